@@ -1,0 +1,47 @@
+# mpmsdem — the two commands a user needs on a fresh Debian 12 machine:
+#   make demo   install what is missing, build, install into YADE's Python, run the demo scene
+#   make test   same set-up, then every test: ctest (C++), pytest (YADE level), scripts/checks
+PY       ?= /usr/bin/python3
+BUILD    ?= build
+JOBS     ?= $(shell nproc)
+YADE_PY  := $(shell ls -d /usr/lib/x86_64-linux-gnu/yade-double/py 2>/dev/null || ls -d /usr/lib/*/yade*/py 2>/dev/null | head -1)
+export PYTHONPATH := $(CURDIR)/$(BUILD)/python:$(YADE_PY)$(if $(PYTHONPATH),:$(PYTHONPATH))
+export OMP_NUM_THREADS ?= $(JOBS)
+
+.PHONY: all deps configure build install demo test test-cpp test-py checks bench clean
+
+all: build
+
+deps:
+	@bash tools/install-deps.sh
+
+$(BUILD)/CMakeCache.txt: | deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=$(PY) -DMPMSDEM_PYTHON=$(PY)
+
+configure: deps $(BUILD)/CMakeCache.txt
+
+build: configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+install: build
+	cmake --install $(BUILD) > /dev/null
+
+demo: install
+	$(PY) examples/demo.py
+
+test-cpp: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+test-py: install
+	$(PY) -m pytest -q tests/python
+
+checks: install
+	@set -e; for s in scripts/checks/*.py; do echo "== $$s"; $(PY) $$s; done
+
+test: test-cpp test-py checks
+
+bench: install
+	$(PY) scripts/bench/bench_sdem.py
+
+clean:
+	rm -rf $(BUILD)

@@ -1,0 +1,59 @@
+// The MPM solver interface. Two backends implement it with the same formulas
+// (shared __host__ __device__ functions): CPU (double, OpenMP) and CUDA (float or double).
+#pragma once
+#include <memory>
+#include <string>
+
+#include "mpm/MpmTypes.hpp"
+
+namespace mpmsdem {
+namespace mpm {
+
+enum class Backend { Cpu, Cuda };
+enum class Precision { Float, Double };
+
+class MpmSolver {
+ public:
+  virtual ~MpmSolver() = default;
+  virtual std::string name() const = 0;              // e.g. "cpu-double", "cuda-float"
+  virtual const MpmParams& params() const = 0;
+
+  // Replace all particles (uploads to the device for CUDA). Throws ParameterError when a
+  // particle lies outside the grid domain (names the particle index and the domain).
+  virtual void setParticles(const ParticleSet& particles) = 0;
+  // Copy the current particle state into `out` (downloads for CUDA).
+  virtual void getParticles(ParticleSet& out) = 0;
+  virtual std::size_t numParticles() const = 0;
+
+  // External forces on particles for the NEXT step only [N], 3 per particle (paper Eq 14:
+  // spread to the grid with the P2G weights). Cleared after each step.
+  virtual void setExternalForces(const std::vector<double>& f) = 0;
+
+  // One explicit step: P2G, grid update (gravity, external forces, walls), G2P,
+  // constitutive update. Throws RuntimeFailure on a NaN / blow-up (names the particle).
+  virtual void step(double dt) = 0;
+
+  // Largest stable step: cfl * dx / (elastic wave speed + max particle speed) [s].
+  virtual double stableTimeStep() = 0;
+
+  // Bytes of device (CUDA) or host (CPU) memory held for particles and grid.
+  virtual std::size_t memoryBytes() const = 0;
+
+  double time() const { return time_; }
+  long steps() const { return steps_; }
+
+ protected:
+  double time_ = 0;
+  long steps_ = 0;
+};
+
+// Build a solver. Throws ParameterError on invalid parameters (each names the parameter and
+// its range), and RuntimeFailure when the CUDA backend is asked for but unavailable.
+std::unique_ptr<MpmSolver> makeSolver(const MpmParams& params, Backend backend = Backend::Cpu,
+                                      Precision precision = Precision::Double);
+
+// True when this build has the CUDA backend AND a CUDA device is present at run time.
+bool cudaAvailable();
+
+}  // namespace mpm
+}  // namespace mpmsdem

@@ -1,0 +1,57 @@
+// MPM data shared by the CPU backend, the CUDA backend, the I/O writers, the JSON
+// driver and the Python binding. Host-side containers are double precision; the CUDA
+// backend may run in float and converts at upload/download.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mpmsdem {
+namespace mpm {
+
+// Granular material of Appendix B (with DESIGN §3 corrections). SI units.
+struct GranularMaterial {
+  double density = 1600;       // rho_0, initial bulk density of the material points [kg/m^3], > 0
+  double youngModulus = 1e6;   // E [Pa], > 0 (Table 1: 1 MPa)
+  double poissonRatio = 0.3;   // nu [-], in [0, 0.5)
+  double muS = 0.24;           // mu_s, static friction coefficient, Eq B.2 [-], >= 0
+  double mu2 = 0.65;           // mu_2, limiting dynamic friction, Eq B.2 [-], >= mu_s
+  double I0 = 0.279;           // I_0, inertial-number scale, Eq B.2 [-], > 0
+  double grainDiameter = 0.002;  // d [m], > 0
+  double solidDensity = 2500;  // rho_s, grain density [kg/m^3], > 0
+  double criticalDensity = 0;  // rho_c [kg/m^3]; 0 means "= density" (paper §2.1). Stress-free below it.
+};
+
+// One wall of the box-shaped grid domain: index 0..5 = -x,+x,-y,+y,-z,+z.
+// friction < 0 means no-slip; 0 = free slip; > 0 = Coulomb with mu_w (Appendix A, corrected).
+struct WallSpec {
+  double friction = 0;
+};
+
+struct MpmParams {
+  double dx = 0.01;                        // grid spacing Delta x [m], > 0
+  std::array<double, 3> origin{0, 0, 0};   // lower corner of the grid domain [m]
+  std::array<int, 3> cells{10, 10, 10};    // number of cells per axis (nodes = cells+1), >= 4
+  std::array<double, 3> gravity{0, 0, -9.81};  // [m/s^2]; incline: rotate gravity, not the grid
+  double flipAlpha = 0.99;                 // alpha, FLIP/PIC blend, Eq 4, in [0, 1]
+  double cfl = 0.3;                        // CFL number for the time-step estimate, in (0, 1]
+  std::array<WallSpec, 6> walls{};         // box walls of the grid domain
+  GranularMaterial material{};
+};
+
+// Structure-of-arrays particle storage (host side, double).
+struct ParticleSet {
+  std::vector<double> x, v;        // position [m], velocity [m/s]: 3 per particle
+  std::vector<double> stress;      // Cauchy stress (tension positive) [Pa]: 6 per particle, xx yy zz yz xz xy
+  std::vector<double> mass;        // [kg]
+  std::vector<double> volume0;     // initial volume [m^3]
+  std::vector<double> J;           // det F, current volume = J * volume0
+  std::vector<double> gammaDotP;   // equivalent plastic shear rate of the last step [1/s]
+  std::vector<double> fext;        // external force on the particle this step [N]: 3 per particle (coupling, Eq 14)
+  std::vector<std::uint8_t> phase; // 0 = dense elastic, 1 = dense plastic (flowing), 2 = gasified (stress-free)
+  std::size_t size() const { return mass.size(); }
+};
+
+}  // namespace mpm
+}  // namespace mpmsdem

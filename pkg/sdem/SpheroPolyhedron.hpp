@@ -1,0 +1,80 @@
+// SpheroPolyhedron: the SDEM shape (paper §2.2, Fig 2; DESIGN §3).
+// A block of outer shape P is the Minkowski sum of an eroded core S (P shrunk by R)
+// and a sphere of radius R. All geometry here is in the BODY frame: origin at the
+// centroid of the rounded body, axes along its principal axes of inertia.
+#pragma once
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/Types.hpp"
+
+namespace mpmsdem {
+namespace sdem {
+
+// A planar face of the core. Convex polygon, vertex loop counter-clockwise seen from
+// outside (right-hand rule gives the outward normal).
+struct CoreFace {
+  std::vector<int> loop;  // indices into SpheroPolyhedron::vertices
+  Vec3 normal;            // unit outward normal (body frame)
+  Real offset;            // plane: normal.dot(x) == offset for x on the face
+};
+
+// An edge of the core between two faces that are not coplanar (a ridge or a valley).
+struct CoreEdge {
+  int v0, v1;       // vertex indices
+  int f0, f1;       // adjacent faces (f0 sees v0->v1 in its loop, f1 sees v1->v0)
+  bool convex;      // true: dihedral angle < pi seen from inside (a ridge)
+};
+
+struct SpheroPolyhedron {
+  // ---- core geometry (body frame)
+  std::vector<Vec3> vertices;                 // core vertices [m]
+  std::vector<CoreEdge> edges;                // ridges/valleys; flat diagonals are not edges
+  std::vector<CoreFace> faces;                // planar convex polygons
+  std::vector<std::vector<int>> vertexEdges;  // per vertex, indices of incident edges
+  Real sweepRadius = 0;                       // R [m], the Minkowski sphere radius (paper Eq 7)
+  bool convex = true;                         // core is a convex polyhedron
+
+  // ---- mass properties of the ROUNDED body, per unit density
+  Real volume = 0;                    // [m^3]
+  Vec3 inertiaPerDensity = Vec3::Zero();  // principal moments / density [m^5], body frame
+
+  // ---- outer shape P in the body frame (what the user described; used for display)
+  std::vector<Vec3> outerVertices;
+  std::vector<std::array<int, 3>> outerTriangles;
+
+  // ---- pose of the body frame in the frame the user described the shape in:
+  // x_input = framePosition + frameOrientation * x_body
+  Vec3 framePosition = Vec3::Zero();
+  Quat frameOrientation = Quat::Identity();
+
+  Real boundingRadius = 0;  // max |vertex| + R: radius of a sphere enclosing the rounded body [m]
+
+  // ---- factories. Each one erodes P by R (core), then computes everything above.
+  // Throw ParameterError naming the parameter and its allowed range on bad input
+  // (R <= 0 or R >= half the thinnest dimension, degenerate/open mesh, ...).
+  static std::shared_ptr<SpheroPolyhedron> box(const Vec3& halfExtents, Real R);
+  static std::shared_ptr<SpheroPolyhedron> convexHull(const std::vector<Vec3>& points, Real R);
+  static std::shared_ptr<SpheroPolyhedron> mesh(const std::vector<Vec3>& vertices,
+                                                const std::vector<std::array<int, 3>>& triangles, Real R);
+  static std::shared_ptr<SpheroPolyhedron> meshFile(const std::string& path, Real R, Real scale = 1.0);
+
+  // Closest point of the CORE to a point p given in the body frame.
+  // Returns the distance d >= 0 (0 if p is inside the core), the closest point, the feature
+  // kind hit (0 = face interior, 1 = edge, 2 = vertex) and its index.
+  struct PointQuery {
+    Real distance;
+    Vec3 closest;
+    int featureKind;
+    int featureIndex;
+  };
+  PointQuery closestPoint(const Vec3& p) const;
+
+  // Minimal width of the core over the face-normal directions [m].
+  Real coreMinWidth() const;
+};
+
+}  // namespace sdem
+}  // namespace mpmsdem
