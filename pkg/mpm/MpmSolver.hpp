@@ -2,7 +2,10 @@
 // (shared __host__ __device__ functions): CPU (double, OpenMP) and CUDA (float or double).
 #pragma once
 #include <memory>
+#include <sstream>
 #include <string>
+
+#include "common/Error.hpp"
 
 #include "mpm/MpmTypes.hpp"
 
@@ -35,6 +38,19 @@ class MpmSolver {
 
   // Largest stable step: cfl * dx / (elastic wave speed + max particle speed) [s].
   virtual double stableTimeStep() = 0;
+
+  // Throws ParameterError unless 0 < dt <= stableTimeStep() (1e-4 relative slack for
+  // round-off), e.g. "dt = 0.001 s: must be in (0, 0.0002] s (CFL 0.3 ...)". step() calls it
+  // on its first step and every 100 steps; callers changing dt may call it themselves.
+  void checkTimeStep(double dt) {
+    const double limit = stableTimeStep();
+    if (!(dt > 0) || !(dt <= limit * 1.0001)) {
+      std::ostringstream os;
+      os << "in (0, " << limit << "] s (CFL " << params().cfl
+         << " times dx over the elastic wave speed plus the largest particle speed)";
+      throwParameter("dt", dt, "s", os.str());
+    }
+  }
 
   // Bytes of device (CUDA) or host (CPU) memory held for particles and grid.
   virtual std::size_t memoryBytes() const = 0;

@@ -34,6 +34,9 @@ struct SpheroPolyhedron {
   std::vector<CoreEdge> edges;                // ridges/valleys; flat diagonals are not edges
   std::vector<CoreFace> faces;                // planar convex polygons
   std::vector<std::vector<int>> vertexEdges;  // per vertex, indices of incident edges
+  // per face, per loop side i (loop[i] -> loop[i+1]): index into edges, or -1 when that side
+  // lies between two coplanar triangles of a non-convex mesh (a flat diagonal, not an edge)
+  std::vector<std::vector<int>> faceEdges;
   Real sweepRadius = 0;                       // R [m], the Minkowski sphere radius (paper Eq 7)
   bool convex = true;                         // core is a convex polyhedron
 
@@ -55,6 +58,23 @@ struct SpheroPolyhedron {
   // ---- factories. Each one erodes P by R (core), then computes everything above.
   // Throw ParameterError naming the parameter and its allowed range on bad input
   // (R <= 0 or R >= half the thinnest dimension, degenerate/open mesh, ...).
+  //
+  // box: halfExtents = OUTER half-extents of P [m], each > 0; R in (0, min(halfExtents)).
+  //   Core = box of half-extents halfExtents - R. Body frame = input frame.
+  // convexHull: points [m] = P's corners (interior points allowed), at least 4 not coplanar.
+  //   Coplanar hull triangles are merged into polygon faces; core = intersection of P's face
+  //   planes moved in by R (faces of P may vanish from the core when R is large);
+  //   R in (0, min(inradius of P, half its min width over face normals)).
+  // mesh: closed, consistently oriented (counter-clockwise seen from outside) triangle mesh of
+  //   P [m], non-convex allowed; every edge in exactly two triangles, no zero-area triangle.
+  //   A convex mesh takes the convexHull path. Otherwise faces = triangles (sides between
+  //   coplanar triangles are not edges), each vertex moves so that each distinct incident
+  //   face plane moves in by R (least squares; exact where at most 3 distinct planes meet),
+  //   and R must stay below half of every wall thickness (rays from face centroids) with no
+  //   eroded triangle flipping.
+  // meshFile: path = .stl (ASCII/binary) or .obj file, scale = factor from file units to m
+  //   (> 0, e.g. 1e-3 for millimetres); then as mesh.
+  // Mass properties: see MassProperties.hpp (exact for convex cores and extruded shapes).
   static std::shared_ptr<SpheroPolyhedron> box(const Vec3& halfExtents, Real R);
   static std::shared_ptr<SpheroPolyhedron> convexHull(const std::vector<Vec3>& points, Real R);
   static std::shared_ptr<SpheroPolyhedron> mesh(const std::vector<Vec3>& vertices,
@@ -64,6 +84,8 @@ struct SpheroPolyhedron {
   // Closest point of the CORE to a point p given in the body frame.
   // Returns the distance d >= 0 (0 if p is inside the core), the closest point, the feature
   // kind hit (0 = face interior, 1 = edge, 2 = vertex) and its index.
+  // Inside the core: distance 0, closest = p, and the feature is the nearest surface feature.
+  // Cost: linear in the number of faces.
   struct PointQuery {
     Real distance;
     Vec3 closest;
@@ -72,7 +94,9 @@ struct SpheroPolyhedron {
   };
   PointQuery closestPoint(const Vec3& p) const;
 
-  // Minimal width of the core over the face-normal directions [m].
+  // Minimal width of the core over the face-normal directions [m]: min over faces of
+  // (offset - min over vertices of normal.x), the extent of the core along that normal
+  // (for a non-convex core an upper bound of its thinnest wall).
   Real coreMinWidth() const;
 };
 

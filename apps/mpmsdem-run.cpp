@@ -1,0 +1,364 @@
+// mpmsdem-run: plain C++ driver (no YADE, no Python) for JSON-described MPM scenes.
+//
+//   mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR]
+//                          [--steps N] [--bench]
+//
+// The scene schema is documented in pkg/mpm/MpmScene.hpp and examples/scenes/README.md.
+// Options override the scene's "run" settings:
+//   --backend, --precision   solver backend and precision ("float" needs "cuda")
+//   --out DIR                output folder (run.output_dir)
+//   --steps N                run exactly N steps (N >= 1) instead of run.duration
+//   --bench                  write no files, take no diagnostics; print one JSON line on
+//                            stdout at the end: backend, precision, solver, particles,
+//                            steps, seconds (step loop wall time), particle_updates_per_s,
+//                            bytes_per_particle (solver memoryBytes()/particles), threads
+// Outputs (not with --bench), in the output folder:
+//   mpm.h5          HDF5 (pkg/io/Hdf5Writer.hpp): /series/{time, step, dt, kinetic_energy,
+//                   front_x, height_z, centre_of_mass (3), max_speed, flowing_fraction,
+//                   gasified_fraction} every run.series_every, /snapshots every
+//                   run.output_every, root attributes units, parameters (scene JSON),
+//                   solver, and on failure "failure" (message) and "failure_snapshot".
+//   particles.pvd + vtk/particles_NNNNNN.vtp   ParaView series (unless run.vtk = "none").
+// Progress lines go to stdout (stderr with --bench) every 5 % of the run.
+// Exit status: 0 done; 2 bad parameters or command line; 3 run failure (NaN, blow-up, step
+// above the stable one), after writing the last good state as a final snapshot; 1 other
+// errors (e.g. I/O).
+#include <omp.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <string>
+
+#include "common/Error.hpp"
+#include "io/Hdf5Writer.hpp"
+#include "io/VtkWriter.hpp"
+#include "mpm/MpmScene.hpp"
+#include "mpm/MpmSolver.hpp"
+
+using namespace mpmsdem;
+using namespace mpmsdem::mpm;
+
+namespace {
+
+const char* const kUsage =
+    "usage: mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR] [--steps N] [--bench]\n";
+
+struct Options {
+  std::string scene;
+  std::optional<Backend> backend;
+  std::optional<Precision> precision;
+  std::optional<std::string> out;
+  long steps = 0;  // 0: run for run.duration
+  bool bench = false;
+};
+
+Options parseArgs(int argc, char** argv) {
+  Options o;
+  auto value = [&](int& i, const char* flag) -> std::string {
+    if (i + 1 >= argc) throw ParameterError(std::string(flag) + ": missing value\n" + kUsage);
+    return argv[++i];
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--backend") {
+      const std::string v = value(i, "--backend");
+      if (v != "cpu" && v != "cuda") throwParameter("--backend", v, "", "cpu or cuda");
+      o.backend = v == "cuda" ? Backend::Cuda : Backend::Cpu;
+    } else if (a == "--precision") {
+      const std::string v = value(i, "--precision");
+      if (v != "float" && v != "double") throwParameter("--precision", v, "", "float or double");
+      o.precision = v == "float" ? Precision::Float : Precision::Double;
+    } else if (a == "--out") {
+      o.out = value(i, "--out");
+    } else if (a == "--steps") {
+      const std::string v = value(i, "--steps");
+      char* end = nullptr;
+      o.steps = std::strtol(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0' || o.steps < 1) throwParameter("--steps", v, "", "an integer >= 1");
+    } else if (a == "--bench") {
+      o.bench = true;
+    } else if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      std::exit(0);
+    } else if (!a.empty() && a[0] == '-') {
+      throw ParameterError("unknown option '" + a + "'\n" + kUsage);
+    } else if (o.scene.empty()) {
+      o.scene = a;
+    } else {
+      throw ParameterError("more than one scene file given ('" + o.scene + "', '" + a + "')\n" + kUsage);
+    }
+  }
+  if (o.scene.empty()) throw ParameterError(std::string("no scene file given\n") + kUsage);
+  return o;
+}
+
+// Whole-system diagnostics of a particle state.
+struct Diagnostics {
+  double kineticEnergy = 0;  // [J]
+  double frontX = 0;         // largest particle x [m]
+  double heightZ = 0;        // largest particle z [m]
+  double com[3] = {0, 0, 0}; // centre of mass [m]
+  double maxSpeed = 0;       // [m/s]
+  double flowing = 0;        // fraction of particles in phase 1
+  double gasified = 0;       // fraction of particles in phase 2
+};
+
+Diagnostics diagnose(const ParticleSet& p) {
+  Diagnostics d;
+  const std::size_t n = p.size();
+  if (n == 0) return d;
+  d.frontX = -INFINITY;
+  d.heightZ = -INFINITY;
+  double mass = 0, maxV2 = 0;
+  std::size_t flowing = 0, gasified = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* v = &p.v[3 * i];
+    const double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    d.kineticEnergy += 0.5 * p.mass[i] * v2;
+    maxV2 = std::max(maxV2, v2);
+    d.frontX = std::max(d.frontX, p.x[3 * i]);
+    d.heightZ = std::max(d.heightZ, p.x[3 * i + 2]);
+    for (int a = 0; a < 3; ++a) d.com[a] += p.mass[i] * p.x[3 * i + a];
+    mass += p.mass[i];
+    flowing += p.phase[i] == 1;
+    gasified += p.phase[i] == 2;
+  }
+  for (double& c : d.com) c /= mass;
+  d.maxSpeed = std::sqrt(maxV2);
+  d.flowing = double(flowing) / n;
+  d.gasified = double(gasified) / n;
+  return d;
+}
+
+std::string formatDuration(double s) {
+  char buf[32];
+  if (s < 120)
+    std::snprintf(buf, sizeof buf, "%.0fs", s);
+  else if (s < 7200)
+    std::snprintf(buf, sizeof buf, "%.1fmin", s / 60);
+  else
+    std::snprintf(buf, sizeof buf, "%.1fh", s / 3600);
+  return buf;
+}
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// A fixed run.dt may exceed the stable step by this factor (round-off), as in
+// MpmSolver::checkTimeStep.
+constexpr double kStepSlack = 1.0001;
+
+// Time step for the next step: fixed or auto, never past the end time when running by time.
+double nextStep(MpmSolver& solver, const RunSettings& run, bool byTime) {
+  double dt;
+  if (run.dt > 0) {
+    const double stable = solver.stableTimeStep();
+    if (run.dt > stable * kStepSlack) {
+      char msg[256];
+      std::snprintf(msg, sizeof msg,
+                    "run.dt = %.6g s exceeds the stable step %.6g s at t = %.6g s, step %ld (use \"dt\": \"auto\" "
+                    "or a smaller dt)",
+                    run.dt, stable, solver.time(), solver.steps());
+      throw RuntimeFailure(msg);
+    }
+    dt = run.dt;
+  } else {
+    dt = run.dtFactor * solver.stableTimeStep();
+  }
+  if (byTime) dt = std::min(dt, run.duration - solver.time());
+  return dt;
+}
+
+bool finished(const MpmSolver& solver, const RunSettings& run, long maxSteps) {
+  if (maxSteps > 0) return solver.steps() >= maxSteps;
+  return solver.time() >= run.duration * (1 - 1e-12);
+}
+
+// Fraction of the run done, by steps (--steps) or by simulated time.
+double progressFraction(const MpmSolver& solver, const RunSettings& run, long maxSteps) {
+  return maxSteps > 0 ? double(solver.steps()) / maxSteps : solver.time() / run.duration;
+}
+
+int runBench(MpmSolver& solver, const MpmScene& scene, long maxSteps) {
+  const std::size_t n = solver.numParticles();
+  const auto t0 = Clock::now();
+  double nextReport = 0.05;
+  while (!finished(solver, scene.run, maxSteps)) {
+    solver.step(nextStep(solver, scene.run, maxSteps == 0));
+    const double f = progressFraction(solver, scene.run, maxSteps);
+    if (f >= nextReport) {
+      const double el = since(t0);
+      std::fprintf(stderr, "[%5.1f%%] t=%.5g s step=%ld rate=%.3g upd/s ETA=%s\n", 100 * f, solver.time(),
+                   solver.steps(), n * double(solver.steps()) / el, formatDuration(el * (1 - f) / f).c_str());
+      nextReport = std::floor(f / 0.05 + 1) * 0.05;
+    }
+  }
+  solver.stableTimeStep();  // a reduction over all particles: waits for outstanding device work
+  const double seconds = since(t0);
+  nlohmann::json out = {{"backend", backendName(scene.run.backend)},
+                        {"precision", precisionName(scene.run.precision)},
+                        {"solver", solver.name()},
+                        {"particles", n},
+                        {"steps", solver.steps()},
+                        {"seconds", seconds},
+                        {"particle_updates_per_s", n * double(solver.steps()) / seconds},
+                        {"bytes_per_particle", n ? double(solver.memoryBytes()) / n : 0.0},
+                        {"threads", omp_get_max_threads()}};
+  std::cout << out.dump() << std::endl;
+  return 0;
+}
+
+class OutputRun {
+ public:
+  OutputRun(MpmSolver& solver, const MpmScene& scene)
+      : solver_(solver),
+        scene_(scene),
+        dir_(scene.run.outputDir),
+        h5_((std::filesystem::create_directories(dir_), (dir_ / "mpm.h5").string())),
+        pvd_(scene.run.vtk == "none" ? std::nullopt
+                                     : std::optional<io::PvdCollection>((dir_ / "particles.pvd").string())) {
+    if (pvd_) std::filesystem::create_directories(dir_ / "vtk");
+    h5_.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
+    h5_.setAttribute("parameters", scene.sourceJson);
+    h5_.setAttribute("solver", solver.name());
+  }
+
+  int run(long maxSteps) {
+    const RunSettings& run = scene_.run;
+    const std::size_t n = solver_.numParticles();
+    solver_.getParticles(state_);
+    recordSeries();
+    writeSnapshot();
+    double nextSeries = run.seriesEvery, nextOutput = run.outputEvery, nextReport = 0.05;
+    const auto t0 = Clock::now();
+    const bool byTime = maxSteps == 0;
+    std::printf("mpmsdem-run: %s, %zu particles, %s, output in %s\n", solver_.name().c_str(), n,
+                byTime ? ("duration " + std::to_string(run.duration) + " s").c_str()
+                       : (std::to_string(maxSteps) + " steps").c_str(),
+                dir_.string().c_str());
+    std::fflush(stdout);
+    double dt = 0;
+    try {
+      while (!finished(solver_, run, maxSteps)) {
+        dt = nextStep(solver_, run, byTime);
+        solver_.step(dt);
+        const double t = solver_.time();
+        const bool series = t >= nextSeries * (1 - 1e-12), output = t >= nextOutput * (1 - 1e-12);
+        const double f = progressFraction(solver_, run, maxSteps);
+        const bool report = f >= nextReport || finished(solver_, run, maxSteps);
+        if (series || output || report) solver_.getParticles(state_);
+        if (series) {
+          recordSeries(dt);
+          while (nextSeries <= t * (1 + 1e-12)) nextSeries += run.seriesEvery;
+        }
+        if (output) {
+          writeSnapshot();
+          while (nextOutput <= t * (1 + 1e-12)) nextOutput += run.outputEvery;
+        }
+        if (report) {
+          const Diagnostics d = diagnose(state_);
+          const double el = since(t0);
+          std::printf("[%5.1f%%] t=%.5g s step=%ld dt=%.3g s KE=%.5g J front=%.5g m rate=%.3g upd/s ETA=%s\n",
+                      100 * f, t, solver_.steps(), dt, d.kineticEnergy, d.frontX, n * double(solver_.steps()) / el,
+                      formatDuration(f > 0 ? el * (1 - f) / f : 0).c_str());
+          std::fflush(stdout);
+          nextReport = std::floor(f / 0.05 + 1) * 0.05;
+        }
+      }
+    } catch (const RuntimeFailure& e) {
+      // The solver keeps the state at the start of the failed step: save it.
+      solver_.getParticles(state_);
+      const long index = writeSnapshot();
+      h5_.setAttribute("failure", e.what());
+      h5_.setAttribute("failure_snapshot", double(index));
+      std::fprintf(stderr, "mpmsdem-run: run failure: %s\nmpmsdem-run: last good state (t = %.6g s, step %ld) "
+                           "saved as snapshot %ld in %s\n",
+                   e.what(), solver_.time(), solver_.steps(), index, h5_.path().c_str());
+      return 3;
+    }
+    if (solver_.time() > state_time_) {
+      solver_.getParticles(state_);
+      writeSnapshot();
+    }
+    std::printf("mpmsdem-run: done, t = %.6g s, %ld steps, %.3g s wall\n", solver_.time(), solver_.steps(), since(t0));
+    return 0;
+  }
+
+ private:
+  void recordSeries(double dt = 0) {
+    const Diagnostics d = diagnose(state_);
+    h5_.appendScalar("time", solver_.time());
+    h5_.appendScalar("step", double(solver_.steps()));
+    h5_.appendScalar("dt", dt);
+    h5_.appendScalar("kinetic_energy", d.kineticEnergy);
+    h5_.appendScalar("front_x", d.frontX);
+    h5_.appendScalar("height_z", d.heightZ);
+    h5_.appendVector("centre_of_mass", {d.com[0], d.com[1], d.com[2]});
+    h5_.appendScalar("max_speed", d.maxSpeed);
+    h5_.appendScalar("flowing_fraction", d.flowing);
+    h5_.appendScalar("gasified_fraction", d.gasified);
+  }
+
+  long writeSnapshot() {
+    const long index = h5_.writeSnapshot(state_, solver_.time(), solver_.steps());
+    if (pvd_) {
+      char name[64];
+      std::snprintf(name, sizeof name, "vtk/particles_%06ld.vtp", index);
+      io::writeParticlesVtp((dir_ / name).string(), state_,
+                            scene_.run.vtk == "ascii" ? io::VtkEncoding::Ascii : io::VtkEncoding::AppendedRaw);
+      pvd_->add(solver_.time(), name);
+    }
+    state_time_ = solver_.time();
+    return index;
+  }
+
+  MpmSolver& solver_;
+  const MpmScene& scene_;
+  std::filesystem::path dir_;
+  io::Hdf5Writer h5_;
+  std::optional<io::PvdCollection> pvd_;
+  ParticleSet state_;
+  double state_time_ = -1;  // time of the last snapshot written
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const Options opt = parseArgs(argc, argv);
+    MpmScene scene = loadScene(opt.scene);
+    if (opt.backend) scene.run.backend = *opt.backend;
+    if (opt.precision) scene.run.precision = *opt.precision;
+    if (opt.out) scene.run.outputDir = *opt.out;
+    validateBackend(scene.run.backend, scene.run.precision);
+    const ParticleSet particles = seedParticles(scene);
+    auto solver = makeSolver(scene.params, scene.run.backend, scene.run.precision);
+    solver->setParticles(particles);
+    if (scene.run.dt > 0 && scene.run.dt > solver->stableTimeStep() * kStepSlack) {
+      char range[128];
+      std::snprintf(range, sizeof range, "<= the stable step %.6g s (cfl dx / wave speed), or \"auto\"",
+                    solver->stableTimeStep());
+      throwParameter("run.dt", scene.run.dt, "s", range);
+    }
+    if (opt.bench) return runBench(*solver, scene, opt.steps);
+    OutputRun out(*solver, scene);
+    return out.run(opt.steps);
+  } catch (const ParameterError& e) {
+    std::fprintf(stderr, "mpmsdem-run: parameter error: %s\n", e.what());
+    return 2;
+  } catch (const RuntimeFailure& e) {
+    std::fprintf(stderr, "mpmsdem-run: failure: %s\n", e.what());
+    return 3;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mpmsdem-run: error: %s\n", e.what());
+    return 1;
+  }
+}

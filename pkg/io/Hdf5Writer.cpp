@@ -1,0 +1,347 @@
+#include "io/Hdf5Writer.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "common/Error.hpp"
+
+namespace mpmsdem {
+namespace io {
+
+namespace {
+
+// Name of a snapshot group while it is being written; renamed to its index once complete,
+// so a run killed mid-snapshot never leaves a half-written numbered snapshot.
+const char* const kIncomplete = "incomplete";
+
+// Silence HDF5's own error-stack printing: every failure is turned into an exception here.
+void quietHdf5() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw RuntimeFailure("HDF5 file '" + path + "': " + what);
+}
+
+template <typename T>
+T check(T id, const std::string& path, const std::string& what) {
+  if (id < 0) fail(path, what);
+  return id;
+}
+
+// RAII holder for an hid_t and its matching close function.
+class Handle {
+ public:
+  Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
+  ~Handle() {
+    if (id_ >= 0) close_(id_);
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  operator hid_t() const { return id_; }
+
+ private:
+  hid_t id_;
+  herr_t (*close_)(hid_t);
+};
+
+hid_t fileAccessWithoutLocking() {
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_file_locking(fapl, 0, 1);
+  return fapl;
+}
+
+std::string snapshotName(long index) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%06ld", index);
+  return buf;
+}
+
+bool linkExists(hid_t loc, const std::string& name) { return H5Lexists(loc, name.c_str(), H5P_DEFAULT) > 0; }
+
+hid_t openOrCreateGroup(hid_t file, const std::string& name, const std::string& path) {
+  if (linkExists(file, name)) return check(H5Gopen2(file, name.c_str(), H5P_DEFAULT), path, "cannot open group " + name);
+  return check(H5Gcreate2(file, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path,
+               "cannot create group " + name);
+}
+
+void writeArray(hid_t group, const std::string& name, hid_t fileType, hid_t memType, const void* data,
+                hsize_t rows, hsize_t cols, const std::string& path) {
+  hsize_t dims[2] = {rows, cols};
+  Handle space(check(H5Screate_simple(cols == 1 ? 1 : 2, dims, nullptr), path, "dataspace for " + name), H5Sclose);
+  Handle dset(check(H5Dcreate2(group, name.c_str(), fileType, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path,
+                    "cannot create dataset " + name),
+              H5Dclose);
+  if (rows > 0) check(H5Dwrite(dset, memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), path, "cannot write " + name);
+}
+
+void writeDoubleAttribute(hid_t loc, const std::string& name, double value, const std::string& path) {
+  if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
+  Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+  Handle attr(check(H5Acreate2(loc, name.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT), path,
+                    "cannot create attribute " + name),
+              H5Aclose);
+  check(H5Awrite(attr, H5T_NATIVE_DOUBLE, &value), path, "cannot write attribute " + name);
+}
+
+void writeLongAttribute(hid_t loc, const std::string& name, long value, const std::string& path) {
+  Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+  Handle attr(check(H5Acreate2(loc, name.c_str(), H5T_STD_I64LE, space, H5P_DEFAULT, H5P_DEFAULT), path,
+                    "cannot create attribute " + name),
+              H5Aclose);
+  const long long v = value;
+  check(H5Awrite(attr, H5T_NATIVE_LLONG, &v), path, "cannot write attribute " + name);
+}
+
+hid_t utf8StringType() {
+  hid_t t = H5Tcopy(H5T_C_S1);
+  H5Tset_size(t, H5T_VARIABLE);
+  H5Tset_cset(t, H5T_CSET_UTF8);
+  return t;
+}
+
+Handle openForReading(const std::string& path) {
+  quietHdf5();
+  if (!std::filesystem::exists(path)) fail(path, "does not exist");
+  Handle fapl(fileAccessWithoutLocking(), H5Pclose);
+  return Handle(check(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl), path, "cannot open for reading"), H5Fclose);
+}
+
+// Read a whole dataset of `memType` elements; `rows`/`cols` receive its shape.
+template <typename T>
+std::vector<T> readArray(hid_t loc, const std::string& name, hid_t memType, std::size_t& rows, std::size_t& cols,
+                         const std::string& path) {
+  if (!linkExists(loc, name)) fail(path, "no dataset " + name);
+  Handle dset(check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), path, "cannot open dataset " + name), H5Dclose);
+  Handle space(H5Dget_space(dset), H5Sclose);
+  hsize_t dims[2] = {0, 1};
+  const int rank = H5Sget_simple_extent_ndims(space);
+  if (rank < 1 || rank > 2) fail(path, "dataset " + name + " has rank " + std::to_string(rank) + ", expected 1 or 2");
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  rows = dims[0];
+  cols = rank == 2 ? dims[1] : 1;
+  std::vector<T> out(rows * cols);
+  if (!out.empty())
+    check(H5Dread(dset, memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), path, "cannot read dataset " + name);
+  return out;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------ writer
+
+Hdf5Writer::Hdf5Writer(const std::string& path, Mode mode) : path_(path) {
+  quietHdf5();
+  Handle fapl(fileAccessWithoutLocking(), H5Pclose);
+  if (mode == Mode::Append && std::filesystem::exists(path)) {
+    file_ = check(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl), path, "cannot open for appending");
+  } else {
+    file_ = check(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl), path, "cannot create");
+  }
+  series_ = openOrCreateGroup(file_, "series", path);
+  snapshots_ = openOrCreateGroup(file_, "snapshots", path);
+  if (linkExists(snapshots_, kIncomplete)) H5Ldelete(snapshots_, kIncomplete, H5P_DEFAULT);
+  while (linkExists(snapshots_, snapshotName(nextSnapshot_))) ++nextSnapshot_;
+  flush();
+}
+
+Hdf5Writer::~Hdf5Writer() {
+  for (auto& kv : openSeries_) H5Dclose(kv.second);
+  if (snapshots_ >= 0) H5Gclose(snapshots_);
+  if (series_ >= 0) H5Gclose(series_);
+  if (file_ >= 0) H5Fclose(file_);
+}
+
+void Hdf5Writer::flush() { check(H5Fflush(file_, H5F_SCOPE_GLOBAL), path_, "flush failed"); }
+
+void Hdf5Writer::setAttribute(const std::string& name, const std::string& value) {
+  if (H5Aexists(file_, name.c_str()) > 0) H5Adelete(file_, name.c_str());
+  Handle type(utf8StringType(), H5Tclose);
+  Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+  Handle attr(check(H5Acreate2(file_, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT), path_,
+                    "cannot create attribute " + name),
+              H5Aclose);
+  const char* s = value.c_str();
+  check(H5Awrite(attr, type, &s), path_, "cannot write attribute " + name);
+  flush();
+}
+
+void Hdf5Writer::setAttribute(const std::string& name, double value) {
+  writeDoubleAttribute(file_, name, value, path_);
+  flush();
+}
+
+void Hdf5Writer::appendScalar(const std::string& name, double value) { appendRow(name, &value, 1, false); }
+
+void Hdf5Writer::appendVector(const std::string& name, const std::vector<double>& values) {
+  if (values.empty()) throwParameter("series '" + name + "' record length", 0, "", "at least 1");
+  appendRow(name, values.data(), values.size(), true);
+}
+
+void Hdf5Writer::appendRow(const std::string& name, const double* values, hsize_t width, bool isVector) {
+  if (name.empty() || name.find('/') != std::string::npos) throwParameter("series name", "'" + name + "'", "", "non-empty, without '/'");
+  const int rank = isVector ? 2 : 1;
+  hid_t dset;
+  auto it = openSeries_.find(name);
+  if (it != openSeries_.end()) {
+    dset = it->second;
+  } else if (linkExists(series_, name)) {
+    dset = check(H5Dopen2(series_, name.c_str(), H5P_DEFAULT), path_, "cannot open series " + name);
+    openSeries_[name] = dset;
+  } else {
+    hsize_t dims[2] = {0, width};
+    hsize_t maxdims[2] = {H5S_UNLIMITED, width};
+    hsize_t chunk[2] = {std::max<hsize_t>(1, 4096 / width), width};
+    Handle space(H5Screate_simple(rank, dims, maxdims), H5Sclose);
+    Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+    H5Pset_chunk(dcpl, rank, chunk);
+    dset = check(H5Dcreate2(series_, name.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT), path_,
+                 "cannot create series " + name);
+    openSeries_[name] = dset;
+  }
+  hsize_t dims[2] = {0, 1};
+  {
+    Handle space(H5Dget_space(dset), H5Sclose);
+    const int r = H5Sget_simple_extent_ndims(space);
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    const hsize_t existingWidth = r == 2 ? dims[1] : 1;
+    if (r != rank || existingWidth != width) {
+      const std::string expected =
+          r == 2 ? "a vector of length " + std::to_string(existingWidth) : std::string("a scalar (appendScalar)");
+      throwParameter("series '" + name + "' record", isVector ? "vector of length " + std::to_string(width) : "scalar",
+                     "", expected + ", like the series' first record");
+    }
+  }
+  hsize_t newDims[2] = {dims[0] + 1, width};
+  check(H5Dset_extent(dset, newDims), path_, "cannot extend series " + name);
+  Handle fspace(H5Dget_space(dset), H5Sclose);
+  hsize_t start[2] = {dims[0], 0};
+  hsize_t count[2] = {1, width};
+  H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, count, nullptr);
+  Handle mspace(H5Screate_simple(rank, count, nullptr), H5Sclose);
+  check(H5Dwrite(dset, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, values), path_, "cannot append to series " + name);
+  flush();
+}
+
+long Hdf5Writer::seriesLength(const std::string& name) const {
+  if (!linkExists(series_, name)) return 0;
+  Handle dset(H5Dopen2(series_, name.c_str(), H5P_DEFAULT), H5Dclose);
+  Handle space(H5Dget_space(dset), H5Sclose);
+  hsize_t dims[2] = {0, 0};
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  return static_cast<long>(dims[0]);
+}
+
+long Hdf5Writer::writeSnapshot(const mpm::ParticleSet& p, double time, long step) {
+  const std::size_t n = p.size();
+  auto requireSize = [&](const char* field, std::size_t got, std::size_t per) {
+    if (got != per * n) {
+      std::ostringstream range;
+      range << per << " x " << n << " (particle count from mass)";
+      throwParameter(std::string("ParticleSet.") + field + " size", got, "", range.str());
+    }
+  };
+  requireSize("x", p.x.size(), 3);
+  requireSize("v", p.v.size(), 3);
+  requireSize("stress", p.stress.size(), 6);
+  requireSize("volume0", p.volume0.size(), 1);
+  requireSize("J", p.J.size(), 1);
+  requireSize("gammaDotP", p.gammaDotP.size(), 1);
+  requireSize("phase", p.phase.size(), 1);
+
+  std::vector<double> density(n);
+  for (std::size_t i = 0; i < n; ++i) density[i] = p.mass[i] / (p.J[i] * p.volume0[i]);
+
+  if (linkExists(snapshots_, kIncomplete)) H5Ldelete(snapshots_, kIncomplete, H5P_DEFAULT);
+  {
+    Handle g(check(H5Gcreate2(snapshots_, kIncomplete, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path_,
+                   "cannot create snapshot group"),
+             H5Gclose);
+    writeArray(g, "x", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.x.data(), n, 3, path_);
+    writeArray(g, "v", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.v.data(), n, 3, path_);
+    writeArray(g, "stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.stress.data(), n, 6, path_);
+    writeArray(g, "density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, density.data(), n, 1, path_);
+    writeArray(g, "phase", H5T_STD_U8LE, H5T_NATIVE_UINT8, p.phase.data(), n, 1, path_);
+    writeArray(g, "gammaDotP", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.gammaDotP.data(), n, 1, path_);
+    writeArray(g, "mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.mass.data(), n, 1, path_);
+    writeArray(g, "volume0", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.volume0.data(), n, 1, path_);
+    writeArray(g, "J", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.J.data(), n, 1, path_);
+    writeDoubleAttribute(g, "time", time, path_);
+    writeLongAttribute(g, "step", step, path_);
+  }
+  flush();
+  const long index = nextSnapshot_;
+  check(H5Lmove(snapshots_, kIncomplete, snapshots_, snapshotName(index).c_str(), H5P_DEFAULT, H5P_DEFAULT), path_,
+        "cannot name snapshot " + snapshotName(index));
+  flush();
+  ++nextSnapshot_;
+  return index;
+}
+
+// ------------------------------------------------------------------------------ readers
+
+std::vector<double> readSeries(const std::string& path, const std::string& name, std::size_t* width) {
+  Handle file = openForReading(path);
+  if (!linkExists(file, "series")) fail(path, "no group /series");
+  Handle g(H5Gopen2(file, "series", H5P_DEFAULT), H5Gclose);
+  std::size_t rows = 0, cols = 0;
+  auto out = readArray<double>(g, name, H5T_NATIVE_DOUBLE, rows, cols, path);
+  if (width) *width = cols;
+  return out;
+}
+
+long readNumSnapshots(const std::string& path) {
+  Handle file = openForReading(path);
+  if (!linkExists(file, "snapshots")) return 0;
+  Handle g(H5Gopen2(file, "snapshots", H5P_DEFAULT), H5Gclose);
+  long n = 0;
+  while (linkExists(g, snapshotName(n))) ++n;
+  return n;
+}
+
+void readSnapshot(const std::string& path, long index, mpm::ParticleSet& out, double* time, long* step) {
+  Handle file = openForReading(path);
+  const std::string name = "snapshots/" + snapshotName(index);
+  if (!linkExists(file, "snapshots") || !linkExists(file, name)) fail(path, "no snapshot /" + name);
+  Handle g(H5Gopen2(file, name.c_str(), H5P_DEFAULT), H5Gclose);
+  std::size_t rows = 0, cols = 0;
+  out.x = readArray<double>(g, "x", H5T_NATIVE_DOUBLE, rows, cols, path);
+  const std::size_t n = rows;
+  out.v = readArray<double>(g, "v", H5T_NATIVE_DOUBLE, rows, cols, path);
+  out.stress = readArray<double>(g, "stress", H5T_NATIVE_DOUBLE, rows, cols, path);
+  out.mass = readArray<double>(g, "mass", H5T_NATIVE_DOUBLE, rows, cols, path);
+  out.volume0 = readArray<double>(g, "volume0", H5T_NATIVE_DOUBLE, rows, cols, path);
+  out.J = readArray<double>(g, "J", H5T_NATIVE_DOUBLE, rows, cols, path);
+  out.gammaDotP = readArray<double>(g, "gammaDotP", H5T_NATIVE_DOUBLE, rows, cols, path);
+  out.phase = readArray<std::uint8_t>(g, "phase", H5T_NATIVE_UINT8, rows, cols, path);
+  out.fext.assign(3 * n, 0.0);
+  if (out.v.size() != 3 * n || out.stress.size() != 6 * n || out.mass.size() != n || out.phase.size() != n)
+    fail(path, "snapshot /" + name + " has arrays of inconsistent length");
+  if (time) {
+    Handle a(check(H5Aopen(g, "time", H5P_DEFAULT), path, "no attribute time in /" + name), H5Aclose);
+    H5Aread(a, H5T_NATIVE_DOUBLE, time);
+  }
+  if (step) {
+    Handle a(check(H5Aopen(g, "step", H5P_DEFAULT), path, "no attribute step in /" + name), H5Aclose);
+    long long s = 0;
+    H5Aread(a, H5T_NATIVE_LLONG, &s);
+    *step = static_cast<long>(s);
+  }
+}
+
+std::string readStringAttribute(const std::string& path, const std::string& name) {
+  Handle file = openForReading(path);
+  if (H5Aexists(file, name.c_str()) <= 0) fail(path, "no root attribute " + name);
+  Handle a(H5Aopen(file, name.c_str(), H5P_DEFAULT), H5Aclose);
+  Handle type(utf8StringType(), H5Tclose);
+  char* s = nullptr;
+  check(H5Aread(a, type, &s), path, "cannot read attribute " + name + " as a string");
+  std::string out = s ? s : "";
+  Handle space(H5Aget_space(a), H5Sclose);
+  H5Dvlen_reclaim(type, space, H5P_DEFAULT, &s);
+  return out;
+}
+
+}  // namespace io
+}  // namespace mpmsdem

@@ -1,0 +1,91 @@
+// Append-only HDF5 output of an MPM run (HDF5 C API; readable with h5py).
+//
+// File layout:
+//   /                      root attributes set with setAttribute(): e.g. "units" (string),
+//                          "parameters" (the scene as a JSON string), "solver" (string)
+//   /series/<name>         extendible datasets, one record per appendScalar()/appendVector()
+//                          call: float64 shape (records,) for scalars, (records, k) for vectors
+//   /snapshots/<NNNNNN>/   one group per writeSnapshot() call, NNNNNN = snapshot index
+//                          (0-based, zero-padded to 6 digits), attributes "time" [s] and
+//                          "step"; datasets (N = particle count):
+//                            x (N,3) [m], v (N,3) [m/s], stress (N,6) [Pa] (xx yy zz yz xz xy,
+//                            tension positive), density (N) [kg/m^3] = mass/(J volume0),
+//                            phase (N) uint8 (0 elastic, 1 flowing, 2 gasified),
+//                            gammaDotP (N) [1/s], mass (N) [kg], volume0 (N) [m^3], J (N) [-]
+//                          (mass, volume0 and J make a snapshot a complete restart state).
+//
+// Every record is followed by H5Fflush, so a run killed between two records leaves a file
+// whose every record written so far can be read. The writer disables HDF5's file locking,
+// so h5py can open the file (read-only) while the run is still writing.
+#pragma once
+#include <hdf5.h>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "mpm/MpmTypes.hpp"
+
+namespace mpmsdem {
+namespace io {
+
+class Hdf5Writer {
+ public:
+  // Truncate: create the file (replacing an existing one). Append: open an existing file
+  // and continue its series and snapshot numbering (restart); creates it when absent.
+  enum class Mode { Truncate, Append };
+
+  // Throws RuntimeFailure when the file cannot be created or opened (names the path).
+  explicit Hdf5Writer(const std::string& path, Mode mode = Mode::Truncate);
+  ~Hdf5Writer();
+  Hdf5Writer(const Hdf5Writer&) = delete;
+  Hdf5Writer& operator=(const Hdf5Writer&) = delete;
+
+  const std::string& path() const { return path_; }
+
+  // Root attribute (replaced when it exists): a UTF-8 string or a float64.
+  void setAttribute(const std::string& name, const std::string& value);
+  void setAttribute(const std::string& name, double value);
+
+  // Append one record to /series/<name>, creating the dataset on first use. A vector
+  // series keeps the width of its first record; another width throws ParameterError.
+  void appendScalar(const std::string& name, double value);
+  void appendVector(const std::string& name, const std::vector<double>& values);
+
+  // Write /snapshots/<index>/ for the particles; returns the snapshot index used.
+  long writeSnapshot(const mpm::ParticleSet& particles, double time, long step);
+
+  // Number of records in /series/<name> (0 when absent) and of snapshots in the file.
+  long seriesLength(const std::string& name) const;
+  long numSnapshots() const { return nextSnapshot_; }
+
+ private:
+  void appendRow(const std::string& name, const double* values, hsize_t width, bool isVector);
+  void flush();
+
+  std::string path_;
+  hid_t file_ = -1;
+  hid_t series_ = -1;
+  hid_t snapshots_ = -1;
+  std::map<std::string, hid_t> openSeries_;  // series datasets kept open between appends
+  long nextSnapshot_ = 0;
+};
+
+// Readers (used for restart and by tests). All throw RuntimeFailure naming the path and
+// the object when the file or the object does not exist.
+
+// Whole /series/<name> as a flat row-major array; `width` receives the record width
+// (1 for scalar series).
+std::vector<double> readSeries(const std::string& path, const std::string& name, std::size_t* width = nullptr);
+// Number of snapshot groups in the file.
+long readNumSnapshots(const std::string& path);
+// Snapshot `index` into `out` (x, v, stress, mass, volume0, J, gammaDotP, phase; fext is
+// resized to zeros); `time` and `step` receive its attributes when non-null.
+void readSnapshot(const std::string& path, long index, mpm::ParticleSet& out, double* time = nullptr,
+                  long* step = nullptr);
+// Root string attribute `name`.
+std::string readStringAttribute(const std::string& path, const std::string& name);
+
+}  // namespace io
+}  // namespace mpmsdem

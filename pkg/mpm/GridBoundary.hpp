@@ -1,0 +1,60 @@
+// Wall boundary conditions on grid nodes (paper Appendix A, corrected per DESIGN §3).
+// The grid domain is a box with six walls (index 0..5 = -x,+x,-y,+y,-z,+z). A wall acts on
+// the nodes of its layer: node index <= kWallLayer on the low side of an axis, >=
+// cells - kWallLayer on the high side. Material points are kept at least kWallLayer cells
+// inside each face, so the walls effectively sit kWallLayer*dx inside the domain box.
+#pragma once
+#include "mpm/MathHD.hpp"
+
+namespace mpmsdem {
+namespace mpm {
+
+// Thickness of each wall's node layer and of the margin kept free of material points [cells].
+constexpr int kWallLayer = 2;
+
+// Apply one wall to a node velocity. axis 0..2; outwardSign = -1 for the low wall, +1 for
+// the high wall; mu: wall friction (< 0 no-slip, 0 free slip, > 0 Coulomb).
+// Only the inward normal component (toward the wall, i.e. out of the material) is removed,
+// so material may separate from a wall. Coulomb (Eq A.4 with the |v_n| the paper drops):
+// if |v_t| <= mu |v_n| then v_t = 0, else v_t -= mu |v_n| v_t/|v_t|, where |v_n| is the
+// removed component; a separating node (no normal component removed) keeps v_t.
+// No-slip: v_t = 0 on every node of the layer, inward normal removed.
+template <typename T>
+MPM_HD_INLINE void applyWall(Vec3T<T>& v, int axis, T outwardSign, T mu) {
+  const T vn = v[axis] * outwardSign;  // > 0: moving into the wall
+  T removed = T(0);
+  if (vn > T(0)) {
+    removed = vn;
+    v[axis] = T(0);
+  }
+  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+  if (mu < T(0)) {
+    v[a1] = T(0);
+    v[a2] = T(0);
+    return;
+  }
+  if (mu == T(0) || removed == T(0)) return;
+  const T vt = hdSqrt(v[a1] * v[a1] + v[a2] * v[a2]);
+  const T cap = mu * removed;
+  if (vt <= cap) {
+    v[a1] = T(0);
+    v[a2] = T(0);
+  } else {
+    const T f = T(1) - cap / vt;
+    v[a1] *= f;
+    v[a2] *= f;
+  }
+}
+
+// Apply all walls whose layer contains node (i[0], i[1], i[2]) of a grid with `cells` cells
+// per axis; friction[6] in wall order -x,+x,-y,+y,-z,+z.
+template <typename T>
+MPM_HD_INLINE void applyWalls(Vec3T<T>& v, const int i[3], const int cells[3], const T friction[6]) {
+  for (int a = 0; a < 3; ++a) {
+    if (i[a] <= kWallLayer) applyWall(v, a, T(-1), friction[2 * a]);
+    if (i[a] >= cells[a] - kWallLayer) applyWall(v, a, T(1), friction[2 * a + 1]);
+  }
+}
+
+}  // namespace mpm
+}  // namespace mpmsdem

@@ -1,0 +1,366 @@
+#include "mpm/MpmScene.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <initializer_list>
+#include <set>
+#include <sstream>
+
+#include "common/Error.hpp"
+#include "mpm/GridBoundary.hpp"
+#include "mpm/Seeding.hpp"
+
+namespace mpmsdem {
+namespace mpm {
+
+namespace {
+
+using nlohmann::json;
+
+std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
+
+// Every key of `obj` must be in `allowed`.
+void checkKeys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) {
+  std::set<std::string> ok(allowed.begin(), allowed.end());
+  for (auto it = obj.begin(); it != obj.end(); ++it) {
+    if (!ok.count(it.key())) {
+      std::string list;
+      for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      throw ParameterError("unknown key '" + join(path, it.key()) + "': allowed keys" +
+                           (path.empty() ? "" : " in '" + path + "'") + " are " + list);
+    }
+  }
+}
+
+const json& requireObject(const json& parent, const std::string& path, const char* key) {
+  if (!parent.contains(key)) throw ParameterError("missing required key '" + join(path, key) + "'");
+  const json& v = parent.at(key);
+  if (!v.is_object()) throwParameter(join(path, key), v.dump(), "", "a JSON object");
+  return v;
+}
+
+double number(const json& v, const std::string& name) {
+  if (!v.is_number()) throwParameter(name, v.dump(), "", "a number");
+  return v.get<double>();
+}
+
+double requireNumber(const json& obj, const std::string& path, const char* key) {
+  if (!obj.contains(key)) throw ParameterError("missing required key '" + join(path, key) + "'");
+  return number(obj.at(key), join(path, key));
+}
+
+double optNumber(const json& obj, const std::string& path, const char* key, double def) {
+  return obj.contains(key) ? number(obj.at(key), join(path, key)) : def;
+}
+
+std::string optString(const json& obj, const std::string& path, const char* key, const std::string& def,
+                      std::initializer_list<const char*> allowed) {
+  if (!obj.contains(key)) return def;
+  const json& v = obj.at(key);
+  std::string list;
+  for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string("\"") + a + "\"";
+  if (!v.is_string()) throwParameter(join(path, key), v.dump(), "", "one of " + list);
+  const std::string s = v.get<std::string>();
+  for (const char* a : allowed)
+    if (s == a) return s;
+  throwParameter(join(path, key), v.dump(), "", "one of " + list);
+}
+
+std::array<double, 3> vec3(const json& v, const std::string& name) {
+  if (!v.is_array() || v.size() != 3) throwParameter(name, v.dump(), "", "an array of 3 numbers");
+  std::array<double, 3> out{};
+  for (int a = 0; a < 3; ++a) out[a] = number(v[a], name + "[" + std::to_string(a) + "]");
+  return out;
+}
+
+// value must be finite and satisfy lo <(=) value <(=) hi.
+void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
+                bool hiOpen) {
+  const bool ok = std::isfinite(value) && (loOpen ? value > lo : value >= lo) && (hiOpen ? value < hi : value <= hi);
+  if (ok) return;
+  std::ostringstream range;
+  range << "in " << (loOpen ? "(" : "[") << lo << ", ";
+  if (std::isinf(hi))
+    range << "inf)";
+  else
+    range << hi << (hiOpen ? ")" : "]");
+  throwParameter(name, value, unit, range.str());
+}
+const double kInf = INFINITY;
+
+void parseGrid(const json& root, MpmParams& p) {
+  const json& g = requireObject(root, "", "grid");
+  checkKeys(g, "grid", {"dx", "cells", "origin"});
+  p.dx = requireNumber(g, "grid", "dx");
+  checkRange("grid.dx", p.dx, "m", 0, true, kInf, true);
+  if (!g.contains("cells")) throw ParameterError("missing required key 'grid.cells'");
+  const json& c = g.at("cells");
+  if (!c.is_array() || c.size() != 3) throwParameter("grid.cells", c.dump(), "", "an array of 3 integers");
+  for (int a = 0; a < 3; ++a) {
+    const std::string name = "grid.cells[" + std::to_string(a) + "]";
+    if (!c[a].is_number_integer()) throwParameter(name, c[a].dump(), "", "an integer >= 4");
+    const long n = c[a].get<long>();
+    if (n < 4 || n > (1L << 30)) throwParameter(name, n, "", "an integer in [4, 2^30]");
+    p.cells[a] = static_cast<int>(n);
+  }
+  if (g.contains("origin")) p.origin = vec3(g.at("origin"), "grid.origin");
+}
+
+void parseGravity(const json& root, MpmParams& p) {
+  if (!root.contains("gravity")) return;
+  const json& g = root.at("gravity");
+  if (g.is_array()) {
+    p.gravity = vec3(g, "gravity");
+    return;
+  }
+  if (!g.is_object())
+    throwParameter("gravity", g.dump(), "", "an array [gx, gy, gz] or an object {\"g\", \"incline_deg\"}");
+  checkKeys(g, "gravity", {"g", "incline_deg"});
+  const double mag = requireNumber(g, "gravity", "g");
+  checkRange("gravity.g", mag, "m/s^2", 0, false, kInf, true);
+  const double deg = optNumber(g, "gravity", "incline_deg", 0);
+  checkRange("gravity.incline_deg", deg, "deg", 0, false, 90, true);
+  const double a = deg * M_PI / 180.0;
+  p.gravity = {mag * std::sin(a), 0.0, -mag * std::cos(a)};
+}
+
+void parseWalls(const json& root, MpmParams& p) {
+  if (!root.contains("walls")) return;
+  const json& w = root.at("walls");
+  if (!w.is_object()) throwParameter("walls", w.dump(), "", "a JSON object with keys -x, +x, -y, +y, -z, +z");
+  static const char* const names[6] = {"-x", "+x", "-y", "+y", "-z", "+z"};
+  checkKeys(w, "walls", {names[0], names[1], names[2], names[3], names[4], names[5]});
+  for (int i = 0; i < 6; ++i) {
+    if (!w.contains(names[i])) continue;
+    const json& v = w.at(names[i]);
+    const std::string name = std::string("walls.") + names[i];
+    if (v.is_string() && v.get<std::string>() == "free") {
+      p.walls[i].friction = 0;
+    } else if (v.is_string() && v.get<std::string>() == "noslip") {
+      p.walls[i].friction = -1;
+    } else if (v.is_number()) {
+      p.walls[i].friction = v.get<double>();
+      checkRange(name, p.walls[i].friction, "", 0, false, kInf, true);
+    } else {
+      throwParameter(name, v.dump(), "", "\"free\", \"noslip\" or a friction coefficient >= 0");
+    }
+  }
+}
+
+void parseMaterial(const json& root, MpmParams& p) {
+  const json& m = requireObject(root, "", "material");
+  checkKeys(m, "material", {"density", "young_modulus", "poisson_ratio", "mu_s", "mu_2", "I0", "grain_diameter",
+                            "solid_density", "critical_density"});
+  GranularMaterial& g = p.material;
+  g.density = requireNumber(m, "material", "density");
+  checkRange("material.density", g.density, "kg/m^3", 0, true, kInf, true);
+  g.youngModulus = requireNumber(m, "material", "young_modulus");
+  checkRange("material.young_modulus", g.youngModulus, "Pa", 0, true, kInf, true);
+  g.poissonRatio = requireNumber(m, "material", "poisson_ratio");
+  checkRange("material.poisson_ratio", g.poissonRatio, "", 0, false, 0.5, true);
+  g.muS = requireNumber(m, "material", "mu_s");
+  checkRange("material.mu_s", g.muS, "", 0, false, kInf, true);
+  g.mu2 = requireNumber(m, "material", "mu_2");
+  checkRange("material.mu_2", g.mu2, "", g.muS, false, kInf, true);
+  g.I0 = optNumber(m, "material", "I0", g.I0);
+  checkRange("material.I0", g.I0, "", 0, true, kInf, true);
+  g.grainDiameter = optNumber(m, "material", "grain_diameter", g.grainDiameter);
+  checkRange("material.grain_diameter", g.grainDiameter, "m", 0, true, kInf, true);
+  g.solidDensity = optNumber(m, "material", "solid_density", g.solidDensity);
+  checkRange("material.solid_density", g.solidDensity, "kg/m^3", 0, true, kInf, true);
+  g.criticalDensity = optNumber(m, "material", "critical_density", g.criticalDensity);
+  checkRange("material.critical_density", g.criticalDensity, "kg/m^3", 0, false, kInf, true);
+}
+
+// Number of whole cells between two grid-line coordinates on axis `a`; throws unless both
+// lie on grid lines (origin + k dx) and hi > lo.
+std::size_t cellSpan(const MpmParams& p, int a, double lo, double hi, const std::string& path) {
+  static const char axis[3] = {'x', 'y', 'z'};
+  const double values[2] = {lo, hi};
+  const char* names[2] = {".lo[", ".hi["};
+  long idx[2];
+  for (int e = 0; e < 2; ++e) {
+    const double k = (values[e] - p.origin[a]) / p.dx;
+    idx[e] = std::lround(k);
+    if (std::fabs(k - static_cast<double>(idx[e])) > 1e-6) {
+      std::ostringstream range;
+      range << "on a grid line origin + k dx (origin[" << a << "] = " << p.origin[a] << " m, dx = " << p.dx
+            << " m) on " << axis[a];
+      throwParameter(path + names[e] + std::to_string(a) + "]", values[e], "m", range.str());
+    }
+  }
+  return static_cast<std::size_t>(idx[1] - idx[0]);
+}
+
+void parseParticles(const json& root, MpmScene& s) {
+  if (!root.contains("particles")) throw ParameterError("missing required key 'particles'");
+  const json& list = root.at("particles");
+  if (!list.is_array() || list.empty())
+    throwParameter("particles", list.dump().substr(0, 80), "", "a non-empty array of boxes {lo, hi, ppc, velocity}");
+  const auto lo = materialRegionLo(s.params), hi = materialRegionHi(s.params);
+  const double tol = 1e-9 * s.params.dx;
+  for (std::size_t b = 0; b < list.size(); ++b) {
+    const std::string path = "particles[" + std::to_string(b) + "]";
+    const json& j = list[b];
+    if (!j.is_object()) throwParameter(path, j.dump(), "", "a JSON object {lo, hi, ppc, velocity}");
+    checkKeys(j, path, {"lo", "hi", "ppc", "velocity"});
+    ParticleBox box;
+    if (!j.contains("lo")) throw ParameterError("missing required key '" + path + ".lo'");
+    if (!j.contains("hi")) throw ParameterError("missing required key '" + path + ".hi'");
+    box.lo = vec3(j.at("lo"), path + ".lo");
+    box.hi = vec3(j.at("hi"), path + ".hi");
+    if (j.contains("velocity")) box.velocity = vec3(j.at("velocity"), path + ".velocity");
+    if (j.contains("ppc")) {
+      const json& c = j.at("ppc");
+      if (c.is_number_integer()) {
+        const long n = c.get<long>();
+        const long k = std::lround(std::cbrt(static_cast<double>(n)));
+        if (n < 1 || k * k * k != n || k > 8)
+          throwParameter(path + ".ppc", n, "", "a cube n^3 with n in [1, 8] (1, 8, 27, ..., 512) or [nx, ny, nz]");
+        box.ppc = {int(k), int(k), int(k)};
+      } else if (c.is_array() && c.size() == 3) {
+        for (int a = 0; a < 3; ++a) {
+          const std::string name = path + ".ppc[" + std::to_string(a) + "]";
+          if (!c[a].is_number_integer() || c[a].get<long>() < 1 || c[a].get<long>() > 8)
+            throwParameter(name, c[a].dump(), "", "an integer in [1, 8]");
+          box.ppc[a] = c[a].get<int>();
+        }
+      } else {
+        throwParameter(path + ".ppc", c.dump(), "", "a cube n^3 (1, 8, 27, ...) or [nx, ny, nz]");
+      }
+    }
+    static const char axis[3] = {'x', 'y', 'z'};
+    for (int a = 0; a < 3; ++a) {
+      const std::string ax(1, axis[a]);
+      if (!(box.hi[a] > box.lo[a])) {
+        std::ostringstream range;
+        range << "> " << path << ".lo[" << a << "] = " << box.lo[a] << " m";
+        throwParameter(path + ".hi[" + std::to_string(a) + "]", box.hi[a], "m", range.str());
+      }
+      if (box.lo[a] < lo[a] - tol || box.hi[a] > hi[a] + tol) {
+        std::ostringstream msg;
+        msg << path << " (lo, hi on " << ax << ") = [" << box.lo[a] << ", " << box.hi[a]
+            << "] m: particles outside the grid; must lie in the material region [" << lo[a] << ", " << hi[a]
+            << "] m (grid box minus the " << kWallLayer << "-cell wall layers)";
+        throw ParameterError(msg.str());
+      }
+      cellSpan(s.params, a, box.lo[a], box.hi[a], path);
+    }
+    for (std::size_t o = 0; o < s.boxes.size(); ++o) {
+      const ParticleBox& q = s.boxes[o];
+      bool overlap = true;
+      for (int a = 0; a < 3; ++a) overlap = overlap && box.lo[a] < q.hi[a] - tol && q.lo[a] < box.hi[a] - tol;
+      if (overlap)
+        throwParameter(path, "box overlapping particles[" + std::to_string(o) + "]", "",
+                       "disjoint from the other boxes (overlap would double the mass)");
+    }
+    s.boxes.push_back(box);
+  }
+}
+
+void parseRun(const json& root, RunSettings& r) {
+  const json& j = requireObject(root, "", "run");
+  checkKeys(j, "run", {"duration", "dt", "dt_factor", "output_every", "series_every", "output_dir", "vtk", "backend",
+                       "precision"});
+  r.duration = requireNumber(j, "run", "duration");
+  checkRange("run.duration", r.duration, "s", 0, true, kInf, true);
+  if (j.contains("dt")) {
+    const json& d = j.at("dt");
+    if (d.is_string() && d.get<std::string>() == "auto") {
+      r.dt = 0;
+    } else if (d.is_number()) {
+      r.dt = d.get<double>();
+      checkRange("run.dt", r.dt, "s", 0, true, r.duration, false);
+    } else {
+      throwParameter("run.dt", d.dump(), "", "\"auto\" or a step in (0, run.duration] s");
+    }
+  }
+  r.dtFactor = optNumber(j, "run", "dt_factor", 0.9);
+  checkRange("run.dt_factor", r.dtFactor, "", 0, true, 1, false);
+  r.outputEvery = optNumber(j, "run", "output_every", r.duration / 20);
+  checkRange("run.output_every", r.outputEvery, "s", 0, true, kInf, true);
+  r.seriesEvery = optNumber(j, "run", "series_every", r.outputEvery / 10);
+  checkRange("run.series_every", r.seriesEvery, "s", 0, true, kInf, true);
+  if (j.contains("output_dir")) {
+    const json& d = j.at("output_dir");
+    if (!d.is_string() || d.get<std::string>().empty()) throwParameter("run.output_dir", d.dump(), "", "a non-empty string");
+    r.outputDir = d.get<std::string>();
+  }
+  r.vtk = optString(j, "run", "vtk", "raw", {"raw", "ascii", "none"});
+  r.backend = optString(j, "run", "backend", "cpu", {"cpu", "cuda"}) == "cuda" ? Backend::Cuda : Backend::Cpu;
+  r.precision =
+      optString(j, "run", "precision", "double", {"double", "float"}) == "float" ? Precision::Float : Precision::Double;
+}
+
+}  // namespace
+
+std::array<double, 3> materialRegionLo(const MpmParams& p) {
+  std::array<double, 3> lo{};
+  for (int a = 0; a < 3; ++a) lo[a] = p.origin[a] + kWallLayer * p.dx;
+  return lo;
+}
+
+std::array<double, 3> materialRegionHi(const MpmParams& p) {
+  std::array<double, 3> hi{};
+  for (int a = 0; a < 3; ++a) hi[a] = p.origin[a] + (p.cells[a] - kWallLayer) * p.dx;
+  return hi;
+}
+
+void validateBackend(Backend backend, Precision precision) {
+  if (backend == Backend::Cpu && precision == Precision::Float)
+    throwParameter("run.precision", "float", "", "\"double\" with backend \"cpu\" (float runs on \"cuda\" only)");
+}
+
+MpmScene parseScene(const std::string& jsonText, const std::string& source) {
+  json root;
+  try {
+    root = json::parse(jsonText);
+  } catch (const json::parse_error& e) {
+    throw ParameterError(source + ": not valid JSON: " + e.what());
+  }
+  if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
+  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "cfl", "walls", "material", "particles", "run"});
+  if (root.contains("description") && !root.at("description").is_string())
+    throwParameter("description", root.at("description").dump(), "", "a string");
+  MpmScene s;
+  parseGrid(root, s.params);
+  parseGravity(root, s.params);
+  s.params.flipAlpha = optNumber(root, "", "flip_alpha", s.params.flipAlpha);
+  checkRange("flip_alpha", s.params.flipAlpha, "", 0, false, 1, false);
+  s.params.cfl = optNumber(root, "", "cfl", s.params.cfl);
+  checkRange("cfl", s.params.cfl, "", 0, true, 1, false);
+  parseWalls(root, s.params);
+  parseMaterial(root, s.params);
+  parseParticles(root, s);
+  parseRun(root, s.run);
+  validateBackend(s.run.backend, s.run.precision);
+  s.sourceJson = root.dump();
+  return s;
+}
+
+MpmScene loadScene(const std::string& path) {
+  std::ifstream is(path);
+  if (!is) throwParameter("scene file", "'" + path + "'", "", "an existing, readable JSON file");
+  std::stringstream ss;
+  ss << is.rdbuf();
+  return parseScene(ss.str(), path);
+}
+
+ParticleSet seedParticles(const MpmScene& scene) {
+  ParticleSet p;
+  for (const ParticleBox& b : scene.boxes) {
+    const std::size_t first = p.size();
+    seedBox(scene.params, b.lo, b.hi, b.ppc, p);
+    for (std::size_t i = first; i < p.size(); ++i)
+      for (int a = 0; a < 3; ++a) p.v[3 * i + a] = b.velocity[a];
+  }
+  return p;
+}
+
+const char* backendName(Backend backend) { return backend == Backend::Cuda ? "cuda" : "cpu"; }
+const char* precisionName(Precision precision) { return precision == Precision::Float ? "float" : "double"; }
+
+}  // namespace mpm
+}  // namespace mpmsdem

@@ -1,0 +1,119 @@
+// A JSON-described MPM scene: grid, material, walls, particle boxes and run settings, as
+// read by the plain C++ driver `mpmsdem-run` (apps/mpmsdem-run.cpp). SI units throughout.
+//
+// Schema (keys are case-sensitive; an unknown key anywhere is a ParameterError naming it;
+// "(req)" marks required keys, the others show their default):
+//
+// {
+//   "description": "free text (optional)",
+//   "grid": {                       (req)
+//     "dx": 0.01,                   (req) cell size [m], > 0
+//     "cells": [180, 20, 40],       (req) cells per axis, each >= 4
+//     "origin": [0, 0, 0]           lower corner of the grid box [m]
+//   },                              The walls act on the 2 outer node layers (kWallLayer),
+//                                   so particles must lie in [origin + 2 dx, origin + (cells-2) dx].
+//   "gravity": [0, 0, -9.81]        [m/s^2], or {"g": 9.81, "incline_deg": 10}: a flume
+//                                   inclined by incline_deg in [0, 90) about y, descending
+//                                   toward +x: gravity = g (sin a, 0, -cos a); g >= 0.
+//   "flip_alpha": 0.99,             FLIP/PIC blend, in [0, 1]
+//   "cfl": 0.3,                     CFL number of the stable-step estimate, in (0, 1]
+//   "walls": {"-x": "free", "+x": "free", "-y": "free", "+y": "free", "-z": "free", "+z": "free"},
+//                                   each wall: "free" (free slip, the default), "noslip",
+//                                   or a Coulomb friction coefficient >= 0 (0 = free slip).
+//                                   Walls never let material through.
+//   "material": {                   (req)
+//     "density": 1600,              (req) initial bulk density rho_0 [kg/m^3], > 0
+//     "young_modulus": 1e6,         (req) E [Pa], > 0
+//     "poisson_ratio": 0.3,         (req) nu, in [0, 0.5)
+//     "mu_s": 0.24,                 (req) static friction coefficient, >= 0
+//     "mu_2": 0.65,                 (req) limiting friction coefficient, >= mu_s
+//     "I0": 0.279,                  inertial-number scale, > 0
+//     "grain_diameter": 0.002,      d [m], > 0
+//     "solid_density": 2500,        rho_s [kg/m^3], > 0
+//     "critical_density": 0         rho_c [kg/m^3], >= 0; 0 means rho_0
+//   },
+//   "particles": [                  (req) non-empty list of non-overlapping boxes
+//     {"lo": [x,y,z], "hi": [x,y,z],   (req) box corners [m] on grid lines (origin + k dx),
+//                                      hi > lo on every axis, inside the material region
+//      "ppc": 8,                       particles per cell: a cube n^3 (1, 8, 27, ..., 512) or
+//                                      per axis [nx, ny, nz], each in [1, 8]; default 8
+//      "velocity": [0, 0, 0]}          initial velocity [m/s]
+//   ],
+//   "run": {                        (req)
+//     "duration": 1.0,              (req) simulated time [s], > 0
+//     "dt": "auto",                 fixed step [s] > 0, or "auto": dt_factor * stable step,
+//                                   re-evaluated every step
+//     "dt_factor": 0.9,             in (0, 1]; only with "dt": "auto"
+//     "output_every": duration/20,  snapshot interval [s], > 0 (HDF5 snapshot + VTK file)
+//     "series_every": output_every/10,  time-series interval [s], > 0
+//     "output_dir": "out",          created when absent
+//     "vtk": "raw",                 VTK particle files: "raw" (appended binary), "ascii", "none"
+//     "backend": "cpu",             "cpu" or "cuda"
+//     "precision": "double"         "double" or "float" (float needs "cuda")
+//   }
+// }
+//
+// Seeding (mpm::seedBox): every grid cell of a box gets nx ny nz particles at the centres
+// of an equal subdivision of the cell, each with volume dx^3/(nx ny nz), mass rho_0 times
+// that, zero stress, J = 1 and the box velocity. Particle count of a box =
+// box volume / dx^3 * nx ny nz; total mass = rho_0 * box volume.
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include "mpm/MpmSolver.hpp"
+#include "mpm/MpmTypes.hpp"
+
+namespace mpmsdem {
+namespace mpm {
+
+// One box of material points (see "particles" above).
+struct ParticleBox {
+  std::array<double, 3> lo{0, 0, 0};        // lower corner [m]
+  std::array<double, 3> hi{0, 0, 0};        // upper corner [m], > lo
+  std::array<int, 3> ppc{2, 2, 2};          // particles per cell per axis, each in [1, 8]
+  std::array<double, 3> velocity{0, 0, 0};  // initial velocity [m/s]
+};
+
+// How the scene is run and written (see "run" above).
+struct RunSettings {
+  double duration = 0;            // simulated time [s], > 0
+  double dt = 0;                  // fixed step [s]; 0 means "auto"
+  double dtFactor = 0.9;          // auto step = dtFactor * stableTimeStep(), in (0, 1]
+  double outputEvery = 0;         // snapshot interval [s], > 0
+  double seriesEvery = 0;         // time-series record interval [s], > 0
+  std::string outputDir = "out";  // output folder
+  std::string vtk = "raw";        // "raw", "ascii" or "none"
+  Backend backend = Backend::Cpu;
+  Precision precision = Precision::Double;
+};
+
+struct MpmScene {
+  MpmParams params;
+  std::vector<ParticleBox> boxes;
+  RunSettings run;
+  std::string sourceJson;  // the scene as parsed (compact JSON), kept for output metadata
+};
+
+// Parse and validate a scene. Throws ParameterError naming the key path (e.g.
+// "material.poisson_ratio") and the allowed range; `source` names the text in messages.
+MpmScene parseScene(const std::string& jsonText, const std::string& source = "scene");
+// Read the file and parse it; a missing file is a ParameterError naming the path.
+MpmScene loadScene(const std::string& path);
+
+// Check a backend/precision pair (after command-line overrides): float needs CUDA.
+void validateBackend(Backend backend, Precision precision);
+
+// Lower and upper corners of the region open to material points (inside the wall layers).
+std::array<double, 3> materialRegionLo(const MpmParams& params);
+std::array<double, 3> materialRegionHi(const MpmParams& params);
+
+// Material points of all boxes, in box order (see "Seeding" above).
+ParticleSet seedParticles(const MpmScene& scene);
+
+const char* backendName(Backend backend);
+const char* precisionName(Precision precision);
+
+}  // namespace mpm
+}  // namespace mpmsdem

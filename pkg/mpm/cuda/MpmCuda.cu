@@ -1,0 +1,280 @@
+// Host control code of the CUDA backend: memory, transfers, launches, failure checks.
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "mpm/cuda/CudaCheck.hpp"
+#include "mpm/cuda/MpmCuda.hpp"
+#include "mpm/cuda/MpmCudaKernels.cuh"
+
+namespace mpmsdem {
+namespace mpm {
+
+namespace {
+constexpr int kThreads = 256;
+inline int blocksFor(std::size_t n) { return static_cast<int>((n + kThreads - 1) / kThreads); }
+
+template <typename U>
+void deviceAlloc(U** ptr, std::size_t count, std::size_t& bytes) {
+  CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(ptr), std::max<std::size_t>(count, 1) * sizeof(U)));
+  bytes += std::max<std::size_t>(count, 1) * sizeof(U);
+}
+template <typename U>
+void deviceFree(U*& ptr) {
+  if (ptr) CUDA_CHECK_NOTHROW(cudaFree(ptr));
+  ptr = nullptr;
+}
+// Host double array with a given stride/offset -> device T array.
+template <typename T>
+void upload(T* dst, const std::vector<double>& src, std::size_t n, int stride, int offset, std::vector<T>& buf) {
+  buf.resize(n);
+  for (std::size_t p = 0; p < n; ++p) buf[p] = static_cast<T>(src[stride * p + offset]);
+  CUDA_CHECK(cudaMemcpy(dst, buf.data(), n * sizeof(T), cudaMemcpyHostToDevice));
+}
+template <typename T>
+void download(std::vector<double>& dst, const T* src, std::size_t n, int stride, int offset, std::vector<T>& buf) {
+  buf.resize(n);
+  CUDA_CHECK(cudaMemcpy(buf.data(), src, n * sizeof(T), cudaMemcpyDeviceToHost));
+  for (std::size_t p = 0; p < n; ++p) dst[stride * p + offset] = static_cast<double>(buf[p]);
+}
+}  // namespace
+
+template <typename T>
+MpmCuda<T>::MpmCuda(const MpmParams& params)
+    : params_(params),
+      grid_(makeGridConst<T>(params, 0.0)),
+      mat_(makeConstitutiveConst<T>(params.material)),
+      maxSpeedAllowed_(blowUpSpeed(params)) {
+  nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
+  deviceAlloc(&nodes_, static_cast<std::size_t>(kGridComponents) * nNodes_, bytes_);
+  deviceAlloc(&flags_, 1, bytes_);
+}
+
+template <typename T>
+MpmCuda<T>::~MpmCuda() {
+  freeParticles();
+  deviceFree(nodes_);
+  deviceFree(flags_);
+}
+
+template <typename T>
+std::string MpmCuda<T>::name() const {
+  return sizeof(T) == sizeof(float) ? "cuda-float" : "cuda-double";
+}
+
+template <typename T>
+void MpmCuda<T>::freeParticles() {
+  for (auto& st : state_) {
+    for (auto& a : st.x) deviceFree(a);
+    for (auto& a : st.v) deviceFree(a);
+    for (auto& a : st.s) deviceFree(a);
+    deviceFree(st.J);
+    deviceFree(st.gdp);
+    deviceFree(st.phase);
+  }
+  deviceFree(mass_);
+  deviceFree(vol0_);
+  for (auto& a : fext_) deviceFree(a);
+  bytes_ = (static_cast<std::size_t>(kGridComponents) * nNodes_) * sizeof(T) + sizeof(StepFlags);
+  hasFext_ = false;
+}
+
+template <typename T>
+void MpmCuda<T>::setParticles(const ParticleSet& ps) {
+  const double meanMass = validateParticles(params_, ps);
+  grid_.massEps = static_cast<T>(1e-12 * meanMass);
+  freeParticles();
+  n_ = ps.size();
+  for (auto& st : state_) {
+    for (auto& a : st.x) deviceAlloc(&a, n_, bytes_);
+    for (auto& a : st.v) deviceAlloc(&a, n_, bytes_);
+    for (auto& a : st.s) deviceAlloc(&a, n_, bytes_);
+    deviceAlloc(&st.J, n_, bytes_);
+    deviceAlloc(&st.gdp, n_, bytes_);
+    deviceAlloc(&st.phase, n_, bytes_);
+  }
+  deviceAlloc(&mass_, n_, bytes_);
+  deviceAlloc(&vol0_, n_, bytes_);
+  cur_ = 0;
+  DeviceState& s = state_[0];
+  std::vector<T> buf;
+  for (int d = 0; d < 3; ++d) {
+    upload(s.x[d], ps.x, n_, 3, d, buf);
+    upload(s.v[d], ps.v, n_, 3, d, buf);
+  }
+  for (int k = 0; k < 6; ++k) upload(s.s[k], ps.stress, n_, 6, k, buf);
+  upload(s.J, ps.J, n_, 1, 0, buf);
+  upload(mass_, ps.mass, n_, 1, 0, buf);
+  upload(vol0_, ps.volume0, n_, 1, 0, buf);
+  if (ps.gammaDotP.empty())
+    CUDA_CHECK(cudaMemset(s.gdp, 0, std::max<std::size_t>(n_, 1) * sizeof(T)));
+  else
+    upload(s.gdp, ps.gammaDotP, n_, 1, 0, buf);
+  if (ps.phase.empty())
+    CUDA_CHECK(cudaMemset(s.phase, 0, std::max<std::size_t>(n_, 1)));
+  else if (n_)
+    CUDA_CHECK(cudaMemcpy(s.phase, ps.phase.data(), n_, cudaMemcpyHostToDevice));
+  maxSpeed_ = 0;
+  for (std::size_t p = 0; p < n_; ++p)
+    maxSpeed_ = std::max(maxSpeed_, std::sqrt(ps.v[3 * p] * ps.v[3 * p] + ps.v[3 * p + 1] * ps.v[3 * p + 1] +
+                                              ps.v[3 * p + 2] * ps.v[3 * p + 2]));
+  if (!ps.fext.empty()) setExternalForces(ps.fext);
+}
+
+template <typename T>
+void MpmCuda<T>::getParticles(ParticleSet& out) {
+  const DeviceState& s = state_[cur_];
+  out.x.assign(3 * n_, 0.0);
+  out.v.assign(3 * n_, 0.0);
+  out.stress.assign(6 * n_, 0.0);
+  out.mass.assign(n_, 0.0);
+  out.volume0.assign(n_, 0.0);
+  out.J.assign(n_, 0.0);
+  out.gammaDotP.assign(n_, 0.0);
+  out.phase.assign(n_, 0);
+  out.fext.assign(3 * n_, 0.0);
+  if (n_ == 0) return;
+  std::vector<T> buf;
+  for (int d = 0; d < 3; ++d) {
+    download(out.x, s.x[d], n_, 3, d, buf);
+    download(out.v, s.v[d], n_, 3, d, buf);
+    if (hasFext_) download(out.fext, fext_[d], n_, 3, d, buf);
+  }
+  for (int k = 0; k < 6; ++k) download(out.stress, s.s[k], n_, 6, k, buf);
+  download(out.J, s.J, n_, 1, 0, buf);
+  download(out.gammaDotP, s.gdp, n_, 1, 0, buf);
+  download(out.mass, mass_, n_, 1, 0, buf);
+  download(out.volume0, vol0_, n_, 1, 0, buf);
+  CUDA_CHECK(cudaMemcpy(out.phase.data(), s.phase, n_, cudaMemcpyDeviceToHost));
+}
+
+template <typename T>
+void MpmCuda<T>::setExternalForces(const std::vector<double>& f) {
+  if (f.size() != 3 * n_) {
+    std::ostringstream os;
+    os << "3 x numParticles = " << 3 * n_ << " values";
+    throwParameter("externalForces.size()", f.size(), "", os.str());
+  }
+  for (std::size_t i = 0; i < f.size(); ++i)
+    if (!std::isfinite(f[i])) throwParameter("externalForces[" + std::to_string(i) + "]", f[i], "N", "finite");
+  std::vector<T> buf;
+  for (int d = 0; d < 3; ++d) {
+    if (!fext_[d]) deviceAlloc(&fext_[d], n_, bytes_);
+    upload(fext_[d], f, n_, 3, d, buf);
+  }
+  hasFext_ = true;
+}
+
+template <typename T>
+double MpmCuda<T>::stableTimeStep() {
+  return params_.cfl * params_.dx / (pWaveSpeed(params_.material) + maxSpeed_);
+}
+
+template <typename T>
+std::size_t MpmCuda<T>::memoryBytes() const {
+  return bytes_;
+}
+
+template <typename T>
+ParticleIn<T> MpmCuda<T>::input() const {
+  const DeviceState& s = state_[cur_];
+  ParticleIn<T> in;
+  for (int d = 0; d < 3; ++d) {
+    in.x[d] = s.x[d];
+    in.v[d] = s.v[d];
+    in.fext[d] = hasFext_ ? fext_[d] : nullptr;
+  }
+  for (int k = 0; k < 6; ++k) in.s[k] = s.s[k];
+  in.J = s.J;
+  in.mass = mass_;
+  in.vol0 = vol0_;
+  return in;
+}
+
+template <typename T>
+ParticleOut<T> MpmCuda<T>::output() const {
+  const DeviceState& s = state_[1 - cur_];
+  ParticleOut<T> out;
+  for (int d = 0; d < 3; ++d) {
+    out.x[d] = s.x[d];
+    out.v[d] = s.v[d];
+  }
+  for (int k = 0; k < 6; ++k) out.s[k] = s.s[k];
+  out.J = s.J;
+  out.gdp = s.gdp;
+  out.phase = s.phase;
+  return out;
+}
+
+template <typename T>
+void MpmCuda<T>::step(double dt) {
+  if (steps_ % 100 == 0) checkTimeStep(dt);
+  const int n = static_cast<int>(n_);
+  const T dtT = static_cast<T>(dt);
+  CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kGridComponents) * nNodes_ * sizeof(T)));
+  const StepFlags init{n, 0u};
+  CUDA_CHECK(cudaMemcpy(flags_, &init, sizeof(StepFlags), cudaMemcpyHostToDevice));
+  const ParticleIn<T> in = input();
+  const ParticleOut<T> out = output();
+  if (n > 0) {
+    cudak::p2gKernel<T><<<blocksFor(n_), kThreads>>>(n, in, grid_, dtT, nodes_, nNodes_);
+    CUDA_CHECK(cudaGetLastError());
+  }
+  cudak::gridKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_, dtT);
+  CUDA_CHECK(cudaGetLastError());
+  StepConst<T> sc;
+  sc.dt = dtT;
+  sc.alpha = static_cast<T>(params_.flipAlpha);
+  sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
+  sc.mat = mat_;
+  if (n > 0) {
+    cudak::g2pKernel<T><<<blocksFor(n_), kThreads>>>(n, in, out, nodes_, nNodes_, grid_, sc, &flags_->firstBad,
+                                                     &flags_->maxSpeedBits);
+    CUDA_CHECK(cudaGetLastError());
+  }
+  StepFlags res;
+  CUDA_CHECK(cudaMemcpy(&res, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
+  if (res.firstBad < n) {
+    const int p = res.firstBad;
+    T xv[7];
+    const T* src[7] = {out.x[0], out.x[1], out.x[2], out.v[0], out.v[1], out.v[2], out.J};
+    for (int i = 0; i < 7; ++i) CUDA_CHECK(cudaMemcpy(&xv[i], src[i] + p, sizeof(T), cudaMemcpyDeviceToHost));
+    std::ostringstream os;
+    os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name() << "): particle " << p
+       << " has a non-finite state or a speed above " << maxSpeedAllowed_ << " m/s (1e3 x P-wave speed): x = ("
+       << xv[0] << ", " << xv[1] << ", " << xv[2] << ") m, v = (" << xv[3] << ", " << xv[4] << ", " << xv[5]
+       << ") m/s, J = " << xv[6] << ". The particle state is kept at the start of this step.";
+    throw RuntimeFailure(os.str());
+  }
+  float vmax;
+  std::memcpy(&vmax, &res.maxSpeedBits, sizeof(float));
+  maxSpeed_ = vmax;
+  cur_ = 1 - cur_;
+  hasFext_ = false;
+  time_ += dt;
+  ++steps_;
+}
+
+template class MpmCuda<float>;
+template class MpmCuda<double>;
+
+std::unique_ptr<MpmSolver> makeCudaSolver(const MpmParams& params, Precision precision) {
+  if (precision == Precision::Float) return std::make_unique<MpmCuda<float>>(params);
+  return std::make_unique<MpmCuda<double>>(params);
+}
+
+bool cudaDevicePresent() {
+  int count = 0;
+  const cudaError_t err = cudaGetDeviceCount(&count);
+  if (err != cudaSuccess) {
+    cudaGetLastError();  // no driver or no device: clear the sticky error and report "absent"
+    return false;
+  }
+  return count > 0;
+}
+
+}  // namespace mpm
+}  // namespace mpmsdem

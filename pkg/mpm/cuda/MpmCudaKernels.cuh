@@ -1,0 +1,70 @@
+// CUDA kernels of one MPM step: thin wrappers that call the shared stage functions.
+#pragma once
+#include "mpm/MpmKernelsCommon.hpp"
+
+namespace mpmsdem {
+namespace mpm {
+namespace cudak {
+
+// P2G scatter into the flat grid with atomics.
+template <typename T>
+struct AtomicScatter {
+  T* grid;
+  int nNodes;
+  __device__ __forceinline__ void operator()(int node, T m, const Vec3T<T>& pOld, const Vec3T<T>& pNew) const {
+    atomicAdd(grid + node, m);
+    atomicAdd(grid + nNodes + node, pOld.x);
+    atomicAdd(grid + 2 * nNodes + node, pOld.y);
+    atomicAdd(grid + 3 * nNodes + node, pOld.z);
+    atomicAdd(grid + 4 * nNodes + node, pNew.x);
+    atomicAdd(grid + 5 * nNodes + node, pNew.y);
+    atomicAdd(grid + 6 * nNodes + node, pNew.z);
+  }
+};
+
+template <typename T>
+__global__ void p2gKernel(int n, ParticleIn<T> in, GridConst<T> g, T dt, T* grid, int nNodes) {
+  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+  if (p >= n) return;
+  AtomicScatter<T> add{grid, nNodes};
+  p2gParticle(p, in, g, dt, add);
+}
+
+template <typename T>
+__global__ void gridKernel(int nNodes, T* grid, GridConst<T> g, T dt) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= nNodes) return;
+  gridNodeUpdate(i, grid, nNodes, g, dt);
+}
+
+// flags[0]: smallest failing particle index (atomicMin); flags[1]: float bits of the largest
+// speed (atomicMax; non-negative floats order like their bit patterns).
+// Largest value over the warp; every lane calls it (inactive lanes must pass 0 via the
+// caller, which keeps the whole warp alive).
+__device__ __forceinline__ unsigned int warpMaxU32(unsigned int v) {
+  for (int off = 16; off > 0; off >>= 1) {
+    const unsigned int o = __shfl_xor_sync(0xffffffffu, v, off);
+    v = o > v ? o : v;
+  }
+  return v;
+}
+
+template <typename T>
+__global__ void g2pKernel(int n, ParticleIn<T> in, ParticleOut<T> out, const T* grid, int nNodes, GridConst<T> g,
+                          StepConst<T> sc, int* firstBad, unsigned int* maxSpeedBits) {
+  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+  unsigned int bits = 0u;
+  if (p < n) {
+    const G2PResult<T> r = g2pParticle(p, in, out, grid, nNodes, g, sc);
+    if (!r.ok) atomicMin(firstBad, p);
+    const float s = static_cast<float>(r.speed);
+    bits = s == s ? __float_as_uint(s) : 0u;  // NaN speeds are reported via firstBad
+  }
+  // One atomic per warp (blockDim is a multiple of 32, so whole warps reach this point).
+  const unsigned int warpMax = warpMaxU32(bits);
+  if ((threadIdx.x & 31u) == 0u && warpMax > 0u) atomicMax(maxSpeedBits, warpMax);
+}
+
+}  // namespace cudak
+}  // namespace mpm
+}  // namespace mpmsdem

@@ -1,0 +1,18 @@
+// Bound functor (YADE naming: Bo1 = one shape -> bound): world-frame axis-aligned bounding
+// box of a rounded sphero-polyhedron at a given pose.
+#pragma once
+#include "common/Types.hpp"
+#include "sdem/SpheroPolyhedron.hpp"
+
+namespace mpmsdem {
+namespace sdem {
+
+struct Bo1_SpheroPolyhedron_Aabb {
+  // pos: world position of the body-frame origin [m]; ori: rotation body -> world (unit).
+  // lo/hi [m]: the tight box of the rounded body = box of the rotated core vertices grown by
+  // the sweep radius R on every side (exact, since the rounded body is core (+) ball(R)).
+  static void go(const SpheroPolyhedron& shape, const Vec3& pos, const Quat& ori, Vec3& lo, Vec3& hi);
+};
+
+}  // namespace sdem
+}  // namespace mpmsdem

@@ -1,0 +1,84 @@
+// Ig2_SpheroPolyhedron_SpheroPolyhedron: narrow-phase contact geometry between two
+// sphero-polyhedra (paper §2.2, Fig 3, Eq 7; DESIGN §3 "Contact features").
+//
+// Core feature pairs are enumerated (vertex–face both ways, edge–edge, vertex–edge both
+// ways, vertex–vertex); a pair is a contact when its core distance d < R_A + R_B and it
+// passes the rules below, which make each geometric contact count once:
+//  - vertex–face: the vertex lies strictly in front of the face and projects inside the
+//    closed face polygon, and either the vertex belongs to a face of its own body that is
+//    nearly anti-parallel to the other face (normals' dot product <= -patchCosine: the two
+//    faces form a contact patch, whose corners are the vertices of the clipped intersection
+//    polygon of the faces) or the contact normal lies in the vertex's normal cone;
+//  - edge–edge: both closest points interior to their (closed) edges, edges not parallel,
+//    both edges convex (valleys never carry a contact), the normal in both edges' normal cones;
+//  - vertex–edge and vertex–vertex: the normal in the normal cones of both features.
+// All these tests use a length tolerance tol = 1e-9 x the larger bounding radius, and
+// contacts of one pair whose two core points both coincide within 4 tol are merged (the
+// first enumerated survives: vertex–face, face–vertex, edge–edge, vertex–edge, edge–vertex,
+// vertex–vertex). Two aligned equal cubes face to face give 4 contacts, a cube face-down on
+// a slab 4 at any yaw, edge-down 2, corner-down 1.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "sdem/SpheroPolyhedron.hpp"
+
+namespace mpmsdem {
+namespace sdem {
+
+// Kind of a core feature; numbering matches SpheroPolyhedron::PointQuery::featureKind.
+enum class FeatureKind : std::int8_t { Face = 0, Edge = 1, Vertex = 2 };
+
+// One contact between bodies A and B (world frame).
+struct SdemGeom {
+  FeatureKind kindA = FeatureKind::Vertex;  // feature of A's core carrying the contact
+  FeatureKind kindB = FeatureKind::Face;    // feature of B's core
+  int indexA = -1;                          // index of that feature in A's shape
+  int indexB = -1;                          // index in B's shape
+  Vec3 pointA = Vec3::Zero();               // closest point on A's core [m]
+  Vec3 pointB = Vec3::Zero();               // closest point on B's core [m]
+  Vec3 normal = Vec3::UnitX();              // unit normal from pointA to pointB
+  Real distance = 0;                        // core distance d [m], 0 < d < R_A + R_B
+  Real overlap = 0;                         // delta = R_A + R_B - d [m] (Eq 7)
+  Vec3 contactPoint = Vec3::Zero();         // midway between the two sphere surfaces [m]
+};
+
+// A shape placed in the world: the world-frame copies of its core data the narrow phase
+// needs, recomputed by update() when the pose changes.
+struct PosedSpheroPolyhedron {
+  const SpheroPolyhedron* shape = nullptr;
+  Vec3 pos = Vec3::Zero();          // centroid [m]
+  Quat ori = Quat::Identity();      // x_world = pos + ori * x_body
+  std::vector<Vec3> vertices;       // world core vertices [m]
+  std::vector<Vec3> faceNormals;    // world unit outward normals
+  std::vector<Real> faceOffsets;    // n . x on the face plane [m]
+  std::vector<Vec3> faceLo, faceHi; // per-face AABB [m]
+  std::vector<Vec3> edgeDir;        // unit direction v0 -> v1
+  std::vector<Real> edgeLength;     // [m]
+  std::vector<Vec3> edgeIn0, edgeIn1;  // unit in-face directions perpendicular to the edge,
+                                       // pointing into face f0 / f1
+  Vec3 coreLo = Vec3::Zero(), coreHi = Vec3::Zero();  // AABB of the core [m]
+
+  // (Re)compute everything above for `s` at pose (pos, ori). `s` must outlive this object.
+  void update(const SpheroPolyhedron& s, const Vec3& pos, const Quat& ori);
+};
+
+class Ig2_SpheroPolyhedron_SpheroPolyhedron {
+ public:
+  // Faces of the two bodies whose outward normals satisfy nA . nB <= -patchCosine are
+  // treated as a contact patch (see the header comment). 0.9 (about 26 degrees of relative
+  // tilt) is far beyond the tilt at which the far corners of a face leave the cutoff
+  // 2R for any face wider than 5R.
+  static constexpr Real patchCosine = 0.9;
+
+  // Append the contacts between A and B to `out`. Returns false when the cores are found
+  // interpenetrating (a vertex of one core inside the other, convex, core): the caller must
+  // stop the run, the time step was too large for the barrier.
+  static bool go(const PosedSpheroPolyhedron& A, const PosedSpheroPolyhedron& B, std::vector<SdemGeom>& out);
+
+  // Length tolerance of the feature tests for this pair [m].
+  static Real tolerance(const PosedSpheroPolyhedron& A, const PosedSpheroPolyhedron& B);
+};
+
+}  // namespace sdem
+}  // namespace mpmsdem

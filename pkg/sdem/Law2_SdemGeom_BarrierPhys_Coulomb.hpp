@@ -1,0 +1,68 @@
+// Law2_SdemGeom_BarrierPhys_Coulomb: contact law of two sphero-polyhedra (paper Eqs 9–11,
+// with DESIGN §3's reading of Eq 10 as a force).
+//
+// Normal: log barrier b(d) = -k_c (d - R)^2 ln(d / R) on the core gap d = R - delta,
+// R = R_A + R_B, whose force is Eq 10:
+//   F_n(delta) = -db/dd = -k_c delta [2 ln((R - delta)/R) - R/(R - delta) + 1]   [N],
+// ~ 3 k_c delta^2 / R near first touch and unbounded as delta -> R. Tangent stiffness
+// k_n = dF_n/ddelta. Optional normal dashpot c_n = 2 zeta_n sqrt(m_eff k_n); the total normal
+// force is clamped at >= 0 (no adhesion).
+// Tangential: incremental spring with history xi (Eq 9): each step xi is rotated into the
+// current tangent plane keeping its length, incremented by v_t dt, and
+//   F_t = -K_t xi - c_t v_t,  K_t = k_n / (2 (1 + nu)) (Eq 11),  c_t = 2 zeta_t sqrt(m_eff K_t).
+// If |K_t xi| > mu F_n the contact slips: xi is rescaled so that K_t |xi| = mu F_n and
+// F_t = -K_t xi (the dashpot is off while slipping); otherwise the damped force is capped at
+// mu F_n in magnitude. Forces are those exerted ON B (A receives the opposite).
+#pragma once
+#include "sdem/Ig2_SpheroPolyhedron_SpheroPolyhedron.hpp"
+#include "sdem/Ip2_SdemMat_SdemMat_BarrierPhys.hpp"
+
+namespace mpmsdem {
+namespace sdem {
+
+// State kept by a contact across steps.
+struct ContactHistory {
+  Vec3 xi = Vec3::Zero();  // cumulative elastic tangential displacement [m] (Eq 9)
+};
+
+// What the law produced for one contact in one step.
+struct LawResult {
+  Real normalForce = 0;             // F_n >= 0 along the normal, on B [N] (elastic + damping)
+  Vec3 tangentialForce = Vec3::Zero();  // F_t on B [N], perpendicular to the normal
+  Real normalStiffness = 0;         // k_n = dF_n/ddelta [N/m]
+  Real tangentialStiffness = 0;     // K_t [N/m]
+  Real barrierEnergy = 0;           // b(d) [J]
+  Real springEnergy = 0;            // K_t |xi|^2 / 2 after the step [J]
+  Real frictionDissipation = 0;     // energy dissipated by slip in this step [J]
+  Real dampingDissipation = 0;      // energy dissipated by the dashpots in this step [J]
+  bool sliding = false;             // the Coulomb cap was reached
+};
+
+class Law2_SdemGeom_BarrierPhys_Coulomb {
+ public:
+  // Elastic normal force F_n(delta) of Eq 10 [N]. kc [N/m] > 0, R = R_A + R_B [m] > 0,
+  // 0 <= delta < R [m]. Returns 0 for delta <= 0.
+  static Real normalForce(Real kc, Real R, Real delta);
+  // Tangent stiffness k_n = dF_n/ddelta [N/m] (0 for delta <= 0).
+  static Real normalStiffness(Real kc, Real R, Real delta);
+  // Barrier potential b(d), d = R - delta [J] (0 for delta <= 0); F_n = db/ddelta.
+  static Real barrierEnergy(Real kc, Real R, Real delta);
+  // Overlap delta at which F_n(delta) = force [m] (force >= 0), by safeguarded Newton.
+  static Real overlapForForce(Real kc, Real R, Real force);
+
+  // Rotate xi into the plane perpendicular to the unit normal n, keeping |xi|.
+  static void rotateHistory(Vec3& xi, const Vec3& n);
+
+  // Apply the law to contact `g` between bodies with ids idA, idB (used in error messages).
+  //  R:       R_A + R_B [m]
+  //  relVel:  velocity of B's material point at the contact minus A's [m/s]
+  //  meff:    effective mass of the pair [kg] (m_A m_B / (m_A + m_B), or the moving body's
+  //           mass against a fixed one), used only by the dashpots
+  //  dt:      time step [s] (> 0)
+  // Throws RuntimeFailure naming the bodies when delta >= R (cores touching: step too large).
+  static LawResult go(const SdemGeom& g, Real R, const BarrierPhys& phys, const Vec3& relVel, Real meff, Real dt,
+                      ContactHistory& history, int idA, int idB);
+};
+
+}  // namespace sdem
+}  // namespace mpmsdem

@@ -1,0 +1,326 @@
+#include "sdem/SdemEngine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "common/Error.hpp"
+
+namespace mpmsdem {
+namespace sdem {
+
+// ------------------------------------------------------------------ set-up
+
+int SdemEngine::addMaterial(const SdemMaterial& m) {
+  m.validate();
+  materials_.push_back(m);
+  const size_t n = materials_.size();
+  std::vector<BarrierPhys> phys(n * n);
+  for (size_t a = 0; a < n; ++a)
+    for (size_t b = 0; b < n; ++b) phys[a * n + b] = Ip2_SdemMat_SdemMat_BarrierPhys::go(materials_[a], materials_[b]);
+  pairPhys_.swap(phys);
+  return static_cast<int>(n - 1);
+}
+
+const SdemMaterial& SdemEngine::material(int k) const {
+  if (k < 0 || k >= numMaterials())
+    throwParameter("material", k, "", "a registered material index in [0, " + std::to_string(numMaterials()) + ")");
+  return materials_[k];
+}
+
+int SdemEngine::addBody(std::shared_ptr<const SpheroPolyhedron> shape, int material, Real mass,
+                        const Vec3& principalInertia, int externalId) {
+  if (!shape) throw ParameterError("shape = null: must be a SpheroPolyhedron");
+  if (shape->vertices.empty() || !(shape->sweepRadius > 0))
+    throwParameter("shape.sweepRadius", shape->sweepRadius, "m", "> 0 on a shape with a core");
+  if (material < 0 || material >= numMaterials())
+    throwParameter("material", material, "",
+                   "a registered material index in [0, " + std::to_string(numMaterials()) + ")");
+  if (!(mass > 0) || !std::isfinite(mass)) throwParameter("mass", mass, "kg", "> 0");
+  for (int k = 0; k < 3; ++k)
+    if (!(principalInertia[k] > 0) || !std::isfinite(principalInertia[k]))
+      throwParameter("principalInertia[" + std::to_string(k) + "]", principalInertia[k], "kg m^2", "> 0");
+  shapes_.push_back(std::move(shape));
+  material_.push_back(material);
+  external_.push_back(externalId);
+  mass_.push_back(mass);
+  inertia_.push_back(principalInertia);
+  fixed_.push_back(0);
+  pos_.push_back(Vec3::Zero());
+  ori_.push_back(Quat::Identity());
+  vel_.push_back(Vec3::Zero());
+  angVel_.push_back(Vec3::Zero());
+  posed_.emplace_back();
+  poseStale_.push_back(1);
+  force_.push_back(Vec3::Zero());
+  torque_.push_back(Vec3::Zero());
+  sumK_.push_back(0);
+  sumKr_.push_back(0);
+  return numBodies() - 1;
+}
+
+void SdemEngine::checkBody(int i, const char* what) const {
+  if (i < 0 || i >= numBodies())
+    throwParameter(what, i, "", "a body index in [0, " + std::to_string(numBodies()) + ")");
+}
+
+void SdemEngine::setFixed(int i, bool fixed) {
+  checkBody(i, "body");
+  fixed_[i] = fixed;
+}
+
+bool SdemEngine::isFixed(int i) const {
+  checkBody(i, "body");
+  return fixed_[i];
+}
+
+void SdemEngine::setState(int i, const Vec3& pos, const Quat& ori, const Vec3& vel, const Vec3& angVel) {
+  checkBody(i, "body");
+  if (!pos.allFinite() || !vel.allFinite() || !angVel.allFinite() || !ori.coeffs().allFinite() ||
+      !(ori.norm() > 0)) {
+    std::ostringstream os;
+    os << "state of body " << external_[i] << ": position, orientation, velocity and angular velocity must be finite"
+       << " (orientation non-zero)";
+    throw ParameterError(os.str());
+  }
+  if (pos != pos_[i] || !ori.coeffs().isApprox(ori_[i].coeffs(), 0.0)) poseStale_[i] = 1;
+  pos_[i] = pos;
+  ori_[i] = ori.normalized();
+  vel_[i] = vel;
+  angVel_[i] = angVel;
+}
+
+void SdemEngine::setStates(const Real* pos, const Real* q, const Real* vel, const Real* angVel) {
+  for (int i = 0; i < numBodies(); ++i)
+    setState(i, Vec3(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]),
+             Quat(q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]),
+             Vec3(vel[3 * i], vel[3 * i + 1], vel[3 * i + 2]),
+             Vec3(angVel[3 * i], angVel[3 * i + 1], angVel[3 * i + 2]));
+}
+
+const Vec3& SdemEngine::position(int i) const { return checkBody(i, "body"), pos_[i]; }
+const Quat& SdemEngine::orientation(int i) const { return checkBody(i, "body"), ori_[i]; }
+const Vec3& SdemEngine::velocity(int i) const { return checkBody(i, "body"), vel_[i]; }
+const Vec3& SdemEngine::angularVelocity(int i) const { return checkBody(i, "body"), angVel_[i]; }
+Real SdemEngine::mass(int i) const { return checkBody(i, "body"), mass_[i]; }
+const Vec3& SdemEngine::principalInertia(int i) const { return checkBody(i, "body"), inertia_[i]; }
+int SdemEngine::externalId(int i) const { return checkBody(i, "body"), external_[i]; }
+int SdemEngine::materialOf(int i) const { return checkBody(i, "body"), material_[i]; }
+const SpheroPolyhedron& SdemEngine::shape(int i) const { return checkBody(i, "body"), *shapes_[i]; }
+const Vec3& SdemEngine::force(int i) const { return checkBody(i, "body"), force_[i]; }
+const Vec3& SdemEngine::torque(int i) const { return checkBody(i, "body"), torque_[i]; }
+
+void SdemEngine::setTimeStepSafety(Real c) {
+  if (!(c > 0) || !std::isfinite(c)) throwParameter("timeStepSafety", c, "", "> 0");
+  safety_ = c;
+}
+
+// ------------------------------------------------------------------ step
+
+void SdemEngine::broadPhase() {
+  pairs_.clear();
+  const int n = numBodies();
+  order_.resize(n);
+  for (int i = 0; i < n; ++i) order_[i] = i;
+  // rounded-body boxes: core box inflated by the sweep radius
+  auto lo = [&](int i, int k) { return posed_[i].coreLo[k] - shapes_[i]->sweepRadius; };
+  auto hi = [&](int i, int k) { return posed_[i].coreHi[k] + shapes_[i]->sweepRadius; };
+  std::sort(order_.begin(), order_.end(), [&](int a, int b) { return lo(a, 0) < lo(b, 0); });
+  for (int s = 0; s < n; ++s) {
+    const int i = order_[s];
+    const Real xmax = hi(i, 0);
+    for (int t = s + 1; t < n; ++t) {
+      const int j = order_[t];
+      if (lo(j, 0) > xmax) break;
+      if (fixed_[i] && fixed_[j]) continue;
+      if (lo(j, 1) > hi(i, 1) || lo(i, 1) > hi(j, 1) || lo(j, 2) > hi(i, 2) || lo(i, 2) > hi(j, 2)) continue;
+      pairs_.emplace_back(std::min(i, j), std::max(i, j));
+    }
+  }
+  std::sort(pairs_.begin(), pairs_.end());  // deterministic order of force summation
+}
+
+void SdemEngine::computeForces(Real dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
+  const int n = numBodies();
+  for (int i = 0; i < n; ++i) {
+    if (poseStale_[i]) posed_[i].update(*shapes_[i], pos_[i], ori_[i]);
+    poseStale_[i] = 0;
+    force_[i].setZero();
+    torque_[i].setZero();
+    sumK_[i] = 0;
+    sumKr_[i] = 0;
+  }
+  broadPhase();
+  records_.clear();
+  nextHistory_.clear();
+  barrierEnergy_ = 0;
+  springEnergy_ = 0;
+  const int nm = numMaterials();
+  for (const auto& [a, b] : pairs_) {
+    geoms_.clear();
+    if (!Ig2_SpheroPolyhedron_SpheroPolyhedron::go(posed_[a], posed_[b], geoms_)) {
+      std::ostringstream os;
+      os << "SDEM bodies " << external_[a] << " and " << external_[b]
+         << ": cores interpenetrate; the time step is too large for the barrier stiffness";
+      throw RuntimeFailure(os.str());
+    }
+    if (geoms_.empty()) continue;
+    const BarrierPhys& phys = pairPhys_[material_[a] * nm + material_[b]];
+    const Real R = shapes_[a]->sweepRadius + shapes_[b]->sweepRadius;
+    const Real meff = fixed_[a] ? mass_[b] : fixed_[b] ? mass_[a] : mass_[a] * mass_[b] / (mass_[a] + mass_[b]);
+    for (const SdemGeom& g : geoms_) {
+      ContactKey key{a, b, g.kindA, g.kindB, g.indexA, g.indexB};
+      ContactHistory h;
+      auto it = history_.find(key);
+      if (it != history_.end()) h = it->second;
+      const Vec3 ra = g.contactPoint - pos_[a], rb = g.contactPoint - pos_[b];
+      const Vec3 relVel = (vel_[b] + angVel_[b].cross(rb)) - (vel_[a] + angVel_[a].cross(ra));
+      const LawResult r =
+          Law2_SdemGeom_BarrierPhys_Coulomb::go(g, R, phys, relVel, meff, dt, h, external_[a], external_[b]);
+      nextHistory_.emplace(key, h);
+      const Vec3 f = r.normalForce * g.normal + r.tangentialForce;  // on B
+      force_[b] += f;
+      force_[a] -= f;
+      torque_[b] += rb.cross(f);
+      torque_[a] -= ra.cross(f);
+      const Real kmax = std::max(r.normalStiffness, r.tangentialStiffness);
+      sumK_[a] += kmax;
+      sumK_[b] += kmax;
+      sumKr_[a] += r.normalStiffness * ra.cross(g.normal).squaredNorm() + r.tangentialStiffness * ra.squaredNorm();
+      sumKr_[b] += r.normalStiffness * rb.cross(g.normal).squaredNorm() + r.tangentialStiffness * rb.squaredNorm();
+      barrierEnergy_ += r.barrierEnergy;
+      springEnergy_ += r.springEnergy;
+      frictionWork_ += r.frictionDissipation;
+      dampingWork_ += r.dampingDissipation;
+      ContactRecord rec;
+      rec.key = key;
+      rec.externalA = external_[a];
+      rec.externalB = external_[b];
+      rec.point = g.contactPoint;
+      rec.normal = g.normal;
+      rec.normalForce = r.normalForce;
+      rec.tangentialForce = r.tangentialForce;
+      rec.overlap = g.overlap;
+      rec.normalStiffness = r.normalStiffness;
+      rec.sliding = r.sliding;
+      records_.push_back(rec);
+    }
+  }
+  history_.swap(nextHistory_);
+  if (dt > criticalTimeStep()) {
+    if (strict_) {
+      std::ostringstream os;
+      os << "dt = " << dt << " s: must be <= the SDEM critical time step " << criticalTimeStep() << " s";
+      throw RuntimeFailure(os.str());
+    }
+    ++warnings_;
+  }
+}
+
+Real SdemEngine::criticalTimeStep() const {
+  Real dt = std::numeric_limits<Real>::infinity();
+  for (int i = 0; i < numBodies(); ++i) {
+    if (fixed_[i]) continue;
+    if (sumK_[i] > 0) dt = std::min(dt, std::sqrt(mass_[i] / sumK_[i]));
+    if (sumKr_[i] > 0) dt = std::min(dt, std::sqrt(inertia_[i].minCoeff() / sumKr_[i]));
+  }
+  return safety_ * dt;
+}
+
+// ------------------------------------------------------------------ checkpoint
+
+std::vector<ContactHistoryEntry> SdemEngine::contactHistories() const {
+  std::vector<ContactHistoryEntry> out;
+  out.reserve(history_.size());
+  for (const auto& [k, h] : history_) out.push_back({k, h.xi});
+  return out;
+}
+
+void SdemEngine::setContactHistories(const std::vector<ContactHistoryEntry>& entries) {
+  std::unordered_map<ContactKey, ContactHistory, ContactKeyHash> h;
+  for (const ContactHistoryEntry& e : entries) {
+    checkBody(e.key.bodyA, "contact history bodyA");
+    checkBody(e.key.bodyB, "contact history bodyB");
+    if (!(e.key.bodyA < e.key.bodyB))
+      throwParameter("contact history bodyB", e.key.bodyB, "", "> bodyA = " + std::to_string(e.key.bodyA));
+    if (!e.xi.allFinite()) throw ParameterError("contact history xi: must be finite");
+    h[e.key].xi = e.xi;
+  }
+  history_.swap(h);
+}
+
+// ------------------------------------------------------------------ SdemWorld
+
+namespace {
+// World-frame inverse-inertia product: omega = R I^-1 R^T L.
+Vec3 omegaFromL(const Quat& q, const Vec3& inertia, const Vec3& L) {
+  const Vec3 lb = q.conjugate() * L;
+  return q * Vec3(lb.cwiseQuotient(inertia));
+}
+Quat advance(const Quat& q, const Vec3& omega, Real dt) {
+  const Real angle = omega.norm() * dt;
+  if (angle == 0) return q;
+  return (Quat(Eigen::AngleAxis<Real>(angle, omega.normalized())) * q).normalized();
+}
+}  // namespace
+
+void SdemWorld::step(Real dt) {
+  engine.computeForces(dt);
+  const int n = engine.numBodies();
+  angMom_.resize(n, Vec3::Zero());
+  lastAngVel_.resize(n, Vec3::Constant(std::numeric_limits<Real>::quiet_NaN()));
+  for (int i = 0; i < n; ++i) {
+    const Quat& q = engine.orientation(i);
+    Vec3 v = engine.velocity(i), w = engine.angularVelocity(i);
+    Vec3 x = engine.position(i);
+    Quat qn;
+    if (engine.isFixed(i)) {
+      x += dt * v;
+      qn = advance(q, w, dt);
+    } else {
+      const Vec3& I = engine.principalInertia(i);
+      // angular velocity changed from outside since our last step: re-derive L from it
+      if (!(w.array() == lastAngVel_[i].array()).all()) angMom_[i] = q * Vec3(I.cwiseProduct(q.conjugate() * w));
+      const Vec3& T = engine.torque(i);
+      const Vec3 Lnow = angMom_[i] + 0.5 * dt * T;  // L(t)
+      angMom_[i] += dt * T;                         // L(t + dt/2)
+      const Quat qHalf = advance(q, omegaFromL(q, I, Lnow), 0.5 * dt);
+      w = omegaFromL(qHalf, I, angMom_[i]);
+      qn = advance(q, w, dt);
+      v += dt * (engine.force(i) / engine.mass(i) + gravity);
+      x += dt * v;
+      if (!x.allFinite() || !v.allFinite() || !w.allFinite()) {
+        std::ostringstream os;
+        os << "SdemWorld: body " << engine.externalId(i) << " got a non-finite state at t = " << time_ << " s";
+        throw RuntimeFailure(os.str());
+      }
+    }
+    engine.setState(i, x, qn, v, w);
+    lastAngVel_[i] = w;
+  }
+  time_ += dt;
+}
+
+Real SdemWorld::kineticEnergy() const {
+  Real e = 0;
+  for (int i = 0; i < engine.numBodies(); ++i) {
+    if (engine.isFixed(i)) continue;
+    const Quat& q = engine.orientation(i);
+    const Vec3 wb = q.conjugate() * engine.angularVelocity(i);
+    e += 0.5 * engine.mass(i) * engine.velocity(i).squaredNorm() +
+         0.5 * wb.dot(engine.principalInertia(i).cwiseProduct(wb));
+  }
+  return e;
+}
+
+Real SdemWorld::gravityEnergy() const {
+  Real e = 0;
+  for (int i = 0; i < engine.numBodies(); ++i)
+    if (!engine.isFixed(i)) e -= engine.mass(i) * gravity.dot(engine.position(i));
+  return e;
+}
+
+}  // namespace sdem
+}  // namespace mpmsdem

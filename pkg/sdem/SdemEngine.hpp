@@ -1,0 +1,201 @@
+// SdemEngine: block–block contact forces of a set of sphero-polyhedra (paper §2.2, Eqs 5–11;
+// DESIGN §2–3). Broad phase (sort-and-sweep on x over the rounded bodies' AABBs, fixed–fixed
+// pairs skipped), narrow phase (Ig2_SpheroPolyhedron_SpheroPolyhedron), pair physics
+// (Ip2_SdemMat_SdemMat_BarrierPhys), law (Law2_SdemGeom_BarrierPhys_Coulomb), force and torque
+// sums, tangential histories kept across steps.
+//
+// The engine does not move bodies: YADE's NewtonIntegrator does (through the Python bridge),
+// or SdemWorld below in C++ tests and drivers. Bodies are addressed by a dense index
+// (0..numBodies()-1, in order of addBody); state and forces also come as flat arrays so a
+// bridge can exchange all bodies in one call.
+#pragma once
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include "sdem/Ig2_SpheroPolyhedron_SpheroPolyhedron.hpp"
+#include "sdem/Ip2_SdemMat_SdemMat_BarrierPhys.hpp"
+#include "sdem/Law2_SdemGeom_BarrierPhys_Coulomb.hpp"
+#include "sdem/SdemMaterial.hpp"
+
+namespace mpmsdem {
+namespace sdem {
+
+// Identity of a contact: the two body indices (bodyA < bodyB) and the two core features.
+struct ContactKey {
+  int bodyA = -1, bodyB = -1;
+  FeatureKind kindA = FeatureKind::Vertex, kindB = FeatureKind::Face;
+  int indexA = -1, indexB = -1;
+  bool operator==(const ContactKey& o) const {
+    return bodyA == o.bodyA && bodyB == o.bodyB && kindA == o.kindA && kindB == o.kindB && indexA == o.indexA &&
+           indexB == o.indexB;
+  }
+};
+
+struct ContactKeyHash {
+  size_t operator()(const ContactKey& k) const {
+    uint64_t h = 1469598103934665603ull;
+    const int64_t parts[6] = {k.bodyA, k.bodyB, static_cast<int64_t>(k.kindA), static_cast<int64_t>(k.kindB),
+                              k.indexA, k.indexB};
+    for (int64_t p : parts) h = (h ^ static_cast<uint64_t>(p)) * 1099511628211ull;
+    return static_cast<size_t>(h);
+  }
+};
+
+// One contact of the last computeForces(), for export.
+struct ContactRecord {
+  ContactKey key;
+  int externalA = -1, externalB = -1;    // externalId of the two bodies
+  Vec3 point = Vec3::Zero();             // contact point (midway between sphere surfaces) [m]
+  Vec3 normal = Vec3::UnitX();           // unit normal from A to B
+  Real normalForce = 0;                  // F_n on B along the normal [N] (>= 0)
+  Vec3 tangentialForce = Vec3::Zero();   // F_t on B [N]
+  Real overlap = 0;                      // delta [m] (Eq 7)
+  Real normalStiffness = 0;              // k_n [N/m]
+  bool sliding = false;                  // Coulomb cap reached
+};
+
+// Tangential history of one contact, for checkpoints.
+struct ContactHistoryEntry {
+  ContactKey key;
+  Vec3 xi = Vec3::Zero();  // [m]
+};
+
+class SdemEngine {
+ public:
+  // ---- set-up
+  // Register a material (validated: ParameterError on a bad one); returns its index.
+  int addMaterial(const SdemMaterial& m);
+  int numMaterials() const { return static_cast<int>(materials_.size()); }
+  const SdemMaterial& material(int k) const;
+
+  // Add a body; returns its index. shape: non-null; material: a registered index;
+  // mass [kg] > 0; principalInertia [kg m^2], all > 0, about the shape's body axes (the body
+  // frame of SpheroPolyhedron); externalId: the caller's id (e.g. YADE's body id), reported in
+  // contacts and errors. The body starts at rest at the origin with identity orientation.
+  int addBody(std::shared_ptr<const SpheroPolyhedron> shape, int material, Real mass, const Vec3& principalInertia,
+              int externalId);
+  int numBodies() const { return static_cast<int>(shapes_.size()); }
+
+  // A fixed body takes no forces into account for its motion (SdemWorld moves it
+  // kinematically with its set velocities) and fixed–fixed pairs are never tested.
+  void setFixed(int i, bool fixed);
+  bool isFixed(int i) const;
+
+  // World-frame state: centroid position [m], orientation (x_world = pos + ori * x_body),
+  // velocity [m/s], angular velocity [rad/s] (world frame).
+  void setState(int i, const Vec3& pos, const Quat& ori, const Vec3& vel, const Vec3& angVel);
+  // All bodies at once from flat arrays (3 n, 4 n as w x y z, 3 n, 3 n values).
+  void setStates(const Real* pos, const Real* oriWxyz, const Real* vel, const Real* angVel);
+
+  const Vec3& position(int i) const;
+  const Quat& orientation(int i) const;
+  const Vec3& velocity(int i) const;
+  const Vec3& angularVelocity(int i) const;
+  Real mass(int i) const;
+  const Vec3& principalInertia(int i) const;
+  int externalId(int i) const;
+  int materialOf(int i) const;
+  const SpheroPolyhedron& shape(int i) const;
+
+  // ---- step
+  // Contact forces and torques of the current state. dt [s] > 0 drives the tangential history
+  // increment. Throws RuntimeFailure naming the bodies when cores touch or interpenetrate, or
+  // when strictTimeStep is set and dt exceeds criticalTimeStep() (else counts a warning).
+  void computeForces(Real dt);
+
+  // Sum of contact forces on body i [N] and their torque about its centroid [N m], world
+  // frame, from the last computeForces().
+  const Vec3& force(int i) const;
+  const Vec3& torque(int i) const;
+  const std::vector<Vec3>& forces() const { return force_; }
+  const std::vector<Vec3>& torques() const { return torque_; }
+
+  const std::vector<ContactRecord>& contacts() const { return records_; }
+
+  // ---- time step control
+  // c * min over non-fixed bodies of sqrt(m_i / sum k_i) and sqrt(I_min,i / sum k_r,i) [s], with
+  // sum k_i = sum over its contacts of max(k_n, K_t) and sum k_r,i = sum of
+  // k_n |r x n|^2 + K_t |r|^2 (r: centroid -> contact point). For one spring the leapfrog is
+  // stable up to 2 sqrt(m/k): c = 1 reports half the stability limit. +infinity when no body
+  // has a contact. Uses the stiffnesses of the last computeForces() (the barrier stiffens
+  // fast with the overlap: keep a margin).
+  Real criticalTimeStep() const;
+  // Safety factor c [-] in criticalTimeStep(). Valid: > 0. Default 1.
+  void setTimeStepSafety(Real c);
+  Real timeStepSafety() const { return safety_; }
+  // Strict: computeForces(dt) throws RuntimeFailure when dt > criticalTimeStep(). Not strict
+  // (default): it counts the step in timeStepWarnings().
+  void setStrictTimeStep(bool strict) { strict_ = strict; }
+  bool strictTimeStep() const { return strict_; }
+  long timeStepWarnings() const { return warnings_; }
+
+  // ---- energies [J]
+  Real barrierEnergy() const { return barrierEnergy_; }          // sum of b(d), current
+  Real tangentialEnergy() const { return springEnergy_; }        // sum of K_t |xi|^2 / 2, current
+  Real frictionDissipation() const { return frictionWork_; }     // cumulative slip work
+  Real dampingDissipation() const { return dampingWork_; }       // cumulative dashpot work
+
+  // ---- checkpoint of the contact histories
+  std::vector<ContactHistoryEntry> contactHistories() const;
+  // Replace all histories (ParameterError on a key naming a body index out of range).
+  void setContactHistories(const std::vector<ContactHistoryEntry>& h);
+
+ private:
+  void checkBody(int i, const char* what) const;
+  void broadPhase();
+
+  std::vector<SdemMaterial> materials_;
+  std::vector<BarrierPhys> pairPhys_;  // numMaterials^2, row-major
+
+  std::vector<std::shared_ptr<const SpheroPolyhedron>> shapes_;
+  std::vector<int> material_, external_;
+  std::vector<Real> mass_;
+  std::vector<Vec3> inertia_;
+  std::vector<char> fixed_;
+  std::vector<Vec3> pos_, vel_, angVel_;
+  std::vector<Quat> ori_;
+  std::vector<PosedSpheroPolyhedron> posed_;
+  std::vector<char> poseStale_;
+
+  std::vector<Vec3> force_, torque_;
+  std::vector<Real> sumK_, sumKr_;
+  std::vector<std::pair<int, int>> pairs_;
+  std::vector<int> order_;
+  std::vector<SdemGeom> geoms_;
+  std::vector<ContactRecord> records_;
+  std::unordered_map<ContactKey, ContactHistory, ContactKeyHash> history_, nextHistory_;
+
+  Real safety_ = 1.0;
+  bool strict_ = false;
+  long warnings_ = 0;
+  Real barrierEnergy_ = 0, springEnergy_ = 0, frictionWork_ = 0, dampingWork_ = 0;
+};
+
+// Minimal rigid-body world for C++ tests and drivers: YADE-like leapfrog.
+// Per step: forces at x(t); v(t+dt/2) = v(t-dt/2) + dt (F/m + g); x(t+dt) = x(t) + dt v(t+dt/2).
+// Rotation of aspherical bodies: world angular momentum L(t+dt/2) = L(t-dt/2) + dt T, the
+// orientation advanced with the angular velocity at mid-step obtained from L and a predicted
+// mid-step orientation (principal inertia in the body frame). Fixed bodies move kinematically
+// with their set velocities.
+class SdemWorld {
+ public:
+  SdemEngine engine;
+  Vec3 gravity = Vec3(0, 0, -9.81);  // [m/s^2]
+
+  void step(Real dt);
+  Real time() const { return time_; }
+  // Translational + rotational kinetic energy of the non-fixed bodies [J].
+  Real kineticEnergy() const;
+  // Gravitational potential energy -sum m g . x of the non-fixed bodies [J].
+  Real gravityEnergy() const;
+
+ private:
+  std::vector<Vec3> angMom_, lastAngVel_;
+  Real time_ = 0;
+};
+
+}  // namespace sdem
+}  // namespace mpmsdem

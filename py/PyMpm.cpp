@@ -1,0 +1,136 @@
+// Binding of the MPM solver: a scene (the same JSON schema as the mpmsdem-run driver,
+// see examples/scenes/README.md), stepping, particle arrays, HDF5 + VTK outputs.
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+
+#include "PyConvert.hpp"
+#include "io/Hdf5Writer.hpp"
+#include "io/VtkWriter.hpp"
+#include "mpm/MpmScene.hpp"
+#include "mpm/MpmSolver.hpp"
+
+namespace mpmsdem {
+namespace py {
+
+namespace {
+
+class PyMpm {
+ public:
+  explicit PyMpm(const std::string& sceneJson) : scene_(mpm::parseScene(sceneJson, "MpmEngine scene")) {
+    solver_ = mpm::makeSolver(scene_.params, scene_.run.backend, scene_.run.precision);
+    solver_->setParticles(mpm::seedParticles(scene_));
+    fresh_ = false;
+  }
+
+  void step(double dt) {
+    solver_->step(dt);
+    fresh_ = false;
+  }
+  void run(long n, double dt) {
+    for (long i = 0; i < n; ++i) solver_->step(dt);
+    fresh_ = false;
+  }
+  double stableTimeStep() { return solver_->stableTimeStep(); }
+  double time() const { return solver_->time(); }
+  long steps() const { return solver_->steps(); }
+  std::size_t numParticles() const { return solver_->numParticles(); }
+  std::size_t memoryBytes() const { return solver_->memoryBytes(); }
+  std::string name() const { return solver_->name(); }
+  std::string sceneJson() const { return scene_.sourceJson; }
+
+  void setExternalForces(const bp::object& f) {
+    solver_->setExternalForces(fromNumpy(f, 3 * solver_->numParticles(), "forces"));
+  }
+
+  bp::dict particles() {
+    sync();
+    const auto& p = cache_;
+    const npy_intp n = static_cast<npy_intp>(p.size());
+    std::vector<double> density(n), phase(n);
+    for (npy_intp i = 0; i < n; ++i) {
+      density[i] = p.mass[i] / (p.J[i] * p.volume0[i]);
+      phase[i] = p.phase[i];
+    }
+    bp::dict d;
+    d["x"] = numpyArray(p.x.data(), n, 3);
+    d["v"] = numpyArray(p.v.data(), n, 3);
+    d["stress"] = numpyArray(p.stress.data(), n, 6);
+    d["mass"] = numpyArray(p.mass.data(), n, 0);
+    d["volume0"] = numpyArray(p.volume0.data(), n, 0);
+    d["J"] = numpyArray(p.J.data(), n, 0);
+    d["density"] = numpyArray(density.data(), n, 0);
+    d["gammaDotP"] = numpyArray(p.gammaDotP.data(), n, 0);
+    d["phase"] = numpyArray(phase.data(), n, 0);
+    return d;
+  }
+
+  // Outputs: <dir>/mpm.h5 (append-only series + snapshots) and <dir>/vtk/particles_*.vtp + .pvd.
+  void openOutput(const std::string& dir, bool append) {
+    std::filesystem::create_directories(std::filesystem::path(dir) / "vtk");
+    const auto mode = append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate;
+    h5_ = std::make_unique<io::Hdf5Writer>((std::filesystem::path(dir) / "mpm.h5").string(), mode);
+    h5_->setAttribute("scene", scene_.sourceJson);
+    h5_->setAttribute("units", "SI: m, s, kg, N, Pa");
+    pvd_ = std::make_unique<io::PvdCollection>((std::filesystem::path(dir) / "particles.pvd").string(), append);
+    dir_ = dir;
+  }
+  void writeSnapshot() {
+    requireOutput();
+    sync();
+    const long k = h5_->writeSnapshot(cache_, solver_->time(), solver_->steps());
+    std::ostringstream name;
+    name << "vtk/particles_" << std::setw(6) << std::setfill('0') << k << ".vtp";
+    io::writeParticlesVtp((std::filesystem::path(dir_) / name.str()).string(), cache_);
+    pvd_->add(solver_->time(), name.str());
+  }
+  void appendSeries(const std::string& name, double value) {
+    requireOutput();
+    h5_->appendScalar(name, value);
+  }
+
+ private:
+  void sync() {
+    if (!fresh_) solver_->getParticles(cache_);
+    fresh_ = true;
+  }
+  void requireOutput() const {
+    if (!h5_) throw ParameterError("output: call openOutput(dir) before writing outputs");
+  }
+
+  mpm::MpmScene scene_;
+  std::unique_ptr<mpm::MpmSolver> solver_;
+  mpm::ParticleSet cache_;
+  bool fresh_ = false;
+  std::unique_ptr<io::Hdf5Writer> h5_;
+  std::unique_ptr<io::PvdCollection> pvd_;
+  std::string dir_;
+};
+
+bool cudaAvailable() { return mpm::cudaAvailable(); }
+
+}  // namespace
+
+void exportMpm() {
+  bp::def("cudaAvailable", &cudaAvailable, "True when this build has CUDA and a GPU is present.");
+  bp::class_<PyMpm, boost::noncopyable>("MpmSolver",
+                                        "MPM solver built from a JSON scene (use mpmsdem.MpmEngine instead).",
+                                        bp::init<std::string>(bp::arg("sceneJson")))
+      .def("step", &PyMpm::step, (bp::arg("dt")))
+      .def("run", &PyMpm::run, (bp::arg("steps"), bp::arg("dt")))
+      .def("stableTimeStep", &PyMpm::stableTimeStep)
+      .def("setExternalForces", &PyMpm::setExternalForces, (bp::arg("forces")))
+      .def("particles", &PyMpm::particles)
+      .def("openOutput", &PyMpm::openOutput, (bp::arg("dir"), bp::arg("append") = false))
+      .def("writeSnapshot", &PyMpm::writeSnapshot)
+      .def("appendSeries", &PyMpm::appendSeries, (bp::arg("name"), bp::arg("value")))
+      .add_property("time", &PyMpm::time)
+      .add_property("steps", &PyMpm::steps)
+      .add_property("numParticles", &PyMpm::numParticles)
+      .add_property("memoryBytes", &PyMpm::memoryBytes)
+      .add_property("name", &PyMpm::name)
+      .add_property("sceneJson", &PyMpm::sceneJson);
+}
+
+}  // namespace py
+}  // namespace mpmsdem

@@ -1,0 +1,232 @@
+// Binding of the SDEM engine and its YADE bridge.
+//
+// The bridge exchanges body state and forces with YADE from C++ (DESIGN §1, §6): per step it
+// reads pos/ori/vel/angVel of the registered bodies through cached State objects, runs
+// SdemEngine::computeForces, and adds forces/torques with O.forces.addF/addT. Bodies that
+// cannot move (YADE `dynamic == False`) are read once and never again. The time spent in the
+// three phases (read, compute, write) is accumulated so benchmarks can report the bridge's
+// share of each step.
+#include <chrono>
+
+#include "PyConvert.hpp"
+#include "sdem/SdemEngine.hpp"
+
+namespace mpmsdem {
+namespace py {
+
+using sdem::SdemEngine;
+using sdem::SdemMaterial;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+const char* featureName(sdem::FeatureKind k) {
+  switch (k) {
+    case sdem::FeatureKind::Vertex: return "vertex";
+    case sdem::FeatureKind::Edge: return "edge";
+    case sdem::FeatureKind::Face: return "face";
+  }
+  return "?";
+}
+
+class YadeSdemBridge {
+ public:
+  int addMaterial(const SdemMaterial& m) { return engine_.addMaterial(m); }
+
+  int addBody(std::shared_ptr<sdem::SpheroPolyhedron> shape, int material, double mass, const bp::object& inertia,
+              int yadeId, bool fixed) {
+    const int i = engine_.addBody(shape, material, mass, toVec3(inertia, "inertia"), yadeId);
+    engine_.setFixed(i, fixed);
+    states_.push_back(bp::object());
+    readOnce_.push_back(0);
+    return i;
+  }
+
+  // Forget the cached YADE State objects (call after O.bodies was rebuilt or O.load()).
+  void refresh() {
+    for (auto& s : states_) s = bp::object();
+    std::fill(readOnce_.begin(), readOnce_.end(), 0);
+  }
+
+  // One step inside YADE's loop: bodies = O.bodies, forces = O.forces, dt = O.dt.
+  void step(const bp::object& bodies, const bp::object& forces, double dt) {
+    const auto t0 = Clock::now();
+    const int n = engine_.numBodies();
+    for (int i = 0; i < n; ++i) {
+      if (engine_.isFixed(i) && readOnce_[i]) continue;
+      if (states_[i].is_none()) states_[i] = bodies[engine_.externalId(i)].attr("state");
+      const bp::object& st = states_[i];
+      const Vec3 pos = bp::extract<Vec3>(st.attr("pos"));
+      const Quat ori = bp::extract<Quat>(st.attr("ori"));
+      const Vec3 vel = bp::extract<Vec3>(st.attr("vel"));
+      const Vec3 angVel = bp::extract<Vec3>(st.attr("angVel"));
+      engine_.setState(i, pos, ori, vel, angVel);
+      readOnce_[i] = 1;
+    }
+    const auto t1 = Clock::now();
+    engine_.computeForces(dt);
+    const auto t2 = Clock::now();
+    bp::object addF = forces.attr("addF"), addT = forces.attr("addT");
+    for (int i = 0; i < n; ++i) {
+      const Vec3& f = engine_.force(i);
+      const Vec3& t = engine_.torque(i);
+      if (f.squaredNorm() == 0 && t.squaredNorm() == 0) continue;
+      addF(engine_.externalId(i), f);
+      if (!engine_.isFixed(i)) addT(engine_.externalId(i), t);
+    }
+    const auto t3 = Clock::now();
+    readSeconds_ += seconds(t0, t1);
+    computeSeconds_ += seconds(t1, t2);
+    writeSeconds_ += seconds(t2, t3);
+    ++steps_;
+  }
+
+  bp::dict timings() const {
+    bp::dict d;
+    d["steps"] = steps_;
+    d["read"] = readSeconds_;
+    d["compute"] = computeSeconds_;
+    d["write"] = writeSeconds_;
+    return d;
+  }
+  void resetTimings() {
+    steps_ = 0;
+    readSeconds_ = computeSeconds_ = writeSeconds_ = 0;
+  }
+
+  // Contacts of the last step as numpy arrays (one row per contact point).
+  bp::dict contacts() const {
+    const auto& rec = engine_.contacts();
+    const npy_intp n = static_cast<npy_intp>(rec.size());
+    std::vector<double> point(3 * n), normal(3 * n), ft(3 * n), fn(n), overlap(n), kn(n);
+    std::vector<long> idA(n), idB(n), sliding(n);
+    bp::list kindA, kindB;
+    for (npy_intp c = 0; c < n; ++c) {
+      const auto& r = rec[c];
+      for (int k = 0; k < 3; ++k) {
+        point[3 * c + k] = r.point[k];
+        normal[3 * c + k] = r.normal[k];
+        ft[3 * c + k] = r.tangentialForce[k];
+      }
+      fn[c] = r.normalForce;
+      overlap[c] = r.overlap;
+      kn[c] = r.normalStiffness;
+      idA[c] = r.externalA;
+      idB[c] = r.externalB;
+      sliding[c] = r.sliding ? 1 : 0;
+      kindA.append(featureName(r.key.kindA));
+      kindB.append(featureName(r.key.kindB));
+    }
+    bp::dict d;
+    d["id1"] = numpyArrayInt(idA);
+    d["id2"] = numpyArrayInt(idB);
+    d["point"] = numpyArray(point.data(), n, 3);
+    d["normal"] = numpyArray(normal.data(), n, 3);
+    d["normalForce"] = numpyArray(fn.data(), n, 0);
+    d["tangentialForce"] = numpyArray(ft.data(), n, 3);
+    d["overlap"] = numpyArray(overlap.data(), n, 0);
+    d["normalStiffness"] = numpyArray(kn.data(), n, 0);
+    d["sliding"] = numpyArrayInt(sliding);
+    d["feature1"] = kindA;
+    d["feature2"] = kindB;
+    return d;
+  }
+
+  // Contact histories for checkpoints: list of (idA, idB, kindA, kindB, indexA, indexB, xi).
+  bp::list histories() const {
+    bp::list l;
+    for (const auto& h : engine_.contactHistories())
+      l.append(bp::make_tuple(h.key.bodyA, h.key.bodyB, static_cast<int>(h.key.kindA), static_cast<int>(h.key.kindB),
+                              h.key.indexA, h.key.indexB, h.xi));
+    return l;
+  }
+  void setHistories(const bp::list& l) {
+    std::vector<sdem::ContactHistoryEntry> h;
+    const long n = bp::len(l);
+    for (long i = 0; i < n; ++i) {
+      bp::object t = l[i];
+      sdem::ContactHistoryEntry e;
+      e.key.bodyA = bp::extract<int>(t[0]);
+      e.key.bodyB = bp::extract<int>(t[1]);
+      e.key.kindA = static_cast<sdem::FeatureKind>(static_cast<int>(bp::extract<int>(t[2])));
+      e.key.kindB = static_cast<sdem::FeatureKind>(static_cast<int>(bp::extract<int>(t[3])));
+      e.key.indexA = bp::extract<int>(t[4]);
+      e.key.indexB = bp::extract<int>(t[5]);
+      e.xi = toVec3(t[6], "xi");
+      h.push_back(e);
+    }
+    engine_.setContactHistories(h);
+  }
+
+  Vec3 force(int i) const { return engine_.force(i); }
+  Vec3 torque(int i) const { return engine_.torque(i); }
+  int numBodies() const { return engine_.numBodies(); }
+  int yadeId(int i) const { return engine_.externalId(i); }
+  double criticalTimeStep() const { return engine_.criticalTimeStep(); }
+  double timeStepSafety() const { return engine_.timeStepSafety(); }
+  void setTimeStepSafety(double c) { engine_.setTimeStepSafety(c); }
+  bool strict() const { return engine_.strictTimeStep(); }
+  void setStrict(bool s) { engine_.setStrictTimeStep(s); }
+  long warnings() const { return engine_.timeStepWarnings(); }
+  double barrierEnergy() const { return engine_.barrierEnergy(); }
+  double tangentialEnergy() const { return engine_.tangentialEnergy(); }
+  double frictionDissipation() const { return engine_.frictionDissipation(); }
+  double dampingDissipation() const { return engine_.dampingDissipation(); }
+  int numContacts() const { return static_cast<int>(engine_.contacts().size()); }
+
+ private:
+  SdemEngine engine_;
+  std::vector<bp::object> states_;
+  std::vector<char> readOnce_;
+  long steps_ = 0;
+  double readSeconds_ = 0, computeSeconds_ = 0, writeSeconds_ = 0;
+};
+
+void validateMaterial(const SdemMaterial& m) { m.validate(); }
+
+}  // namespace
+
+void exportSdem() {
+  bp::class_<SdemMaterial>("SdemMat",
+                           "Contact material of a sphero-polyhedron block (paper Eqs 9-11). SI units.")
+      .def_readwrite("density", &SdemMaterial::density, "Mass density [kg/m^3], > 0.")
+      .def_readwrite("friction", &SdemMaterial::friction, "Coulomb friction coefficient mu [-], >= 0 (Eq 9).")
+      .def_readwrite("poisson", &SdemMaterial::poisson, "Poisson ratio nu [-], in (-1, 0.5); K_t = k_n/(2(1+nu)) (Eq 11).")
+      .def_readwrite("barrierStiffness", &SdemMaterial::barrierStiffness,
+                     "Barrier stiffness k_c [N/m], > 0 (Eq 10 as a force; paper 1e4).")
+      .def_readwrite("normalDamping", &SdemMaterial::normalDamping,
+                     "Normal damping, fraction of critical [-], >= 0 (default 0: elastic barrier).")
+      .def_readwrite("tangentialDamping", &SdemMaterial::tangentialDamping,
+                     "Tangential damping c_t, fraction of critical [-], >= 0 (Eq 9).")
+      .def("validate", &validateMaterial, "Raise ValueError naming the first parameter out of range.");
+
+  bp::class_<YadeSdemBridge, boost::noncopyable>("SdemBridge",
+                                                 "C++ side of mpmsdem.SdemEngine (use that class instead).")
+      .def("addMaterial", &YadeSdemBridge::addMaterial)
+      .def("addBody", &YadeSdemBridge::addBody)
+      .def("refresh", &YadeSdemBridge::refresh)
+      .def("step", &YadeSdemBridge::step)
+      .def("timings", &YadeSdemBridge::timings)
+      .def("resetTimings", &YadeSdemBridge::resetTimings)
+      .def("contacts", &YadeSdemBridge::contacts)
+      .def("histories", &YadeSdemBridge::histories)
+      .def("setHistories", &YadeSdemBridge::setHistories)
+      .def("force", &YadeSdemBridge::force)
+      .def("torque", &YadeSdemBridge::torque)
+      .def("yadeId", &YadeSdemBridge::yadeId)
+      .add_property("numBodies", &YadeSdemBridge::numBodies)
+      .add_property("numContacts", &YadeSdemBridge::numContacts)
+      .add_property("criticalTimeStep", &YadeSdemBridge::criticalTimeStep)
+      .add_property("timeStepSafety", &YadeSdemBridge::timeStepSafety, &YadeSdemBridge::setTimeStepSafety)
+      .add_property("strict", &YadeSdemBridge::strict, &YadeSdemBridge::setStrict)
+      .add_property("timeStepWarnings", &YadeSdemBridge::warnings)
+      .add_property("barrierEnergy", &YadeSdemBridge::barrierEnergy)
+      .add_property("tangentialEnergy", &YadeSdemBridge::tangentialEnergy)
+      .add_property("frictionDissipation", &YadeSdemBridge::frictionDissipation)
+      .add_property("dampingDissipation", &YadeSdemBridge::dampingDissipation);
+}
+
+}  // namespace py
+}  // namespace mpmsdem

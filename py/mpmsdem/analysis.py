@@ -1,0 +1,57 @@
+"""Analytic references and post-processing used by checks, examples and users. SI units."""
+import math
+
+G = 9.81  # default gravitational acceleration [m/s^2]
+
+
+def slidingDistance(t, thetaDeg, mu, g=G):
+    """Travel distance of a block sliding down an incline from rest, paper Eq 19:
+    S_b(t) = t²/2 · (g sin θ − μ g cos θ); 0 when the block does not slide (μ ≥ tan θ)."""
+    th = math.radians(thetaDeg)
+    a = g * (math.sin(th) - mu * math.cos(th))
+    return 0.5 * a * t * t if a > 0 else 0.0
+
+
+def barrierForce(delta, R, kc):
+    """Normal force of the log barrier (paper Eq 10 read as a force, DESIGN §3) [N]:
+    F_n = −k_c δ [2 ln((R−δ)/R) − R/(R−δ) + 1], 0 ≤ δ < R, R = R_i + R_j."""
+    if not 0 <= delta < R:
+        raise ValueError("delta = %g m: must be in [0, R = %g m)" % (delta, R))
+    return -kc * delta * (2.0 * math.log((R - delta) / R) - R / (R - delta) + 1.0)
+
+
+def equilibriumOverlap(load, R, kc, contacts=1):
+    """Overlap δ at which ``contacts`` equal barrier contacts carry ``load`` [N] together [m]
+    (bisection on the monotonic barrier force)."""
+    if load < 0:
+        raise ValueError("load = %g N: must be >= 0" % load)
+    lo, hi = 0.0, R * (1 - 1e-15)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if contacts * barrierForce(mid, R, kc) < load:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def runoutLube(a):
+    """Normalised runout ΔL/L_i of a quasi-2D granular column collapse of aspect ratio a:
+    ≈ 1.2 a for a ≲ 1.8, ≈ 1.9 a^(2/3) above (Lube et al. 2005; Lajeunesse et al. 2005 report
+    the same two regimes)."""
+    return 1.2 * a if a < 1.8 else 1.9 * a ** (2.0 / 3.0)
+
+
+def froude(v, h, g=G):
+    """Froude number Fr = v / √(g h) (paper §3.2.3 and §5)."""
+    return v / math.sqrt(g * h)
+
+
+def dynamicPressureCoefficient(Fr):
+    """α_f = 10.8 Fr^(-1.3) (Thibert et al. 2008), used in the hydrodynamic model Eq 20."""
+    return 10.8 * Fr ** -1.3
+
+
+def hydrodynamicForce(rho, v, h, area, g=G):
+    """Impact force of the hydrodynamic model, Eq 20: F = α_f ρ v² A, α_f from Fr = v/√(g h) [N]."""
+    return dynamicPressureCoefficient(froude(v, h, g)) * rho * v * v * area

@@ -1,0 +1,146 @@
+"""The MPM granular-flow solver inside YADE's loop (or stepped directly from Python).
+
+The scene uses the same schema as the plain C++ driver ``mpmsdem-run`` (see
+``examples/scenes/README.md``): a grid box with six walls, a μ(I) granular material, boxes of
+material points. Example, an MPM-only YADE script::
+
+    import mpmsdem
+    from yade import O
+    mpm = mpmsdem.MpmEngine(
+        grid={"dx": 0.01, "cells": [54, 9, 34], "origin": [-0.02, -0.02, -0.02]},
+        material={"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.38, "mu_2": 0.64},
+        particles=[{"lo": [0, 0, 0], "hi": [0.1, 0.05, 0.2], "ppc": 8}],
+        walls={"-z": 0.4}, output="out/collapse", outputEvery=0.02)
+    O.engines = [mpm.runner]
+    O.dt = 0.9 * mpm.stableTimeStep()
+    O.run(int(0.6 / O.dt), True)
+    mpm.check()
+"""
+import json
+import sys
+import time as _time
+
+from yade import O
+from yade.wrapper import PyRunner
+
+from . import _mpmsdem
+
+_ENGINES = {}
+
+
+def _step(key):
+    """Called by the PyRunner of an MpmEngine every YADE step."""
+    _ENGINES[key]._yadeStep()
+
+
+class MpmEngine:
+    """Explicit MPM with the μ(I) granular model (paper §2.1, Appendices A–B).
+
+    :param grid: ``{"dx": [m], "cells": [nx, ny, nz], "origin": [x, y, z] [m]}``.
+    :param material: ``{"density", "young_modulus", "poisson_ratio", "mu_s", "mu_2", "I0",
+        "grain_diameter", "solid_density", "critical_density"}`` (SI; see the schema).
+    :param particles: list of ``{"lo", "hi", "ppc", "velocity"}`` boxes of material points.
+    :param gravity: ``[gx, gy, gz]`` [m/s²] or ``{"g": 9.81, "incline_deg": θ}`` (flume
+        inclined about y, flowing toward +x: gravity is rotated, not the grid).
+    :param walls: per wall ``"-x"``…``"+z"``: ``"free"``, ``"noslip"`` or a friction μ_w ≥ 0.
+    :param flipAlpha: FLIP/PIC blend α of Eq 4, in [0, 1] (default 0.99).
+    :param cfl: CFL number of :meth:`stableTimeStep`, in (0, 1].
+    :param backend: ``"cpu"`` (double, OpenMP) or ``"cuda"``; :param precision: ``"double"``
+        or ``"float"`` (CUDA only).
+    :param output: folder for ``mpm.h5`` (append-only HDF5 series + snapshots) and VTK
+        files (``particles.pvd`` for ParaView); None: no files.
+    :param outputEvery: snapshot interval [s] (with ``output``).
+    :param label: label of the PyRunner for ``O.engines``.
+    """
+
+    def __init__(self, grid, material, particles, gravity=(0, 0, -9.81), walls=None, flipAlpha=0.99, cfl=0.3,
+                 backend="cpu", precision="double", output=None, outputEvery=None, label="mpm", verbose=True):
+        scene = {"grid": grid, "material": material, "particles": list(particles),
+                 "gravity": list(gravity) if not isinstance(gravity, dict) else gravity,
+                 "flip_alpha": flipAlpha, "cfl": cfl,
+                 "run": {"duration": 1.0, "backend": backend, "precision": precision}}
+        if walls:
+            scene["walls"] = walls
+        self.solver = _mpmsdem.MpmSolver(json.dumps(scene))
+        self.output = output
+        self.outputEvery = outputEvery
+        self.verbose = verbose
+        self.seriesPeriod = 10  # steps between time-series records (time, kinetic energy, front)
+        self._nextOutput = 0.0
+        self.error = None
+        if output is not None:
+            if not (outputEvery and outputEvery > 0):
+                raise ValueError("outputEvery = %r s: must be > 0 when output is set" % (outputEvery,))
+            self.solver.openOutput(str(output), False)
+        self._key = id(self)
+        _ENGINES[self._key] = self
+        self.runner = PyRunner(command="import mpmsdem.mpm as _m; _m._step(%d)" % self._key,
+                               iterPeriod=1, initRun=True, label=label)
+        self._wall0 = _time.time()
+        self._lastReport = self._wall0
+
+    # ------------------------------------------------------------------ stepping
+    def stableTimeStep(self):
+        """cfl · dx / (elastic wave speed + max particle speed) [s]."""
+        return self.solver.stableTimeStep()
+
+    def step(self, dt):
+        """One MPM step of ``dt`` seconds, then outputs if due."""
+        self.solver.step(float(dt))
+        self._afterStep()
+
+    def _yadeStep(self):
+        try:
+            self.step(O.dt)
+        except Exception as e:
+            self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
+            if self.output is not None:
+                self.solver.writeSnapshot()  # the last good state: the solver keeps it on failure
+            raise
+
+    def _afterStep(self):
+        t = self.solver.time
+        if self.output is not None:
+            if self.solver.steps % self.seriesPeriod == 0:
+                p = self.solver.particles()
+                self.solver.appendSeries("time", t)
+                self.solver.appendSeries("kinetic_energy", 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum()))
+                self.solver.appendSeries("front_x", float(p["x"][:, 0].max()))
+            if t >= self._nextOutput - 1e-12:
+                self.solver.writeSnapshot()
+                self._nextOutput += self.outputEvery
+        now = _time.time()
+        if self.verbose and now - self._lastReport > 10.0:
+            self._lastReport = now
+            rate = self.solver.steps * self.solver.numParticles / max(now - self._wall0, 1e-9)
+            print("mpmsdem.MpmEngine: t = %.4f s, step %d, %.3g particle-updates/s"
+                  % (t, self.solver.steps, rate), file=sys.stderr, flush=True)
+
+    def check(self):
+        """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
+        if self.error:
+            raise RuntimeError("mpmsdem.MpmEngine stopped the run at " + self.error)
+
+    # ------------------------------------------------------------------ read-out
+    def particles(self):
+        """Particle arrays (numpy): x, v (n×3), stress (n×6: xx yy zz yz xz xy, tension > 0)
+        [Pa], mass [kg], volume0 [m³], J, density [kg/m³], gammaDotP [1/s], phase
+        (0 elastic, 1 flowing, 2 gasified)."""
+        return self.solver.particles()
+
+    def kineticEnergy(self):
+        p = self.solver.particles()
+        return 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum())
+
+    @property
+    def time(self):
+        return self.solver.time
+
+    @property
+    def numParticles(self):
+        return self.solver.numParticles
+
+    def front(self, axis=0):
+        """Position of the flow front: the largest particle coordinate along ``axis`` [m]."""
+        return float(self.solver.particles()["x"][:, axis].max())
+

@@ -1,0 +1,294 @@
+"""SDEM in YADE: sphero-polyhedral blocks as real YADE bodies, contact forces from C++.
+
+Typical use::
+
+    import mpmsdem
+    from yade import O
+    from yade.wrapper import ForceResetter, NewtonIntegrator
+    sdem = mpmsdem.SdemEngine()
+    steel = mpmsdem.material(density=7800, friction=0.3)
+    slab = sdem.box(halfExtents=(1, 1, .05), sweepRadius=.005, material=steel, pos=(0, 0, -.05), fixed=True)
+    cube = sdem.box(halfExtents=(.05,) * 3, sweepRadius=.005, material=steel, pos=(0, 0, .06))
+    O.engines = [ForceResetter(), sdem.runner, NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.dt = 1e-5
+    O.run(10000, True)
+    sdem.check()   # re-raises an error that stopped the run, if any
+
+The YADE body is the source of truth for motion (mass, inertia, pos, ori, vel, angVel,
+``dynamic``, ``blockedDOFs``); the engine only adds forces and torques through ``O.forces``.
+"""
+import json
+import math
+import os
+import warnings
+
+from yade import O
+from yade.wrapper import Body, FrictMat, Polyhedra, PyRunner
+from yade.minieigenHP import Quaternion, Vector3
+
+from . import _mpmsdem
+
+_ENGINES = {}
+
+DT_CHECKS = ("raise", "warn")
+
+
+def _step(key):
+    """Called by the PyRunner of an SdemEngine every YADE step."""
+    _ENGINES[key]._step()
+
+
+class SdemEngine:
+    """Contact forces between sphero-polyhedral blocks, run inside YADE's loop.
+
+    :param dtCheck: ``"raise"`` (default): stop the run with an error when ``O.dt`` exceeds
+        the critical step of the current contacts; ``"warn"``: print a warning instead.
+    :param timeStepSafety: c in dt_crit = c · min sqrt(m / Σk) over bodies [-], > 0
+        (c = 1 is half the leapfrog stability limit 2/ω; default 1).
+    :param label: label of the PyRunner put into ``O.engines``.
+    """
+
+    def __init__(self, dtCheck="raise", timeStepSafety=1.0, label="sdem"):
+        if dtCheck not in DT_CHECKS:
+            raise ValueError("dtCheck = %r: must be one of %s" % (dtCheck, ", ".join(DT_CHECKS)))
+        self._bridge = _mpmsdem.SdemBridge()
+        self._bridge.strict = dtCheck == "raise"
+        self._bridge.timeStepSafety = float(timeStepSafety)
+        self.dtCheck = dtCheck
+        self._materials = []      # (SdemMat, index)
+        self._recipes = []        # how each body was made, for save()/restore()
+        self._index = {}          # YADE id -> engine index
+        self._shapes = {}         # YADE id -> SpheroPolyhedron
+        self._warned = 0
+        self.error = None
+        self._key = id(self)
+        _ENGINES[self._key] = self
+        self.runner = PyRunner(command="import mpmsdem.sdem as _s; _s._step(%d)" % self._key,
+                               iterPeriod=1, initRun=True, label=label)
+
+    # ------------------------------------------------------------------ bodies
+    def box(self, halfExtents, sweepRadius, material, pos=(0, 0, 0), ori=None, fixed=False, color=None):
+        """Add a rounded box; returns the YADE body id.
+
+        :param halfExtents: OUTER half-extents of the box [m]; the core is shrunk by R.
+        :param sweepRadius: R [m], 0 < R < min(halfExtents) (paper recommends R = h/20).
+        :param material: an :class:`SdemMat`.
+        :param pos: centroid position [m]. :param ori: orientation (Quaternion), default identity.
+        :param fixed: a fixed body (YADE ``dynamic = False``): a slab, a flume bed, a wall.
+        """
+        shape = _mpmsdem.SpheroPolyhedron.box(_vec(halfExtents, "halfExtents"), float(sweepRadius))
+        recipe = {"kind": "box", "halfExtents": list(_vec(halfExtents, "halfExtents")), "sweepRadius": sweepRadius}
+        return self._add(shape, recipe, material, pos, ori, fixed, color, centroidPlacement=True)
+
+    def polyhedron(self, points, sweepRadius, material, pos=None, ori=None, fixed=False, color=None):
+        """Add the rounded convex hull of ``points`` [m] (the outer shape); returns the YADE id.
+
+        With ``pos=None`` the body stays where the points describe it; otherwise its centroid
+        is put at ``pos`` and ``ori`` rotates the shape as described.
+        """
+        pts = [_vec(p, "points") for p in points]
+        shape = _mpmsdem.SpheroPolyhedron.convexHull(pts, float(sweepRadius))
+        recipe = {"kind": "hull", "points": [list(p) for p in pts], "sweepRadius": sweepRadius}
+        return self._add(shape, recipe, material, pos, ori, fixed, color, centroidPlacement=pos is not None)
+
+    def mesh(self, path, sweepRadius, material, scale=1.0, pos=None, ori=None, fixed=False, color=None):
+        """Add a closed triangle mesh (STL or OBJ, non-convex allowed) as the outer shape.
+
+        Coordinates are multiplied by ``scale``. Placement as in :meth:`polyhedron`.
+        """
+        shape = _mpmsdem.SpheroPolyhedron.meshFile(str(path), float(sweepRadius), float(scale))
+        recipe = {"kind": "meshFile", "path": str(path), "sweepRadius": sweepRadius, "scale": scale}
+        return self._add(shape, recipe, material, pos, ori, fixed, color, centroidPlacement=pos is not None)
+
+    def _materialIndex(self, mat):
+        if not isinstance(mat, _mpmsdem.SdemMat):
+            raise ValueError("material = %r: must be an mpmsdem.SdemMat (see mpmsdem.material())" % (mat,))
+        for m, k in self._materials:
+            if m is mat:
+                return k
+        mat.validate()
+        k = self._bridge.addMaterial(mat)
+        self._materials.append((mat, k))
+        return k
+
+    def _add(self, shape, recipe, material, pos, ori, fixed, color, centroidPlacement, yadeId=None):
+        k = self._materialIndex(material)
+        q = _quat(ori) if ori is not None else Quaternion.Identity
+        if centroidPlacement:
+            p = _vec(pos, "pos")
+            o = q * shape.frameOrientation
+        else:
+            p = q * shape.framePosition
+            o = q * shape.frameOrientation
+        mass = material.density * shape.volume
+        inertia = shape.inertiaPerDensity * material.density
+        if yadeId is None:
+            b = Body()
+            b.shape = Polyhedra(v=shape.outerVertices())
+            if color is not None:
+                b.shape.color = _vec(color, "color")
+            b.material = FrictMat(density=material.density, frictionAngle=math.atan(material.friction),
+                                  poisson=material.poisson)
+            b.state.mass = mass
+            b.state.inertia = inertia
+            b.state.pos = p
+            b.state.ori = o
+            b.aspherical = True
+            if fixed:
+                b.dynamic = False
+            yadeId = O.bodies.append(b)
+        self._bridge.addBody(shape, k, mass, inertia, yadeId, bool(fixed))
+        self._index[yadeId] = len(self._recipes)
+        self._shapes[yadeId] = shape
+        recipe = dict(recipe, yadeId=yadeId, fixed=bool(fixed), material=_matDict(material))
+        self._recipes.append(recipe)
+        return yadeId
+
+    def shape(self, yadeId):
+        """The :class:`SpheroPolyhedron` of a body (ValueError if it is not an SDEM body)."""
+        try:
+            return self._shapes[yadeId]
+        except KeyError:
+            raise ValueError("yadeId = %r: not an SDEM body of this engine (ids: %s)"
+                             % (yadeId, sorted(self._shapes))) from None
+
+    @property
+    def ids(self):
+        """YADE ids of the SDEM bodies, in engine order."""
+        return [r["yadeId"] for r in self._recipes]
+
+    # ------------------------------------------------------------------ stepping
+    def _step(self):
+        try:
+            self._bridge.step(O.bodies, O.forces, O.dt)
+        except Exception as e:
+            self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
+            raise
+        if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
+            if self._warned == 0:
+                warnings.warn("mpmsdem.SdemEngine: O.dt = %g s exceeds the critical step %g s at step %d"
+                              % (O.dt, self._bridge.criticalTimeStep, O.iter), RuntimeWarning)
+            self._warned = self._bridge.timeStepWarnings
+
+    def check(self):
+        """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
+        if self.error:
+            raise RuntimeError("mpmsdem.SdemEngine stopped the run at " + self.error)
+
+    def refresh(self):
+        """Re-read YADE's body state objects (after replacing O.bodies or O.load())."""
+        self._bridge.refresh()
+
+    # ------------------------------------------------------------------ read-out
+    @property
+    def criticalTimeStep(self):
+        """c · min sqrt(m / Σ k_n) over bodies for the current contacts [s] (inf: no contact)."""
+        return self._bridge.criticalTimeStep
+
+    @property
+    def timeStepWarnings(self):
+        """Number of steps whose O.dt exceeded the critical step (dtCheck = "warn")."""
+        return self._bridge.timeStepWarnings
+
+    def contacts(self):
+        """Contact points of the last step as numpy arrays: id1, id2, point (n×3), normal (n×3,
+        from id1 to id2), normalForce (n) [N], tangentialForce (n×3) [N, on id2], overlap [m],
+        normalStiffness [N/m], sliding (0/1), feature1/feature2 ('vertex'|'edge'|'face')."""
+        return self._bridge.contacts()
+
+    def force(self, yadeId):
+        """Contact force of the last step on a body [N] (world frame)."""
+        return self._bridge.force(self._engineIndex(yadeId))
+
+    def torque(self, yadeId):
+        """Contact torque of the last step about the body centroid [N m]."""
+        return self._bridge.torque(self._engineIndex(yadeId))
+
+    def _engineIndex(self, yadeId):
+        if yadeId not in self._index:
+            self.shape(yadeId)
+        return self._index[yadeId]
+
+    def energies(self):
+        """Contact energies [J]: barrier potential, tangential springs, cumulative friction and
+        damping dissipation."""
+        b = self._bridge
+        return {"barrier": b.barrierEnergy, "tangential": b.tangentialEnergy,
+                "friction": b.frictionDissipation, "damping": b.dampingDissipation}
+
+    def timings(self):
+        """Wall time spent in the bridge since the last reset: steps, read (YADE → C++ state),
+        compute (contacts and laws), write (forces → O.forces) [s]."""
+        return dict(self._bridge.timings())
+
+    def resetTimings(self):
+        self._bridge.resetTimings()
+
+    # ------------------------------------------------------------------ checkpoint
+    def save(self, path):
+        """Write the engine's state (shapes' recipes, materials, contact histories) as JSON,
+        to go alongside ``O.save()``; restore with :meth:`SdemEngine.restore`."""
+        hist = [[a, b, ka, kb, ia, ib, list(xi)] for (a, b, ka, kb, ia, ib, xi) in self._bridge.histories()]
+        data = {"format": "mpmsdem-sdem-1", "dtCheck": self.dtCheck,
+                "timeStepSafety": self._bridge.timeStepSafety, "bodies": self._recipes, "histories": hist}
+        tmp = str(path) + ".tmp"
+        with open(tmp, "w") as f:
+            json.dump(data, f)
+        os.replace(tmp, str(path))
+
+    @classmethod
+    def restore(cls, path, label="sdem"):
+        """Rebuild an engine from :meth:`save` for bodies already in ``O.bodies`` (after
+        ``O.load()``); returns it. Put its ``runner`` back into ``O.engines``."""
+        with open(path) as f:
+            data = json.load(f)
+        if data.get("format") != "mpmsdem-sdem-1":
+            raise ValueError("path = %r: not an mpmsdem SDEM checkpoint" % (path,))
+        eng = cls(dtCheck=data["dtCheck"], timeStepSafety=data["timeStepSafety"], label=label)
+        mats = {}
+        for r in data["bodies"]:
+            key = json.dumps(r["material"], sort_keys=True)
+            if key not in mats:
+                mats[key] = _material(r["material"])
+            if r["kind"] == "box":
+                shape = _mpmsdem.SpheroPolyhedron.box(r["halfExtents"], r["sweepRadius"])
+            elif r["kind"] == "hull":
+                shape = _mpmsdem.SpheroPolyhedron.convexHull(r["points"], r["sweepRadius"])
+            else:
+                shape = _mpmsdem.SpheroPolyhedron.meshFile(r["path"], r["sweepRadius"], r["scale"])
+            rec = {k: v for k, v in r.items() if k not in ("yadeId", "fixed", "material")}
+            eng._add(shape, rec, mats[key], None, None, r["fixed"], None, centroidPlacement=False,
+                     yadeId=r["yadeId"])
+        eng._bridge.setHistories([tuple(h[:6]) + (Vector3(*h[6]),) for h in data["histories"]])
+        return eng
+
+
+def _vec(v, name):
+    try:
+        if len(v) != 3:
+            raise TypeError
+        return Vector3(float(v[0]), float(v[1]), float(v[2]))
+    except TypeError:
+        raise ValueError("%s = %r: must be a 3-vector [m]" % (name, v)) from None
+
+
+def _quat(q):
+    if isinstance(q, Quaternion):
+        return q
+    if len(q) == 4:
+        return Quaternion(*[float(c) for c in q])
+    raise ValueError("ori = %r: must be a Quaternion" % (q,))
+
+
+def _material(d):
+    m = _mpmsdem.SdemMat()
+    for k, v in d.items():
+        setattr(m, k, v)
+    m.validate()
+    return m
+
+
+def _matDict(m):
+    return {"density": m.density, "friction": m.friction, "poisson": m.poisson,
+            "barrierStiffness": m.barrierStiffness, "normalDamping": m.normalDamping,
+            "tangentialDamping": m.tangentialDamping}

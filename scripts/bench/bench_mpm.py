@@ -1,0 +1,228 @@
+#!/usr/bin/env python3
+"""MPM throughput benchmark: CPU (double, OpenMP) against CUDA (float and double).
+
+Runs `mpmsdem-run --bench` on generated dam-break scenes (a block of glass beads, 8 material
+points per cell, twice as long as high and as wide as high, released in a box four block
+lengths long) at several particle counts and prints particle-updates per second
+(particles x steps / wall time of the step loop), bytes per particle (solver memory /
+particles) and the GPU/CPU ratio at the same size.
+
+    scripts/bench/bench_mpm.py                       # CPU 1e5, 1e6; CUDA 1e5..1e7 if a GPU is found
+    scripts/bench/bench_mpm.py --cuda --markdown docs/benchmarks.md
+    scripts/bench/bench_mpm.py --cpu-sizes 1e5,1e6,1e7 --threads 2
+
+Uses only the standard library. Exit status 1 when a run fails.
+"""
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def parse_sizes(text):
+    """'1e5,1e6' -> [100000, 1000000]"""
+    try:
+        sizes = [int(float(s)) for s in text.split(",") if s.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError("sizes must be comma-separated numbers, e.g. 1e5,1e6")
+    if not sizes or min(sizes) < 64:
+        raise argparse.ArgumentTypeError("each size must be >= 64 particles")
+    return sizes
+
+
+def dam_break_scene(particles, dx=0.01):
+    """Scene dict for a dam-break block of about `particles` material points (8 per cell)."""
+    cells = particles / 8.0
+    h = max(2, int(round((cells / 2.0) ** (1.0 / 3.0))))  # block: 2h x h x h cells
+    block = (2 * h, h, h)
+    region = (4 * block[0], block[1], block[2] + 2)  # cells open to material (inside the walls)
+    margin = 2  # wall layers of the solver (kWallLayer)
+    return {
+        "description": "benchmark dam break, %d x %d x %d cells x 8 ppc" % block,
+        "grid": {"dx": dx, "cells": [r + 2 * margin for r in region],
+                 "origin": [-margin * dx] * 3},
+        "gravity": [0, 0, -9.81],
+        "walls": {"-z": 0.21},
+        "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3,
+                     "mu_s": 0.24, "mu_2": 0.65},
+        "particles": [{"lo": [0, 0, 0], "hi": [b * dx for b in block], "ppc": 8}],
+        "run": {"duration": 10.0, "dt": "auto", "vtk": "none"},
+    }, 8 * block[0] * block[1] * block[2]
+
+
+def find_exe(args):
+    if args.exe:
+        return args.exe
+    exe = os.path.join(args.build, "mpmsdem-run")
+    if not os.path.isabs(exe):
+        exe = os.path.join(REPO, exe)
+    return exe
+
+
+def gpu_present():
+    if not shutil.which("nvidia-smi"):
+        return False
+    try:
+        out = subprocess.run(["nvidia-smi", "-L"], capture_output=True, text=True, timeout=30)
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return out.returncode == 0 and "GPU" in out.stdout
+
+
+def gpu_name():
+    try:
+        out = subprocess.run(["nvidia-smi", "--query-gpu=name", "--format=csv,noheader"],
+                             capture_output=True, text=True, timeout=30)
+        return out.stdout.strip().splitlines()[0] if out.returncode == 0 and out.stdout.strip() else ""
+    except (OSError, subprocess.TimeoutExpired, IndexError):
+        return ""
+
+
+def run_one(exe, scene_path, backend, precision, steps, threads, timeout):
+    env = dict(os.environ)
+    if threads:
+        env["OMP_NUM_THREADS"] = str(threads)
+    cmd = [exe, scene_path, "--bench", "--backend", backend, "--precision", precision,
+           "--steps", str(steps)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout)
+    if proc.returncode != 0:
+        raise RuntimeError("%s failed (exit %d):\n%s" % (" ".join(cmd), proc.returncode,
+                                                        proc.stderr.strip()[-2000:]))
+    lines = [l for l in proc.stdout.splitlines() if l.startswith("{")]
+    if not lines:
+        raise RuntimeError("%s printed no JSON result:\n%s" % (" ".join(cmd), proc.stdout[-2000:]))
+    return json.loads(lines[-1])
+
+
+def steps_for(particles, target_updates, min_steps, max_steps):
+    return int(min(max_steps, max(min_steps, math.ceil(target_updates / particles))))
+
+
+def format_table(rows):
+    head = ["size", "backend", "precision", "particles", "steps", "seconds",
+            "updates/s", "bytes/particle", "GPU/CPU"]
+    body = []
+    for r in rows:
+        body.append([
+            "%.0e" % r["size"], r["backend"], r["precision"], str(r["particles"]), str(r["steps"]),
+            "%.3g" % r["seconds"], "%.3e" % r["particle_updates_per_s"],
+            "%.0f" % r["bytes_per_particle"],
+            ("%.1f" % r["ratio"]) if r.get("ratio") is not None else "n/a"])
+    widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)]
+    text = "  ".join(h.rjust(w) for h, w in zip(head, widths)) + "\n"
+    for b in body:
+        text += "  ".join(c.rjust(w) for c, w in zip(b, widths)) + "\n"
+    md = "| " + " | ".join(head) + " |\n|" + "---|" * len(head) + "\n"
+    for b in body:
+        md += "| " + " | ".join(b) + " |\n"
+    return text, md
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--build", default="build", help="build folder holding mpmsdem-run (default: build)")
+    ap.add_argument("--exe", help="path of mpmsdem-run (overrides --build)")
+    ap.add_argument("--sizes", type=parse_sizes, default=parse_sizes("1e5,1e6,1e7"),
+                    help="particle counts for CUDA runs (default 1e5,1e6,1e7)")
+    ap.add_argument("--cpu-sizes", type=parse_sizes, default=parse_sizes("1e5,1e6"),
+                    help="particle counts for CPU runs (default 1e5,1e6; add 1e7 for the full set)")
+    gpu = ap.add_mutually_exclusive_group()
+    gpu.add_argument("--cuda", action="store_true", help="run the CUDA backend (default: when nvidia-smi finds a GPU)")
+    gpu.add_argument("--no-cuda", action="store_true", help="never run the CUDA backend")
+    ap.add_argument("--no-cpu", action="store_true", help="skip the CPU runs (no GPU/CPU ratio then)")
+    ap.add_argument("--threads", type=int, default=2, help="OMP_NUM_THREADS for CPU runs (default 2)")
+    ap.add_argument("--cpu-updates", type=float, default=3e7,
+                    help="particle updates per CPU run; steps = this / particles (default 3e7)")
+    ap.add_argument("--gpu-updates", type=float, default=2e9,
+                    help="particle updates per CUDA run (default 2e9)")
+    ap.add_argument("--min-steps", type=int, default=20, help="fewest steps per run (default 20)")
+    ap.add_argument("--max-steps", type=int, default=2000, help="most steps per run (default 2000)")
+    ap.add_argument("--timeout", type=float, default=1800, help="seconds allowed per run (default 1800)")
+    ap.add_argument("--markdown", help="append the results as a markdown table to this file")
+    ap.add_argument("--json", help="write all results as a JSON list to this file")
+    args = ap.parse_args()
+    if args.threads < 1:
+        ap.error("--threads must be >= 1")
+    if args.min_steps < 1 or args.max_steps < args.min_steps:
+        ap.error("need 1 <= --min-steps <= --max-steps")
+
+    exe = find_exe(args)
+    if not os.access(exe, os.X_OK):
+        sys.exit("bench_mpm: no executable mpmsdem-run at %s (build it, or pass --build/--exe)" % exe)
+    use_cuda = args.cuda or (not args.no_cuda and gpu_present())
+
+    plan = []  # (size, backend, precision)
+    if not args.no_cpu:
+        plan += [(n, "cpu", "double") for n in args.cpu_sizes]
+    if use_cuda:
+        for n in args.sizes:
+            plan += [(n, "cuda", "float"), (n, "cuda", "double")]
+    if not plan:
+        sys.exit("bench_mpm: nothing to run (no CPU runs and no GPU)")
+
+    rows = []
+    failed = False
+    with tempfile.TemporaryDirectory(prefix="bench_mpm_") as tmp:
+        for size, backend, precision in plan:
+            scene, particles = dam_break_scene(size)
+            path = os.path.join(tmp, "dam_break_%d.json" % size)
+            with open(path, "w") as f:
+                json.dump(scene, f)
+            if backend == "cpu":
+                steps = steps_for(particles, args.cpu_updates, args.min_steps, args.max_steps)
+            else:
+                steps = steps_for(particles, args.gpu_updates, args.min_steps, args.max_steps)
+            print("running %s-%s, %d particles, %d steps ..." % (backend, precision, particles, steps),
+                  flush=True)
+            try:
+                r = run_one(exe, path, backend, precision, steps,
+                            args.threads if backend == "cpu" else None, args.timeout)
+            except (RuntimeError, subprocess.TimeoutExpired) as e:
+                print("bench_mpm: %s" % e, file=sys.stderr)
+                failed = True
+                continue
+            r["size"] = size
+            rows.append(r)
+
+    cpu_rate = {r["size"]: r["particle_updates_per_s"] for r in rows if r["backend"] == "cpu"}
+    for r in rows:
+        r["ratio"] = (r["particle_updates_per_s"] / cpu_rate[r["size"]]
+                      if r["backend"] == "cuda" and r["size"] in cpu_rate else None)
+    text, md = format_table(rows)
+    print()
+    print(text, end="")
+    print("(CPU runs: OMP_NUM_THREADS=%d; GPU/CPU: against cpu-double at the same size)" % args.threads)
+
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(rows, f, indent=1)
+    if args.markdown:
+        try:
+            commit = subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"],
+                                    capture_output=True, text=True).stdout.strip()
+        except OSError:
+            commit = ""
+        machine = "%s, %d CPU cores" % (platform.processor() or platform.machine(), os.cpu_count() or 0)
+        if use_cuda:
+            machine += ", GPU: %s" % (gpu_name() or "unknown")
+        os.makedirs(os.path.dirname(os.path.abspath(args.markdown)), exist_ok=True)
+        with open(args.markdown, "a") as f:
+            f.write("\n### MPM throughput, %s (commit %s)\n\n" %
+                    (datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), commit or "unknown"))
+            f.write("Machine: %s. CPU runs with OMP_NUM_THREADS=%d. Dam-break block, 8 MPs/cell, "
+                    "dt auto. updates/s = particles x steps / wall time of the step loop.\n\n"
+                    % (machine, args.threads))
+            f.write(md)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,134 @@
+// Appendix B mu(I) model (with DESIGN §3 corrections) and the Appendix A wall condition.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "mpm/Constitutive.hpp"
+#include "mpm/GridBoundary.hpp"
+#include "mpm/MpmKernelsCommon.hpp"
+
+using namespace mpmsdem::mpm;
+
+namespace {
+ConstitutiveConst<double> material() {
+  GranularMaterial m;  // Table 1 glass beads: E 1 MPa, nu 0.3, mu_s 0.24, mu_2 0.65
+  return makeConstitutiveConst<double>(m);
+}
+Sym6T<double> isotropic(double p) { return {{-p, -p, -p, 0, 0, 0}}; }
+}  // namespace
+
+TEST(Constitutive, ElasticStepIsHooke) {
+  const auto c = material();
+  EXPECT_NEAR(c.G, 1e6 / 2.6, 1e-6);
+  EXPECT_NEAR(c.lambda, 1e6 * 0.3 / (1.3 * 0.4), 1e-6);
+  Sym6T<double> s = isotropic(1000);
+  Mat3T<double> L = Mat3T<double>::zero();
+  // symmetric (W = 0) small strain rate with volumetric and deviatoric parts [1/s]
+  L.m[0][0] = -2e-3; L.m[1][1] = 1e-3; L.m[2][2] = -4e-3;
+  L.m[0][1] = L.m[1][0] = 5e-4; L.m[1][2] = L.m[2][1] = -3e-4; L.m[0][2] = L.m[2][0] = 2e-4;
+  const double dt = 1e-3, rho = 1700;
+  double gdp = -1;
+  const auto phase = updateStress(s, L, dt, rho, c, gdp);
+  EXPECT_EQ(phase, kPhaseElastic);
+  EXPECT_EQ(gdp, 0.0);
+  const double tr = -5e-3;
+  const double D[6] = {-2e-3, 1e-3, -4e-3, -3e-4, 2e-4, 5e-4};
+  for (int k = 0; k < 6; ++k) {
+    const double expect = (k < 3 ? -1000.0 + dt * c.lambda * tr : 0.0) + dt * 2 * c.G * D[k];
+    EXPECT_NEAR(s.s[k], expect, 1e-12 * 1000);
+  }
+}
+
+TEST(Constitutive, PlasticStepReturnsOntoMuISurface) {
+  const auto c = material();
+  const double p0 = 1000, dt = 1e-4, rate = 5.0;
+  Sym6T<double> s = isotropic(p0);
+  Mat3T<double> L = Mat3T<double>::zero();
+  L.m[0][2] = L.m[2][0] = rate;  // pure shear, W = 0
+  double gdp = 0;
+  const auto phase = updateStress(s, L, dt, 1700.0, c, gdp);
+  ASSERT_EQ(phase, kPhasePlastic);
+  const double tauTr = dt * 2 * c.G * rate;  // sqrt(1/2 * 2 * (dt 2G rate)^2)
+  ASSERT_GT(tauTr, c.muS * p0);
+  double p, tau;
+  stressInvariants(s, p, tau);
+  EXPECT_NEAR(p, p0, 1e-12 * p0);                    // pressure kept (B.11)
+  EXPECT_NEAR(s.s[4] / tau, 1.0, 1e-12);             // deviator direction kept (only xz)
+  EXPECT_NEAR(gdp, (tauTr - tau) / (c.G * dt), 1e-9 * gdp);  // B.10
+  // On the mu(I) surface: tau = mu(I) p with I = gdp d / sqrt(p / rho_s) (B.2).
+  GranularMaterial m;
+  const double I = gdp * m.grainDiameter / std::sqrt(p / m.solidDensity);
+  const double mu = m.muS + (m.mu2 - m.muS) / (m.I0 / I + 1);
+  EXPECT_NEAR(tau, mu * p, 1e-10 * p);
+  EXPECT_GT(tau, c.muS * p);
+  EXPECT_LT(tau, tauTr);
+  // Quadratic B.8 with the corrected alpha_1 = xi G dt sqrt(p_tr).
+  const double a1 = c.xi * c.G * dt * std::sqrt(p0);
+  const double B = c.mu2 * p0 + tauTr + a1, H = c.mu2 * p0 * tauTr + c.muS * p0 * a1;
+  EXPECT_NEAR((tau * tau - B * tau + H) / (B * B), 0.0, 1e-10);
+}
+
+TEST(Constitutive, GasifiedBelowCriticalDensityOrInTension) {
+  const auto c = material();  // rho_c = rho_0 = 1600
+  Mat3T<double> L = Mat3T<double>::zero();
+  L.m[0][0] = 1e-3;
+  double gdp = 1;
+  Sym6T<double> s = isotropic(1000);
+  EXPECT_EQ(updateStress(s, L, 1e-4, 1599.0, c, gdp), kPhaseGasified);
+  for (double v : s.s) EXPECT_EQ(v, 0.0);
+  EXPECT_EQ(gdp, 0.0);
+  s = isotropic(-50);  // tension
+  EXPECT_EQ(updateStress(s, L, 1e-4, 1700.0, c, gdp), kPhaseGasified);
+  for (double v : s.s) EXPECT_EQ(v, 0.0);
+}
+
+// Under pure spin (D = 0) the Jaumann update sigma + dt (W sigma - sigma W) keeps the trace
+// exactly (tr(W s - s W) = 0), and since s0 : (W s0 - s0 W) = 0 it changes tau only at
+// second order: tau'^2 = tau^2 + dt^2 |W s0 - s0 W|^2 / 2, i.e. tau'/tau - 1 <= 2 dt^2 |W|_F^2.
+TEST(Constitutive, JaumannSpinKeepsInvariants) {
+  const auto c = material();
+  Sym6T<double> s{{-1200, -1000, -900, 30, -40, 60}};
+  double p0, tau0;
+  stressInvariants(s, p0, tau0);
+  ASSERT_LT(tau0, c.muS * p0);  // stays elastic
+  Mat3T<double> L = Mat3T<double>::zero();
+  L.m[0][1] = 3; L.m[1][0] = -3; L.m[0][2] = -2; L.m[2][0] = 2; L.m[1][2] = 1.5; L.m[2][1] = -1.5;
+  const double dt = 1e-4;
+  Mat3T<double> W = L;
+  const Sym6T<double> C = jaumannTerm(W, s);
+  const double expectTau = std::sqrt(tau0 * tau0 + dt * dt * ddot(C, C) / 2);
+  double gdp;
+  ASSERT_EQ(updateStress(s, L, dt, 1700.0, c, gdp), kPhaseElastic);
+  double p1, tau1;
+  stressInvariants(s, p1, tau1);
+  EXPECT_NEAR(p1, p0, 1e-12 * p0);
+  EXPECT_NEAR(tau1, expectTau, 1e-12 * tau0);
+  const double w2 = 2 * (9 + 4 + 2.25);
+  EXPECT_LE(tau1 / tau0 - 1, 2 * dt * dt * w2);
+  EXPECT_GE(tau1 / tau0 - 1, 0.0);
+}
+
+TEST(GridBoundary, CoulombWallRemovesInwardNormalAndCapsTangential) {
+  // low z wall (outward normal -z), mu 0.5: v_n = 2 removed, |v_t| = 5 reduced by 1
+  Vec3T<double> v{3, 4, -2};
+  applyWall(v, 2, -1.0, 0.5);
+  EXPECT_NEAR(v.z, 0, 1e-15);
+  EXPECT_NEAR(v.x, 3 * 0.8, 1e-14);
+  EXPECT_NEAR(v.y, 4 * 0.8, 1e-14);
+  // sticking: |v_t| = 0.5 <= 0.5 * 2
+  v = {0.3, 0.4, -2};
+  applyWall(v, 2, -1.0, 0.5);
+  EXPECT_EQ(v.x, 0);
+  EXPECT_EQ(v.y, 0);
+  // separating: untouched
+  v = {3, 4, 2};
+  applyWall(v, 2, -1.0, 0.5);
+  EXPECT_EQ(v.x, 3);
+  EXPECT_EQ(v.z, 2);
+  // no-slip high x wall: tangential zero, outward (inward-moving) normal removed
+  v = {1, 4, 2};
+  applyWall(v, 0, 1.0, -1.0);
+  EXPECT_EQ(v.x, 0);
+  EXPECT_EQ(v.y, 0);
+  EXPECT_EQ(v.z, 0);
+}

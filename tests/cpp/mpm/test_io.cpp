@@ -1,0 +1,361 @@
+// HDF5 and VTK writers: exact read-back, append across reopen, validity of the file on disk
+// after every flush (what a killed run leaves), VTK/PVD parse-back.
+#include <gtest/gtest.h>
+#include <hdf5.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "common/Error.hpp"
+#include "io/Hdf5Writer.hpp"
+#include "io/VtkWriter.hpp"
+
+using namespace mpmsdem;
+using namespace mpmsdem::io;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("mpmsdem_test_io_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path p = dir / name;
+  fs::remove(p);
+  return p;
+}
+
+// n particles with distinct, non-round values in every field.
+mpm::ParticleSet makeParticles(std::size_t n) {
+  mpm::ParticleSet p;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      p.x.push_back(0.1 * i + 0.01 * a + 1.0 / 3.0);
+      p.v.push_back(-0.7 * i + 0.3 * a + 1e-3 / 7.0);
+      p.fext.push_back(0.0);
+    }
+    for (int k = 0; k < 6; ++k) p.stress.push_back(-1000.0 * (i + 1) - 17.0 * k + 0.125);
+    p.mass.push_back(1.6e-4 * (1 + 0.01 * i));
+    p.volume0.push_back(1e-7 * (1 + 0.02 * i));
+    p.J.push_back(1.0 + 1e-3 * i);
+    p.gammaDotP.push_back(0.5 * i + 1.0 / 9.0);
+    p.phase.push_back(static_cast<std::uint8_t>(i % 3));
+  }
+  return p;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream is(p, std::ios::binary);
+  std::stringstream ss;
+  ss << is.rdbuf();
+  return ss.str();
+}
+
+// Values of the ascii DataArray `name` in a .vtp text.
+std::vector<double> asciiArray(const std::string& text, const std::string& name) {
+  const std::string tag = "Name=\"" + name + "\"";
+  const std::size_t at = text.find(tag);
+  if (at == std::string::npos) return {};
+  const std::size_t begin = text.find('>', at) + 1;
+  const std::size_t end = text.find("</DataArray>", begin);
+  std::istringstream is(text.substr(begin, end - begin));
+  std::vector<double> out;
+  double d;
+  while (is >> d) out.push_back(d);
+  return out;
+}
+
+// Float32 values of the appended DataArray `name` (raw encoding, UInt64 headers).
+std::vector<float> rawFloatArray(const std::string& text, const std::string& name) {
+  const std::size_t at = text.find("Name=\"" + name + "\"");
+  if (at == std::string::npos) return {};
+  const std::size_t off = text.find("offset=\"", at) + 8;
+  const std::size_t offset = std::stoul(text.substr(off, text.find('"', off) - off));
+  const std::size_t base = text.find('_', text.find("<AppendedData")) + 1;
+  std::uint64_t nbytes;
+  std::memcpy(&nbytes, &text[base + offset], 8);
+  std::vector<float> out(nbytes / 4);
+  std::memcpy(out.data(), &text[base + offset + 8], nbytes);
+  return out;
+}
+
+int intAttribute(const std::string& text, const std::string& attr) {
+  const std::regex re(attr + "=\"([0-9]+)\"");
+  std::smatch m;
+  if (!std::regex_search(text, m, re)) return -1;
+  return std::stoi(m[1].str());
+}
+
+}  // namespace
+
+TEST(Hdf5Writer, WritesAndReadsBackExactValues) {
+  const fs::path path = scratch("exact.h5");
+  const auto p = makeParticles(7);
+  {
+    Hdf5Writer w(path.string());
+    w.setAttribute("units", "SI");
+    w.setAttribute("parameters", std::string("{\"dx\": 0.01, \"name\": \"d\u00e9bris\"}"));
+    w.setAttribute("gravity", -9.81);
+    for (int k = 0; k < 5; ++k) {
+      w.appendScalar("time", 0.1 * k + 1.0 / 3.0);
+      w.appendVector("com", {1.0 * k, 2.0 / 3.0, -k / 7.0});
+    }
+    EXPECT_EQ(w.writeSnapshot(p, 0.25, 42), 0);
+    EXPECT_EQ(w.writeSnapshot(p, 0.5, 84), 1);
+    EXPECT_EQ(w.seriesLength("time"), 5);
+    EXPECT_EQ(w.seriesLength("absent"), 0);
+  }
+  std::size_t width = 0;
+  const auto time = readSeries(path.string(), "time", &width);
+  ASSERT_EQ(time.size(), 5u);
+  EXPECT_EQ(width, 1u);
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(time[k], 0.1 * k + 1.0 / 3.0);
+  const auto com = readSeries(path.string(), "com", &width);
+  ASSERT_EQ(com.size(), 15u);
+  EXPECT_EQ(width, 3u);
+  EXPECT_EQ(com[3 * 4 + 0], 4.0);
+  EXPECT_EQ(com[3 * 4 + 1], 2.0 / 3.0);
+  EXPECT_EQ(com[3 * 4 + 2], -4 / 7.0);
+  EXPECT_EQ(readStringAttribute(path.string(), "units"), "SI");
+  EXPECT_EQ(readStringAttribute(path.string(), "parameters"), "{\"dx\": 0.01, \"name\": \"d\u00e9bris\"}");
+
+  ASSERT_EQ(readNumSnapshots(path.string()), 2);
+  mpm::ParticleSet q;
+  double t = 0;
+  long step = 0;
+  readSnapshot(path.string(), 1, q, &t, &step);
+  EXPECT_EQ(t, 0.5);
+  EXPECT_EQ(step, 84);
+  ASSERT_EQ(q.size(), 7u);
+  EXPECT_EQ(q.x, p.x);
+  EXPECT_EQ(q.v, p.v);
+  EXPECT_EQ(q.stress, p.stress);
+  EXPECT_EQ(q.mass, p.mass);
+  EXPECT_EQ(q.volume0, p.volume0);
+  EXPECT_EQ(q.J, p.J);
+  EXPECT_EQ(q.gammaDotP, p.gammaDotP);
+  EXPECT_EQ(q.phase, p.phase);
+  EXPECT_EQ(q.fext, std::vector<double>(21, 0.0));
+
+  // Shapes and the derived density, read with the plain HDF5 API as a user would.
+  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  hid_t d = H5Dopen2(f, "/snapshots/000000/stress", H5P_DEFAULT);
+  hid_t s = H5Dget_space(d);
+  hsize_t dims[2] = {0, 0};
+  EXPECT_EQ(H5Sget_simple_extent_ndims(s), 2);
+  H5Sget_simple_extent_dims(s, dims, nullptr);
+  EXPECT_EQ(dims[0], 7u);
+  EXPECT_EQ(dims[1], 6u);
+  H5Sclose(s);
+  H5Dclose(d);
+  d = H5Dopen2(f, "/snapshots/000000/density", H5P_DEFAULT);
+  std::vector<double> density(7);
+  H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, density.data());
+  H5Dclose(d);
+  for (int i = 0; i < 7; ++i) EXPECT_NEAR(density[i], p.mass[i] / (p.J[i] * p.volume0[i]), 1e-12 * density[i]);
+  EXPECT_NEAR(density[0], 1600.0, 1e-9);
+  hid_t a = H5Aopen(f, "gravity", H5P_DEFAULT);
+  double g = 0;
+  H5Aread(a, H5T_NATIVE_DOUBLE, &g);
+  EXPECT_EQ(g, -9.81);
+  H5Aclose(a);
+  H5Fclose(f);
+}
+
+TEST(Hdf5Writer, AppendsAcrossCloseAndReopen) {
+  const fs::path path = scratch("append.h5");
+  const auto p = makeParticles(3);
+  {
+    Hdf5Writer w(path.string());
+    for (int k = 0; k < 3; ++k) w.appendScalar("time", k);
+    w.writeSnapshot(p, 0.0, 0);
+  }
+  {
+    Hdf5Writer w(path.string(), Hdf5Writer::Mode::Append);
+    EXPECT_EQ(w.numSnapshots(), 1);
+    EXPECT_EQ(w.seriesLength("time"), 3);
+    for (int k = 3; k < 5; ++k) w.appendScalar("time", k);
+    EXPECT_EQ(w.writeSnapshot(p, 1.0, 10), 1);
+  }
+  const auto time = readSeries(path.string(), "time");
+  ASSERT_EQ(time.size(), 5u);
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(time[k], double(k));
+  EXPECT_EQ(readNumSnapshots(path.string()), 2);
+  double t = 0;
+  long step = 0;
+  mpm::ParticleSet q;
+  readSnapshot(path.string(), 1, q, &t, &step);
+  EXPECT_EQ(t, 1.0);
+  EXPECT_EQ(step, 10);
+  // Truncate starts afresh.
+  { Hdf5Writer w(path.string(), Hdf5Writer::Mode::Truncate); }
+  EXPECT_EQ(readNumSnapshots(path.string()), 0);
+  EXPECT_THROW(readSeries(path.string(), "time"), RuntimeFailure);
+}
+
+TEST(Hdf5Writer, FileOnDiskIsValidAfterEveryRecord) {
+  // Copy the file while the writer still holds it open: the copy is what a killed run leaves.
+  const fs::path path = scratch("live.h5");
+  const fs::path copy = scratch("live_copy.h5");
+  const auto p = makeParticles(4);
+  Hdf5Writer w(path.string());
+  for (int k = 0; k < 4; ++k) {
+    w.appendScalar("kinetic_energy", 0.5 * k);
+    w.writeSnapshot(p, 0.1 * k, k);
+    fs::copy_file(path, copy, fs::copy_options::overwrite_existing);
+    const auto ke = readSeries(copy.string(), "kinetic_energy");
+    ASSERT_EQ(ke.size(), std::size_t(k + 1));
+    EXPECT_EQ(ke.back(), 0.5 * k);
+    ASSERT_EQ(readNumSnapshots(copy.string()), k + 1);
+    mpm::ParticleSet q;
+    double t = -1;
+    readSnapshot(copy.string(), k, q, &t);
+    EXPECT_EQ(t, 0.1 * k);
+    EXPECT_EQ(q.x, p.x);
+  }
+  // The live file itself can be opened read-only while the writer holds it.
+  EXPECT_EQ(readSeries(path.string(), "kinetic_energy").size(), 4u);
+}
+
+TEST(Hdf5Writer, RejectsInconsistentRecords) {
+  const fs::path path = scratch("bad.h5");
+  Hdf5Writer w(path.string());
+  w.appendVector("com", {1, 2, 3});
+  try {
+    w.appendVector("com", {1, 2});
+    FAIL() << "expected ParameterError";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("series 'com'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("length 3"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(w.appendScalar("com", 1.0), ParameterError);
+  EXPECT_THROW(w.appendScalar("a/b", 1.0), ParameterError);
+  auto p = makeParticles(3);
+  p.J.pop_back();
+  try {
+    w.writeSnapshot(p, 0, 0);
+    FAIL() << "expected ParameterError";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("ParticleSet.J"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(Hdf5Writer("/nonexistent-dir/x.h5"), RuntimeFailure);
+}
+
+TEST(VtkWriter, AsciiParticlesParseBack) {
+  const fs::path path = scratch("p.vtp");
+  const auto p = makeParticles(5);
+  writeParticlesVtp(path.string(), p, VtkEncoding::Ascii);
+  const std::string text = slurp(path);
+  EXPECT_EQ(intAttribute(text, "NumberOfPoints"), 5);
+  EXPECT_EQ(intAttribute(text, "NumberOfVerts"), 1);
+  const auto pts = asciiArray(text, "Points");
+  ASSERT_EQ(pts.size(), 15u);
+  EXPECT_NEAR(pts[3 * 4 + 2], p.x[3 * 4 + 2], 1e-7 * std::fabs(p.x[14]));
+  const auto pressure = asciiArray(text, "pressure");
+  ASSERT_EQ(pressure.size(), 5u);
+  const double p2 = -(p.stress[12] + p.stress[13] + p.stress[14]) / 3;  // particle 2
+  EXPECT_NEAR(pressure[2], p2, 1e-6 * std::fabs(p2));
+  const auto stress = asciiArray(text, "stress");
+  ASSERT_EQ(stress.size(), 45u);
+  // Full tensor of particle 1: [xx xy xz; xy yy yz; xz yz zz] from (xx yy zz yz xz xy).
+  const double* s = &p.stress[6];
+  const double full[9] = {s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2]};
+  for (int k = 0; k < 9; ++k) EXPECT_NEAR(stress[9 + k], full[k], 1e-6 * std::fabs(full[k]));
+  const auto phase = asciiArray(text, "phase");
+  ASSERT_EQ(phase.size(), 5u);
+  EXPECT_EQ(phase[4], 1.0);
+  const auto density = asciiArray(text, "density");
+  EXPECT_NEAR(density[0], 1600.0, 1e-3);
+  EXPECT_FALSE(fs::exists(path.string() + ".tmp"));
+}
+
+TEST(VtkWriter, RawParticlesParseBack) {
+  const fs::path path = scratch("p_raw.vtp");
+  const auto p = makeParticles(6);
+  writeParticlesVtp(path.string(), p, VtkEncoding::AppendedRaw);
+  const std::string text = slurp(path);
+  EXPECT_EQ(intAttribute(text, "NumberOfPoints"), 6);
+  const auto v = rawFloatArray(text, "velocity");
+  ASSERT_EQ(v.size(), 18u);
+  for (int k = 0; k < 18; ++k) EXPECT_NEAR(v[k], p.v[k], 1e-6 * std::fabs(p.v[k]) + 1e-12);
+  const auto gdp = rawFloatArray(text, "gammaDotP");
+  ASSERT_EQ(gdp.size(), 6u);
+  EXPECT_NEAR(gdp[5], 2.5 + 1.0 / 9.0, 1e-6);
+  const auto pts = rawFloatArray(text, "Points");
+  ASSERT_EQ(pts.size(), 18u);
+  EXPECT_NEAR(pts[0], 1.0 / 3.0, 1e-7);
+  // Raw is much smaller than ascii for the same data.
+  const fs::path ascii = scratch("p_ascii.vtp");
+  writeParticlesVtp(ascii.string(), makeParticles(2000), VtkEncoding::Ascii);
+  writeParticlesVtp(path.string(), makeParticles(2000), VtkEncoding::AppendedRaw);
+  EXPECT_LT(fs::file_size(path), fs::file_size(ascii) / 2);
+}
+
+TEST(VtkWriter, RigidSurfacesWithBodyIds) {
+  const fs::path path = scratch("bodies.vtp");
+  RigidSurface a, b;
+  a.id = 3;
+  a.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  a.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  b = a;
+  b.id = 7;
+  for (auto& v : b.vertices) v[0] += 2.0;
+  writeRigidSurfacesVtp(path.string(), {a, b}, VtkEncoding::Ascii);
+  const std::string text = slurp(path);
+  EXPECT_EQ(intAttribute(text, "NumberOfPoints"), 8);
+  EXPECT_EQ(intAttribute(text, "NumberOfPolys"), 8);
+  const auto ids = asciiArray(text, "bodyId");
+  ASSERT_EQ(ids.size(), 8u);
+  EXPECT_EQ(ids[0], 3.0);
+  EXPECT_EQ(ids[7], 7.0);
+  const auto conn = asciiArray(text, "connectivity");
+  ASSERT_EQ(conn.size(), 24u);
+  EXPECT_EQ(conn[12], 4.0);  // body b, triangle 0, vertex 0 -> 4 + 0
+  EXPECT_EQ(conn[23], 7.0);  // body b, triangle 3, vertex 3 -> 4 + 3
+  const auto offs = asciiArray(text, "offsets");
+  ASSERT_EQ(offs.size(), 8u);
+  EXPECT_EQ(offs[7], 24.0);
+  const auto pts = asciiArray(text, "Points");
+  EXPECT_EQ(pts[3 * 5 + 0], 3.0);  // vertex 1 of body b: (1 + 2, 0, 0)
+
+  b.triangles[2][1] = 4;
+  try {
+    writeRigidSurfacesVtp(path.string(), {a, b});
+    FAIL() << "expected ParameterError";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("body 7 triangle 2"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PvdCollection, RewrittenAfterEachAddAndResumable) {
+  const fs::path path = scratch("series.pvd");
+  {
+    PvdCollection c(path.string());
+    c.add(0.0, "vtk/p_000000.vtp");
+    c.add(0.05, "vtk/p_000001.vtp");
+    c.add(0.1, "vtk/bodies_000002.vtp", 1);
+    const std::string text = slurp(path);  // valid while the run goes on
+    EXPECT_NE(text.find("</VTKFile>"), std::string::npos);
+    const std::regex dataset("<DataSet ");
+    EXPECT_EQ(std::distance(std::sregex_iterator(text.begin(), text.end(), dataset), std::sregex_iterator()), 3);
+  }
+  PvdCollection resumed(path.string(), true);
+  EXPECT_EQ(resumed.size(), 3u);
+  resumed.add(0.15, "vtk/p&q.vtp");
+  const std::string text = slurp(path);
+  EXPECT_NE(text.find("timestep=\"0.10000000000000001\" group=\"\" part=\"1\" file=\"vtk/bodies_000002.vtp\""),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("file=\"vtk/p&amp;q.vtp\""), std::string::npos) << text;
+  PvdCollection again(path.string(), true);
+  EXPECT_EQ(again.size(), 4u);
+  again.add(0.2, "x.vtp");
+  EXPECT_NE(slurp(path).find("file=\"vtk/p&amp;q.vtp\""), std::string::npos);
+  PvdCollection fresh(path.string(), false);
+  EXPECT_EQ(fresh.size(), 0u);
+}

@@ -1,0 +1,229 @@
+// JSON scenes: parameters, particle count and mass of a good scene; every kind of bad input
+// raises ParameterError naming the key.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <regex>
+#include <nlohmann/json.hpp>
+
+#include "common/Error.hpp"
+#include "mpm/MpmScene.hpp"
+
+using namespace mpmsdem;
+using namespace mpmsdem::mpm;
+using nlohmann::json;
+
+namespace {
+
+// Grid 40 x 10 x 20 cells of 0.01 m: material region [0.02, 0.38] x [0.02, 0.08] x [0.02, 0.18].
+json goodScene() {
+  return json::parse(R"({
+    "description": "two boxes in a small inclined flume",
+    "grid": {"dx": 0.01, "cells": [40, 10, 20], "origin": [0, 0, 0]},
+    "gravity": {"g": 9.81, "incline_deg": 10},
+    "flip_alpha": 0.95,
+    "cfl": 0.4,
+    "walls": {"-z": 0.21, "+x": "noslip", "-x": "free"},
+    "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65,
+                 "grain_diameter": 0.001, "critical_density": 1500},
+    "particles": [
+      {"lo": [0.02, 0.02, 0.02], "hi": [0.32, 0.08, 0.12], "ppc": 8},
+      {"lo": [0.33, 0.02, 0.02], "hi": [0.36, 0.05, 0.06], "ppc": [1, 2, 3], "velocity": [0.5, 0, -0.25]}
+    ],
+    "run": {"duration": 0.5, "dt": "auto", "output_every": 0.05, "output_dir": "out/flume", "vtk": "ascii"}
+  })");
+}
+
+// Parse `scene` and require a ParameterError whose message contains every `needle`.
+void expectError(const json& scene, std::initializer_list<const char*> needles) {
+  try {
+    parseScene(scene.dump());
+    ADD_FAILURE() << "expected ParameterError for " << scene.dump();
+  } catch (const ParameterError& e) {
+    for (const char* n : needles) EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+
+TEST(MpmScene, GoodSceneGivesParameters) {
+  const MpmScene s = parseScene(goodScene().dump());
+  const MpmParams& p = s.params;
+  EXPECT_EQ(p.dx, 0.01);
+  EXPECT_EQ(p.cells[0], 40);
+  EXPECT_EQ(p.cells[2], 20);
+  const double a = 10 * M_PI / 180;
+  EXPECT_NEAR(p.gravity[0], 9.81 * std::sin(a), 1e-12);
+  EXPECT_NEAR(p.gravity[0], 1.7034886, 1e-6);
+  EXPECT_EQ(p.gravity[1], 0.0);
+  EXPECT_NEAR(p.gravity[2], -9.81 * std::cos(a), 1e-12);
+  EXPECT_NEAR(p.gravity[2], -9.660965, 1e-6);
+  EXPECT_EQ(p.flipAlpha, 0.95);
+  EXPECT_EQ(p.cfl, 0.4);
+  EXPECT_EQ(p.walls[4].friction, 0.21);  // -z
+  EXPECT_LT(p.walls[1].friction, 0.0);   // +x no-slip
+  EXPECT_EQ(p.walls[0].friction, 0.0);   // -x free
+  EXPECT_EQ(p.walls[5].friction, 0.0);   // +z default free
+  EXPECT_EQ(p.material.density, 1600.0);
+  EXPECT_EQ(p.material.youngModulus, 1e6);
+  EXPECT_EQ(p.material.mu2, 0.65);
+  EXPECT_EQ(p.material.grainDiameter, 0.001);
+  EXPECT_EQ(p.material.criticalDensity, 1500.0);
+  EXPECT_EQ(p.material.I0, 0.279);          // default
+  EXPECT_EQ(p.material.solidDensity, 2500);  // default
+  EXPECT_EQ(s.run.duration, 0.5);
+  EXPECT_EQ(s.run.dt, 0.0);  // auto
+  EXPECT_EQ(s.run.dtFactor, 0.9);
+  EXPECT_EQ(s.run.outputEvery, 0.05);
+  EXPECT_NEAR(s.run.seriesEvery, 0.005, 1e-15);
+  EXPECT_EQ(s.run.outputDir, "out/flume");
+  EXPECT_EQ(s.run.vtk, "ascii");
+  EXPECT_EQ(s.run.backend, Backend::Cpu);
+  EXPECT_EQ(s.run.precision, Precision::Double);
+  ASSERT_EQ(s.boxes.size(), 2u);
+  EXPECT_EQ(s.boxes[1].ppc[2], 3);
+  EXPECT_EQ(json::parse(s.sourceJson), goodScene());
+}
+
+TEST(MpmScene, SeedsHandComputedCountAndMass) {
+  const MpmScene s = parseScene(goodScene().dump());
+  const ParticleSet p = seedParticles(s);
+  // Box 0: 30 x 6 x 10 cells x 8 = 14400; box 1: 3 x 3 x 4 cells x 6 = 216.
+  ASSERT_EQ(p.size(), 14400u + 216u);
+  ASSERT_EQ(p.x.size(), 3 * p.size());
+  ASSERT_EQ(p.stress.size(), 6 * p.size());
+  ASSERT_EQ(p.fext.size(), 3 * p.size());
+  double m0 = 0, m1 = 0, v0 = 0;
+  for (std::size_t i = 0; i < 14400; ++i) {
+    m0 += p.mass[i];
+    v0 += p.volume0[i];
+  }
+  for (std::size_t i = 14400; i < p.size(); ++i) m1 += p.mass[i];
+  const double vol0 = 0.30 * 0.06 * 0.10, vol1 = 0.03 * 0.03 * 0.04;
+  EXPECT_NEAR(m0, 1600 * vol0, 1e-12);  // 2.88 kg
+  EXPECT_NEAR(m0, 2.88, 1e-12);
+  EXPECT_NEAR(m1, 1600 * vol1, 1e-12);  // 0.0576 kg
+  EXPECT_NEAR(v0, vol0, 1e-15);
+  // Every particle inside its box; box 1 carries its velocity, box 0 is at rest.
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const ParticleBox& b = s.boxes[i < 14400 ? 0 : 1];
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GT(p.x[3 * i + a], b.lo[a]);
+      EXPECT_LT(p.x[3 * i + a], b.hi[a]);
+      EXPECT_EQ(p.v[3 * i + a], b.velocity[a]);
+    }
+    EXPECT_EQ(p.J[i], 1.0);
+  }
+  EXPECT_EQ(p.v[3 * 14400], 0.5);
+  EXPECT_EQ(p.v[3 * 14400 + 2], -0.25);
+}
+
+TEST(MpmScene, DefaultsAndPlainGravity) {
+  json j = goodScene();
+  j["gravity"] = {0.0, -1.0, -9.0};
+  j.erase("walls");
+  j.erase("flip_alpha");
+  j["run"] = {{"duration", 2.0}, {"dt", 1e-4}};
+  const MpmScene s = parseScene(j.dump());
+  EXPECT_EQ(s.params.gravity[1], -1.0);
+  EXPECT_EQ(s.params.gravity[2], -9.0);
+  EXPECT_EQ(s.params.flipAlpha, 0.99);
+  for (const WallSpec& w : s.params.walls) EXPECT_EQ(w.friction, 0.0);
+  EXPECT_EQ(s.run.dt, 1e-4);
+  EXPECT_EQ(s.run.outputEvery, 0.1);
+  EXPECT_EQ(s.run.outputDir, "out");
+  EXPECT_EQ(s.run.vtk, "raw");
+}
+
+TEST(MpmScene, UnknownKeysAreNamed) {
+  json j = goodScene();
+  j["gravty"] = 9.81;
+  expectError(j, {"unknown key 'gravty'"});
+  j = goodScene();
+  j["material"]["densty"] = 1600;
+  expectError(j, {"unknown key 'material.densty'", "density"});
+  j = goodScene();
+  j["particles"][1]["ppcc"] = 8;
+  expectError(j, {"unknown key 'particles[1].ppcc'"});
+  j = goodScene();
+  j["walls"]["-w"] = 0.1;
+  expectError(j, {"unknown key 'walls.-w'"});
+  j = goodScene();
+  j["run"]["output"] = "x";
+  expectError(j, {"unknown key 'run.output'"});
+}
+
+TEST(MpmScene, MissingKeysAreNamed) {
+  for (const char* key : {"grid", "material", "particles", "run"}) {
+    json j = goodScene();
+    j.erase(key);
+    expectError(j, {"missing required key", key});
+  }
+  json j = goodScene();
+  j["run"].erase("duration");
+  expectError(j, {"missing required key 'run.duration'"});
+  j = goodScene();
+  j["material"].erase("mu_2");
+  expectError(j, {"missing required key 'material.mu_2'"});
+  j = goodScene();
+  j["grid"].erase("dx");
+  expectError(j, {"missing required key 'grid.dx'"});
+  j = goodScene();
+  j["particles"][0].erase("hi");
+  expectError(j, {"missing required key 'particles[0].hi'"});
+}
+
+TEST(MpmScene, ParticlesOutsideTheGrid) {
+  json j = goodScene();
+  j["particles"][0]["hi"] = {0.32, 0.08, 0.19};  // z region ends at 0.18 (wall layers)
+  expectError(j, {"particles[0]", "outside the grid", "0.18"});
+  j = goodScene();
+  j["particles"][0]["lo"] = {0.01, 0.02, 0.02};  // inside the -x wall layer
+  expectError(j, {"particles[0]", "outside the grid", "0.02"});
+  j = goodScene();
+  j["particles"][1]["lo"] = {0.30, 0.02, 0.02};  // overlaps box 0
+  expectError(j, {"particles[1]", "overlapping particles[0]"});
+  j = goodScene();
+  j["particles"][0]["hi"] = {0.325, 0.08, 0.12};  // not on a grid line
+  expectError(j, {"particles[0].hi[0]", "grid line"});
+  j = goodScene();
+  j["particles"][0]["hi"] = {0.02, 0.08, 0.12};  // empty
+  expectError(j, {"particles[0].hi[0]"});
+  j = goodScene();
+  j["particles"] = json::array();
+  expectError(j, {"particles", "non-empty"});
+}
+
+TEST(MpmScene, BadValueRanges) {
+  const std::vector<std::pair<std::string, json>> cases = {
+      {"/grid/dx", -0.01},          {"/grid/cells/1", 3},       {"/grid/cells/0", 10.5},
+      {"/material/density", 0},     {"/material/poisson_ratio", 0.5}, {"/material/mu_2", 0.2},
+      {"/material/young_modulus", -1e6}, {"/material/I0", 0},   {"/flip_alpha", 1.5},
+      {"/cfl", 0},                  {"/walls/-z", -0.2},        {"/walls/+x", "sticky"},
+      {"/gravity/incline_deg", 90}, {"/run/duration", 0},       {"/run/dt", 1.0},
+      {"/run/dt", "fast"},          {"/run/dt_factor", 1.5},    {"/run/backend", "gpu"},
+      {"/run/precision", "half"},   {"/run/vtk", "binary"},     {"/particles/0/ppc", 9},
+      {"/particles/0/ppc", [] { return json::array({1, 9, 1}); }()},
+      {"/material/density", "heavy"}};
+  for (const auto& [ptr, value] : cases) {
+    json j = goodScene();
+    j[json::json_pointer(ptr)] = value;
+    // Name as in the messages: "/material/poisson_ratio" -> "material.poisson_ratio", "/grid/cells/1" -> "grid.cells[1]".
+    std::string name = ptr.substr(1);
+    std::size_t pos;
+    while ((pos = name.find('/')) != std::string::npos) name.replace(pos, 1, ".");
+    name = std::regex_replace(name, std::regex("\\.([0-9]+)"), "[$1]");
+    SCOPED_TRACE(ptr);
+    expectError(j, {name.c_str(), "must be"});
+  }
+  // Float on the CPU backend.
+  json j = goodScene();
+  j["run"]["precision"] = "float";
+  expectError(j, {"run.precision", "cuda"});
+  EXPECT_THROW(validateBackend(Backend::Cpu, Precision::Float), ParameterError);
+  EXPECT_NO_THROW(validateBackend(Backend::Cuda, Precision::Float));
+  // Not JSON, not an object, missing file.
+  EXPECT_THROW(parseScene("{\"grid\": "), ParameterError);
+  EXPECT_THROW(parseScene("[1, 2]"), ParameterError);
+  EXPECT_THROW(loadScene("/nonexistent/scene.json"), ParameterError);
+}
