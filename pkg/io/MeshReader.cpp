@@ -81,6 +81,8 @@ TriangleMesh readObj(const std::string& path) {
   std::ifstream in(path);
   if (!in) badFile(path, "cannot open the file");
   TriangleMesh mesh;
+  VertexMerger merger{{}, &mesh};
+  std::vector<int> merged;  // OBJ vertex number - 1 -> merged vertex index
   std::string line;
   int lineNo = 0;
   while (std::getline(in, line)) {
@@ -91,17 +93,17 @@ TriangleMesh readObj(const std::string& path) {
     if (tag == "v") {
       Vec3 p;
       if (!(ls >> p.x() >> p.y() >> p.z())) badFile(path, "bad vertex on line " + std::to_string(lineNo));
-      mesh.vertices.push_back(p);
+      merged.push_back(merger.add(p));
     } else if (tag == "f") {
       std::vector<int> corners;
       std::string tok;
       while (ls >> tok) {
         const int idx = std::atoi(tok.substr(0, tok.find('/')).c_str());
-        const int n = static_cast<int>(mesh.vertices.size());
+        const int n = static_cast<int>(merged.size());
         const int zeroBased = idx > 0 ? idx - 1 : n + idx;  // negative: relative to the end
         if (idx == 0 || zeroBased < 0 || zeroBased >= n)
           badFile(path, "face index out of range on line " + std::to_string(lineNo));
-        corners.push_back(zeroBased);
+        corners.push_back(merged[zeroBased]);
       }
       if (corners.size() < 3) badFile(path, "face with fewer than 3 corners on line " + std::to_string(lineNo));
       for (size_t i = 1; i + 1 < corners.size(); ++i) mesh.triangles.push_back({corners[0], corners[i], corners[i + 1]});

@@ -15,8 +15,9 @@ struct TriangleMesh {
 };
 
 // Read a mesh; the format is chosen by the extension (.stl or .obj, any case).
-// STL stores each triangle's corners separately: corners with identical coordinates are
-// merged into one vertex so that the mesh is indexed (needed for the closedness check).
+// Vertices with identical coordinates are merged into one (STL stores each triangle's
+// corners separately; some OBJ exporters duplicate vertices along seams), so that the mesh
+// is indexed as the closedness check needs.
 // OBJ polygons with more than three corners are split into a fan of triangles.
 // scale multiplies every coordinate (e.g. 0.001 for a file in millimetres); must be > 0.
 // Throws ParameterError naming `path` (missing/unreadable file, unknown extension,

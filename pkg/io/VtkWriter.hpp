@@ -52,7 +52,6 @@ class PvdCollection {
   void add(double time, const std::string& file, int part = 0);
 
   std::size_t size() const { return entries_.size(); }
-  const std::string& path() const { return path_; }
 
  private:
   struct Entry {

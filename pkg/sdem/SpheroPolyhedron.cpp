@@ -127,7 +127,8 @@ void finalize(SpheroPolyhedron& s) {
 }
 
 // Faces (convex polygons) of the convex hull of pts, coplanar hull triangles merged.
-// Returns the polygon loops (indices into `used`, the hull vertices) and their planes.
+// Holds the hull vertices and triangles, and the merged polygon loops (indices into
+// vertices, counter-clockwise from outside) with their planes.
 struct Hull {
   std::vector<Vec3> vertices;
   std::vector<std::array<int, 3>> triangles;
@@ -142,7 +143,7 @@ void requireSolid(const std::vector<Vec3>& pts) {
   for (const Vec3& p : pts)
     if (!p.allFinite()) throwParameter("points", "a non-finite coordinate", "", "finite coordinates");
   const Real tol = kRelTol * shapeSize(pts);
-  size_t i1 = 0, i2 = 0, i3 = 0;
+  size_t i1 = 0, i2 = 0;
   Real best = 0;
   for (size_t i = 0; i < pts.size(); ++i)
     if ((pts[i] - pts[0]).norm() > best) best = (pts[i] - pts[0]).norm(), i1 = i;
@@ -156,9 +157,9 @@ void requireSolid(const std::vector<Vec3>& pts) {
   Real height = 0;
   for (size_t i = 0; i < pts.size(); ++i) {
     const Real d = std::abs((pts[i] - pts[0]).dot(n));
-    if (d > height) height = d, i3 = i;
+    height = std::max(height, d);
   }
-  if (!(height > tol) || !(best > tol) || i3 == 0)
+  if (!(height > tol) || !(best > tol))
     throwParameter("points", "a degenerate set (all points collinear or coplanar)", "",
                    "at least 4 points, not all coplanar");
 }
@@ -306,8 +307,9 @@ std::shared_ptr<SpheroPolyhedron> convexFromPoints(const std::vector<Vec3>& poin
   const Real limit = std::min(0.5 * minWidth, inradius);
   if (R >= limit * (1 - 1e-9))
     throwParameter("sweepRadius", R, "m",
-                   std::string("in (0, ") + num(limit) + ") m: below half the thinnest dimension of the " + what +
-                       " (min width over face normals " + num(minWidth) + " m, inradius " + num(inradius) + " m)");
+                   std::string("in (0, ") + num(limit) + ") m so that the " + what +
+                       " shrunk by R keeps a volume (limit = min(inradius " + num(inradius) +
+                       " m, half the min width over face normals " + num(0.5 * minWidth) + " m))");
   // Core = intersection of the half-spaces n.x <= d - R, by polar duality about the Chebyshev
   // centre x0 (strictly inside, margin inradius - R): each facet {m.y = h} of the hull of the
   // dual points n/(d - R - n.x0) is a core vertex x0 + m/h.
@@ -421,17 +423,31 @@ std::shared_ptr<SpheroPolyhedron> SpheroPolyhedron::convexHull(const std::vector
   return convexFromPoints(points, R, "convex hull");
 }
 
-std::shared_ptr<SpheroPolyhedron> SpheroPolyhedron::mesh(const std::vector<Vec3>& verts,
-                                                         const std::vector<std::array<int, 3>>& tris, Real R) {
+std::shared_ptr<SpheroPolyhedron> SpheroPolyhedron::mesh(const std::vector<Vec3>& inputVerts,
+                                                         const std::vector<std::array<int, 3>>& inputTris, Real R) {
   checkRadiusPositive(R);
-  if (tris.size() < 4) throwParameter("mesh", std::to_string(tris.size()) + " triangles", "", "a closed mesh of at least 4 triangles");
+  if (inputTris.size() < 4)
+    throwParameter("mesh", std::to_string(inputTris.size()) + " triangles", "", "a closed mesh of at least 4 triangles");
+  for (size_t t = 0; t < inputTris.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      if (inputTris[t][k] < 0 || inputTris[t][k] >= static_cast<int>(inputVerts.size()))
+        throwParameter("mesh", "triangle " + std::to_string(t) + " vertex index " + std::to_string(inputTris[t][k]), "",
+                       "indices in [0, " + std::to_string(inputVerts.size()) + ")");
+  // Drop vertices no triangle uses (they would enlarge the bounds); keep the input order.
+  std::vector<int> remap(inputVerts.size(), -1), orig;  // input -> kept index, and back
+  std::vector<Vec3> verts;
+  std::vector<std::array<int, 3>> tris = inputTris;
+  for (auto& t : tris)
+    for (int& v : t) {
+      if (remap[v] < 0) {
+        remap[v] = static_cast<int>(verts.size());
+        verts.push_back(inputVerts[v]);
+        orig.push_back(v);
+      }
+      v = remap[v];
+    }
   for (const Vec3& v : verts)
     if (!v.allFinite()) throwParameter("mesh", "a non-finite vertex coordinate", "", "finite coordinates");
-  for (size_t t = 0; t < tris.size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      if (tris[t][k] < 0 || tris[t][k] >= static_cast<int>(verts.size()))
-        throwParameter("mesh", "triangle " + std::to_string(t) + " vertex index " + std::to_string(tris[t][k]), "",
-                       "indices in [0, " + std::to_string(verts.size()) + ")");
   const Real size = shapeSize(verts);
   std::vector<Vec3> triN(tris.size());
   for (size_t t = 0; t < tris.size(); ++t) {
@@ -449,13 +465,13 @@ std::shared_ptr<SpheroPolyhedron> SpheroPolyhedron::mesh(const std::vector<Vec3>
       const int a = tris[t][k], b = tris[t][(k + 1) % 3];
       ++useCount[{std::min(a, b), std::max(a, b)}];
       if (!sideTri.emplace(std::make_pair(a, b), static_cast<int>(t)).second)
-        throwParameter("mesh", "edge (" + std::to_string(a) + ", " + std::to_string(b) + ")", "",
+        throwParameter("mesh", "edge (" + std::to_string(orig[a]) + ", " + std::to_string(orig[b]) + ")", "",
                        "shared by exactly two consistently oriented triangles (it is traversed twice in the same "
                        "direction: non-manifold or inconsistent orientation)");
     }
   for (const auto& kv : useCount)
     if (kv.second != 2)
-      throwParameter("mesh", "edge (" + std::to_string(kv.first.first) + ", " + std::to_string(kv.first.second) + ")",
+      throwParameter("mesh", "edge (" + std::to_string(orig[kv.first.first]) + ", " + std::to_string(orig[kv.first.second]) + ")",
                      "", "shared by exactly two triangles (it is used by " + std::to_string(kv.second) +
                              (kv.second == 1 ? ": the mesh is open)" : ": non-manifold)"));
   Real vol = 0;
@@ -472,15 +488,7 @@ std::shared_ptr<SpheroPolyhedron> SpheroPolyhedron::mesh(const std::vector<Vec3>
     if (1.0 - n0.dot(n1) < kCoplanarCos) continue;
     if (n0.cross(n1).dot((verts[b] - verts[a]).normalized()) <= 0) isConvex = false;
   }
-  if (isConvex) {
-    std::vector<Vec3> used;
-    std::vector<char> mark(verts.size(), 0);
-    for (const auto& t : tris)
-      for (int v : t) mark[v] = 1;
-    for (size_t i = 0; i < verts.size(); ++i)
-      if (mark[i]) used.push_back(verts[i]);
-    return convexFromPoints(used, R, "mesh");
-  }
+  if (isConvex) return convexFromPoints(verts, R, "mesh");
   // Non-convex: erode each vertex so that each distinct incident face plane moves in by R.
   std::vector<std::vector<Vec3>> vertNormals(verts.size());
   for (size_t t = 0; t < tris.size(); ++t)

@@ -42,7 +42,7 @@ from .sdem import SdemEngine  # noqa: E402
 from .mpm import MpmEngine  # noqa: E402
 from . import analysis  # noqa: E402
 
-__all__ = ["SpheroPolyhedron", "SdemMat", "SdemEngine", "MpmEngine", "analysis", "cudaAvailable", "material"]
+__all__ = ["SpheroPolyhedron", "SdemMat", "SdemEngine", "MpmEngine", "analysis", "cudaAvailable", "material", "run"]
 
 
 def material(density, friction=0.5, poisson=0.3, barrierStiffness=1e4, normalDamping=0.0,
@@ -65,3 +65,18 @@ def material(density, friction=0.5, poisson=0.3, barrierStiffness=1e4, normalDam
     m.tangentialDamping = tangentialDamping
     m.validate()
     return m
+
+
+def run(steps, *engines):
+    """Run YADE for ``steps`` steps (``O.run(steps, True)``) and raise RuntimeError if one of
+    ``engines`` (SdemEngine, MpmEngine) stopped the run. YADE reports an error raised inside a
+    PyRunner on its log and stops, but does not always raise it from ``O.run``."""
+    from yade import O
+    try:
+        O.run(int(steps), True)
+    except RuntimeError:
+        for e in engines:
+            e.check()
+        raise
+    for e in engines:
+        e.check()

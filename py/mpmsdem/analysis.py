@@ -20,6 +20,59 @@ def barrierForce(delta, R, kc):
     return -kc * delta * (2.0 * math.log((R - delta) / R) - R / (R - delta) + 1.0)
 
 
+def barrierStiffness(delta, R, kc):
+    """Tangent stiffness k_n = dF_n/dδ of the barrier force [N/m] (DESIGN §3)."""
+    if not 0 <= delta < R:
+        raise ValueError("delta = %g m: must be in [0, R = %g m)" % (delta, R))
+    g = 2.0 * math.log((R - delta) / R) - R / (R - delta) + 1.0
+    dg = -2.0 / (R - delta) - R / (R - delta) ** 2
+    return -kc * (g + delta * dg)
+
+
+def slidingDistanceElastic(t, thetaDeg, mu, Kt, mass, zeta=0.0, g=G):
+    """Eq 19 for a block whose friction acts through a tangential spring-dashpot of total
+    stiffness ``Kt`` [N/m] and damping ratio ``zeta`` [-], capped at μN (the SDEM law of
+    Eqs 9 and 11), released from rest with the spring unloaded.
+
+    Stage 1, stick: m x'' + c x' + Kt x = m g sin θ (c = 2 ζ √(m Kt)), until the spring-dashpot
+    force Kt x + c x' reaches μ m g cos θ at t1; stage 2, Coulomb sliding at
+    a = g (sin θ − μ cos θ) from (x1, v1). Equals Eq 19 for μ = 0 and tends to it as Kt → ∞.
+    Rocking of the block is neglected. [m]"""
+    th = math.radians(thetaDeg)
+    gs, gc = g * math.sin(th), g * math.cos(th)
+    a = gs - mu * gc
+    if a <= 0:
+        raise ValueError("thetaDeg = %g, mu = %g: the block does not slide (mu >= tan theta)" % (thetaDeg, mu))
+    if not 0 <= zeta < 1:
+        raise ValueError("zeta = %g: must be in [0, 1) (under-damped)" % zeta)
+    w = math.sqrt(Kt / mass)
+    wd = w * math.sqrt(1.0 - zeta * zeta)
+    xs = gs / (w * w)  # static stretch under the slope load
+
+    def stick(tt):  # position and velocity of the damped oscillator from rest
+        e = math.exp(-zeta * w * tt)
+        x = xs * (1.0 - e * (math.cos(wd * tt) + zeta * w / wd * math.sin(wd * tt)))
+        v = xs * e * (w * w / wd) * math.sin(wd * tt)
+        return x, v
+
+    def spare(tt):  # Coulomb cap minus the spring-dashpot force per unit mass
+        x, v = stick(tt)
+        return mu * gc - (w * w * x + 2.0 * zeta * w * v)
+
+    t1 = 0.0
+    if mu > 0:
+        hi = math.pi / wd  # the force peaks (above the cap: the block slides) within half a period
+        lo = 0.0
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if spare(mid) > 0 else (lo, mid)
+        t1 = 0.5 * (lo + hi)
+    if t < t1:
+        return stick(t)[0]
+    x1, v1 = stick(t1)
+    return x1 + v1 * (t - t1) + 0.5 * a * (t - t1) ** 2
+
+
 def equilibriumOverlap(load, R, kc, contacts=1):
     """Overlap δ at which ``contacts`` equal barrier contacts carry ``load`` [N] together [m]
     (bisection on the monotonic barrier force)."""

@@ -60,6 +60,7 @@ class SdemEngine:
         self._index = {}          # YADE id -> engine index
         self._shapes = {}         # YADE id -> SpheroPolyhedron
         self._warned = 0
+        self._checkedEngines = False
         self.error = None
         self._key = id(self)
         _ENGINES[self._key] = self
@@ -159,6 +160,9 @@ class SdemEngine:
 
     # ------------------------------------------------------------------ stepping
     def _step(self):
+        if not self._checkedEngines:
+            self._checkedEngines = True
+            _warnDamping()
         try:
             self._bridge.step(O.bodies, O.forces, O.dt)
         except Exception as e:
@@ -261,6 +265,15 @@ class SdemEngine:
                      yadeId=r["yadeId"])
         eng._bridge.setHistories([tuple(h[:6]) + (Vector3(*h[6]),) for h in data["histories"]])
         return eng
+
+
+def _warnDamping():
+    from yade.wrapper import NewtonIntegrator
+    for e in O.engines:
+        if isinstance(e, NewtonIntegrator) and e.damping != 0:
+            warnings.warn("NewtonIntegrator.damping = %g: YADE's numerical damping removes energy the contact law "
+                          "would conserve (restitution < 1 with an elastic barrier); use damping=0 and the "
+                          "materials' normalDamping/tangentialDamping instead" % e.damping, RuntimeWarning)
 
 
 def _vec(v, name):

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <regex>
 #include <sstream>
+#include <unistd.h>
 
 #include "common/Error.hpp"
 #include "io/Hdf5Writer.hpp"
@@ -21,8 +22,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
+fs::path scratchDir() { return fs::temp_directory_path() / ("mpmsdem_test_io_" + std::to_string(::getpid())); }
+
+// Removes the scratch folder after the last test.
+struct ScratchCleanup : ::testing::Environment {
+  void TearDown() override { fs::remove_all(scratchDir()); }
+};
+::testing::Environment* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("mpmsdem_test_io_" + std::to_string(::getpid()));
+  const fs::path dir = scratchDir();
   fs::create_directories(dir);
   const fs::path p = dir / name;
   fs::remove(p);

@@ -169,6 +169,47 @@ TEST(SpheroPolyhedronShape, SmallFacetVanishesFromCore) {
   EXPECT_LT(kept->volume, gone->volume);
 }
 
+TEST(SpheroPolyhedronShape, ManyFacetHullConsistentWithSteiner) {
+  // Hull of 500 pseudo-random points on a sphere of radius 0.1 (many small faces, vertices
+  // where the shifted planes split). Steiner's formula with the core's own geometry
+  // V_R = V + A R + M R^2 + 4 pi R^3/3 (M = 1/2 sum_e L_e angle(n0, n1)) checks the piecewise
+  // integration (slabs, wedges, vertex sectors whose solid angles must add up to 4 pi).
+  std::vector<Vec3> p;
+  unsigned state = 12345u;
+  auto uniform = [&]() {
+    state = state * 1664525u + 1013904223u;
+    return (state >> 8) / 16777216.0;
+  };
+  while (p.size() < 500) {
+    const Vec3 v(2 * uniform() - 1, 2 * uniform() - 1, 2 * uniform() - 1);
+    if (v.norm() > 0.2 && v.norm() < 1) p.push_back(0.1 * v.normalized());
+  }
+  const Real R = 0.01;
+  const auto s = SpheroPolyhedron::convexHull(p, R);
+  Real V = 0, A = 0, M = 0;
+  for (const auto& f : s->faces)
+    for (size_t i = 1; i + 1 < f.loop.size(); ++i) {
+      const Vec3 &a = s->vertices[f.loop[0]], &b = s->vertices[f.loop[i]], &c = s->vertices[f.loop[i + 1]];
+      V += a.dot(b.cross(c)) / 6;
+      A += 0.5 * (b - a).cross(c - a).norm();
+    }
+  for (const auto& e : s->edges) {
+    const Vec3 &n0 = s->faces[e.f0].normal, &n1 = s->faces[e.f1].normal;
+    M += 0.5 * (s->vertices[e.v1] - s->vertices[e.v0]).norm() * std::atan2(n0.cross(n1).norm(), n0.dot(n1));
+  }
+  const Real VR = V + A * R + M * R * R + 4 * kPi * R * R * R / 3;
+  EXPECT_NEAR(s->volume, VR, 1e-12 * VR);
+  // the rounded body lies inside P, itself inside the sphere
+  EXPECT_LT(s->volume, 4 * kPi / 3 * 1e-3);
+  EXPECT_GT(s->volume, 0.9 * 4 * kPi / 3 * 1e-3);
+  // core is convex: every vertex on the inner side of every face plane
+  Real worst = 0;
+  for (const auto& f : s->faces)
+    for (const auto& v : s->vertices) worst = std::max(worst, f.normal.dot(v) - f.offset);
+  EXPECT_NEAR(worst, 0.0, 1e-12);
+  EXPECT_NEAR(s->inertiaPerDensity[0], s->inertiaPerDensity[2], 0.02 * s->inertiaPerDensity[2]);
+}
+
 TEST(SpheroPolyhedronShape, RegularOctahedronAndTetrahedronSteiner) {
   // Steiner: V_R = V + A R + M R^2 + 4 pi R^3/3, M = 1/2 sum_e L_e (pi - interior dihedral).
   {

@@ -1,0 +1,47 @@
+"""Scene builders shared by the YADE-level tests and the checks in scripts/checks."""
+import math
+import os
+
+import mpmsdem
+from mpmsdem import analysis
+from yade import O
+from yade.minieigenHP import Quaternion, Vector3
+from yade.wrapper import ForceResetter, NewtonIntegrator
+
+DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
+
+H = 0.1          # cube side [m] (paper §3.1)
+R = 0.005        # sweep radius [m]
+RHO = 3000.0     # block density [kg/m^3]
+KC = 1e4         # barrier stiffness [N/m]
+
+
+def run(engine, steps):
+    """Run YADE for ``steps`` steps and re-raise an error that stopped the run."""
+    mpmsdem.run(steps, engine)
+
+
+def gravity(thetaDeg, g=9.81):
+    """Gravity of a flume inclined by theta about y, flowing toward +x (rotate gravity, not the bed)."""
+    th = math.radians(thetaDeg)
+    return Vector3(g * math.sin(th), 0, -g * math.cos(th))
+
+
+def cubeOnSlab(thetaDeg=0.0, mu=0.0, yawDeg=0.0, normalDamping=0.0, gap=None, **engineKw):
+    """The §3.1 scene: a 0.1 m cube (R 5 mm, rho 3000, k_c 1e4) on a fixed slab whose top face is
+    z = 0, gravity inclined by theta. With gap=None the cube starts at the overlap at which its
+    4 face contacts carry its weight component normal to the bed (no bouncing).
+    Returns (engine, cube id, slab id, cube mass)."""
+    eng = mpmsdem.SdemEngine(**engineKw)
+    mat = mpmsdem.material(density=RHO, friction=mu, barrierStiffness=KC, normalDamping=normalDamping)
+    slab = eng.box((4.0, 0.5, 0.05), R, mat, pos=(1.0, 0, -0.05), fixed=True)
+    mass = RHO * mpmsdem.SpheroPolyhedron.box((H / 2,) * 3, R).volume
+    if gap is None:
+        load = mass * 9.81 * math.cos(math.radians(thetaDeg))
+        z = H / 2 - analysis.equilibriumOverlap(load, 2 * R, KC, contacts=4)
+    else:
+        z = H / 2 + gap
+    ori = Quaternion(Vector3(0, 0, 1), math.radians(yawDeg))
+    cube = eng.box((H / 2,) * 3, R, mat, pos=(0, 0, z), ori=ori)
+    O.engines = [ForceResetter(), eng.runner, NewtonIntegrator(gravity=gravity(thetaDeg), damping=0)]
+    return eng, cube, slab, mass
