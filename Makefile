@@ -26,8 +26,9 @@ build: configure
 install: build
 	cmake --install $(BUILD) > /dev/null
 
+# The demo runs through the installed package, the way a user's `yade -x script.py` does.
 demo: install
-	$(PY) examples/demo.py
+	env -u PYTHONPATH yade -n -x examples/demo.py
 
 test-cpp: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -7,7 +7,7 @@ Scenes (all three methods run in this one process, so their ratios are comparabl
    0.4 m apart, +-1 m/s, frictionless, dt = 5e-6 s, run through impact and separation.
    Reports µs/step, speed after impact (exact answer 1 m/s), transverse and angular
    velocity (exact answer 0) and the relative change of kinetic energy (exact answer 0).
-2. A pile of 48 cubes (h = 0.1 m) dropped into a fixed box (floor + 4 walls) under
+2. A pile of 50 cubes (h = 0.1 m, four staggered layers, random tilts) dropped into a fixed box (floor + 4 walls) under
    gravity. Reports µs/step, number of contacts, final kinetic energy, mean and top
    centroid height.
 
@@ -44,7 +44,7 @@ from yade.wrapper import (Bo1_LevelSet_Aabb, Bo1_Polyhedra_Aabb, Bo1_Wall_Aabb, 
                           InteractionLoop, Ip2_FrictMat_FrictMat_FrictPhys,
                           Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys, Law2_PolyhedraGeom_PolyhedraPhys_Volumetric,
                           Law2_ScGeom_FrictPhys_CundallStrack, MatchMaker, NewtonIntegrator, PolyhedraMat,
-                          PyRunner, Wall)
+                          PyRunner)
 
 DENSITY = 3000.0      # kg/m^3 (paper §3.1 block)
 KC = 1e4              # N/m, barrier stiffness k_c (paper)
@@ -64,11 +64,31 @@ def kinetic(ids):
     return e
 
 
+_STAMPS = []
+
+
+def _stamp():
+    _STAMPS.append((O.iter, time.perf_counter()))
+
+
 def timed_run(steps):
-    """Run `steps` YADE steps; return wall seconds."""
-    t0 = time.perf_counter()
-    O.run(steps, True)
-    return time.perf_counter() - t0
+    """Run `steps` YADE steps; return the wall seconds of exactly `steps` steps.
+
+    Timed from inside YADE's loop by a PyRunner that fires only at the first and the last step
+    (two calls in all): ``O.run(n, True)`` returns on a 40 ms polling grid, which would dominate
+    short runs, and polling ``O.running`` from Python competes for the GIL with PyRunners.
+    One extra step is run to reach the second stamp.
+    """
+    import builtins
+    builtins._benchSdemStamp = _stamp
+    del _STAMPS[:]
+    stamper = PyRunner(command="import builtins; builtins._benchSdemStamp()", iterPeriod=steps, initRun=True)
+    O.engines = O.engines + [stamper]
+    O.run(steps + 1, True)
+    O.engines = O.engines[:-1]
+    if len(_STAMPS) != 2 or _STAMPS[1][0] - _STAMPS[0][0] != steps:
+        raise RuntimeError("timing stamps %r do not span %d steps" % (_STAMPS, steps))
+    return _STAMPS[1][1] - _STAMPS[0][1]
 
 
 def cube_vertices(half):
@@ -83,15 +103,21 @@ def newton(gravity, damping):
 # Each builder resets O, creates bodies and engines, and returns (ids of moving bodies, extra).
 
 
-def build_collision_sdem(h, engineMode="sdem"):
+def start_x(h, contactOnly):
+    """Centroid x of the right cube: 0.2 m (paper), or a 0.1 mm gap for the contact-phase runs."""
+    return h / 2 + 5e-5 if contactOnly else 0.2
+
+
+def build_collision_sdem(h, engineMode="sdem", contactOnly=False):
     """engineMode: 'sdem' (the plugin), 'pass' (empty PyRunner), 'none' (YADE loop only)."""
     O.reset()
     sdem = mpmsdem.SdemEngine(dtCheck="warn")
     mat = mpmsdem.material(density=DENSITY, friction=0.0, poisson=POISSON, barrierStiffness=KC,
                            normalDamping=0.0, tangentialDamping=0.1)
     R = h / 20.0
-    a = sdem.box((h / 2,) * 3, R, mat, pos=(-0.2, 0, 0))
-    b = sdem.box((h / 2,) * 3, R, mat, pos=(0.2, 0, 0))
+    x = start_x(h, contactOnly)
+    a = sdem.box((h / 2,) * 3, R, mat, pos=(-x, 0, 0))
+    b = sdem.box((h / 2,) * 3, R, mat, pos=(x, 0, 0))
     O.bodies[a].state.vel = Vector3(1, 0, 0)
     O.bodies[b].state.vel = Vector3(-1, 0, 0)
     middle = {"sdem": [sdem.runner], "pass": [PyRunner(command="pass", iterPeriod=1)], "none": []}[engineMode]
@@ -100,12 +126,13 @@ def build_collision_sdem(h, engineMode="sdem"):
     return [a, b], sdem
 
 
-def build_collision_levelset(h, kn):
+def build_collision_levelset(h, kn, contactOnly=False):
     O.reset()
     mat = O.materials.append(FrictMat(density=DENSITY, frictionAngle=0.0, young=1e6, poisson=POISSON))
     # grid spacing h/20 (as the paper's node-size/side ratio); 602 surface nodes as in the paper
     ids = []
-    for x, v in ((-0.2, 1.0), (0.2, -1.0)):
+    x0 = start_x(h, contactOnly)
+    for x, v in ((-x0, 1.0), (x0, -1.0)):
         bd = utils.levelSetBody("box", center=(x, 0, 0), extents=(h / 2,) * 3, spacing=h / 20.0,
                                 nSurfNodes=602, nodesPath=2, material=mat)
         i = O.bodies.append(bd)
@@ -122,13 +149,14 @@ def build_collision_levelset(h, kn):
     return ids, None
 
 
-def build_collision_polyhedra(h, kv):
+def build_collision_polyhedra(h, kv, contactOnly=False):
     """kv: volumetric stiffness [N/m^3] (force = kv * overlap volume)."""
     O.reset()
     # Ip2: 1/kn = 1/Y1 + 1/Y2 -> Y = 2 kv
     mat = O.materials.append(PolyhedraMat(density=DENSITY, young=2 * kv, poisson=POISSON, frictionAngle=0.0))
     ids = []
-    for x, v in ((-0.2, 1.0), (0.2, -1.0)):
+    x0 = start_x(h, contactOnly)
+    for x, v in ((-x0, 1.0), (x0, -1.0)):
         bd = polyhedra_utils.polyhedra(O.materials[mat], v=cube_vertices(h / 2))
         bd.state.pos = Vector3(x, 0, 0)
         i = O.bodies.append(bd)
@@ -156,29 +184,31 @@ def collision_figures(ids, e0):
 # pile --------------------------------------------------------------------------------
 
 PILE_H = 0.1            # cube side [m]
-PILE_N = (4, 4, 3)      # lattice: 48 cubes
-PILE_PITCH = 0.13       # lattice pitch [m]
+PILE_PITCH = 0.135      # horizontal lattice pitch [m]
+PILE_VPITCH = 0.15      # vertical pitch of the layers [m]
+PILE_TILT = 10.0        # random initial tilt, up to this many degrees about a random axis
 PILE_INNER = 0.56       # inner side of the box [m]
 PILE_WALL = 0.05        # wall thickness (SDEM boxes) [m]
-PILE_HEIGHT = 0.6       # wall height [m]
+PILE_HEIGHT = 0.7       # wall height [m]
 PILE_FRICTION = 0.5
 PILE_DAMPING = 0.2      # NewtonIntegrator damping, the same for all methods
-PILE_DT = 5e-5
+PILE_DT = 1e-4
 
 
 def pile_layout():
-    """Centroids and orientations (seeded small random tilts) of the pile's cubes."""
+    """Centroids and orientations of the pile's 50 cubes: four layers, 4x4 and 3x3 alternately,
+    the 3x3 layers shifted by half a pitch so that cubes land on edges and corners of the layer
+    below; seeded random tilts."""
     rnd = random.Random(12345)
     out = []
-    nx, ny, nz = PILE_N
-    for k in range(nz):
-        for j in range(ny):
-            for i in range(nx):
-                p = Vector3((i - (nx - 1) / 2) * PILE_PITCH, (j - (ny - 1) / 2) * PILE_PITCH,
-                            PILE_H / 2 + 0.02 + k * PILE_PITCH)
+    for k, n in enumerate((4, 3, 4, 3)):
+        for j in range(n):
+            for i in range(n):
+                p = Vector3((i - (n - 1) / 2) * PILE_PITCH, (j - (n - 1) / 2) * PILE_PITCH,
+                            PILE_H / 2 + 0.03 + k * PILE_VPITCH)
                 axis = Vector3(rnd.uniform(-1, 1), rnd.uniform(-1, 1), rnd.uniform(-1, 1))
                 axis.normalize()
-                q = Quaternion(axis, math.radians(rnd.uniform(-15, 15)))
+                q = Quaternion(axis, math.radians(rnd.uniform(-PILE_TILT, PILE_TILT)))
                 out.append((p, q))
     return out
 
@@ -270,9 +300,11 @@ def yade_contacts():
 
 
 def measure(build, steps, repeat, after=None):
-    """Build and run a scene `repeat` times; returns (min µs/step, ids, extra, data of the last run)."""
+    """Build and run a scene `repeat` times; returns (min µs/step, figures of the last run; for
+    mpmsdem also its bridge timings, each the minimum over the runs)."""
     best = float("inf")
     data = None
+    bestTimings = {}
     for _ in range(repeat):
         ids, extra = build()
         e0 = kinetic(ids)
@@ -284,17 +316,16 @@ def measure(build, steps, repeat, after=None):
         best = min(best, dt / steps * 1e6)
         data = after(ids, extra, e0) if after else None
         if extra is not None:
-            data = dict(data or {}, timings=extra.timings(), warnings=extra.timeStepWarnings)
+            for k, v in extra.timings().items():
+                bestTimings[k] = min(v, bestTimings.get(k, float("inf")))
+            data = dict(data or {}, timings=dict(bestTimings), warnings=extra.timeStepWarnings)
     return best, data
 
 
 def sdem_breakdown(buildSdem, steps, repeat, after):
     """µs/step of the plugin run and its parts (each a minimum over `repeat`)."""
     total, data = measure(lambda: buildSdem("sdem"), steps, repeat, after)
-    bestParts = {"read": float("inf"), "compute": float("inf"), "write": float("inf")}
-    # the last run's timings; re-run the other repeats only for the minima of the parts
-    for k in bestParts:
-        bestParts[k] = data["timings"][k] / steps * 1e6
+    bestParts = {k: data["timings"][k] / steps * 1e6 for k in ("read", "compute", "write")}
     yadeOnly, _ = measure(lambda: buildSdem("none"), steps, repeat)
     withPass, _ = measure(lambda: buildSdem("pass"), steps, repeat)
     bridge = bestParts["read"] + bestParts["compute"] + bestParts["write"]
@@ -305,20 +336,23 @@ def sdem_breakdown(buildSdem, steps, repeat, after):
 
 
 def delta_max_sdem(h, steps):
-    """Peak overlap [m] of the SDEM collision (sampled every 10 steps; an untimed run)."""
+    """Peak overlap [m] and number of steps in contact of the SDEM collision (sampled every
+    10 steps; an untimed run)."""
     ids, sdem = build_collision_sdem(h)
     peak = [0.0]
+    inContact = [0]
 
     def sample():
         c = sdem.contacts()
         if len(c["overlap"]):
             peak[0] = max(peak[0], float(max(c["overlap"])))
+            inContact[0] += 10
     import builtins
     builtins._benchSdemSample = sample
     O.engines = O.engines + [PyRunner(command="import builtins; builtins._benchSdemSample()", iterPeriod=10)]
     O.run(steps, True)
     sdem.check()
-    return peak[0], ids
+    return peak[0], inContact[0]
 
 
 # ---------------------------------------------------------------------------- main
@@ -347,15 +381,15 @@ def main(argv=None):
         collisions = [(0.1, 60000), (0.3, 30000)]
     for h, steps in collisions:
         scene = "collision h=%.1f m (%d steps)" % (h, steps)
-        dmax, _ = delta_max_sdem(h, steps)
+        dmax, ncontact = delta_max_sdem(h, steps)
         # match peers to the SDEM peak overlap: same relative kinetic energy stored at the same depth
         m = DENSITY * h ** 3
         erel = 0.5 * (m / 2) * 2.0 ** 2
         kn = 2 * erel / dmax ** 2                 # linear spring [N/m]
         kv = kn / h ** 2                          # volumetric [N/m^3]: face overlap volume = h^2 * delta
         stiff[h] = kn
-        notes.append("h=%.1f m: SDEM peak overlap %.3g mm -> peers kn = %.3g N/m (LevelSet), "
-                     "kv = %.3g N/m^3 (Polyhedra)" % (h, dmax * 1e3, kn, kv))
+        notes.append("h=%.1f m: SDEM peak overlap %.3g mm, in contact for about %d steps -> peers kn = %.3g N/m "
+                     "(LevelSet), kv = %.3g N/m^3 (Polyhedra)" % (h, dmax * 1e3, ncontact, kn, kv))
 
         def after_col(ids, extra, e0):
             return collision_figures(ids, e0)
@@ -367,12 +401,30 @@ def main(argv=None):
         if not args.no_polyhedra:
             t, d = measure(lambda: build_collision_polyhedra(h, kv), steps, repeat, after_col)
             rows.append((scene, "YADE Polyhedra", t, d))
+        # the contact phase alone (the free flight above is mostly overhead): start 0.1 mm apart and
+        # run as long as the longer of the SDEM contact and the peers' linear contact (pi sqrt(mu/kn)), +20 %;
+        # short runs, so 3x as many repeats
+        linear = math.pi * math.sqrt(m / 2 / kn) / 5e-6
+        csteps = int(1.2 * max(ncontact, linear))
+        cscene = "contact phase h=%.1f m (%d steps)" % (h, csteps)
+        t, d, parts = sdem_breakdown(lambda mode: build_collision_sdem(h, mode, True), csteps, 3 * repeat,
+                                     after_col)
+        rows.append((cscene, "mpmsdem SDEM", t, d))
+        parts_rows.append((cscene, t, parts, d.get("warnings", 0)))
+        t, d = measure(lambda: build_collision_levelset(h, kn, True), csteps, 3 * repeat, after_col)
+        rows.append((cscene, "YADE LevelSet", t, d))
+        if not args.no_polyhedra:
+            t, d = measure(lambda: build_collision_polyhedra(h, kv, True), csteps, 3 * repeat, after_col)
+            rows.append((cscene, "YADE Polyhedra", t, d))
 
     # ---- scene 2: pile
-    psteps = 2000 if args.quick else 8000
-    scene = "pile 48 cubes (%d steps)" % psteps
+    psteps = 1500 if args.quick else 5000
+    scene = "pile 50 cubes (%d steps)" % psteps
     # peers' stiffness: that matched to SDEM in the collision of cubes of the same size
     knPile = stiff.get(PILE_H) or 2 * (0.5 * (DENSITY * PILE_H ** 3 / 2) * 4.0) / delta_max_sdem(PILE_H, 60000)[0] ** 2
+    notes.append("pile: peers' kn = %.3g N/m (LevelSet), kv = %.3g N/m^3 (Polyhedra), as for h = %.1f m; "
+                 "YADE Wall bodies for the peers' floor and walls; NewtonIntegrator damping %.1f for all; "
+                 "dt %g s" % (knPile, knPile / PILE_H ** 2, PILE_H, PILE_DAMPING, PILE_DT))
 
     def after_sdem_pile(ids, extra, e0):
         return pile_figures(ids, sdem_pairs(extra))
@@ -385,7 +437,8 @@ def main(argv=None):
     t, d = measure(lambda: build_pile_levelset(knPile), psteps, repeat, after_peer_pile)
     rows.append((scene, "YADE LevelSet", t, d))
     if not args.no_polyhedra:
-        t, d = measure(lambda: build_pile_polyhedra(knPile / PILE_H ** 2), psteps, repeat, after_peer_pile)
+        # one run only: Polyhedra is by far the slowest here, its noise does not matter
+        t, d = measure(lambda: build_pile_polyhedra(knPile / PILE_H ** 2), psteps, 1, after_peer_pile)
         rows.append((scene, "YADE Polyhedra", t, d))
 
     # ---- report
@@ -413,8 +466,9 @@ def fmt_fig(d):
 
 
 def format_report(rows, parts_rows, notes, repeat, args):
-    cmd = "OMP_NUM_THREADS=%s /usr/bin/python3 scripts/bench/bench_sdem.py %s" % (
-        os.environ.get("OMP_NUM_THREADS", "unset"), " ".join(sys.argv[1:]))
+    cmd = "OMP_NUM_THREADS=%s PYTHONPATH=%s %s scripts/bench/bench_sdem.py %s" % (
+        os.environ.get("OMP_NUM_THREADS", "unset"), os.environ.get("PYTHONPATH", ""), sys.executable,
+        " ".join(sys.argv[1:]))
     lines = []
     lines.append("### SDEM run %s (%s, %s)" % (datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
                                                  platform.node(), platform.processor() or platform.machine()))

@@ -34,7 +34,7 @@ def cubeOnSlab(thetaDeg=0.0, mu=0.0, yawDeg=0.0, normalDamping=0.0, gap=None, **
     Returns (engine, cube id, slab id, cube mass)."""
     eng = mpmsdem.SdemEngine(**engineKw)
     mat = mpmsdem.material(density=RHO, friction=mu, barrierStiffness=KC, normalDamping=normalDamping)
-    slab = eng.box((4.0, 0.5, 0.05), R, mat, pos=(1.0, 0, -0.05), fixed=True)
+    slab = eng.box((12.0, 0.5, 0.05), R, mat, pos=(10.0, 0, -0.05), fixed=True)  # 24 m bed (paper: 20 m)
     mass = RHO * mpmsdem.SpheroPolyhedron.box((H / 2,) * 3, R).volume
     if gap is None:
         load = mass * 9.81 * math.cos(math.radians(thetaDeg))
