@@ -49,7 +49,7 @@ class PyMpm {
     const npy_intp n = static_cast<npy_intp>(p.size());
     std::vector<double> density(n), phase(n);
     for (npy_intp i = 0; i < n; ++i) {
-      density[i] = p.mass[i] / (p.J[i] * p.volume0[i]);
+      density[i] = p.density(i);
       phase[i] = p.phase[i];
     }
     bp::dict d;

@@ -235,23 +235,10 @@ long Hdf5Writer::seriesLength(const std::string& name) const {
 
 long Hdf5Writer::writeSnapshot(const mpm::ParticleSet& p, double time, long step) {
   const std::size_t n = p.size();
-  auto requireSize = [&](const char* field, std::size_t got, std::size_t per) {
-    if (got != per * n) {
-      std::ostringstream range;
-      range << per << " x " << n << " (particle count from mass)";
-      throwParameter(std::string("ParticleSet.") + field + " size", got, "", range.str());
-    }
-  };
-  requireSize("x", p.x.size(), 3);
-  requireSize("v", p.v.size(), 3);
-  requireSize("stress", p.stress.size(), 6);
-  requireSize("volume0", p.volume0.size(), 1);
-  requireSize("J", p.J.size(), 1);
-  requireSize("gammaDotP", p.gammaDotP.size(), 1);
-  requireSize("phase", p.phase.size(), 1);
+  p.validateSizes();
 
   std::vector<double> density(n);
-  for (std::size_t i = 0; i < n; ++i) density[i] = p.mass[i] / (p.J[i] * p.volume0[i]);
+  for (std::size_t i = 0; i < n; ++i) density[i] = p.density(i);
 
   if (linkExists(snapshots_, kIncomplete)) H5Ldelete(snapshots_, kIncomplete, H5P_DEFAULT);
   {

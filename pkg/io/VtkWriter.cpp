@@ -181,20 +181,7 @@ std::string xmlUnescape(const std::string& s) {
 
 void writeParticlesVtp(const std::string& path, const mpm::ParticleSet& p, VtkEncoding encoding) {
   const std::size_t n = p.size();
-  auto requireSize = [&](const char* field, std::size_t got, std::size_t per) {
-    if (got != per * n) {
-      std::ostringstream range;
-      range << per << " x " << n << " (particle count from mass)";
-      throwParameter(std::string("ParticleSet.") + field + " size", got, "", range.str());
-    }
-  };
-  requireSize("x", p.x.size(), 3);
-  requireSize("v", p.v.size(), 3);
-  requireSize("stress", p.stress.size(), 6);
-  requireSize("volume0", p.volume0.size(), 1);
-  requireSize("J", p.J.size(), 1);
-  requireSize("gammaDotP", p.gammaDotP.size(), 1);
-  requireSize("phase", p.phase.size(), 1);
+  p.validateSizes();
 
   std::vector<float> x(p.x.begin(), p.x.end()), v(p.v.begin(), p.v.end());
   std::vector<float> stress(9 * n), pressure(n), density(n), gdp(p.gammaDotP.begin(), p.gammaDotP.end());
@@ -203,7 +190,7 @@ void writeParticlesVtp(const std::string& path, const mpm::ParticleSet& p, VtkEn
     const double full[9] = {s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2]};
     for (int k = 0; k < 9; ++k) stress[9 * i + k] = static_cast<float>(full[k]);
     pressure[i] = static_cast<float>(-(s[0] + s[1] + s[2]) / 3.0);
-    density[i] = static_cast<float>(p.mass[i] / (p.J[i] * p.volume0[i]));
+    density[i] = static_cast<float>(p.density(i));
   }
   std::vector<Array> pointData;
   pointData.push_back(makeArray("velocity", "Float32", 3, v));

@@ -4,8 +4,11 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <sstream>
 #include <string>
 #include <vector>
+
+#include "common/Error.hpp"
 
 namespace mpmsdem {
 namespace mpm {
@@ -51,6 +54,23 @@ struct ParticleSet {
   std::vector<double> fext;        // external force on the particle this step [N]: 3 per particle (coupling, Eq 14)
   std::vector<std::uint8_t> phase; // 0 = dense elastic, 1 = dense plastic (flowing), 2 = gasified (stress-free)
   std::size_t size() const { return mass.size(); }
+  // Current density rho = m / (J V0) of particle i [kg/m^3].
+  double density(std::size_t i) const { return mass[i] / (J[i] * volume0[i]); }
+  // Throw ParameterError naming the first array whose length does not match size().
+  void validateSizes() const {
+    const std::size_t n = size();
+    const struct { const char* name; std::size_t got, per; } fields[] = {
+        {"x", x.size(), 3},       {"v", v.size(), 3},   {"stress", stress.size(), 6},
+        {"volume0", volume0.size(), 1}, {"J", J.size(), 1}, {"gammaDotP", gammaDotP.size(), 1},
+        {"phase", phase.size(), 1}};
+    for (const auto& f : fields) {
+      if (f.got != f.per * n) {
+        std::ostringstream range;
+        range << f.per << " x " << n << " (particle count from mass)";
+        throwParameter(std::string("ParticleSet.") + f.name + " size", f.got, "", range.str());
+      }
+    }
+  }
 };
 
 }  // namespace mpm
