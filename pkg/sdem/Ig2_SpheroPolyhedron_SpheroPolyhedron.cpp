@@ -103,6 +103,19 @@ bool inPatch(const PosedSpheroPolyhedron& P, int v, const Vec3& n) {
   return false;
 }
 
+// If edge ea of A and edge eb of B bound two faces, one of each, that are nearly anti-parallel
+// (a contact patch), return in `na` the outward normal of A's face: the patch direction.
+bool patchNormal(const PosedSpheroPolyhedron& A, int ea, const PosedSpheroPolyhedron& B, int eb, Vec3& na) {
+  const CoreEdge &EA = A.shape->edges[ea], &EB = B.shape->edges[eb];
+  for (int fa : {EA.f0, EA.f1})
+    for (int fb : {EB.f0, EB.f1})
+      if (A.faceNormals[fa].dot(B.faceNormals[fb]) <= -Ig2_SpheroPolyhedron_SpheroPolyhedron::patchCosine) {
+        na = A.faceNormals[fa];
+        return true;
+      }
+  return false;
+}
+
 // Append a contact given the two core points, merging it into an equal one of this pair.
 void emit(PairContext& c, FeatureKind ka, int ia, FeatureKind kb, int ib, const Vec3& pa, const Vec3& pb,
           Real d) {
@@ -149,6 +162,32 @@ void vertexFace(PairContext& c, const PosedSpheroPolyhedron& P, int v, const Pos
     emit(c, FeatureKind::Face, f, FeatureKind::Vertex, v, q, x, s);
 }
 
+// Crossing of two edges bounding a contact patch (see patchNormal): the points of the two
+// edges that coincide when projected along the patch normal na. This is a corner of the
+// clipped intersection polygon of the two faces; it meets the patch's vertex–face corners
+// continuously when it reaches an edge end, whatever the small tilt between the faces (the
+// closest points of the two edge lines would drift away from the corner instead).
+bool patchCrossing(PairContext& c, int ea, int eb, const Vec3& na) {
+  const PosedSpheroPolyhedron &A = c.A, &B = c.B;
+  const Vec3& p0 = A.vertices[A.shape->edges[ea].v0];
+  const Vec3& q0 = B.vertices[B.shape->edges[eb].v0];
+  const Vec3 &ta = A.edgeDir[ea], &tb = B.edgeDir[eb];
+  const Real La = A.edgeLength[ea], Lb = B.edgeLength[eb];
+  const Real den = ta.cross(tb).dot(na);
+  // parallel in the patch plane: the ends' vertex–face corners carry the contact
+  if (std::abs(den) * c.cutoff <= c.tol) return true;
+  const Vec3 r = q0 - p0;
+  const Real s = r.cross(tb).dot(na) / den;
+  const Real t = r.cross(ta).dot(na) / den;
+  if (s < -c.tol || s > La + c.tol || t < -c.tol || t > Lb + c.tol) return true;
+  const Vec3 pa = p0 + std::clamp(s, Real(0), La) * ta, pb = q0 + std::clamp(t, Real(0), Lb) * tb;
+  const Vec3 sep = pb - pa;
+  if (sep.dot(na) <= 0) return false;  // B behind A's face: not this patch, try the general rule
+  const Real d = sep.norm();
+  if (d < c.cutoff) emit(c, FeatureKind::Edge, ea, FeatureKind::Edge, eb, pa, pb, d);
+  return true;
+}
+
 void edgeEdge(PairContext& c, int ea, int eb) {
   const PosedSpheroPolyhedron &A = c.A, &B = c.B;
   const Vec3& p0 = A.vertices[A.shape->edges[ea].v0];
@@ -159,6 +198,9 @@ void edgeEdge(PairContext& c, int ea, int eb) {
   const Vec3 mid = (p0 + 0.5 * La * ta) - (q0 + 0.5 * Lb * tb);
   const Real reach = 0.5 * (La + Lb) + c.cutoff;
   if (mid.squaredNorm() >= reach * reach) return;
+  if (!A.shape->edges[ea].convex || !B.shape->edges[eb].convex) return;
+  Vec3 na;
+  if (patchNormal(A, ea, B, eb, na) && patchCrossing(c, ea, eb, na)) return;
   // Parallel within tolerance: the contact is carried by the endpoints' vertex pairs, whose
   // cone tests then pass within tol. sin(angle) * cutoff <= tol keeps both rules consistent.
   const Real sin2 = ta.cross(tb).squaredNorm();

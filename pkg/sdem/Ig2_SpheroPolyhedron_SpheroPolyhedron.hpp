@@ -10,7 +10,10 @@
 //    faces form a contact patch, whose corners are the vertices of the clipped intersection
 //    polygon of the faces) or the contact normal lies in the vertex's normal cone;
 //  - edge–edge: both closest points interior to their (closed) edges, edges not parallel,
-//    both edges convex (valleys never carry a contact), the normal in both edges' normal cones;
+//    both edges convex (valleys never carry a contact), and either each edge bounds a face
+//    nearly anti-parallel to a face bounded by the other, facing it (a crossing of the two
+//    faces' boundaries: a corner of their contact patch, kept while the faces tilt) or the
+//    normal lies in both edges' normal cones;
 //  - vertex–edge and vertex–vertex: the normal in the normal cones of both features.
 // All these tests use a length tolerance tol = 1e-9 x the larger bounding radius, and
 // contacts of one pair whose two core points both coincide within 4 tol are merged (the
