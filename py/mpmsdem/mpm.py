@@ -25,12 +25,7 @@ from yade.wrapper import PyRunner
 
 from . import _mpmsdem
 
-_ENGINES = {}
-
-
-def _step(key):
-    """Called by the PyRunner of an MpmEngine every YADE step."""
-    _ENGINES[key]._yadeStep()
+from .sdem import _bindStep
 
 
 class MpmEngine:
@@ -72,10 +67,8 @@ class MpmEngine:
             if not (outputEvery and outputEvery > 0):
                 raise ValueError("outputEvery = %r s: must be > 0 when output is set" % (outputEvery,))
             self.solver.openOutput(str(output), False)
-        self._key = id(self)
-        _ENGINES[self._key] = self
-        self.runner = PyRunner(command="import mpmsdem.mpm as _m; _m._step(%d)" % self._key,
-                               iterPeriod=1, initRun=True, label=label)
+        self.runner = PyRunner(command=_bindStep("mpm", id(self), self._yadeStep), iterPeriod=1, initRun=True,
+                               label=label)
         self._wall0 = _time.time()
         self._lastReport = self._wall0
 

@@ -28,14 +28,17 @@ from yade.minieigenHP import Quaternion, Vector3
 
 from . import _mpmsdem
 
-_ENGINES = {}
-
 DT_CHECKS = ("raise", "warn")
 
 
-def _step(key):
-    """Called by the PyRunner of an SdemEngine every YADE step."""
-    _ENGINES[key]._step()
+def _bindStep(kind, key, step):
+    """Put ``step`` into the namespace YADE's PyRunner commands run in (``__main__``) and return
+    the shortest command calling it: PyRunner compiles its command every step, so a bare call
+    is the cheapest bridge into our code."""
+    import __main__
+    name = "_mpmsdem_%s_%d" % (kind, key)
+    setattr(__main__, name, step)
+    return name + "()"
 
 
 class SdemEngine:
@@ -62,10 +65,8 @@ class SdemEngine:
         self._warned = 0
         self._checkedEngines = False
         self.error = None
-        self._key = id(self)
-        _ENGINES[self._key] = self
-        self.runner = PyRunner(command="import mpmsdem.sdem as _s; _s._step(%d)" % self._key,
-                               iterPeriod=1, initRun=True, label=label)
+        self.runner = PyRunner(command=_bindStep("sdem", id(self), self._step), iterPeriod=1, initRun=True,
+                               label=label)
 
     # ------------------------------------------------------------------ bodies
     def box(self, halfExtents, sweepRadius, material, pos=(0, 0, 0), ori=None, fixed=False, color=None):
