@@ -1,13 +1,16 @@
 // mpmsdem-run: plain C++ driver (no YADE, no Python) for JSON-described MPM scenes.
 //
 //   mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR]
-//                          [--steps N] [--bench]
+//                          [--steps N] [--restart] [--bench]
 //
 // The scene schema is documented in pkg/mpm/MpmScene.hpp and examples/scenes/README.md.
 // Options override the scene's "run" settings:
 //   --backend, --precision   solver backend and precision ("float" needs "cuda")
 //   --out DIR                output folder (run.output_dir)
 //   --steps N                run exactly N steps (N >= 1) instead of run.duration
+//   --restart                continue from the last snapshot of the output folder's mpm.h5
+//                            (its particles, time and step), appending to its outputs;
+//                            --steps then counts the steps of this run
 //   --bench                  write no files, take no diagnostics; print one JSON line on
 //                            stdout at the end: backend, precision, solver, particles,
 //                            steps, seconds (step loop wall time), particle_updates_per_s,
@@ -49,7 +52,8 @@ using namespace mpmsdem::mpm;
 namespace {
 
 const char* const kUsage =
-    "usage: mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR] [--steps N] [--bench]\n";
+    "usage: mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR] [--steps N] "
+    "[--restart] [--bench]\n";
 
 struct Options {
   std::string scene;
@@ -57,6 +61,7 @@ struct Options {
   std::optional<Precision> precision;
   std::optional<std::string> out;
   long steps = 0;  // 0: run for run.duration
+  bool restart = false;
   bool bench = false;
 };
 
@@ -83,6 +88,8 @@ Options parseArgs(int argc, char** argv) {
       char* end = nullptr;
       o.steps = std::strtol(v.c_str(), &end, 10);
       if (v.empty() || *end != '\0' || o.steps < 1) throwParameter("--steps", v, "", "an integer >= 1");
+    } else if (a == "--restart") {
+      o.restart = true;
     } else if (a == "--bench") {
       o.bench = true;
     } else if (a == "-h" || a == "--help") {
@@ -97,6 +104,7 @@ Options parseArgs(int argc, char** argv) {
     }
   }
   if (o.scene.empty()) throw ParameterError(std::string("no scene file given\n") + kUsage);
+  if (o.restart && o.bench) throw ParameterError("--restart and --bench: choose one (a benchmark writes no files)");
   return o;
 }
 
@@ -177,14 +185,16 @@ double nextStep(MpmSolver& solver, const RunSettings& run, bool byTime) {
   return dt;
 }
 
+// maxSteps: the step count at which to stop (0: stop at run.duration).
 bool finished(const MpmSolver& solver, const RunSettings& run, long maxSteps) {
   if (maxSteps > 0) return solver.steps() >= maxSteps;
   return solver.time() >= run.duration * (1 - 1e-12);
 }
 
-// Fraction of the run done, by steps (--steps) or by simulated time.
-double progressFraction(const MpmSolver& solver, const RunSettings& run, long maxSteps) {
-  return maxSteps > 0 ? double(solver.steps()) / maxSteps : solver.time() / run.duration;
+// Fraction of the run done, by steps (--steps, counted from firstStep) or by simulated time.
+double progressFraction(const MpmSolver& solver, const RunSettings& run, long maxSteps, long firstStep = 0) {
+  return maxSteps > 0 ? double(solver.steps() - firstStep) / double(maxSteps - firstStep)
+                      : solver.time() / run.duration;
 }
 
 int runBench(MpmSolver& solver, const MpmScene& scene, long maxSteps) {
@@ -218,13 +228,17 @@ int runBench(MpmSolver& solver, const MpmScene& scene, long maxSteps) {
 
 class OutputRun {
  public:
-  OutputRun(MpmSolver& solver, const MpmScene& scene)
+  // restart: append to the outputs already in the folder instead of starting them anew.
+  OutputRun(MpmSolver& solver, const MpmScene& scene, bool restart)
       : solver_(solver),
         scene_(scene),
+        restart_(restart),
         dir_(scene.run.outputDir),
-        h5_((std::filesystem::create_directories(dir_), (dir_ / "mpm.h5").string())),
-        pvd_(scene.run.vtk == "none" ? std::nullopt
-                                     : std::optional<io::PvdCollection>((dir_ / "particles.pvd").string())) {
+        h5_((std::filesystem::create_directories(dir_), (dir_ / "mpm.h5").string()),
+            restart ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate),
+        pvd_(scene.run.vtk == "none"
+                 ? std::nullopt
+                 : std::optional<io::PvdCollection>(std::in_place, (dir_ / "particles.pvd").string(), restart)) {
     if (pvd_) std::filesystem::create_directories(dir_ / "vtk");
     h5_.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
     h5_.setAttribute("parameters", scene.sourceJson);
@@ -234,10 +248,19 @@ class OutputRun {
   int run(long maxSteps) {
     const RunSettings& run = scene_.run;
     const std::size_t n = solver_.numParticles();
+    const long firstStep = solver_.steps();
     solver_.getParticles(state_);
-    recordSeries();
-    writeSnapshot();
-    double nextSeries = run.seriesEvery, nextOutput = run.outputEvery, nextReport = 0.05;
+    if (restart_) {
+      state_time_ = solver_.time();  // the snapshot we start from is already in the file
+    } else {
+      recordSeries();
+      writeSnapshot();
+    }
+    // next record and snapshot times: the first multiples of their intervals after now
+    const double t0sim = solver_.time();
+    double nextSeries = (std::floor(t0sim / run.seriesEvery * (1 + 1e-12)) + 1) * run.seriesEvery;
+    double nextOutput = (std::floor(t0sim / run.outputEvery * (1 + 1e-12)) + 1) * run.outputEvery;
+    double nextReport = std::floor(progressFraction(solver_, run, maxSteps, firstStep) / 0.05 + 1) * 0.05;
     const auto t0 = Clock::now();
     const bool byTime = maxSteps == 0;
     std::printf("mpmsdem-run: %s, %zu particles, %s, output in %s\n", solver_.name().c_str(), n,
@@ -252,7 +275,7 @@ class OutputRun {
         solver_.step(dt);
         const double t = solver_.time();
         const bool series = t >= nextSeries * (1 - 1e-12), output = t >= nextOutput * (1 - 1e-12);
-        const double f = progressFraction(solver_, run, maxSteps);
+        const double f = progressFraction(solver_, run, maxSteps, firstStep);
         const bool report = f >= nextReport || finished(solver_, run, maxSteps);
         if (series || output || report) solver_.getParticles(state_);
         if (series) {
@@ -267,7 +290,8 @@ class OutputRun {
           const Diagnostics d = diagnose(state_);
           const double el = since(t0);
           std::printf("[%5.1f%%] t=%.5g s step=%ld dt=%.3g s KE=%.5g J front=%.5g m rate=%.3g upd/s ETA=%s\n",
-                      100 * f, t, solver_.steps(), dt, d.kineticEnergy, d.frontX, n * double(solver_.steps()) / el,
+                      100 * f, t, solver_.steps(), dt, d.kineticEnergy, d.frontX,
+                      n * double(solver_.steps() - firstStep) / el,
                       formatDuration(f > 0 ? el * (1 - f) / f : 0).c_str());
           std::fflush(stdout);
           nextReport = std::floor(f / 0.05 + 1) * 0.05;
@@ -322,6 +346,7 @@ class OutputRun {
 
   MpmSolver& solver_;
   const MpmScene& scene_;
+  bool restart_;
   std::filesystem::path dir_;
   io::Hdf5Writer h5_;
   std::optional<io::PvdCollection> pvd_;
@@ -339,18 +364,34 @@ int main(int argc, char** argv) {
     if (opt.precision) scene.run.precision = *opt.precision;
     if (opt.out) scene.run.outputDir = *opt.out;
     validateBackend(scene.run.backend, scene.run.precision);
-    const ParticleSet particles = seedParticles(scene);
     auto solver = makeSolver(scene.params, scene.run.backend, scene.run.precision);
-    solver->setParticles(particles);
+    long maxSteps = opt.steps;
+    if (opt.restart) {
+      const std::string h5 = (std::filesystem::path(scene.run.outputDir) / "mpm.h5").string();
+      if (!std::filesystem::exists(h5)) throwParameter("--restart", h5, "", "an existing mpm.h5 of an earlier run");
+      const long last = io::readNumSnapshots(h5) - 1;
+      if (last < 0) throwParameter("--restart", h5, "", "a file holding at least one snapshot");
+      ParticleSet particles;
+      double time = 0;
+      long step = 0;
+      io::readSnapshot(h5, last, particles, &time, &step);
+      solver->setParticles(particles);
+      solver->setClock(time, step);
+      if (maxSteps > 0) maxSteps += step;
+      std::printf("mpmsdem-run: restarting from snapshot %ld of %s (t = %.6g s, step %ld)\n", last, h5.c_str(), time,
+                  step);
+    } else {
+      solver->setParticles(seedParticles(scene));
+    }
     if (scene.run.dt > 0 && scene.run.dt > solver->stableTimeStep() * kStepSlack) {
       char range[128];
       std::snprintf(range, sizeof range, "<= the stable step %.6g s (cfl dx / wave speed), or \"auto\"",
                     solver->stableTimeStep());
       throwParameter("run.dt", scene.run.dt, "s", range);
     }
-    if (opt.bench) return runBench(*solver, scene, opt.steps);
-    OutputRun out(*solver, scene);
-    return out.run(opt.steps);
+    if (opt.bench) return runBench(*solver, scene, maxSteps);
+    OutputRun out(*solver, scene, opt.restart);
+    return out.run(maxSteps);
   } catch (const ParameterError& e) {
     std::fprintf(stderr, "mpmsdem-run: parameter error: %s\n", e.what());
     return 2;

@@ -70,8 +70,7 @@ class PyMpm {
     std::filesystem::create_directories(std::filesystem::path(dir) / "vtk");
     const auto mode = append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate;
     h5_ = std::make_unique<io::Hdf5Writer>((std::filesystem::path(dir) / "mpm.h5").string(), mode);
-    h5_->setAttribute("scene", scene_.sourceJson);
-    h5_->setAttribute("units", "SI: m, s, kg, N, Pa");
+    writeHeader(*h5_);
     pvd_ = std::make_unique<io::PvdCollection>((std::filesystem::path(dir) / "particles.pvd").string(), append);
     dir_ = dir;
   }
@@ -84,12 +83,43 @@ class PyMpm {
     io::writeParticlesVtp((std::filesystem::path(dir_) / name.str()).string(), cache_);
     pvd_->add(solver_->time(), name.str());
   }
+  // A checkpoint: one HDF5 file with the scene and the full particle state at this time
+  // (the same layout as mpm.h5, so any output file also works as a checkpoint).
+  void saveCheckpoint(const std::string& path) {
+    sync();
+    const std::string tmp = path + ".tmp";
+    {
+      io::Hdf5Writer w(tmp, io::Hdf5Writer::Mode::Truncate);
+      writeHeader(w);
+      w.writeSnapshot(cache_, solver_->time(), solver_->steps());
+    }
+    std::filesystem::rename(tmp, path);
+  }
+  // Continue from snapshot `index` (-1: the last) of an mpm.h5 or checkpoint file.
+  void loadSnapshot(const std::string& path, long index) {
+    const long n = io::readNumSnapshots(path);
+    if (index < 0) index += n;
+    if (index < 0 || index >= n) throwParameter("index", index, "", "in [-" + std::to_string(n) + ", " +
+                                                 std::to_string(n) + ") (snapshots in " + path + ")");
+    mpm::ParticleSet p;
+    double time = 0;
+    long step = 0;
+    io::readSnapshot(path, index, p, &time, &step);
+    solver_->setParticles(p);
+    solver_->setClock(time, step);
+    fresh_ = false;
+  }
   void appendSeries(const std::string& name, double value) {
     requireOutput();
     h5_->appendScalar(name, value);
   }
 
  private:
+  void writeHeader(io::Hdf5Writer& w) const {
+    w.setAttribute("parameters", scene_.sourceJson);
+    w.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
+    w.setAttribute("solver", solver_->name());
+  }
   void sync() {
     if (!fresh_) solver_->getParticles(cache_);
     fresh_ = true;
@@ -108,11 +138,13 @@ class PyMpm {
 };
 
 bool cudaAvailable() { return mpm::cudaAvailable(); }
+std::string sceneOf(const std::string& path) { return io::readStringAttribute(path, "parameters"); }
 
 }  // namespace
 
 void exportMpm() {
   bp::def("cudaAvailable", &cudaAvailable, "True when this build has CUDA and a GPU is present.");
+  bp::def("sceneOf", &sceneOf, (bp::arg("path")), "The scene JSON stored in an mpm.h5 or checkpoint file.");
   bp::class_<PyMpm, boost::noncopyable>("MpmSolver",
                                         "MPM solver built from a JSON scene (use mpmsdem.MpmEngine instead).",
                                         bp::init<std::string>(bp::arg("sceneJson")))
@@ -124,6 +156,8 @@ void exportMpm() {
       .def("openOutput", &PyMpm::openOutput, (bp::arg("dir"), bp::arg("append") = false))
       .def("writeSnapshot", &PyMpm::writeSnapshot)
       .def("appendSeries", &PyMpm::appendSeries, (bp::arg("name"), bp::arg("value")))
+      .def("saveCheckpoint", &PyMpm::saveCheckpoint, (bp::arg("path")))
+      .def("loadSnapshot", &PyMpm::loadSnapshot, (bp::arg("path"), bp::arg("index") = -1))
       .add_property("time", &PyMpm::time)
       .add_property("steps", &PyMpm::steps)
       .add_property("numParticles", &PyMpm::numParticles)

@@ -57,6 +57,14 @@ class MpmSolver {
 
   double time() const { return time_; }
   long steps() const { return steps_; }
+  // Set the simulated time [s] (>= 0) and step count (>= 0), e.g. when restarting from a
+  // snapshot taken at that time.
+  void setClock(double time, long steps) {
+    if (!(time >= 0)) throwParameter("time", time, "s", ">= 0");
+    if (steps < 0) throwParameter("steps", steps, "", ">= 0");
+    time_ = time;
+    steps_ = steps;
+  }
 
  protected:
   double time_ = 0;

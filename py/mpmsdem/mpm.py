@@ -56,21 +56,29 @@ class MpmEngine:
                  "run": {"duration": 1.0, "backend": backend, "precision": precision}}
         if walls:
             scene["walls"] = walls
-        self.solver = _mpmsdem.MpmSolver(json.dumps(scene))
-        self.output = output
-        self.outputEvery = outputEvery
+        self._setup(json.dumps(scene), output, outputEvery, label, verbose)
+
+    def _setup(self, sceneJson, output, outputEvery, label, verbose):
+        self.solver = _mpmsdem.MpmSolver(sceneJson)
+        self.output = None
         self.verbose = verbose
         self.seriesPeriod = 10  # steps between time-series records (time, kinetic energy, front)
-        self._nextOutput = 0.0
         self.error = None
         if output is not None:
-            if not (outputEvery and outputEvery > 0):
-                raise ValueError("outputEvery = %r s: must be > 0 when output is set" % (outputEvery,))
-            self.solver.openOutput(str(output), False)
+            self._openOutput(output, outputEvery, append=False)
         self.runner = PyRunner(command=_bindStep("mpm", id(self), self._yadeStep), iterPeriod=1, initRun=True,
                                label=label)
         self._wall0 = _time.time()
         self._lastReport = self._wall0
+
+    def _openOutput(self, output, outputEvery, append):
+        if not (outputEvery and outputEvery > 0):
+            raise ValueError("outputEvery = %r s: must be > 0 when output is set" % (outputEvery,))
+        self.solver.openOutput(str(output), bool(append))
+        self.output, self.outputEvery = output, outputEvery
+        # next snapshot: now for a new run, the next multiple of outputEvery when appending
+        t = self.solver.time
+        self._nextOutput = (int(t / outputEvery + 1e-9) + 1) * outputEvery if append else t
 
     # ------------------------------------------------------------------ stepping
     def stableTimeStep(self):
@@ -113,6 +121,26 @@ class MpmEngine:
         """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
         if self.error:
             raise RuntimeError("mpmsdem.MpmEngine stopped the run at " + self.error)
+
+    # ------------------------------------------------------------------ checkpoint
+    def save(self, path):
+        """Write a checkpoint (HDF5: the scene and every particle's state at this time), to go
+        alongside ``O.save()``; continue with :meth:`MpmEngine.restore`. Written to a temporary
+        name and renamed, so a killed run never leaves a half-written checkpoint."""
+        self.solver.saveCheckpoint(str(path))
+
+    @classmethod
+    def restore(cls, path, output=None, outputEvery=None, label="mpm", verbose=True, appendOutput=True):
+        """An engine continuing from a checkpoint of :meth:`save` (or from the last snapshot of
+        an ``mpm.h5``): same scene, particles, time and step count. With ``output``, outputs
+        are appended to the files already in that folder (``appendOutput``). Put its
+        ``runner`` into ``O.engines``."""
+        eng = cls.__new__(cls)
+        eng._setup(_mpmsdem.sceneOf(str(path)), None, None, label, verbose)
+        eng.solver.loadSnapshot(str(path), -1)
+        if output is not None:
+            eng._openOutput(output, outputEvery, append=appendOutput)
+        return eng
 
     # ------------------------------------------------------------------ read-out
     def particles(self):

@@ -26,7 +26,6 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.join(HERE, "..", "..")
-sys.path.insert(0, os.path.join(ROOT, "py"))
 
 
 def main():
@@ -40,7 +39,8 @@ def main():
     L, H = 0.1, 0.2
     a = H / L
     with tempfile.TemporaryDirectory() as out:
-        subprocess.run([exe, scene_path, "--out", out], check=True, stdout=subprocess.DEVNULL)
+        env = dict(os.environ, OMP_NUM_THREADS=str(os.cpu_count() or 1))
+        subprocess.run([exe, scene_path, "--out", out], check=True, stdout=subprocess.DEVNULL, env=env)
         with h5py.File(os.path.join(out, "mpm.h5"), "r") as f:
             t = f["series/time"][:]
             front = f["series/front_x"][:]
