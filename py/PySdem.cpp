@@ -7,6 +7,7 @@
 // three phases (read, compute, write) is accumulated so benchmarks can report the bridge's
 // share of each step.
 #include <chrono>
+#include <sstream>
 
 #include "PyConvert.hpp"
 #include "sdem/SdemEngine.hpp"
@@ -62,6 +63,7 @@ class YadeSdemBridge {
       const Quat ori = bp::extract<Quat>(st.attr("ori"));
       const Vec3 vel = bp::extract<Vec3>(st.attr("vel"));
       const Vec3 angVel = bp::extract<Vec3>(st.attr("angVel"));
+      checkState(i, pos, ori, vel, angVel);
       engine_.setState(i, pos, ori, vel, angVel);
       readOnce_[i] = 1;
     }
@@ -81,6 +83,22 @@ class YadeSdemBridge {
     computeSeconds_ += seconds(t1, t2);
     writeSeconds_ += seconds(t2, t3);
     ++steps_;
+  }
+
+  // Blow-up guard: a body whose state is not finite or moves faster than maxSpeed stops the run.
+  void checkState(int i, const Vec3& pos, const Quat& ori, const Vec3& vel, const Vec3& angVel) const {
+    const bool finite = pos.allFinite() && ori.coeffs().allFinite() && vel.allFinite() && angVel.allFinite();
+    if (finite && vel.norm() <= maxSpeed_) return;
+    std::ostringstream os;
+    os << "body " << engine_.externalId(i) << (finite ? " moves at " : " has a non-finite state: ") << "|vel| = "
+       << vel.norm() << " m/s (maxSpeed = " << maxSpeed_ << " m/s), pos = (" << pos.transpose()
+       << ") m: the run blew up (time step too large for the contact stiffness?)";
+    throw RuntimeFailure(os.str());
+  }
+  double maxSpeed() const { return maxSpeed_; }
+  void setMaxSpeed(double v) {
+    if (!(v > 0)) throwParameter("maxSpeed", v, "m/s", "> 0");
+    maxSpeed_ = v;
   }
 
   bp::dict timings() const {
@@ -180,6 +198,7 @@ class YadeSdemBridge {
   SdemEngine engine_;
   std::vector<bp::object> states_;
   std::vector<char> readOnce_;
+  double maxSpeed_ = 1e3;
   long steps_ = 0;
   double readSeconds_ = 0, computeSeconds_ = 0, writeSeconds_ = 0;
 };
@@ -221,6 +240,7 @@ void exportSdem() {
       .add_property("criticalTimeStep", &YadeSdemBridge::criticalTimeStep)
       .add_property("timeStepSafety", &YadeSdemBridge::timeStepSafety, &YadeSdemBridge::setTimeStepSafety)
       .add_property("strict", &YadeSdemBridge::strict, &YadeSdemBridge::setStrict)
+      .add_property("maxSpeed", &YadeSdemBridge::maxSpeed, &YadeSdemBridge::setMaxSpeed)
       .add_property("timeStepWarnings", &YadeSdemBridge::warnings)
       .add_property("barrierEnergy", &YadeSdemBridge::barrierEnergy)
       .add_property("tangentialEnergy", &YadeSdemBridge::tangentialEnergy)

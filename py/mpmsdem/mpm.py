@@ -95,8 +95,9 @@ class MpmEngine:
             self.step(O.dt)
         except Exception as e:
             self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
-            if self.output is not None:
-                self.solver.writeSnapshot()  # the last good state: the solver keeps it on failure
+            if self.output is not None:  # the last good state: the solver keeps it on failure
+                self.solver.writeSnapshot()
+                self.error += " [last good state saved as the last snapshot in %s]" % self.output
             raise
 
     def _afterStep(self):

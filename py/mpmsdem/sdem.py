@@ -48,16 +48,23 @@ class SdemEngine:
         the critical step of the current contacts; ``"warn"``: print a warning instead.
     :param timeStepSafety: c in dt_crit = c · min sqrt(m / Σk) over bodies [-], > 0
         (c = 1 is half the leapfrog stability limit 2/ω; default 1).
+    :param maxSpeed: a body faster than this [m/s] (> 0), or with a non-finite state, stops the
+        run as a blow-up (default 1000 m/s).
+    :param saveOnFailure: path prefix; when a step fails, the last good state is saved as
+        ``<prefix>.yade.gz`` (``O.save``) and ``<prefix>.sdem.json`` (:meth:`save`) before the
+        run stops. None: nothing saved (the state in memory is still the last good one).
     :param label: label of the PyRunner put into ``O.engines``.
     """
 
-    def __init__(self, dtCheck="raise", timeStepSafety=1.0, label="sdem"):
+    def __init__(self, dtCheck="raise", timeStepSafety=1.0, maxSpeed=1e3, saveOnFailure=None, label="sdem"):
         if dtCheck not in DT_CHECKS:
             raise ValueError("dtCheck = %r: must be one of %s" % (dtCheck, ", ".join(DT_CHECKS)))
         self._bridge = _mpmsdem.SdemBridge()
         self._bridge.strict = dtCheck == "raise"
         self._bridge.timeStepSafety = float(timeStepSafety)
+        self._bridge.maxSpeed = float(maxSpeed)
         self.dtCheck = dtCheck
+        self.saveOnFailure = saveOnFailure
         self._materials = []      # (SdemMat, index)
         self._recipes = []        # how each body was made, for save()/restore()
         self._index = {}          # YADE id -> engine index
@@ -168,6 +175,10 @@ class SdemEngine:
             self._bridge.step(O.bodies, O.forces, O.dt)
         except Exception as e:
             self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
+            if self.saveOnFailure:
+                O.save(self.saveOnFailure + ".yade.gz")
+                self.save(self.saveOnFailure + ".sdem.json")
+                self.error += " [last good state saved: %s.yade.gz, %s.sdem.json]" % ((self.saveOnFailure,) * 2)
             raise
         if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
             if self._warned == 0:

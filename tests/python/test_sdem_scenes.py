@@ -330,3 +330,21 @@ def test_non_convex_mesh_rests_on_its_l_shaped_face():
     # (0.1 - R, 0.1 - R) in the file's frame, shifted with the centroid put at x = y = 0.
     ref = np.array([0.1 - R - shape.framePosition[0], 0.1 - R - shape.framePosition[1]])
     assert np.min(np.linalg.norm(c["point"][:, :2] - ref, axis=1)) < 2e-5  # settling shifts it by ~7 um
+
+
+def test_blow_up_stops_the_run_and_saves_the_last_good_state(tmp_path):
+    # A body given a non-finite velocity (as after a numerical blow-up) must stop the run at
+    # once, name the body, and leave the last good state on disk, ready to reload.
+    prefix = str(tmp_path / "failed")
+    eng, cube, slab, m = cubeOnSlab(saveOnFailure=prefix, maxSpeed=50.0)
+    O.dt = 1e-4
+    run(eng, 10)
+    O.bodies[cube].state.vel = (80.0, 0, 0)  # above maxSpeed
+    with pytest.raises(RuntimeError, match="body %d moves at .*maxSpeed = 50" % cube):
+        run(eng, 10)
+    it = O.iter
+    O.reset()
+    O.load(prefix + ".yade.gz")
+    assert O.iter == it
+    eng2 = mpmsdem.SdemEngine.restore(prefix + ".sdem.json")
+    assert eng2.ids == [slab, cube]
