@@ -56,15 +56,9 @@ def material(density, friction=0.5, poisson=0.3, barrierStiffness=1e4, normalDam
     :param normalDamping: fraction of critical [-], >= 0 (0: elastic barrier, as the paper)
     :param tangentialDamping: fraction of critical [-], >= 0 (c_t of Eq 9)
     """
-    m = SdemMat()
-    m.density = density
-    m.friction = friction
-    m.poisson = poisson
-    m.barrierStiffness = barrierStiffness
-    m.normalDamping = normalDamping
-    m.tangentialDamping = tangentialDamping
-    m.validate()
-    return m
+    from .sdem import _material
+    return _material(dict(density=density, friction=friction, poisson=poisson, barrierStiffness=barrierStiffness,
+                          normalDamping=normalDamping, tangentialDamping=tangentialDamping))
 
 
 def run(steps, *engines):
