@@ -44,7 +44,8 @@ checks: install
 test: test-cpp test-py checks
 
 bench: install
-	$(PY) scripts/bench/bench_sdem.py
+	OMP_NUM_THREADS=1 $(PY) scripts/bench/bench_sdem.py
+	$(PY) scripts/bench/bench_mpm.py --build $(BUILD)
 
 clean:
 	rm -rf $(BUILD)

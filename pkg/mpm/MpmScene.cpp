@@ -3,12 +3,14 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <set>
 #include <sstream>
 
 #include "common/Error.hpp"
+#include "io/MeshReader.hpp"
 #include "mpm/GridBoundary.hpp"
 #include "mpm/Seeding.hpp"
 
@@ -194,69 +196,121 @@ std::size_t cellSpan(const MpmParams& p, int a, double lo, double hi, const std:
   return static_cast<std::size_t>(idx[1] - idx[0]);
 }
 
-void parseParticles(const json& root, MpmScene& s) {
+// "ppc": a cube n^3 or [nx, ny, nz].
+std::array<int, 3> parsePpc(const json& c, const std::string& path) {
+  std::array<int, 3> ppc{};
+  if (c.is_number_integer()) {
+    const long n = c.get<long>();
+    const long k = std::lround(std::cbrt(static_cast<double>(n)));
+    if (n < 1 || k * k * k != n || k > 8)
+      throwParameter(path + ".ppc", n, "", "a cube n^3 with n in [1, 8] (1, 8, 27, ..., 512) or [nx, ny, nz]");
+    ppc = {int(k), int(k), int(k)};
+  } else if (c.is_array() && c.size() == 3) {
+    for (int a = 0; a < 3; ++a) {
+      const std::string name = path + ".ppc[" + std::to_string(a) + "]";
+      if (!c[a].is_number_integer() || c[a].get<long>() < 1 || c[a].get<long>() > 8)
+        throwParameter(name, c[a].dump(), "", "an integer in [1, 8]");
+      ppc[a] = c[a].get<int>();
+    }
+  } else {
+    throwParameter(path + ".ppc", c.dump(), "", "a cube n^3 (1, 8, 27, ...) or [nx, ny, nz]");
+  }
+  return ppc;
+}
+
+// Box corners lo/hi: on grid lines, hi > lo, inside the material region.
+void parseBoxCorners(const json& j, const std::string& path, const MpmParams& p, ParticleBox& box) {
+  const auto lo = materialRegionLo(p), hi = materialRegionHi(p);
+  const double tol = 1e-9 * p.dx;
+  if (!j.contains("lo")) throw ParameterError("missing required key '" + path + ".lo' (or '" + path + ".mesh')");
+  if (!j.contains("hi")) throw ParameterError("missing required key '" + path + ".hi'");
+  box.lo = vec3(j.at("lo"), path + ".lo");
+  box.hi = vec3(j.at("hi"), path + ".hi");
+  static const char axis[3] = {'x', 'y', 'z'};
+  for (int a = 0; a < 3; ++a) {
+    const std::string ax(1, axis[a]);
+    if (!(box.hi[a] > box.lo[a])) {
+      std::ostringstream range;
+      range << "> " << path << ".lo[" << a << "] = " << box.lo[a] << " m";
+      throwParameter(path + ".hi[" + std::to_string(a) + "]", box.hi[a], "m", range.str());
+    }
+    if (box.lo[a] < lo[a] - tol || box.hi[a] > hi[a] + tol) {
+      std::ostringstream msg;
+      msg << path << " (lo, hi on " << ax << ") = [" << box.lo[a] << ", " << box.hi[a]
+          << "] m: particles outside the grid; must lie in the material region [" << lo[a] << ", " << hi[a]
+          << "] m (grid box minus the " << kWallLayer << "-cell wall layers)";
+      throw ParameterError(msg.str());
+    }
+    cellSpan(p, a, box.lo[a], box.hi[a], path);
+  }
+}
+
+// Mesh file, scale and offset: read, place and check the mesh; lo/hi get its bounding box.
+void parseMesh(const json& j, const std::string& path, const std::string& baseDir, const MpmParams& p,
+               ParticleBox& box) {
+  const json& m = j.at("mesh");
+  if (!m.is_string() || m.get<std::string>().empty())
+    throwParameter(path + ".mesh", m.dump(), "", "a non-empty path to a .stl or .obj file");
+  const std::string given = m.get<std::string>();
+  const std::filesystem::path file(given);
+  box.mesh = (baseDir.empty() || file.is_absolute()) ? given : (std::filesystem::path(baseDir) / file).string();
+  box.scale = optNumber(j, path, "scale", 1.0);
+  checkRange(path + ".scale", box.scale, "", 0, true, kInf, true);
+  if (j.contains("offset")) box.offset = vec3(j.at("offset"), path + ".offset");
+  try {
+    io::TriangleMesh mesh = io::readMesh(box.mesh, box.scale);
+    for (Vec3& v : mesh.vertices) v += Vec3(box.offset[0], box.offset[1], box.offset[2]);
+    const MeshBounds mb = checkSeedMesh(p, mesh.vertices, mesh.triangles, box.mesh);
+    box.lo = mb.lo;
+    box.hi = mb.hi;
+    box.vertices = std::move(mesh.vertices);
+    box.triangles = std::move(mesh.triangles);
+  } catch (const ParameterError& e) {
+    throw ParameterError(path + ".mesh: " + e.what());
+  }
+}
+
+void parseParticles(const json& root, MpmScene& s, const std::string& baseDir) {
   if (!root.contains("particles")) throw ParameterError("missing required key 'particles'");
   const json& list = root.at("particles");
   if (!list.is_array() || list.empty())
-    throwParameter("particles", list.dump().substr(0, 80), "", "a non-empty array of boxes {lo, hi, ppc, velocity}");
-  const auto lo = materialRegionLo(s.params), hi = materialRegionHi(s.params);
+    throwParameter("particles", list.dump().substr(0, 80), "",
+                   "a non-empty array of boxes {lo, hi, ppc, velocity} or meshes {mesh, scale, offset, ppc, velocity}");
   const double tol = 1e-9 * s.params.dx;
   for (std::size_t b = 0; b < list.size(); ++b) {
     const std::string path = "particles[" + std::to_string(b) + "]";
     const json& j = list[b];
-    if (!j.is_object()) throwParameter(path, j.dump(), "", "a JSON object {lo, hi, ppc, velocity}");
-    checkKeys(j, path, {"lo", "hi", "ppc", "velocity"});
+    if (!j.is_object())
+      throwParameter(path, j.dump(), "", "a JSON object {lo, hi, ppc, velocity} or {mesh, scale, offset, ppc, velocity}");
+    const bool isMesh = j.contains("mesh");
+    if (isMesh)
+      checkKeys(j, path, {"mesh", "scale", "offset", "ppc", "velocity"});
+    else
+      checkKeys(j, path, {"lo", "hi", "ppc", "velocity"});
     ParticleBox box;
-    if (!j.contains("lo")) throw ParameterError("missing required key '" + path + ".lo'");
-    if (!j.contains("hi")) throw ParameterError("missing required key '" + path + ".hi'");
-    box.lo = vec3(j.at("lo"), path + ".lo");
-    box.hi = vec3(j.at("hi"), path + ".hi");
     if (j.contains("velocity")) box.velocity = vec3(j.at("velocity"), path + ".velocity");
-    if (j.contains("ppc")) {
-      const json& c = j.at("ppc");
-      if (c.is_number_integer()) {
-        const long n = c.get<long>();
-        const long k = std::lround(std::cbrt(static_cast<double>(n)));
-        if (n < 1 || k * k * k != n || k > 8)
-          throwParameter(path + ".ppc", n, "", "a cube n^3 with n in [1, 8] (1, 8, 27, ..., 512) or [nx, ny, nz]");
-        box.ppc = {int(k), int(k), int(k)};
-      } else if (c.is_array() && c.size() == 3) {
-        for (int a = 0; a < 3; ++a) {
-          const std::string name = path + ".ppc[" + std::to_string(a) + "]";
-          if (!c[a].is_number_integer() || c[a].get<long>() < 1 || c[a].get<long>() > 8)
-            throwParameter(name, c[a].dump(), "", "an integer in [1, 8]");
-          box.ppc[a] = c[a].get<int>();
-        }
-      } else {
-        throwParameter(path + ".ppc", c.dump(), "", "a cube n^3 (1, 8, 27, ...) or [nx, ny, nz]");
-      }
-    }
-    static const char axis[3] = {'x', 'y', 'z'};
-    for (int a = 0; a < 3; ++a) {
-      const std::string ax(1, axis[a]);
-      if (!(box.hi[a] > box.lo[a])) {
-        std::ostringstream range;
-        range << "> " << path << ".lo[" << a << "] = " << box.lo[a] << " m";
-        throwParameter(path + ".hi[" + std::to_string(a) + "]", box.hi[a], "m", range.str());
-      }
-      if (box.lo[a] < lo[a] - tol || box.hi[a] > hi[a] + tol) {
-        std::ostringstream msg;
-        msg << path << " (lo, hi on " << ax << ") = [" << box.lo[a] << ", " << box.hi[a]
-            << "] m: particles outside the grid; must lie in the material region [" << lo[a] << ", " << hi[a]
-            << "] m (grid box minus the " << kWallLayer << "-cell wall layers)";
-        throw ParameterError(msg.str());
-      }
-      cellSpan(s.params, a, box.lo[a], box.hi[a], path);
-    }
+    if (j.contains("ppc")) box.ppc = parsePpc(j.at("ppc"), path);
+    if (isMesh)
+      parseMesh(j, path, baseDir, s.params, box);
+    else
+      parseBoxCorners(j, path, s.params, box);
     for (std::size_t o = 0; o < s.boxes.size(); ++o) {
       const ParticleBox& q = s.boxes[o];
       bool overlap = true;
       for (int a = 0; a < 3; ++a) overlap = overlap && box.lo[a] < q.hi[a] - tol && q.lo[a] < box.hi[a] - tol;
-      if (overlap)
+      if (!overlap) continue;
+      if (box.mesh.empty() && q.mesh.empty())
         throwParameter(path, "box overlapping particles[" + std::to_string(o) + "]", "",
                        "disjoint from the other boxes (overlap would double the mass)");
+      std::ostringstream value;
+      value << (box.mesh.empty() ? "box" : "mesh bounding box") << " [" << box.lo[0] << ", " << box.lo[1] << ", "
+            << box.lo[2] << "] - [" << box.hi[0] << ", " << box.hi[1] << ", " << box.hi[2] << "] m overlapping particles["
+            << o << "]" << (q.mesh.empty() ? "" : " (mesh '" + q.mesh + "')");
+      throwParameter(path + (box.mesh.empty() ? "" : " (mesh '" + box.mesh + "')"), value.str(), "",
+                     "disjoint from the other entries (a mesh is refused when its bounding box overlaps another "
+                     "entry's box or mesh bounding box)");
     }
-    s.boxes.push_back(box);
+    s.boxes.push_back(std::move(box));
   }
 }
 
@@ -313,7 +367,7 @@ void validateBackend(Backend backend, Precision precision) {
     throwParameter("run.precision", "float", "", "\"double\" with backend \"cpu\" (float runs on \"cuda\" only)");
 }
 
-MpmScene parseScene(const std::string& jsonText, const std::string& source) {
+MpmScene parseScene(const std::string& jsonText, const std::string& source, const std::string& baseDir) {
   json root;
   try {
     root = json::parse(jsonText);
@@ -333,7 +387,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source) {
   checkRange("cfl", s.params.cfl, "", 0, true, 1, false);
   parseWalls(root, s.params);
   parseMaterial(root, s.params);
-  parseParticles(root, s);
+  parseParticles(root, s, baseDir);
   parseRun(root, s.run);
   validateBackend(s.run.backend, s.run.precision);
   s.sourceJson = root.dump();
@@ -345,12 +399,16 @@ MpmScene loadScene(const std::string& path) {
   if (!is) throwParameter("scene file", "'" + path + "'", "", "an existing, readable JSON file");
   std::stringstream ss;
   ss << is.rdbuf();
-  return parseScene(ss.str(), path);
+  return parseScene(ss.str(), path, std::filesystem::path(path).parent_path().string());
 }
 
 ParticleSet seedParticles(const MpmScene& scene) {
   ParticleSet p;
   for (const ParticleBox& b : scene.boxes) {
+    if (!b.mesh.empty()) {
+      seedMesh(scene.params, b.vertices, b.triangles, b.ppc, b.velocity, p, b.mesh);
+      continue;
+    }
     const std::size_t first = p.size();
     seedBox(scene.params, b.lo, b.hi, b.ppc, p);
     for (std::size_t i = first; i < p.size(); ++i)

@@ -32,13 +32,29 @@
 //     "solid_density": 2500,        rho_s [kg/m^3], > 0
 //     "critical_density": 0         rho_c [kg/m^3], >= 0; 0 means rho_0
 //   },
-//   "particles": [                  (req) non-empty list of non-overlapping boxes
-//     {"lo": [x,y,z], "hi": [x,y,z],   (req) box corners [m] on grid lines (origin + k dx),
+//   "particles": [                  (req) non-empty list of non-overlapping entries, each a box
+//                                   or a closed triangle mesh:
+//     {"lo": [x,y,z], "hi": [x,y,z],   (req for a box) box corners [m] on grid lines (origin + k dx),
 //                                      hi > lo on every axis, inside the material region
 //      "ppc": 8,                       particles per cell: a cube n^3 (1, 8, 27, ..., 512) or
 //                                      per axis [nx, ny, nz], each in [1, 8]; default 8
-//      "velocity": [0, 0, 0]}          initial velocity [m/s]
-//   ],
+//      "velocity": [0, 0, 0]},         initial velocity [m/s]
+//     {"mesh": "block.stl",            (req for a mesh) closed triangle mesh, .stl (ASCII or
+//                                      binary) or .obj; a relative path is taken from the scene
+//                                      file's folder (loadScene) or as given (parseScene without
+//                                      a base folder). The mesh must be watertight and
+//                                      consistently oriented (every edge shared by exactly 2
+//                                      triangles), enclose a volume, and lie, once placed,
+//                                      inside the material region.
+//      "scale": 1.0,                   factor on the file's coordinates (0.001 for millimetres), > 0
+//      "offset": [0, 0, 0],            added to the scaled coordinates [m]
+//      "ppc": 8, "velocity": [0, 0, 0]}   as for a box
+//   ],                              A mesh entry may not have lo/hi, a box entry may not have
+//                                   mesh/scale/offset. Overlap: two boxes may touch but not
+//                                   overlap; a mesh's bounding box may not overlap any other
+//                                   entry's box or mesh bounding box (a refusal by bounding
+//                                   boxes: simple, and it never lets two entries put material
+//                                   in the same place, whatever their ppc).
 //   "run": {                        (req)
 //     "duration": 1.0,              (req) simulated time [s], > 0
 //     "dt": "auto",                 fixed step [s] > 0, or "auto": dt_factor * stable step,
@@ -57,23 +73,33 @@
 // of an equal subdivision of the cell, each with volume dx^3/(nx ny nz), mass rho_0 times
 // that, zero stress, J = 1 and the box velocity. Particle count of a box =
 // box volume / dx^3 * nx ny nz; total mass = rho_0 * box volume.
+// A mesh (mpm::seedMesh) gets the same candidate points over the cells covering its bounding
+// box and keeps those inside the surface, with the same volume and mass each: its total mass
+// is rho_0 * mesh volume up to about the surface area times the point spacing / 2 (exactly
+// that of the box for a box-shaped mesh with faces on grid lines).
 #pragma once
 #include <array>
 #include <string>
 #include <vector>
 
+#include "common/Types.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "mpm/MpmTypes.hpp"
 
 namespace mpmsdem {
 namespace mpm {
 
-// One box of material points (see "particles" above).
+// One entry of "particles" (see above): a box, or a closed triangle mesh when `mesh` is set.
 struct ParticleBox {
-  std::array<double, 3> lo{0, 0, 0};        // lower corner [m]
-  std::array<double, 3> hi{0, 0, 0};        // upper corner [m], > lo
+  std::array<double, 3> lo{0, 0, 0};        // lower corner [m] (a mesh: of its bounding box)
+  std::array<double, 3> hi{0, 0, 0};        // upper corner [m], > lo (a mesh: of its bounding box)
   std::array<int, 3> ppc{2, 2, 2};          // particles per cell per axis, each in [1, 8]
   std::array<double, 3> velocity{0, 0, 0};  // initial velocity [m/s]
+  std::string mesh;                         // mesh file as resolved (scene folder applied); empty: a box
+  double scale = 1.0;                       // factor on the file's coordinates, > 0
+  std::array<double, 3> offset{0, 0, 0};    // added to the scaled coordinates [m]
+  std::vector<Vec3> vertices;               // the mesh's vertices after scale and offset [m]
+  std::vector<std::array<int, 3>> triangles;  // the mesh's triangles (vertex indices)
 };
 
 // How the scene is run and written (see "run" above).
@@ -91,15 +117,18 @@ struct RunSettings {
 
 struct MpmScene {
   MpmParams params;
-  std::vector<ParticleBox> boxes;
+  std::vector<ParticleBox> boxes;  // the "particles" entries, boxes and meshes, in order
   RunSettings run;
   std::string sourceJson;  // the scene as parsed (compact JSON), kept for output metadata
 };
 
-// Parse and validate a scene. Throws ParameterError naming the key path (e.g.
-// "material.poisson_ratio") and the allowed range; `source` names the text in messages.
-MpmScene parseScene(const std::string& jsonText, const std::string& source = "scene");
-// Read the file and parse it; a missing file is a ParameterError naming the path.
+// Parse and validate a scene (mesh files are read and checked here). Throws ParameterError
+// naming the key path (e.g. "material.poisson_ratio") and the allowed range; `source` names
+// the text in messages; relative mesh paths are taken from `baseDir` (as given when empty).
+MpmScene parseScene(const std::string& jsonText, const std::string& source = "scene",
+                    const std::string& baseDir = "");
+// Read the file and parse it, mesh paths relative to the file's folder; a missing file is a
+// ParameterError naming the path.
 MpmScene loadScene(const std::string& path);
 
 // Check a backend/precision pair (after command-line overrides): float needs CUDA.
@@ -109,7 +138,7 @@ void validateBackend(Backend backend, Precision precision);
 std::array<double, 3> materialRegionLo(const MpmParams& params);
 std::array<double, 3> materialRegionHi(const MpmParams& params);
 
-// Material points of all boxes, in box order (see "Seeding" above).
+// Material points of all entries (boxes and meshes), in entry order (see "Seeding" above).
 ParticleSet seedParticles(const MpmScene& scene);
 
 const char* backendName(Backend backend);
