@@ -7,9 +7,13 @@
 // three phases (read, compute, write) is accumulated so benchmarks can report the bridge's
 // share of each step.
 #include <chrono>
+#include <filesystem>
+#include <iomanip>
 #include <sstream>
 
 #include "PyConvert.hpp"
+#include "io/Hdf5Writer.hpp"
+#include "io/VtkWriter.hpp"
 #include "sdem/SdemEngine.hpp"
 
 namespace mpmsdem {
@@ -178,8 +182,75 @@ class YadeSdemBridge {
     engine_.setContactHistories(h);
   }
 
+  // ---- outputs: <dir>/sdem.h5 (append-only series) and <dir>/bodies.pvd + vtk/bodies_*.vtp
+  void openOutput(const std::string& dir, bool append) {
+    namespace fs = std::filesystem;
+    fs::create_directories(fs::path(dir) / "vtk");
+    h5_ = std::make_unique<io::Hdf5Writer>((fs::path(dir) / "sdem.h5").string(),
+                                           append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate);
+    std::ostringstream ids;
+    ids << "[";
+    for (int i = 0; i < engine_.numBodies(); ++i) ids << (i ? ", " : "") << engine_.externalId(i);
+    ids << "]";
+    h5_->setAttribute("ids", ids.str());
+    h5_->setAttribute("units", "SI: m, s, N, N m; ori as quaternion w x y z; per-body series are (records, 3 x bodies) "
+                               "in the order of the attribute ids");
+    pvd_ = std::make_unique<io::PvdCollection>((fs::path(dir) / "bodies.pvd").string(), append);
+    dir_ = dir;
+  }
+  // One record of the state of the last step: time, step, per body pos, ori, vel, angVel,
+  // force, torque, and the number of contact points.
+  void record(double time, long step) {
+    requireOutput();
+    const int n = engine_.numBodies();
+    std::vector<double> pos(3 * n), ori(4 * n), vel(3 * n), angVel(3 * n), f(3 * n), t(3 * n);
+    for (int i = 0; i < n; ++i) {
+      const Quat& q = engine_.orientation(i);
+      const double qc[4] = {q.w(), q.x(), q.y(), q.z()};
+      for (int k = 0; k < 4; ++k) ori[4 * i + k] = qc[k];
+      for (int k = 0; k < 3; ++k) {
+        pos[3 * i + k] = engine_.position(i)[k];
+        vel[3 * i + k] = engine_.velocity(i)[k];
+        angVel[3 * i + k] = engine_.angularVelocity(i)[k];
+        f[3 * i + k] = engine_.force(i)[k];
+        t[3 * i + k] = engine_.torque(i)[k];
+      }
+    }
+    h5_->appendScalar("time", time);
+    h5_->appendScalar("step", static_cast<double>(step));
+    h5_->appendVector("pos", pos);
+    h5_->appendVector("ori", ori);
+    h5_->appendVector("vel", vel);
+    h5_->appendVector("angVel", angVel);
+    h5_->appendVector("force", f);
+    h5_->appendVector("torque", t);
+    h5_->appendScalar("contacts", static_cast<double>(engine_.contacts().size()));
+  }
+  // The outer shapes of all bodies at their current pose, for ParaView.
+  void writeVtk(double time) {
+    requireOutput();
+    std::vector<io::RigidSurface> bodies(engine_.numBodies());
+    for (int i = 0; i < engine_.numBodies(); ++i) {
+      const auto& shape = engine_.shape(i);
+      io::RigidSurface& b = bodies[i];
+      b.id = engine_.externalId(i);
+      for (const Vec3& v : shape.outerVertices) {
+        const Vec3 w = engine_.position(i) + engine_.orientation(i) * v;
+        b.vertices.push_back({w[0], w[1], w[2]});
+      }
+      b.triangles = shape.outerTriangles;
+    }
+    std::ostringstream name;
+    name << "vtk/bodies_" << std::setw(6) << std::setfill('0') << pvd_->size() << ".vtp";
+    io::writeRigidSurfacesVtp((std::filesystem::path(dir_) / name.str()).string(), bodies);
+    pvd_->add(time, name.str());
+  }
+
   Vec3 force(int i) const { return engine_.force(i); }
   Vec3 torque(int i) const { return engine_.torque(i); }
+  void requireOutput() const {
+    if (!h5_) throw ParameterError("output: call openOutput(dir) before writing outputs");
+  }
   int numBodies() const { return engine_.numBodies(); }
   int yadeId(int i) const { return engine_.externalId(i); }
   double criticalTimeStep() const { return engine_.criticalTimeStep(); }
@@ -198,6 +269,9 @@ class YadeSdemBridge {
   SdemEngine engine_;
   std::vector<bp::object> states_;
   std::vector<char> readOnce_;
+  std::unique_ptr<io::Hdf5Writer> h5_;
+  std::unique_ptr<io::PvdCollection> pvd_;
+  std::string dir_;
   double maxSpeed_ = 1e3;
   long steps_ = 0;
   double readSeconds_ = 0, computeSeconds_ = 0, writeSeconds_ = 0;
@@ -231,6 +305,9 @@ void exportSdem() {
       .def("resetTimings", &YadeSdemBridge::resetTimings)
       .def("contacts", &YadeSdemBridge::contacts)
       .def("histories", &YadeSdemBridge::histories)
+      .def("openOutput", &YadeSdemBridge::openOutput)
+      .def("record", &YadeSdemBridge::record)
+      .def("writeVtk", &YadeSdemBridge::writeVtk)
       .def("setHistories", &YadeSdemBridge::setHistories)
       .def("force", &YadeSdemBridge::force)
       .def("torque", &YadeSdemBridge::torque)

@@ -53,10 +53,17 @@ class SdemEngine:
     :param saveOnFailure: path prefix; when a step fails, the last good state is saved as
         ``<prefix>.yade.gz`` (``O.save``) and ``<prefix>.sdem.json`` (:meth:`save`) before the
         run stops. None: nothing saved (the state in memory is still the last good one).
+    :param output: folder for ``sdem.h5`` — append-only HDF5 series of every body's pos, ori,
+        vel, angVel, contact force and torque (``/series/<name>``, shape (records, 3·bodies),
+        bodies in the order of the root attribute ``ids``) — and, with ``vtkEvery``,
+        ``bodies.pvd`` + ``vtk/bodies_*.vtp`` (outer shapes, for ParaView). None: no files.
+    :param outputEvery: interval of the HDF5 records [s], > 0 (with ``output``).
+    :param vtkEvery: interval of the VTK files [s], > 0, or None for none.
     :param label: label of the PyRunner put into ``O.engines``.
     """
 
-    def __init__(self, dtCheck="raise", timeStepSafety=1.0, maxSpeed=1e3, saveOnFailure=None, label="sdem"):
+    def __init__(self, dtCheck="raise", timeStepSafety=1.0, maxSpeed=1e3, saveOnFailure=None, output=None,
+                 outputEvery=None, vtkEvery=None, label="sdem"):
         if dtCheck not in DT_CHECKS:
             raise ValueError("dtCheck = %r: must be one of %s" % (dtCheck, ", ".join(DT_CHECKS)))
         self._bridge = _mpmsdem.SdemBridge()
@@ -65,6 +72,12 @@ class SdemEngine:
         self._bridge.maxSpeed = float(maxSpeed)
         self.dtCheck = dtCheck
         self.saveOnFailure = saveOnFailure
+        if output is not None and not (outputEvery and outputEvery > 0):
+            raise ValueError("outputEvery = %r s: must be > 0 when output is set" % (outputEvery,))
+        if vtkEvery is not None and not (output is not None and vtkEvery > 0):
+            raise ValueError("vtkEvery = %r s: must be > 0, with output set" % (vtkEvery,))
+        self.output, self.outputEvery, self.vtkEvery = output, outputEvery, vtkEvery
+        self._nextRecord = self._nextVtk = None  # set when the outputs open, at the first step
         self._materials = []      # (SdemMat, index)
         self._recipes = []        # how each body was made, for save()/restore()
         self._index = {}          # YADE id -> engine index
@@ -171,6 +184,9 @@ class SdemEngine:
         if not self._checkedEngines:
             self._checkedEngines = True
             _warnDamping()
+            if self.output is not None:  # opened here: every body has been added by now
+                self._bridge.openOutput(str(self.output), False)
+                self._nextRecord = self._nextVtk = O.time
         try:
             self._bridge.step(O.bodies, O.forces, O.dt)
         except Exception as e:
@@ -180,6 +196,14 @@ class SdemEngine:
                 self.save(self.saveOnFailure + ".sdem.json")
                 self.error += " [last good state saved: %s.yade.gz, %s.sdem.json]" % ((self.saveOnFailure,) * 2)
             raise
+        if self.output is not None:
+            t = O.time
+            if t >= self._nextRecord - 1e-12:
+                self._bridge.record(t, O.iter)
+                self._nextRecord += self.outputEvery
+            if self.vtkEvery and t >= self._nextVtk - 1e-12:
+                self._bridge.writeVtk(t)
+                self._nextVtk += self.vtkEvery
         if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
             if self._warned == 0:
                 warnings.warn("mpmsdem.SdemEngine: O.dt = %g s exceeds the critical step %g s at step %d"

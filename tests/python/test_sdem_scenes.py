@@ -1,5 +1,6 @@
 """SDEM scenes in YADE (issue: SDEM in YADE). Every number is compared with an analytic value
 or a conservation law; tolerances are two-sided."""
+import json
 import math
 
 import numpy as np
@@ -348,3 +349,27 @@ def test_blow_up_stops_the_run_and_saves_the_last_good_state(tmp_path):
     assert O.iter == it
     eng2 = mpmsdem.SdemEngine.restore(prefix + ".sdem.json")
     assert eng2.ids == [slab, cube]
+
+
+def test_outputs_record_the_sliding_block_for_h5py_and_paraview(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    import xml.etree.ElementTree as ET
+    out = tmp_path / "sdem"
+    eng, cube, slab, m = cubeOnSlab(thetaDeg=30.0, mu=0.0, output=str(out), outputEvery=0.05, vtkEvery=0.1)
+    O.dt = 1e-4
+    run(eng, 3001)
+    with h5py.File(out / "sdem.h5", "r", locking=False) as f:  # the engine still holds it open
+        ids = json.loads(f.attrs["ids"])
+        assert ids == [slab, cube]
+        t = f["series/time"][:]
+        assert len(t) == 7 and np.allclose(t, np.arange(7) * 0.05, atol=1e-9)
+        x = f["series/pos"][:, 3 * ids.index(cube)]
+        # frictionless: Eq 19 with mu = 0 at every recorded time, within 1 %
+        ref = [analysis.slidingDistance(ti, 30.0, 0.0) for ti in t]
+        assert np.allclose(x, ref, rtol=0.01, atol=1e-6)
+        fz = f["series/force"][:, 3 * ids.index(cube) + 2]
+        w = m * 9.81 * math.cos(math.radians(30.0))
+        assert np.allclose(fz, w, rtol=0.005)  # placed at equilibrium: the bed carries g cos(theta)
+        assert f["series/ori"].shape == (7, 8)
+    files = [d.get("file") for d in ET.parse(out / "bodies.pvd").getroot().iter("DataSet")]
+    assert len(files) == 4 and all((out / fn).exists() for fn in files)  # t = 0, 0.1, 0.2, 0.3
