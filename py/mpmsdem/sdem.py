@@ -270,21 +270,26 @@ class SdemEngine:
         to go alongside ``O.save()``; restore with :meth:`SdemEngine.restore`."""
         hist = [[a, b, ka, kb, ia, ib, list(xi)] for (a, b, ka, kb, ia, ib, xi) in self._bridge.histories()]
         data = {"format": "mpmsdem-sdem-1", "dtCheck": self.dtCheck,
-                "timeStepSafety": self._bridge.timeStepSafety, "bodies": self._recipes, "histories": hist}
+                "timeStepSafety": self._bridge.timeStepSafety, "maxSpeed": self._bridge.maxSpeed,
+                "bodies": self._recipes, "histories": hist}
         tmp = str(path) + ".tmp"
         with open(tmp, "w") as f:
             json.dump(data, f)
         os.replace(tmp, str(path))
 
     @classmethod
-    def restore(cls, path, label="sdem"):
+    def restore(cls, path, **engineKw):
         """Rebuild an engine from :meth:`save` for bodies already in ``O.bodies`` (after
-        ``O.load()``); returns it. Put its ``runner`` back into ``O.engines``."""
+        ``O.load()``); returns it. Put its ``runner`` back into ``O.engines``. The saved
+        dtCheck, timeStepSafety and maxSpeed are used unless given in ``engineKw``, which takes
+        the other constructor arguments too (output, saveOnFailure, label, ...)."""
         with open(path) as f:
             data = json.load(f)
         if data.get("format") != "mpmsdem-sdem-1":
             raise ValueError("path = %r: not an mpmsdem SDEM checkpoint" % (path,))
-        eng = cls(dtCheck=data["dtCheck"], timeStepSafety=data["timeStepSafety"], label=label)
+        kw = {k: data[k] for k in ("dtCheck", "timeStepSafety", "maxSpeed") if k in data}
+        kw.update(engineKw)
+        eng = cls(**kw)
         mats = {}
         for r in data["bodies"]:
             key = json.dumps(r["material"], sort_keys=True)
