@@ -106,7 +106,7 @@ class MpmEngine:
             if self.solver.steps % self.seriesPeriod == 0:
                 p = self.solver.particles()
                 self.solver.appendSeries("time", t)
-                self.solver.appendSeries("kinetic_energy", 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum()))
+                self.solver.appendSeries("kinetic_energy", _kineticEnergy(p))
                 self.solver.appendSeries("front_x", float(p["x"][:, 0].max()))
             if t >= self._nextOutput - 1e-12:
                 self.solver.writeSnapshot()
@@ -151,8 +151,8 @@ class MpmEngine:
         return self.solver.particles()
 
     def kineticEnergy(self):
-        p = self.solver.particles()
-        return 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum())
+        """Total kinetic energy of the material points [J]."""
+        return _kineticEnergy(self.solver.particles())
 
     @property
     def time(self):
@@ -166,3 +166,6 @@ class MpmEngine:
         """Position of the flow front: the largest particle coordinate along ``axis`` [m]."""
         return float(self.solver.particles()["x"][:, axis].max())
 
+
+def _kineticEnergy(p):
+    return 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum())
