@@ -20,6 +20,8 @@ The YADE body is the source of truth for motion (mass, inertia, pos, ori, vel, a
 import json
 import math
 import os
+import sys
+import time
 import warnings
 
 from yade import O
@@ -59,11 +61,13 @@ class SdemEngine:
         ``bodies.pvd`` + ``vtk/bodies_*.vtp`` (outer shapes, for ParaView). None: no files.
     :param outputEvery: interval of the HDF5 records [s], > 0 (with ``output``).
     :param vtkEvery: interval of the VTK files [s], > 0, or None for none.
+    :param verbose: print a progress line (time, step, contacts, critical step, wall time per
+        step) to stderr every 10 s of wall time on long runs.
     :param label: label of the PyRunner put into ``O.engines``.
     """
 
     def __init__(self, dtCheck="raise", timeStepSafety=1.0, maxSpeed=1e3, saveOnFailure=None, output=None,
-                 outputEvery=None, vtkEvery=None, label="sdem"):
+                 outputEvery=None, vtkEvery=None, verbose=True, label="sdem"):
         if dtCheck not in DT_CHECKS:
             raise ValueError("dtCheck = %r: must be one of %s" % (dtCheck, ", ".join(DT_CHECKS)))
         self._bridge = _mpmsdem.SdemBridge()
@@ -83,6 +87,8 @@ class SdemEngine:
         self._index = {}          # YADE id -> engine index
         self._shapes = {}         # YADE id -> SpheroPolyhedron
         self._warned = 0
+        self.verbose = verbose
+        self._lastReport = None  # (wall time, step) of the last progress line
         self._checkedEngines = False
         self.error = None
         self.runner = PyRunner(command=_bindStep("sdem", id(self), self._step), iterPeriod=1, initRun=True,
@@ -204,11 +210,24 @@ class SdemEngine:
             if self.vtkEvery and t >= self._nextVtk - 1e-12:
                 self._bridge.writeVtk(t)
                 self._nextVtk += self.vtkEvery
+        if self.verbose and O.iter % 1000 == 0:
+            self._progress()
         if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
             if self._warned == 0:
                 warnings.warn("mpmsdem.SdemEngine: O.dt = %g s exceeds the critical step %g s at step %d"
                               % (O.dt, self._bridge.criticalTimeStep, O.iter), RuntimeWarning)
             self._warned = self._bridge.timeStepWarnings
+
+    def _progress(self):
+        now = time.time()
+        if self._lastReport is None:
+            self._lastReport = (now, O.iter)
+        elif now - self._lastReport[0] > 10.0:
+            wall, it = self._lastReport
+            print("mpmsdem.SdemEngine: t = %.5g s, step %d, %d contacts, critical step %.3g s (O.dt %.3g s), "
+                  "%.1f us/step" % (O.time, O.iter, self._bridge.numContacts, self._bridge.criticalTimeStep, O.dt,
+                                    1e6 * (now - wall) / max(O.iter - it, 1)), file=sys.stderr, flush=True)
+            self._lastReport = (now, O.iter)
 
     def check(self):
         """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
