@@ -166,3 +166,15 @@ def test_shipped_scenes_load_and_step(name):
     solver.run(3, dt)
     assert solver.steps == 3 and abs(solver.time - 3 * dt) <= 1e-15
     assert solver.particles()["mass"].sum() == p0["mass"].sum()
+
+
+def test_cuda_backend_without_a_gpu_is_a_clear_error():
+    if mpmsdem.cudaAvailable():
+        pytest.skip("a CUDA device is present: the CUDA backend is tested by test_mpm (CpuAndCudaAgree)")
+    with pytest.raises(RuntimeError, match="no CUDA device|without the CUDA backend|CUDA"):
+        mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [10, 10, 10]}, material=MATERIAL,
+                          particles=[{"lo": [0.03, 0.03, 0.03], "hi": [0.05, 0.05, 0.05]}],
+                          backend="cuda", precision="float")
+    with pytest.raises(ValueError, match="precision"):  # float is a CUDA-only precision
+        mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [10, 10, 10]}, material=MATERIAL,
+                          particles=[{"lo": [0.03, 0.03, 0.03], "hi": [0.05, 0.05, 0.05]}], precision="float")
