@@ -20,5 +20,11 @@ void Bo1_SpheroPolyhedron_Aabb::go(const SpheroPolyhedron& shape, const Vec3& po
   hi += pos + r;
 }
 
+void Bo1_SpheroPolyhedron_Aabb::go(const PosedSpheroPolyhedron& posed, Vec3& lo, Vec3& hi) {
+  const Vec3 r = Vec3::Constant(posed.shape->sweepRadius);
+  lo = posed.coreLo - r;
+  hi = posed.coreHi + r;
+}
+
 }  // namespace sdem
 }  // namespace mpmsdem

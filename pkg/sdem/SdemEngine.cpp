@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/Error.hpp"
+#include "sdem/Bo1_SpheroPolyhedron_Aabb.hpp"
 
 namespace mpmsdem {
 namespace sdem {
@@ -123,9 +124,11 @@ void SdemEngine::broadPhase() {
   const int n = numBodies();
   order_.resize(n);
   for (int i = 0; i < n; ++i) order_[i] = i;
-  // rounded-body boxes: core box inflated by the sweep radius
-  auto lo = [&](int i, int k) { return posed_[i].coreLo[k] - shapes_[i]->sweepRadius; };
-  auto hi = [&](int i, int k) { return posed_[i].coreHi[k] + shapes_[i]->sweepRadius; };
+  boxLo_.resize(n);
+  boxHi_.resize(n);
+  for (int i = 0; i < n; ++i) Bo1_SpheroPolyhedron_Aabb::go(posed_[i], boxLo_[i], boxHi_[i]);
+  auto lo = [&](int i, int k) { return boxLo_[i][k]; };
+  auto hi = [&](int i, int k) { return boxHi_[i][k]; };
   std::sort(order_.begin(), order_.end(), [&](int a, int b) { return lo(a, 0) < lo(b, 0); });
   for (int s = 0; s < n; ++s) {
     const int i = order_[s];

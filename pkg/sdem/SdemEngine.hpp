@@ -162,6 +162,7 @@ class SdemEngine {
 
   std::vector<Vec3> force_, torque_;
   std::vector<Real> sumK_, sumKr_;
+  std::vector<Vec3> boxLo_, boxHi_;  // rounded-body boxes of the current step (broad phase)
   std::vector<std::pair<int, int>> pairs_;
   std::vector<int> order_;
   std::vector<SdemGeom> geoms_;

@@ -549,3 +549,17 @@ TEST(SpheroPolyhedronShape, AabbOfRotatedBox) {
   EXPECT_NEAR((hi - (pos + Vec3(h, h, 0.02))).norm(), 0.0, 1e-15);
   EXPECT_NEAR((lo - (pos - Vec3(h, h, 0.02))).norm(), 0.0, 1e-15);
 }
+
+TEST(Bo1SpheroPolyhedronAabb, PosedShapeGivesTheSameBox) {
+  // The broad phase bounds bodies from their posed cores: it must agree with the pose form.
+  auto s = SpheroPolyhedron::box(Vec3(0.1, 0.2, 0.3), 0.02);
+  const Vec3 pos(1, -2, 0.5);
+  const Quat ori(Eigen::AngleAxis<Real>(0.7, Vec3(1, 2, 3).normalized()));
+  PosedSpheroPolyhedron posed;
+  posed.update(*s, pos, ori);
+  Vec3 lo1, hi1, lo2, hi2;
+  Bo1_SpheroPolyhedron_Aabb::go(*s, pos, ori, lo1, hi1);
+  Bo1_SpheroPolyhedron_Aabb::go(posed, lo2, hi2);
+  EXPECT_LT((lo1 - lo2).norm(), 1e-15);
+  EXPECT_LT((hi1 - hi2).norm(), 1e-15);
+}
