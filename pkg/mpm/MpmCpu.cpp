@@ -98,6 +98,25 @@ void MpmCpu::setExternalForces(const std::vector<double>& f) {
   hasFext_ = true;
 }
 
+ParticleView MpmCpu::openForceBuffer() {
+  ParticleView v;
+  v.precision = Precision::Double;
+  v.device = false;
+  v.n = n_;
+  const State& s = state_[cur_];
+  for (int d = 0; d < 3; ++d) {
+    fext_[d].assign(n_, 0.0);
+    v.x[d] = s.x[d].data();
+    v.v[d] = s.v[d].data();
+    v.force[d] = fext_[d].data();
+  }
+  v.mass = mass_.data();
+  v.volume0 = vol0_.data();
+  v.J = s.J.data();
+  hasFext_ = true;
+  return v;
+}
+
 double MpmCpu::stableTimeStep() { return params_.cfl * params_.dx / (pWaveSpeed(params_.material) + maxSpeed_); }
 
 std::size_t MpmCpu::memoryBytes() const {

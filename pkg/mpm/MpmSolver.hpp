@@ -15,6 +15,24 @@ namespace mpm {
 enum class Backend { Cpu, Cuda };
 enum class Precision { Float, Double };
 
+// Co-simulation face of a solver (what a coupling reads and writes each step, paper §2.3):
+// the current particle state in the backend's own memory (host for the CPU backend, device
+// for CUDA) and precision, and the external-force buffer of the next step. Arrays are
+// structure-of-arrays, one per component, numParticles() long; their element type is double
+// or float as `precision` says. The views stay valid until the next step(), setParticles()
+// or openForceBuffer().
+struct ParticleView {
+  Precision precision = Precision::Double;
+  bool device = false;             // true: CUDA device pointers
+  std::size_t n = 0;               // particle count
+  const void* x[3] = {};           // position [m]
+  const void* v[3] = {};           // velocity [m/s]
+  const void* mass = nullptr;      // [kg]
+  const void* volume0 = nullptr;   // initial volume [m^3] (sets the contact radius, Eq 13)
+  const void* J = nullptr;         // det F: current volume = J volume0
+  void* force[3] = {};             // external force of the next step [N], accumulate into it (Eq 14)
+};
+
 class MpmSolver {
  public:
   virtual ~MpmSolver() = default;
@@ -31,6 +49,12 @@ class MpmSolver {
   // External forces on particles for the NEXT step only [N], 3 per particle (paper Eq 14:
   // spread to the grid with the P2G weights). Cleared after each step.
   virtual void setExternalForces(const std::vector<double>& f) = 0;
+
+  // Zero the external-force buffer, arm it for the next step() (which spreads it to the grid
+  // with the P2G weights, Eq 14, and clears it) and return the particle view with it. A
+  // coupling calls this once per step and adds its forces into view.force; nothing crosses
+  // between host and device.
+  virtual ParticleView openForceBuffer() = 0;
 
   // One explicit step: P2G, grid update (gravity, external forces, walls), G2P,
   // constitutive update. Throws RuntimeFailure on a NaN / blow-up (names the particle).

@@ -4,28 +4,21 @@
 #include <sstream>
 
 #include "common/Error.hpp"
+#include "sdem/SdemKernelsCommon.hpp"
 
 namespace mpmsdem {
 namespace sdem {
 
-// With x = delta/R: ln((R-delta)/R) = log1p(-x) and 1 - R/(R-delta) = -x/(1-x); written this way
-// the bracket of Eq 10 has no cancellation near first touch.
-Real Law2_SdemGeom_BarrierPhys_Coulomb::normalForce(Real kc, Real R, Real delta) {
-  if (delta <= 0) return 0;
-  const Real x = delta / R;
-  return -kc * delta * (2 * std::log1p(-x) - x / (1 - x));
-}
+// The formulas are the shared ones of SdemKernelsCommon.hpp (also run by the coupling on CPU
+// and GPU).
+Real Law2_SdemGeom_BarrierPhys_Coulomb::normalForce(Real kc, Real R, Real delta) { return barrierForce(kc, R, delta); }
 
 Real Law2_SdemGeom_BarrierPhys_Coulomb::normalStiffness(Real kc, Real R, Real delta) {
-  if (delta <= 0) return 0;
-  const Real x = delta / R;
-  // d/ddelta of -kc [2 delta log1p(-x) - delta x/(1-x)]
-  return -kc * (2 * std::log1p(-x) - 3 * x / (1 - x) - x / ((1 - x) * (1 - x)));
+  return barrierStiffness(kc, R, delta);
 }
 
 Real Law2_SdemGeom_BarrierPhys_Coulomb::barrierEnergy(Real kc, Real R, Real delta) {
-  if (delta <= 0) return 0;
-  return -kc * delta * delta * std::log1p(-delta / R);
+  return barrierPotential(kc, R, delta);
 }
 
 Real Law2_SdemGeom_BarrierPhys_Coulomb::overlapForForce(Real kc, Real R, Real force) {
@@ -47,11 +40,9 @@ Real Law2_SdemGeom_BarrierPhys_Coulomb::overlapForForce(Real kc, Real R, Real fo
 }
 
 void Law2_SdemGeom_BarrierPhys_Coulomb::rotateHistory(Vec3& xi, const Vec3& n) {
-  const Real len = xi.norm();
-  if (len == 0) return;
-  const Vec3 proj = xi - xi.dot(n) * n;
-  const Real plen = proj.norm();
-  xi = plen > 1e-12 * len ? Vec3(proj * (len / plen)) : Vec3::Zero();
+  Real x[3] = {xi[0], xi[1], xi[2]};
+  rotateTangentialHistory(x, mpm::Vec3T<Real>{n[0], n[1], n[2]});
+  xi = Vec3(x[0], x[1], x[2]);
 }
 
 LawResult Law2_SdemGeom_BarrierPhys_Coulomb::go(const SdemGeom& g, Real R, const BarrierPhys& phys,
@@ -65,43 +56,23 @@ LawResult Law2_SdemGeom_BarrierPhys_Coulomb::go(const SdemGeom& g, Real R, const
        << " m (cores touching); the time step is too large for the barrier stiffness";
     throw RuntimeFailure(os.str());
   }
-  const Real kc = phys.barrierStiffness;
-  const Vec3& n = g.normal;
+  const BarrierCoulombPhys<Real> ph{phys.barrierStiffness, phys.friction, phys.poisson, phys.normalDamping,
+                                    phys.tangentialDamping};
+  Real xi[3] = {h.xi[0], h.xi[1], h.xi[2]};
+  const BarrierCoulombResult<Real> b =
+      barrierCoulomb(ph, R, delta, mpm::Vec3T<Real>{g.normal[0], g.normal[1], g.normal[2]},
+                     mpm::Vec3T<Real>{relVel[0], relVel[1], relVel[2]}, meff, dt, xi);
+  h.xi = Vec3(xi[0], xi[1], xi[2]);
   LawResult r;
-  r.normalStiffness = normalStiffness(kc, R, delta);
-  r.tangentialStiffness = r.normalStiffness / (2 * (1 + phys.poisson));
-  r.barrierEnergy = barrierEnergy(kc, R, delta);
-
-  // normal: elastic barrier + optional dashpot; vn > 0 when separating
-  const Real vn = relVel.dot(n);
-  const Real cn = 2 * phys.normalDamping * std::sqrt(meff * r.normalStiffness);
-  const Real fElastic = normalForce(kc, R, delta);
-  r.normalForce = std::max(Real(0), fElastic - cn * vn);
-  r.dampingDissipation = (r.normalForce - fElastic) * -vn * dt;
-
-  // tangential: incremental spring with history
-  const Vec3 vt = relVel - vn * n;
-  rotateHistory(h.xi, n);
-  h.xi += vt * dt;
-  const Real kt = r.tangentialStiffness;
-  const Real cap = phys.friction * r.normalForce;
-  const Vec3 fSpring = -kt * h.xi;
-  const Real fSpringNorm = fSpring.norm();
-  if (fSpringNorm > cap) {
-    r.sliding = true;
-    const Real slip = fSpringNorm > 0 ? h.xi.norm() * (1 - cap / fSpringNorm) : 0;
-    h.xi *= fSpringNorm > 0 ? cap / fSpringNorm : 0;
-    r.tangentialForce = -kt * h.xi;
-    r.frictionDissipation = cap * slip;
-  } else {
-    const Real ct = 2 * phys.tangentialDamping * std::sqrt(meff * kt);
-    Vec3 ft = fSpring - ct * vt;
-    const Real ftNorm = ft.norm();
-    if (ftNorm > cap) ft *= cap / ftNorm;
-    r.tangentialForce = ft;
-    r.dampingDissipation += -(ft - fSpring).dot(vt) * dt;
-  }
-  r.springEnergy = 0.5 * kt * h.xi.squaredNorm();
+  r.normalForce = b.normalForce;
+  r.tangentialForce = Vec3(b.tangential.x, b.tangential.y, b.tangential.z);
+  r.normalStiffness = b.kn;
+  r.tangentialStiffness = b.kt;
+  r.barrierEnergy = b.barrierEnergy;
+  r.springEnergy = b.springEnergy;
+  r.frictionDissipation = b.frictionWork;
+  r.dampingDissipation = b.dampingWork;
+  r.sliding = b.sliding;
   return r;
 }
 

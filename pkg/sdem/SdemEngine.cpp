@@ -269,9 +269,12 @@ Quat advance(const Quat& q, const Vec3& omega, Real dt) {
 }
 }  // namespace
 
-void SdemWorld::step(Real dt) {
-  engine.computeForces(dt);
+void SdemWorld::step(Real dt, const std::vector<Vec3>* extraForce, const std::vector<Vec3>* extraTorque) {
   const int n = engine.numBodies();
+  for (const std::vector<Vec3>* extra : {extraForce, extraTorque})
+    if (extra && static_cast<int>(extra->size()) != n)
+      throwParameter("extra force/torque count", extra->size(), "", "the number of bodies, " + std::to_string(n));
+  engine.computeForces(dt);
   angMom_.resize(n, Vec3::Zero());
   lastAngVel_.resize(n, Vec3::Constant(std::numeric_limits<Real>::quiet_NaN()));
   for (int i = 0; i < n; ++i) {
@@ -286,13 +289,14 @@ void SdemWorld::step(Real dt) {
       const Vec3& I = engine.principalInertia(i);
       // angular velocity changed from outside since our last step: re-derive L from it
       if (!(w.array() == lastAngVel_[i].array()).all()) angMom_[i] = q * Vec3(I.cwiseProduct(q.conjugate() * w));
-      const Vec3& T = engine.torque(i);
+      const Vec3 T = engine.torque(i) + (extraTorque ? (*extraTorque)[i] : Vec3::Zero());
       const Vec3 Lnow = angMom_[i] + 0.5 * dt * T;  // L(t)
       angMom_[i] += dt * T;                         // L(t + dt/2)
       const Quat qHalf = advance(q, omegaFromL(q, I, Lnow), 0.5 * dt);
       w = omegaFromL(qHalf, I, angMom_[i]);
       qn = advance(q, w, dt);
-      v += dt * (engine.force(i) / engine.mass(i) + gravity);
+      const Vec3 F = engine.force(i) + (extraForce ? (*extraForce)[i] : Vec3::Zero());
+      v += dt * (F / engine.mass(i) + gravity);
       x += dt * v;
       if (!x.allFinite() || !v.allFinite() || !w.allFinite()) {
         std::ostringstream os;

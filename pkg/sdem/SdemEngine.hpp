@@ -123,6 +123,11 @@ class SdemEngine {
   // has a contact. Uses the stiffnesses of the last computeForces() (the barrier stiffens
   // fast with the overlap: keep a margin).
   Real criticalTimeStep() const;
+  // The per-body sums behind criticalTimeStep(), from the last computeForces(): sum of
+  // max(k_n, K_t) [N/m] and of k_n |r x n|^2 + K_t |r|^2 [N m]. A coupling adds its own
+  // contacts' sums to these for the combined critical step.
+  Real stiffnessSum(int i) const { return checkBody(i, "body"), sumK_[i]; }
+  Real rotationalStiffnessSum(int i) const { return checkBody(i, "body"), sumKr_[i]; }
   // Safety factor c [-] in criticalTimeStep(). Valid: > 0. Default 1.
   void setTimeStepSafety(Real c);
   Real timeStepSafety() const { return safety_; }
@@ -186,7 +191,9 @@ class SdemWorld {
   SdemEngine engine;
   Vec3 gravity = Vec3(0, 0, -9.81);  // [m/s^2]
 
-  void step(Real dt);
+  // One step. extraForce/extraTorque (world frame, one per body, or null): forces from outside
+  // the engine (a coupling) added to the contact forces of this step.
+  void step(Real dt, const std::vector<Vec3>* extraForce = nullptr, const std::vector<Vec3>* extraTorque = nullptr);
   Real time() const { return time_; }
   // Translational + rotational kinetic energy of the non-fixed bodies [J].
   Real kineticEnergy() const;

@@ -169,6 +169,27 @@ void MpmCuda<T>::setExternalForces(const std::vector<double>& f) {
 }
 
 template <typename T>
+ParticleView MpmCuda<T>::openForceBuffer() {
+  ParticleView v;
+  v.precision = sizeof(T) == sizeof(float) ? Precision::Float : Precision::Double;
+  v.device = true;
+  v.n = n_;
+  const DeviceState& s = state_[cur_];
+  for (int d = 0; d < 3; ++d) {
+    if (!fext_[d]) deviceAlloc(&fext_[d], n_, bytes_);
+    CUDA_CHECK(cudaMemset(fext_[d], 0, std::max<std::size_t>(n_, 1) * sizeof(T)));
+    v.x[d] = s.x[d];
+    v.v[d] = s.v[d];
+    v.force[d] = fext_[d];
+  }
+  v.mass = mass_;
+  v.volume0 = vol0_;
+  v.J = s.J;
+  hasFext_ = true;
+  return v;
+}
+
+template <typename T>
 double MpmCuda<T>::stableTimeStep() {
   return params_.cfl * params_.dx / (pWaveSpeed(params_.material) + maxSpeed_);
 }

@@ -32,6 +32,7 @@ class MpmCuda : public MpmSolver {
   void getParticles(ParticleSet& out) override;
   std::size_t numParticles() const override { return n_; }
   void setExternalForces(const std::vector<double>& f) override;
+  ParticleView openForceBuffer() override;
   void step(double dt) override;
   double stableTimeStep() override;
   std::size_t memoryBytes() const override;

@@ -1,0 +1,47 @@
+#include "coupling/CoupledWorld.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/Error.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+CoupledWorld::CoupledWorld(std::unique_ptr<mpm::MpmSolver> solver) : solver_(std::move(solver)) {
+  if (!solver_) throw ParameterError("CoupledWorld: solver = null: must be an MPM solver");
+}
+
+void CoupledWorld::step(double dt) {
+  coupling.computeForces(*solver_, dt);
+  const int n = world.engine.numBodies();
+  blockForce_.resize(n);
+  blockTorque_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    blockForce_[i] = coupling.force(i);
+    blockTorque_[i] = coupling.torque(i);
+  }
+  world.step(dt, &blockForce_, &blockTorque_);
+  solver_->step(dt);
+}
+
+double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& coupling) {
+  double dt = coupling.particleCriticalStep();
+  const int n = std::min(sdem.numBodies(), coupling.numBlocks());
+  for (int i = 0; i < n; ++i) {
+    if (sdem.isFixed(i)) continue;
+    const double k = sdem.stiffnessSum(i) + coupling.stiffnessSum(i);
+    const double kr = sdem.rotationalStiffnessSum(i) + coupling.rotationalStiffnessSum(i);
+    if (k > 0) dt = std::min(dt, std::sqrt(sdem.mass(i) / k));
+    if (kr > 0) dt = std::min(dt, std::sqrt(sdem.principalInertia(i).minCoeff() / kr));
+  }
+  return sdem.timeStepSafety() * dt;
+}
+
+double CoupledWorld::criticalTimeStep() {
+  return std::min(solver_->stableTimeStep(), coupledContactStep(world.engine, coupling));
+}
+
+}  // namespace coupling
+}  // namespace mpmsdem

@@ -1,0 +1,49 @@
+// CoupledWorld: one coupled MPM–SDEM scene stepped in C++ (tests, the mpmsdem-run driver),
+// owning the order of a step (paper §2.3):
+//   1. MP–block contacts at the state of time t (MpSdemCoupling): particle forces into the
+//      MPM external-force buffer, the opposite forces and torques onto the blocks;
+//   2. block–block contacts and the rigid-body update with those extra forces (SdemWorld,
+//      the same leapfrog as YADE's NewtonIntegrator);
+//   3. the MPM step, which spreads the particle forces to the grid (Eq 14).
+// Inside YADE the same order is kept by mpmsdem.CoupledEngine, with NewtonIntegrator in place
+// of step 2's integration.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "coupling/MpSdemCoupling.hpp"
+#include "mpm/MpmSolver.hpp"
+#include "sdem/SdemEngine.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+class CoupledWorld {
+ public:
+  // The solver must already hold its particles; blocks are added to world.engine.
+  explicit CoupledWorld(std::unique_ptr<mpm::MpmSolver> solver);
+
+  sdem::SdemWorld world;
+  MpSdemCoupling coupling{world.engine};
+  mpm::MpmSolver& mpm() { return *solver_; }
+
+  void step(double dt);
+  double time() const { return world.time(); }
+
+  // Largest stable step of the coupled scene [s]: the smallest of the MPM CFL step, the MP
+  // side of MP–block contacts sqrt(m_p / k) and, per block, sqrt(m / (sum k_SDEM + sum k_MP))
+  // and its rotational counterpart, times the SDEM time-step safety factor.
+  double criticalTimeStep();
+
+ private:
+  std::unique_ptr<mpm::MpmSolver> solver_;
+  std::vector<Vec3> blockForce_, blockTorque_;
+};
+
+// The contact part of the coupled critical step (without the MPM CFL limit), shared with the
+// YADE bridge: per block sqrt(m / (k_SDEM + k_MP)) and sqrt(I_min / (k_r,SDEM + k_r,MP)) over
+// moving blocks, and the MP side, times the SDEM safety factor [s].
+double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& coupling);
+
+}  // namespace coupling
+}  // namespace mpmsdem

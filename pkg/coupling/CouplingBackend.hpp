@@ -1,0 +1,47 @@
+// What a coupling backend receives and returns for one step (host side), and the interface of
+// the CUDA backend. Kept free of Eigen so that the CUDA sources include only plain headers.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "coupling/CouplingKernelsCommon.hpp"
+#include "mpm/MpmSolver.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+struct CouplingStepInput {
+  sdem::ShapeTableView<double> shapes;  // host arrays
+  int numVertices, numFaces, numLoopEntries;
+  bool shapesChanged;                   // the table grew since the last step
+  const std::vector<BlockState<double>>* blocks;
+  const std::vector<sdem::BarrierCoulombPhys<double>>* phys;
+  BinGridView bins;                     // host arrays
+  int numBins, numBinEntries;
+  mpm::ParticleView particles;
+  double dt;
+  int historySlots;
+};
+
+struct CouplingStepOutput {
+  std::vector<double> sums;   // kBlockSums per block
+  double minParticleStep;     // min over contacts of sqrt(m_p / max(k_n, K_t)) [s] (inf: none)
+  long overflow;              // contacts without a free history slot
+  int badParticle;            // -1, or a particle whose centre reached block badBlock's core
+  int badBlock;
+};
+
+// The CUDA side (pkg/coupling/cuda): device copies of the tables and histories, the kernel.
+class CouplingDeviceBackend {
+ public:
+  virtual ~CouplingDeviceBackend() = default;
+  virtual void run(const CouplingStepInput& in, CouplingStepOutput& out) = 0;
+  virtual void resetHistories() = 0;
+  // Largest initial particle volume of the view [m^3].
+  virtual double maxVolume0(const mpm::ParticleView& v) = 0;
+};
+// Null when this build has no CUDA.
+std::unique_ptr<CouplingDeviceBackend> makeCouplingDeviceBackend(mpm::Precision precision);
+
+}  // namespace coupling
+}  // namespace mpmsdem

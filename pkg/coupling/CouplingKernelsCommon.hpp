@@ -1,0 +1,231 @@
+// MP–SDEM contact of one material point (paper §2.3, Eqs 12–16) written once as a
+// __host__ __device__ function: the CPU loop (MpSdemCoupling.cpp) and the CUDA kernel
+// (cuda/MpSdemCouplingKernels.cuh) call exactly this, in double or float.
+//
+// A material point is a sphere of radius R_p0 = (3 V0 / (4 pi))^(1/3) (Eq 13 with
+// V0 = dx^3 / n_i). Against block b its overlap is delta = R_p0 + R_b - d(MP, core) (Eq 12),
+// with the block–block laws (barrier normal force, incremental Coulomb tangential spring).
+// The force on the particle goes into its external-force slot, which the next MPM step
+// spreads to the grid with the P2G weights (Eq 14); the opposite force acts on the block at
+// the contact point.
+#pragma once
+#include <cstdint>
+
+#include "sdem/SdemKernelsCommon.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+using mpm::Vec3T;
+
+template <typename T>
+MPM_HD_INLINE T hdCbrt(T a) {
+#if defined(__CUDA_ARCH__)
+  return cbrt(a);
+#else
+  return std::cbrt(a);
+#endif
+}
+
+// Pose and motion of one block for this step (world frame).
+template <typename T>
+struct BlockState {
+  T pos[3];      // centroid [m]
+  T rot[9];      // rotation body -> world, row-major
+  T vel[3];      // [m/s]
+  T angVel[3];   // [rad/s]
+  T mass;        // [kg]
+  T reach;       // bounding radius of the rounded body [m]
+  int shape;     // index in the shape table
+  int phys;      // index in the pair-physics table
+  int fixed;     // 1: the block does not respond to forces (meff = particle mass)
+};
+
+// Uniform bins over the MPM grid box listing the blocks whose rounded-body box, grown by the
+// largest particle radius, touches them (compressed rows).
+struct BinGridView {
+  double origin[3];   // lower corner [m]
+  double invSize;     // 1 / bin edge [1/m]
+  int dims[3];        // bins per axis
+  const int* start;   // dims[0] dims[1] dims[2] + 1 offsets into blocks
+  const int* blocks;  // block indices
+};
+
+// Tangential history of a particle's contacts: `slots` entries per particle, each a key
+// (block << 32 | feature kind << 28 | feature index, or -1 when empty) and xi [m]. Indexed
+// by particle id, so it follows the particle as long as particles keep their ids.
+template <typename T>
+struct HistoryView {
+  long long* key;   // slots per particle
+  T* xi;            // 3 x slots per particle
+  int slots;
+};
+
+// One MP–block contact, handed to the caller's sink.
+template <typename T>
+struct MpContact {
+  int particle, block, featureKind, featureIndex;
+  Vec3T<T> force;     // on the particle [N] (the block takes -force at `point`)
+  Vec3T<T> point;     // contact point, midway between the two sphere surfaces [m]
+  Vec3T<T> normal;    // unit, from the block towards the particle
+  T overlap;          // delta [m]
+  T particleMass;     // [kg]
+  sdem::BarrierCoulombResult<T> law;  // forces, stiffnesses, energies of the law
+};
+
+// Status of one particle's coupling.
+constexpr int kCoupleOk = 0;
+constexpr int kCoupleCoreReached = 1;  // the particle centre reached a block core (delta >= R)
+
+template <typename T>
+struct CouplingParticles {
+  const T* x[3];
+  const T* v[3];
+  const T* mass;
+  const T* vol0;
+  T* force[3];  // accumulate-into external force of the next MPM step [N]
+};
+
+// Couple particle p with the blocks listed in its bin. Calls sink(const MpContact<T>&) for each
+// contact, adds the particle's forces into P.force, rewrites its history slots. Returns
+// kCoupleOk, or kCoupleCoreReached with *badBlock set (the step is then invalid: the barrier
+// cannot act once the centre is at the core, which means the time step was too large or the
+// particle started inside the block). `overflow` counts contacts that found no free history
+// slot (they act without tangential memory this step).
+template <typename T, typename Sink>
+MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const BlockState<T>* B,
+                                 const sdem::ShapeTableView<T>& S, const sdem::BarrierCoulombPhys<T>* phys,
+                                 const BinGridView& bins, const HistoryView<T>& H, T dt, Sink& sink, int* badBlock,
+                                 int* overflow) {
+  const Vec3T<T> x{P.x[0][p], P.x[1][p], P.x[2][p]};
+  int bc[3];
+  for (int d = 0; d < 3; ++d) {
+    int c = static_cast<int>(mpm::hdFloor((static_cast<double>(x[d]) - bins.origin[d]) * bins.invSize));
+    bc[d] = c < 0 ? 0 : (c >= bins.dims[d] ? bins.dims[d] - 1 : c);
+  }
+  const int bin = (bc[0] * bins.dims[1] + bc[1]) * bins.dims[2] + bc[2];
+  const int b0 = bins.start[bin], b1 = bins.start[bin + 1];
+  if (b0 == b1) {
+    // no block near: forget stale histories so a later contact starts from rest
+    for (int k = 0; k < H.slots; ++k) H.key[H.slots * p + k] = -1;
+    return kCoupleOk;
+  }
+  constexpr int kMaxSlots = 4;
+  long long oldKey[kMaxSlots];
+  T oldXi[3 * kMaxSlots];
+  const int slots = H.slots < kMaxSlots ? H.slots : kMaxSlots;
+  for (int k = 0; k < slots; ++k) {
+    oldKey[k] = H.key[H.slots * p + k];
+    for (int d = 0; d < 3; ++d) oldXi[3 * k + d] = H.xi[3 * (H.slots * p + k) + d];
+    H.key[H.slots * p + k] = -1;
+  }
+  int used = 0;
+  const T rp = hdCbrt(T(3) * P.vol0[p] / T(4 * 3.14159265358979323846));
+  const T mp = P.mass[p];
+  const Vec3T<T> vp{P.v[0][p], P.v[1][p], P.v[2][p]};
+  Vec3T<T> fsum{T(0), T(0), T(0)};
+  for (int i = b0; i < b1; ++i) {
+    const int b = bins.blocks[i];
+    const BlockState<T>& blk = B[b];
+    const Vec3T<T> r{x.x - blk.pos[0], x.y - blk.pos[1], x.z - blk.pos[2]};
+    const T reach = blk.reach + rp;
+    if (mpm::dot(r, r) >= reach * reach) continue;
+    const T* R = blk.rot;
+    const Vec3T<T> xb{R[0] * r.x + R[3] * r.y + R[6] * r.z, R[1] * r.x + R[4] * r.y + R[7] * r.z,
+                      R[2] * r.x + R[5] * r.y + R[8] * r.z};
+    const sdem::CoreQuery<T> q = sdem::closestPointOnCore(S, blk.shape, xb);
+    const T cutoff = S.sweepRadius[blk.shape] + rp;
+    if (q.distance >= cutoff) continue;
+    const T delta = cutoff - q.distance;
+    if (!(q.distance > T(0)) || !(delta < cutoff)) {
+      *badBlock = b;
+      return kCoupleCoreReached;
+    }
+    const Vec3T<T> nb = (T(1) / q.distance) * (xb - q.closest);
+    const Vec3T<T> n{R[0] * nb.x + R[1] * nb.y + R[2] * nb.z, R[3] * nb.x + R[4] * nb.y + R[5] * nb.z,
+                     R[6] * nb.x + R[7] * nb.y + R[8] * nb.z};
+    const Vec3T<T> cw = x - q.distance * n;  // closest core point, world frame
+    const T Rb = S.sweepRadius[blk.shape];
+    const Vec3T<T> c = T(0.5) * ((cw + Rb * n) + (x - rp * n));
+    const Vec3T<T> rc{c.x - blk.pos[0], c.y - blk.pos[1], c.z - blk.pos[2]};
+    const Vec3T<T> w{blk.angVel[0], blk.angVel[1], blk.angVel[2]};
+    const Vec3T<T> vb = Vec3T<T>{blk.vel[0], blk.vel[1], blk.vel[2]} + sdem::cross(w, rc);
+    const T meff = blk.fixed ? mp : mp * blk.mass / (mp + blk.mass);
+    const long long key = (static_cast<long long>(b) << 32) | (static_cast<long long>(q.featureKind) << 28) |
+                          static_cast<long long>(q.featureIndex);
+    T xi[3] = {T(0), T(0), T(0)};
+    for (int k = 0; k < slots; ++k)
+      if (oldKey[k] == key)
+        for (int d = 0; d < 3; ++d) xi[d] = oldXi[3 * k + d];
+    MpContact<T> ct;
+    ct.law = sdem::barrierCoulomb(phys[blk.phys], cutoff, delta, n, vp - vb, meff, dt, xi);
+    if (used < slots) {
+      H.key[H.slots * p + used] = key;
+      for (int d = 0; d < 3; ++d) H.xi[3 * (H.slots * p + used) + d] = xi[d];
+      ++used;
+    } else {
+      ++*overflow;
+    }
+    ct.particle = p;
+    ct.block = b;
+    ct.featureKind = q.featureKind;
+    ct.featureIndex = q.featureIndex;
+    ct.force = ct.law.normalForce * n + ct.law.tangential;
+    ct.point = c;
+    ct.normal = n;
+    ct.overlap = delta;
+    ct.particleMass = mp;
+    fsum = fsum + ct.force;
+    sink(ct);
+  }
+  for (int d = 0; d < 3; ++d) P.force[d][p] += fsum[d];
+  return kCoupleOk;
+}
+
+// Per-block sums of one step, kBlockSums doubles per block: what the flow does to the block.
+constexpr int kSumForce = 0;      // 3: force on the block [N]
+constexpr int kSumTorque = 3;     // 3: torque about its centroid [N m]
+constexpr int kSumFace = 6;       // 3: force from contacts on face interiors (F_f, paper §3.2.3) [N]
+constexpr int kSumEdge = 9;       // 3: force from contacts on edges and vertices (F_e) [N]
+constexpr int kSumK = 12;         // sum of max(k_n, K_t) [N/m] (critical step)
+constexpr int kSumKr = 13;        // sum of k_n |r x n|^2 + K_t |r|^2 [N m] (critical step, rotation)
+constexpr int kSumCount = 14;     // number of MP contacts
+constexpr int kSumBarrier = 15;   // barrier energy [J]
+constexpr int kSumSpring = 16;    // tangential spring energy [J]
+constexpr int kSumFriction = 17;  // slip work of this step [J]
+constexpr int kSumDamping = 18;   // dashpot work of this step [J]
+constexpr int kBlockSums = 19;
+
+// Add contact c's share to its block's sums with add(double* slot, double value) (a plain +=
+// on the CPU, an atomic add on the GPU).
+template <typename T, typename Add>
+MPM_HD_INLINE void addBlockShare(const MpContact<T>& c, const BlockState<T>& b, double* sums, const Add& add) {
+  const Vec3T<T> rc{c.point.x - b.pos[0], c.point.y - b.pos[1], c.point.z - b.pos[2]};
+  const Vec3T<T> f{-c.force.x, -c.force.y, -c.force.z};
+  const Vec3T<T> tq = sdem::cross(rc, f);
+  double* s = sums + kBlockSums * c.block;
+  const int split = c.featureKind == sdem::kFeatureFace ? kSumFace : kSumEdge;
+  for (int d = 0; d < 3; ++d) {
+    add(s + kSumForce + d, static_cast<double>(f[d]));
+    add(s + kSumTorque + d, static_cast<double>(tq[d]));
+    add(s + split + d, static_cast<double>(f[d]));
+  }
+  const Vec3T<T> rn = sdem::cross(rc, c.normal);
+  add(s + kSumK, static_cast<double>(c.law.kn > c.law.kt ? c.law.kn : c.law.kt));
+  add(s + kSumKr, static_cast<double>(c.law.kn * mpm::dot(rn, rn) + c.law.kt * mpm::dot(rc, rc)));
+  add(s + kSumCount, 1.0);
+  add(s + kSumBarrier, static_cast<double>(c.law.barrierEnergy));
+  add(s + kSumSpring, static_cast<double>(c.law.springEnergy));
+  add(s + kSumFriction, static_cast<double>(c.law.frictionWork));
+  add(s + kSumDamping, static_cast<double>(c.law.dampingWork));
+}
+
+// Stable-step bound of the particle side of a contact: sqrt(m_p / max(k_n, K_t)) [s].
+template <typename T>
+MPM_HD_INLINE T particleStepBound(const MpContact<T>& c) {
+  const T k = c.law.kn > c.law.kt ? c.law.kn : c.law.kt;
+  return mpm::hdSqrt(c.particleMass / k);
+}
+
+}  // namespace coupling
+}  // namespace mpmsdem

@@ -1,0 +1,321 @@
+#include "coupling/MpSdemCoupling.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+
+#include "common/Error.hpp"
+#include "sdem/Bo1_SpheroPolyhedron_Aabb.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+// Particles per chunk of the CPU loop: contacts are reduced chunk by chunk in this fixed
+// order, so the block sums do not depend on the thread count.
+constexpr long kChunk = 4096;
+// Upper bound of the number of bins: the bin edge grows until the grid box fits.
+constexpr double kMaxBins = 1 << 22;
+}  // namespace
+
+#if !defined(MPMSDEM_WITH_CUDA)
+std::unique_ptr<CouplingDeviceBackend> makeCouplingDeviceBackend(mpm::Precision) { return nullptr; }
+#endif
+
+MpSdemCoupling::MpSdemCoupling(const sdem::SdemEngine& sdem) : sdem_(sdem) {}
+MpSdemCoupling::~MpSdemCoupling() = default;
+
+void MpSdemCoupling::setPair(int material, const sdem::BarrierPhys& p) {
+  sdem_.material(material);  // throws for an unknown index
+  if (!(p.barrierStiffness > 0) || !std::isfinite(p.barrierStiffness))
+    throwParameter("coupling barrierStiffness", p.barrierStiffness, "N/m", "> 0");
+  if (!(p.friction >= 0) || !std::isfinite(p.friction)) throwParameter("coupling friction", p.friction, "", ">= 0");
+  if (!(p.poisson > -1 && p.poisson < 0.5)) throwParameter("coupling poisson", p.poisson, "", "in (-1, 0.5)");
+  if (!(p.normalDamping >= 0) || !std::isfinite(p.normalDamping))
+    throwParameter("coupling normalDamping", p.normalDamping, "", ">= 0 (fraction of critical)");
+  if (!(p.tangentialDamping >= 0) || !std::isfinite(p.tangentialDamping))
+    throwParameter("coupling tangentialDamping", p.tangentialDamping, "", ">= 0 (fraction of critical)");
+  pairs_[material] = p;
+}
+
+void MpSdemCoupling::setHistorySlots(int slots) {
+  if (slots < 1 || slots > 4) throwParameter("historySlots", slots, "", "in [1, 4]");
+  if (slots != slots_) {
+    slots_ = slots;
+    key_.clear();
+    xi_.clear();
+    if (device_) device_->resetHistories();
+  }
+}
+
+void MpSdemCoupling::setDissipation(double friction, double damping) {
+  if (!(friction >= 0) || !(damping >= 0)) throwParameter("dissipation", friction < 0 ? friction : damping, "J", ">= 0");
+  frictionWork_ = friction;
+  dampingWork_ = damping;
+}
+
+void MpSdemCoupling::setHistories(const std::vector<long long>& keys, const std::vector<double>& xi) {
+  if (xi.size() != 3 * keys.size()) throwParameter("history xi size", xi.size(), "", "3 x the number of keys");
+  if (keys.size() % slots_ != 0)
+    throwParameter("history keys size", keys.size(), "", "a multiple of historySlots = " + std::to_string(slots_));
+  for (double v : xi)
+    if (!std::isfinite(v)) throw ParameterError("history xi: must be finite");
+  key_ = keys;
+  xi_ = xi;
+  particleCount_ = keys.size() / slots_;
+}
+
+// Blocks in: shapes of new bodies join the table; pose and motion of every body.
+void MpSdemCoupling::syncBlocks(const mpm::MpmParams&) {
+  const int n = sdem_.numBodies();
+  for (int i = static_cast<int>(blockShape_.size()); i < n; ++i) {
+    const sdem::SpheroPolyhedron* s = &sdem_.shape(i);
+    auto it = shapeIndex_.find(s);
+    if (it == shapeIndex_.end()) {
+      it = shapeIndex_.emplace(s, shapes_.add(*s)).first;
+      shapesChanged_ = true;
+    }
+    blockShape_.push_back(it->second);
+  }
+  phys_.assign(sdem_.numMaterials(), sdem::BarrierCoulombPhys<double>{0, 0, 0, 0, 0});
+  for (const auto& [m, p] : pairs_)
+    phys_[m] = {p.barrierStiffness, p.friction, p.poisson, p.normalDamping, p.tangentialDamping};
+  blocks_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const int mat = sdem_.materialOf(i);
+    if (!pairs_.count(mat))
+      throwParameter("coupling pair for SDEM material " + std::to_string(mat) + " (body " +
+                         std::to_string(sdem_.externalId(i)) + ")",
+                     "missing", "", "set with setPair(material, phys): the flow-block friction and stiffness");
+    BlockState<double>& b = blocks_[i];
+    const Vec3& p = sdem_.position(i);
+    const Mat3 R = sdem_.orientation(i).toRotationMatrix();
+    for (int d = 0; d < 3; ++d) {
+      b.pos[d] = p[d];
+      b.vel[d] = sdem_.velocity(i)[d];
+      b.angVel[d] = sdem_.angularVelocity(i)[d];
+      for (int e = 0; e < 3; ++e) b.rot[3 * d + e] = R(d, e);
+    }
+    b.mass = sdem_.mass(i);
+    b.reach = sdem_.shape(i).boundingRadius;
+    b.shape = blockShape_[i];
+    b.phys = mat;
+    b.fixed = sdem_.isFixed(i) ? 1 : 0;
+  }
+}
+
+// Bins over the grid box; each lists the blocks whose rounded-body box grown by the largest
+// particle radius touches it.
+void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
+  if (binSize_ == 0) {
+    binSize_ = 4 * g.dx;
+    for (;;) {
+      double count = 1;
+      for (int d = 0; d < 3; ++d) count *= std::ceil(g.cells[d] * g.dx / binSize_);
+      if (count <= kMaxBins) break;
+      binSize_ *= 2;
+    }
+    for (int d = 0; d < 3; ++d) {
+      binOrigin_[d] = g.origin[d];
+      binDims_[d] = std::max(1, static_cast<int>(std::ceil(g.cells[d] * g.dx / binSize_)));
+    }
+  }
+  const int nb = binDims_[0] * binDims_[1] * binDims_[2];
+  binCount_.assign(nb, 0);
+  std::vector<std::array<int, 6>> range(blocks_.size());
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    Vec3 lo, hi;
+    sdem::Bo1_SpheroPolyhedron_Aabb::go(sdem_.shape(static_cast<int>(i)), sdem_.position(static_cast<int>(i)),
+                                        sdem_.orientation(static_cast<int>(i)), lo, hi);
+    bool outside = false;
+    for (int d = 0; d < 3; ++d) {
+      const double a = (lo[d] - maxParticleRadius_ - binOrigin_[d]) / binSize_;
+      const double b = (hi[d] + maxParticleRadius_ - binOrigin_[d]) / binSize_;
+      if (b < 0 || a >= binDims_[d]) outside = true;  // no particle can reach it
+      range[i][d] = std::clamp(static_cast<int>(std::floor(a)), 0, binDims_[d] - 1);
+      range[i][3 + d] = std::clamp(static_cast<int>(std::floor(b)), 0, binDims_[d] - 1);
+    }
+    if (outside) range[i] = {0, 0, 0, -1, -1, -1};
+  }
+  auto forEachBin = [&](const std::array<int, 6>& r, auto&& fn) {
+    for (int a = r[0]; a <= r[3]; ++a)
+      for (int b = r[1]; b <= r[4]; ++b)
+        for (int c = r[2]; c <= r[5]; ++c) fn((a * binDims_[1] + b) * binDims_[2] + c);
+  };
+  for (const auto& r : range) forEachBin(r, [&](int bin) { ++binCount_[bin]; });
+  binStart_.assign(nb + 1, 0);
+  for (int b = 0; b < nb; ++b) binStart_[b + 1] = binStart_[b] + binCount_[b];
+  binBlocks_.resize(binStart_[nb]);
+  std::vector<int> fill(binStart_.begin(), binStart_.end() - 1);
+  for (std::size_t i = 0; i < range.size(); ++i)
+    forEachBin(range[i], [&](int bin) { binBlocks_[fill[bin]++] = static_cast<int>(i); });
+}
+
+void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
+  const mpm::MpmParams& g = solver.params();
+  syncBlocks(g);
+  mpm::ParticleView view = solver.openForceBuffer();
+  if (view.device && !device_) {
+    device_ = makeCouplingDeviceBackend(view.precision);
+    devicePrecision_ = view.precision;
+    if (!device_) throw RuntimeFailure("MpSdemCoupling: the solver runs on CUDA but this build has no CUDA coupling");
+  }
+  if (maxParticleRadius_ < 0) {
+    double vmax = 0;
+    if (view.device) {
+      vmax = device_->maxVolume0(view);
+    } else {
+      const double* v0 = static_cast<const double*>(view.volume0);
+      for (std::size_t p = 0; p < view.n; ++p) vmax = std::max(vmax, v0[p]);
+    }
+    maxParticleRadius_ = std::cbrt(3 * vmax / (4 * kPi));
+  }
+  if (view.n != particleCount_ || key_.size() != slots_ * view.n) {  // a new particle set: no history yet
+    particleCount_ = view.n;
+    key_.assign(slots_ * view.n, -1);
+    xi_.assign(3 * slots_ * view.n, 0.0);
+    if (device_) device_->resetHistories();
+  }
+  buildBins(g);
+  CouplingStepInput in;
+  in.shapes = shapes_.view();
+  in.numVertices = static_cast<int>(shapes_.vertex.size() / 3);
+  in.numFaces = static_cast<int>(shapes_.faceOffset.size());
+  in.numLoopEntries = static_cast<int>(shapes_.loopVertex.size());
+  in.shapesChanged = shapesChanged_;
+  in.blocks = &blocks_;
+  in.phys = &phys_;
+  in.bins = BinGridView{{binOrigin_[0], binOrigin_[1], binOrigin_[2]},
+                        1.0 / binSize_,
+                        {binDims_[0], binDims_[1], binDims_[2]},
+                        binStart_.data(),
+                        binBlocks_.data()};
+  in.numBins = binDims_[0] * binDims_[1] * binDims_[2];
+  in.numBinEntries = static_cast<int>(binBlocks_.size());
+  in.particles = view;
+  in.dt = dt;
+  in.historySlots = slots_;
+  CouplingStepOutput& out = last_;
+  out.sums.assign(static_cast<std::size_t>(kBlockSums) * blocks_.size(), 0.0);
+  out.minParticleStep = std::numeric_limits<double>::infinity();
+  out.overflow = 0;
+  out.badParticle = -1;
+  out.badBlock = -1;
+  if (view.device)
+    device_->run(in, out);
+  else
+    runCpu(in, out);
+  shapesChanged_ = false;
+  if (out.badParticle >= 0) {
+    std::ostringstream os;
+    os << "MP-SDEM coupling: the centre of material point " << out.badParticle << " reached the core of block "
+       << sdem_.externalId(out.badBlock)
+       << " (overlap >= R_p0 + R); at the first step the particles were seeded inside the block, later the time "
+          "step is too large for the barrier stiffness";
+    throw RuntimeFailure(os.str());
+  }
+  minParticleStep_ = out.minParticleStep;
+  overflow_ += out.overflow;
+  barrierEnergy_ = springEnergy_ = 0;
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    const double* s = out.sums.data() + kBlockSums * b;
+    barrierEnergy_ += s[kSumBarrier];
+    springEnergy_ += s[kSumSpring];
+    frictionWork_ += s[kSumFriction];
+    dampingWork_ += s[kSumDamping];
+  }
+}
+
+void MpSdemCoupling::runCpu(const CouplingStepInput& in, CouplingStepOutput& out) {
+  const mpm::ParticleView& v = in.particles;
+  CouplingParticles<double> P;
+  for (int d = 0; d < 3; ++d) {
+    P.x[d] = static_cast<const double*>(v.x[d]);
+    P.v[d] = static_cast<const double*>(v.v[d]);
+    P.force[d] = static_cast<double*>(v.force[d]);
+  }
+  P.mass = static_cast<const double*>(v.mass);
+  P.vol0 = static_cast<const double*>(v.volume0);
+  const sdem::ShapeTableView<double> S = shapes_.view();
+  const HistoryView<double> H{key_.data(), xi_.data(), slots_};
+  const long n = static_cast<long>(v.n);
+  const long nChunks = (n + kChunk - 1) / kChunk;
+  chunkContacts_.resize(nChunks);
+  long overflow = 0;
+  long firstBad = n;
+  int badBlock = -1;
+  const BlockState<double>* B = blocks_.data();
+  const sdem::BarrierCoulombPhys<double>* phys = phys_.data();
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : overflow)
+  for (long c = 0; c < nChunks; ++c) {
+    std::vector<MpContact<double>>& list = chunkContacts_[c];
+    list.clear();
+    auto sink = [&list](const MpContact<double>& ct) { list.push_back(ct); };
+    int over = 0;
+    for (long p = c * kChunk; p < std::min(n, (c + 1) * kChunk); ++p) {
+      int bad = -1;
+      if (coupleParticle(static_cast<int>(p), P, B, S, phys, in.bins, H, in.dt, sink, &bad, &over) != kCoupleOk) {
+#pragma omp critical(mpsdem_bad)
+        if (p < firstBad) {
+          firstBad = p;
+          badBlock = bad;
+        }
+        break;
+      }
+    }
+    overflow += over;
+  }
+  out.overflow = overflow;
+  if (firstBad < n) {
+    out.badParticle = static_cast<int>(firstBad);
+    out.badBlock = badBlock;
+    return;
+  }
+  auto add = [](double* slot, double value) { *slot += value; };
+  for (const auto& list : chunkContacts_)
+    for (const MpContact<double>& ct : list) {
+      addBlockShare(ct, B[ct.block], out.sums.data(), add);
+      out.minParticleStep = std::min(out.minParticleStep, particleStepBound(ct));
+    }
+}
+
+// ------------------------------------------------------------------ results
+
+const double* MpSdemCoupling::sums(int i, int offset) const {
+  if (i < 0 || i >= numBlocks() || last_.sums.size() < static_cast<std::size_t>(kBlockSums) * numBlocks())
+    throwParameter("block", i, "", "a block (SDEM body) index in [0, " + std::to_string(numBlocks()) +
+                                       ") of the last coupling step");
+  return last_.sums.data() + kBlockSums * i + offset;
+}
+
+Vec3 MpSdemCoupling::force(int i) const {
+  const double* s = sums(i, kSumForce);
+  return Vec3(s[0], s[1], s[2]);
+}
+Vec3 MpSdemCoupling::torque(int i) const {
+  const double* s = sums(i, kSumTorque);
+  return Vec3(s[0], s[1], s[2]);
+}
+Vec3 MpSdemCoupling::faceForce(int i) const {
+  const double* s = sums(i, kSumFace);
+  return Vec3(s[0], s[1], s[2]);
+}
+Vec3 MpSdemCoupling::edgeForce(int i) const {
+  const double* s = sums(i, kSumEdge);
+  return Vec3(s[0], s[1], s[2]);
+}
+int MpSdemCoupling::contactCount(int i) const { return static_cast<int>(*sums(i, kSumCount)); }
+double MpSdemCoupling::stiffnessSum(int i) const { return *sums(i, kSumK); }
+double MpSdemCoupling::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }
+long MpSdemCoupling::totalContacts() const {
+  long n = 0;
+  for (int i = 0; i < numBlocks(); ++i) n += contactCount(i);
+  return n;
+}
+
+}  // namespace coupling
+}  // namespace mpmsdem

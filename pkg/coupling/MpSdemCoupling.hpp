@@ -1,0 +1,127 @@
+// MpSdemCoupling: contact between the material points of an MPM solver and the blocks of an
+// SdemEngine (paper §2.3, Eqs 12–18), on the backend the solver runs on (CPU, or CUDA with
+// no host round trip of particle data).
+//
+// Each step (computeForces):
+//  1. blocks in: pose, velocity of every SDEM body (block index = SdemEngine body index);
+//     bodies added since the last step join the shape table;
+//  2. broad phase: uniform bins over the MPM grid list the blocks whose rounded-body box,
+//     grown by the largest MP radius, touches them; a particle tests only its bin's blocks,
+//     so the cost follows the particles near blocks, not particles x blocks;
+//  3. narrow phase and law per (particle, block): CouplingKernelsCommon.hpp;
+//  4. forces: into the solver's external-force buffer (spread to the grid by the next MPM
+//     step with the P2G weights, Eq 14) and, opposite, onto the blocks (force, torque about
+//     the centroid, split into face-interior F_f and edge/vertex F_e, §3.2.3).
+// Because the B-spline weights sum to one, the impulse the grid receives equals minus the
+// impulse the blocks receive (Eqs 17–18).
+//
+// Block sums are reduced in a fixed order on the CPU (results do not depend on the thread
+// count); on the GPU with atomics in double.
+#pragma once
+#include <array>
+#include <limits>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "coupling/CouplingBackend.hpp"
+#include "mpm/MpmSolver.hpp"
+#include "sdem/SdemEngine.hpp"
+#include "sdem/ShapeTable.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+class MpSdemCoupling {
+ public:
+  explicit MpSdemCoupling(const sdem::SdemEngine& sdem);
+  ~MpSdemCoupling();
+
+  // Contact physics between the flow and blocks of SDEM material `sdemMaterial` (YADE's Ip2
+  // role for the pair "granular flow, block material"): barrier stiffness k_c [N/m] (> 0),
+  // friction mu (>= 0), Poisson ratio (in (-1, 0.5)) for K_t, normal and tangential damping
+  // (fractions of critical, >= 0). A block whose material has no pair stops the first step
+  // with a ParameterError naming the material.
+  void setPair(int sdemMaterial, const sdem::BarrierPhys& phys);
+  bool hasPair(int sdemMaterial) const { return pairs_.count(sdemMaterial) > 0; }
+
+  // Tangential-history slots per particle: how many simultaneous block contacts keep their
+  // memory (a point in the corner between a block and the bed needs 2). In [1, 4], default 2.
+  void setHistorySlots(int slots);
+  int historySlots() const { return slots_; }
+
+  // One coupling step at the current SDEM state and the solver's current particles: adds the
+  // particles' forces into solver.openForceBuffer() and computes the blocks' share. Throws
+  // RuntimeFailure when a particle centre reaches a block core (names both; at the first step
+  // this means particles were seeded inside a block), ParameterError for a missing pair.
+  void computeForces(mpm::MpmSolver& solver, double dt);
+
+  // ---- results of the last computeForces, per SDEM body index (world frame)
+  Vec3 force(int block) const;        // force of the flow on the block [N]
+  Vec3 torque(int block) const;       // its torque about the block centroid [N m]
+  Vec3 faceForce(int block) const;    // share through face interiors, F_f [N]
+  Vec3 edgeForce(int block) const;    // share through edges and vertices, F_e [N]
+  int contactCount(int block) const;  // number of MP contacts
+  double stiffnessSum(int block) const;            // sum max(k_n, K_t) [N/m]
+  double rotationalStiffnessSum(int block) const;  // sum k_n |r x n|^2 + K_t |r|^2 [N m]
+  int numBlocks() const { return static_cast<int>(blocks_.size()); }
+  long totalContacts() const;
+  // Smallest sqrt(m_p / max(k_n, K_t)) over the MP contacts [s]; +inf without contacts.
+  double particleCriticalStep() const { return minParticleStep_; }
+  long historyOverflow() const { return overflow_; }
+
+  // ---- energies [J]: current barrier and tangential-spring potentials, cumulative slip and
+  // dashpot work of MP–block contacts.
+  double barrierEnergy() const { return barrierEnergy_; }
+  double springEnergy() const { return springEnergy_; }
+  double frictionDissipation() const { return frictionWork_; }
+  double dampingDissipation() const { return dampingWork_; }
+  void setDissipation(double friction, double damping);  // continue counters after a restart
+
+  // ---- checkpoint of the tangential histories (CPU backend): per particle `slots` keys and
+  // 3 x slots xi values.
+  const std::vector<long long>& historyKeys() const { return key_; }
+  const std::vector<double>& historyXi() const { return xi_; }
+  void setHistories(const std::vector<long long>& keys, const std::vector<double>& xi);
+
+  // Bin edge of the broad phase [m] (set on the first step from the grid spacing).
+  double binSize() const { return binSize_; }
+
+ private:
+  void syncBlocks(const mpm::MpmParams& grid);
+  void buildBins(const mpm::MpmParams& grid);
+  void runCpu(const CouplingStepInput& in, CouplingStepOutput& out);
+  const double* sums(int block, int offset) const;
+
+  const sdem::SdemEngine& sdem_;
+  std::map<int, sdem::BarrierPhys> pairs_;
+  int slots_ = 2;
+
+  sdem::ShapeTable shapes_;
+  std::map<const sdem::SpheroPolyhedron*, int> shapeIndex_;
+  std::vector<int> blockShape_;
+  bool shapesChanged_ = true;
+  std::vector<BlockState<double>> blocks_;
+  std::vector<sdem::BarrierCoulombPhys<double>> phys_;  // per SDEM material
+
+  double maxParticleRadius_ = -1;  // [m], from the particles' initial volumes
+  std::size_t particleCount_ = 0;
+  double binSize_ = 0;
+  double binOrigin_[3] = {0, 0, 0};
+  int binDims_[3] = {0, 0, 0};
+  std::vector<int> binStart_, binBlocks_, binCount_;
+
+  std::vector<long long> key_;  // CPU histories
+  std::vector<double> xi_;
+  std::vector<std::vector<MpContact<double>>> chunkContacts_;
+  std::unique_ptr<CouplingDeviceBackend> device_;
+  mpm::Precision devicePrecision_ = mpm::Precision::Double;
+
+  CouplingStepOutput last_;
+  double minParticleStep_ = std::numeric_limits<double>::infinity();
+  long overflow_ = 0;
+  double barrierEnergy_ = 0, springEnergy_ = 0, frictionWork_ = 0, dampingWork_ = 0;
+};
+
+}  // namespace coupling
+}  // namespace mpmsdem

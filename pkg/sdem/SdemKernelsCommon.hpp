@@ -1,0 +1,264 @@
+// SDEM geometry and contact law written once as __host__ __device__ functions over plain
+// arrays, so that the CPU paths (block–block Law2, MP–block coupling) and the CUDA coupling
+// kernels evaluate the same formulas in double or float.
+//
+// Shapes live in a flat table (ShapeTable.hpp builds it on the host from SpheroPolyhedron;
+// CGAL is used only while building the shapes): core vertices, faces (outward unit normal,
+// plane offset, vertex loop, and for each loop side the core edge it lies on or -1 for a flat
+// diagonal between coplanar triangles), and per shape its sweep radius and convexity. Vertex
+// and edge indices stored in the loops are table-global; queries report them shape-local.
+#pragma once
+#include <cstdint>
+
+#include "mpm/MathHD.hpp"
+
+namespace mpmsdem {
+namespace sdem {
+
+using mpm::Vec3T;
+
+template <typename T>
+MPM_HD_INLINE T hdLog1p(T a) {
+#if defined(__CUDA_ARCH__)
+  return log1p(a);
+#else
+  return std::log1p(a);
+#endif
+}
+template <typename T>
+MPM_HD_INLINE T hdAtan2(T y, T x) {
+#if defined(__CUDA_ARCH__)
+  return atan2(y, x);
+#else
+  return std::atan2(y, x);
+#endif
+}
+
+template <typename T>
+MPM_HD_INLINE Vec3T<T> cross(const Vec3T<T>& a, const Vec3T<T>& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+template <typename T>
+MPM_HD_INLINE T norm(const Vec3T<T>& a) {
+  return mpm::hdSqrt(mpm::dot(a, a));
+}
+
+// Flat shape table (views into arrays owned by the host ShapeTable or by device buffers).
+template <typename T>
+struct ShapeTableView {
+  int numShapes;
+  const T* vertex;          // 3 per core vertex, body frame [m]
+  const T* faceNormal;      // 3 per face, unit outward normal
+  const T* faceOffset;      // per face: normal . x on the face plane [m]
+  const int* faceLoopStart; // per face, start of its loop in loopVertex/loopEdge (numFaces + 1 entries)
+  const int* loopVertex;    // table-global vertex index of each loop corner (counter-clockwise from outside)
+  const int* loopEdge;      // table-global edge index of the side loop[i] -> loop[i+1], or -1
+  const int* shapeFaceStart;    // per shape, first face (numShapes + 1 entries)
+  const int* shapeVertexStart;  // per shape, first vertex (numShapes + 1 entries)
+  const int* shapeEdgeStart;    // per shape, first edge (numShapes + 1 entries)
+  const T* sweepRadius;         // R per shape [m]
+  const T* boundingRadius;      // per shape: max |vertex| + R [m]
+  const std::uint8_t* convex;   // per shape: 1 when the core is convex
+};
+
+// Feature kinds, numbered as SpheroPolyhedron::PointQuery::featureKind and FeatureKind.
+constexpr int kFeatureFace = 0;
+constexpr int kFeatureEdge = 1;
+constexpr int kFeatureVertex = 2;
+
+template <typename T>
+struct CoreQuery {
+  T distance;          // distance from the point to the core, 0 inside [m]
+  Vec3T<T> closest;    // closest core point, body frame [m] (the point itself when inside)
+  int featureKind;     // kFeatureFace / kFeatureEdge / kFeatureVertex of the nearest surface feature
+  int featureIndex;    // shape-local index of that feature
+};
+
+// Closest point of shape s's core to point p (body frame): every face offers its interior
+// projection, or else the nearest point of its boundary (a vertex, or an edge unless the side
+// is a flat diagonal). Ties within 1e-12 of the shape size go to the lower kind
+// number (face, then edge, then vertex), so a point over a face interior is a face contact.
+// Inside the core (half-spaces for convex cores, winding number otherwise) the distance is 0. Cost: linear in the number of face corners of the shape.
+template <typename T>
+MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s, const Vec3T<T>& p) {
+  CoreQuery<T> best{T(0), p, kFeatureFace, -1};
+  T bestD2 = T(-1);
+  const T br = S.boundingRadius[s];
+  const T tieTol = T(1e-24) * br * br;
+  const int v0 = S.shapeVertexStart[s], e0 = S.shapeEdgeStart[s], f0 = S.shapeFaceStart[s];
+  auto offer = [&](const Vec3T<T>& q, int kind, int index) {
+    const Vec3T<T> d = p - q;
+    const T d2 = mpm::dot(d, d);
+    if (bestD2 < T(0) || d2 < bestD2 - tieTol || (d2 <= bestD2 + tieTol && kind < best.featureKind)) {
+      bestD2 = (bestD2 < T(0) || d2 < bestD2) ? d2 : bestD2;
+      best.closest = q;
+      best.featureKind = kind;
+      best.featureIndex = index;
+    }
+  };
+  auto vertexAt = [&](int v) { return Vec3T<T>{S.vertex[3 * v], S.vertex[3 * v + 1], S.vertex[3 * v + 2]}; };
+  for (int f = f0; f < S.shapeFaceStart[s + 1]; ++f) {
+    const Vec3T<T> n{S.faceNormal[3 * f], S.faceNormal[3 * f + 1], S.faceNormal[3 * f + 2]};
+    const int l0 = S.faceLoopStart[f], l1 = S.faceLoopStart[f + 1], m = l1 - l0;
+    const Vec3T<T> q = p - (mpm::dot(n, p) - S.faceOffset[f]) * n;
+    bool inside = true;
+    for (int i = 0; i < m && inside; ++i) {
+      const Vec3T<T> a = vertexAt(S.loopVertex[l0 + i]);
+      const Vec3T<T> b = vertexAt(S.loopVertex[l0 + (i + 1) % m]);
+      inside = mpm::dot(cross(b - a, q - a), n) >= T(0);
+    }
+    if (inside) {
+      offer(q, kFeatureFace, f - f0);
+      continue;
+    }
+    for (int i = 0; i < m; ++i) {
+      const int ia = S.loopVertex[l0 + i], ib = S.loopVertex[l0 + (i + 1) % m];
+      const Vec3T<T> a = vertexAt(ia), b = vertexAt(ib);
+      const Vec3T<T> ab = b - a;
+      const T t = mpm::dot(p - a, ab) / mpm::dot(ab, ab);
+      if (t <= T(0))
+        offer(a, kFeatureVertex, ia - v0);
+      else if (t >= T(1))
+        offer(b, kFeatureVertex, ib - v0);
+      else if (S.loopEdge[l0 + i] >= 0)
+        offer(a + t * ab, kFeatureEdge, S.loopEdge[l0 + i] - e0);
+    }
+  }
+  best.distance = mpm::hdSqrt(bestD2 < T(0) ? T(0) : bestD2);
+  bool inside;
+  if (S.convex[s]) {
+    inside = true;
+    for (int f = f0; f < S.shapeFaceStart[s + 1] && inside; ++f) {
+      const Vec3T<T> n{S.faceNormal[3 * f], S.faceNormal[3 * f + 1], S.faceNormal[3 * f + 2]};
+      inside = mpm::dot(n, p) <= S.faceOffset[f];
+    }
+  } else {  // winding number: sum of the solid angles of the (fan-triangulated) faces seen from p
+    T omega = T(0);
+    for (int f = f0; f < S.shapeFaceStart[s + 1]; ++f) {
+      const int l0 = S.faceLoopStart[f], l1 = S.faceLoopStart[f + 1];
+      for (int i = l0 + 1; i + 1 < l1; ++i) {
+        const Vec3T<T> a = vertexAt(S.loopVertex[l0]) - p, b = vertexAt(S.loopVertex[i]) - p,
+                       c = vertexAt(S.loopVertex[i + 1]) - p;
+        const T la = norm(a), lb = norm(b), lc = norm(c);
+        omega += T(2) * hdAtan2(mpm::dot(a, cross(b, c)),
+                                la * lb * lc + mpm::dot(a, b) * lc + mpm::dot(b, c) * la + mpm::dot(c, a) * lb);
+      }
+    }
+    inside = omega > T(2 * 3.14159265358979323846);
+  }
+  if (inside) {
+    best.distance = T(0);
+    best.closest = p;
+  }
+  return best;
+}
+
+// ------------------------------------------------------------------ barrier normal law (Eq 10)
+// Read as a force: F_n = -db/dd of b(d) = -k_c (d - R)^2 ln(d/R) on the core gap d = R - delta,
+// F_n(delta) = -k_c delta [2 ln((R - delta)/R) - R/(R - delta) + 1]. With x = delta/R the
+// bracket is written with log1p(-x) and -x/(1-x), free of cancellation near first touch.
+template <typename T>
+MPM_HD_INLINE T barrierForce(T kc, T R, T delta) {
+  if (!(delta > T(0))) return T(0);
+  const T x = delta / R;
+  return -kc * delta * (T(2) * hdLog1p(-x) - x / (T(1) - x));
+}
+// Tangent stiffness k_n = dF_n/ddelta [N/m].
+template <typename T>
+MPM_HD_INLINE T barrierStiffness(T kc, T R, T delta) {
+  if (!(delta > T(0))) return T(0);
+  const T x = delta / R;
+  return -kc * (T(2) * hdLog1p(-x) - T(3) * x / (T(1) - x) - x / ((T(1) - x) * (T(1) - x)));
+}
+// Barrier potential b(R - delta) [J]; F_n = db/ddelta.
+template <typename T>
+MPM_HD_INLINE T barrierPotential(T kc, T R, T delta) {
+  if (!(delta > T(0))) return T(0);
+  return -kc * delta * delta * hdLog1p(-delta / R);
+}
+
+// Pair parameters of the law (YADE's IPhys role), plain values for device use.
+template <typename T>
+struct BarrierCoulombPhys {
+  T kc;        // barrier stiffness k_c [N/m]
+  T mu;        // Coulomb friction [-]
+  T nu;        // Poisson ratio in K_t = k_n / (2 (1 + nu)) [-]
+  T zetaN;     // normal damping, fraction of critical [-]
+  T zetaT;     // tangential damping, fraction of critical [-]
+};
+
+template <typename T>
+struct BarrierCoulombResult {
+  T normalForce;          // F_n >= 0 along n [N]
+  Vec3T<T> tangential;    // F_t [N], perpendicular to n
+  T kn, kt;               // tangent normal stiffness, tangential stiffness [N/m]
+  T barrierEnergy;        // b(d) [J]
+  T springEnergy;         // K_t |xi|^2 / 2 after the step [J]
+  T frictionWork;         // slip work of this step [J]
+  T dampingWork;          // dashpot work of this step [J]
+  bool sliding;
+};
+
+// Rotate xi into the plane perpendicular to the unit normal n, keeping its length (Eq 9).
+template <typename T>
+MPM_HD_INLINE void rotateTangentialHistory(T xi[3], const Vec3T<T>& n) {
+  const Vec3T<T> x{xi[0], xi[1], xi[2]};
+  const T len = norm(x);
+  if (len == T(0)) return;
+  const Vec3T<T> proj = x - mpm::dot(x, n) * n;
+  const T plen = norm(proj);
+  const T scale = plen > T(1e-12) * len ? len / plen : T(0);
+  xi[0] = proj.x * scale;
+  xi[1] = proj.y * scale;
+  xi[2] = proj.z * scale;
+}
+
+// Barrier normal force (Eq 10) with an optional dashpot, clamped at >= 0, and the incremental
+// Coulomb tangential spring (Eqs 9, 11): xi rotated into the tangent plane, incremented by
+// v_t dt; F_t = -K_t xi - c_t v_t capped at mu F_n; while slipping xi is rescaled to the cap and
+// the dashpot is off. Forces act on the body whose velocity relative to the other is relVel
+// (n points from the other body towards it). meff [kg] sets the dashpots. The caller checks
+// 0 < delta < R.
+template <typename T>
+MPM_HD_INLINE BarrierCoulombResult<T> barrierCoulomb(const BarrierCoulombPhys<T>& ph, T R, T delta,
+                                                     const Vec3T<T>& n, const Vec3T<T>& relVel, T meff, T dt,
+                                                     T xi[3]) {
+  BarrierCoulombResult<T> r;
+  r.kn = barrierStiffness(ph.kc, R, delta);
+  r.kt = r.kn / (T(2) * (T(1) + ph.nu));
+  r.barrierEnergy = barrierPotential(ph.kc, R, delta);
+  const T vn = mpm::dot(relVel, n);
+  const T cn = T(2) * ph.zetaN * mpm::hdSqrt(meff * r.kn);
+  const T fElastic = barrierForce(ph.kc, R, delta);
+  const T fn = fElastic - cn * vn;
+  r.normalForce = fn > T(0) ? fn : T(0);
+  r.dampingWork = (r.normalForce - fElastic) * -vn * dt;
+  const Vec3T<T> vt = relVel - vn * n;
+  rotateTangentialHistory(xi, n);
+  for (int d = 0; d < 3; ++d) xi[d] += vt[d] * dt;
+  const Vec3T<T> x{xi[0], xi[1], xi[2]};
+  const T cap = ph.mu * r.normalForce;
+  const Vec3T<T> fSpring = -r.kt * x;
+  const T fSpringNorm = norm(fSpring);
+  r.frictionWork = T(0);
+  if (fSpringNorm > cap) {
+    r.sliding = true;
+    const T ratio = fSpringNorm > T(0) ? cap / fSpringNorm : T(0);
+    r.frictionWork = cap * norm(x) * (T(1) - ratio);
+    for (int d = 0; d < 3; ++d) xi[d] *= ratio;
+    r.tangential = Vec3T<T>{-r.kt * xi[0], -r.kt * xi[1], -r.kt * xi[2]};
+  } else {
+    r.sliding = false;
+    const T ct = T(2) * ph.zetaT * mpm::hdSqrt(meff * r.kt);
+    Vec3T<T> ft = fSpring - ct * vt;
+    const T ftNorm = norm(ft);
+    if (ftNorm > cap) ft = (cap / ftNorm) * ft;
+    r.tangential = ft;
+    r.dampingWork += -mpm::dot(ft - fSpring, vt) * dt;
+  }
+  r.springEnergy = T(0.5) * r.kt * (xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+  return r;
+}
+
+}  // namespace sdem
+}  // namespace mpmsdem

@@ -1,0 +1,325 @@
+// MP–SDEM coupling (paper §2.3): the shared geometry against the SDEM shape's own query,
+// float against double, impulse balance (Eqs 17–18), momentum conservation, a block carried
+// by a granular layer, thread-count independence, bad input.
+#include <gtest/gtest.h>
+
+#include <omp.h>
+
+#include <cmath>
+#include <random>
+
+#include "common/Error.hpp"
+#include "coupling/CoupledWorld.hpp"
+#include "mpm/Seeding.hpp"
+#include "sdem/ShapeTable.hpp"
+
+using namespace mpmsdem;
+using namespace mpmsdem::coupling;
+using sdem::SpheroPolyhedron;
+
+namespace {
+
+std::vector<std::shared_ptr<SpheroPolyhedron>> testShapes() {
+  std::vector<std::shared_ptr<SpheroPolyhedron>> s;
+  s.push_back(SpheroPolyhedron::box(Vec3(0.05, 0.03, 0.02), 0.005));
+  s.push_back(SpheroPolyhedron::convexHull(
+      {Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.08, 0), Vec3(0.02, 0.03, 0.09), Vec3(0.07, 0.06, 0.05)}, 0.004));
+  s.push_back(SpheroPolyhedron::meshFile(std::string(MPMSDEM_TEST_DATA) + "/l_prism.obj", 0.01));
+  return s;
+}
+
+mpm::MpmParams gridParams(std::array<int, 3> cells, double dx = 0.01) {
+  mpm::MpmParams p;
+  p.dx = dx;
+  p.cells = cells;
+  p.gravity = {0, 0, 0};
+  p.material.density = 1600;
+  p.material.youngModulus = 1e6;
+  p.material.poissonRatio = 0.3;
+  p.material.muS = 0.24;
+  p.material.mu2 = 0.65;
+  for (auto& w : p.walls) w.friction = 0;
+  return p;
+}
+
+sdem::BarrierPhys pair(double mu = 0.3, double zetaN = 0.0) {
+  sdem::BarrierPhys ph;
+  ph.barrierStiffness = 1e4;
+  ph.friction = mu;
+  ph.poisson = 0.3;
+  ph.normalDamping = zetaN;
+  ph.tangentialDamping = 0.1;
+  return ph;
+}
+
+// A world with one cube of outer half-size h and sweep radius R at pos.
+int addCube(CoupledWorld& w, double h, double R, const Vec3& pos, double density, bool fixed = false) {
+  static std::vector<std::shared_ptr<SpheroPolyhedron>> keep;
+  keep.push_back(SpheroPolyhedron::box(Vec3::Constant(h), R));
+  const auto& s = keep.back();
+  sdem::SdemMaterial m;
+  m.density = density;
+  const int mat = w.world.engine.numMaterials() ? 0 : w.world.engine.addMaterial(m);
+  const int i = w.world.engine.addBody(s, mat, density * s->volume, density * s->inertiaPerDensity, 100 + w.world.engine.numBodies());
+  w.world.engine.setFixed(i, fixed);
+  w.world.engine.setState(i, pos, Quat::Identity(), Vec3::Zero(), Vec3::Zero());
+  return i;
+}
+
+Vec3 particleMomentum(mpm::MpmSolver& s) {
+  mpm::ParticleSet ps;
+  s.getParticles(ps);
+  Vec3 m = Vec3::Zero();
+  for (std::size_t p = 0; p < ps.size(); ++p)
+    for (int d = 0; d < 3; ++d) m[d] += ps.mass[p] * ps.v[3 * p + d];
+  return m;
+}
+
+}  // namespace
+
+TEST(ShapeTable, ClosestPointMatchesShapeQuery) {
+  const auto shapes = testShapes();
+  sdem::ShapeTable table;
+  for (const auto& s : shapes) table.add(*s);
+  const auto view = table.view();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.12, 0.12);
+  int kinds[3] = {0, 0, 0};
+  for (int s = 0; s < 3; ++s)
+    for (int k = 0; k < 3000; ++k) {
+      const Vec3 p(u(rng), u(rng), u(rng));
+      const auto ref = shapes[s]->closestPoint(p);
+      const auto q = sdem::closestPointOnCore(view, s, mpm::Vec3T<double>{p[0], p[1], p[2]});
+      ASSERT_NEAR(q.distance, ref.distance, 1e-14) << "shape " << s;
+      ASSERT_EQ(q.featureKind, ref.featureKind) << "shape " << s;
+      ASSERT_EQ(q.featureIndex, ref.featureIndex) << "shape " << s;
+      for (int d = 0; d < 3; ++d) ASSERT_NEAR(q.closest[d], ref.closest[d], 1e-14);
+      ++kinds[q.featureKind];
+    }
+  for (int k = 0; k < 3; ++k) EXPECT_GT(kinds[k], 100) << "feature kind " << k << " hardly sampled";
+}
+
+// The float instantiation (what the CUDA float backend runs) against double.
+TEST(ShapeTable, FloatFormulasAgreeWithDouble) {
+  const auto shapes = testShapes();
+  sdem::ShapeTable table;
+  for (const auto& s : shapes) table.add(*s);
+  std::vector<float> vf(table.vertex.begin(), table.vertex.end()), nf(table.faceNormal.begin(), table.faceNormal.end()),
+      of(table.faceOffset.begin(), table.faceOffset.end()), rf(table.sweepRadius.begin(), table.sweepRadius.end()),
+      bf(table.boundingRadius.begin(), table.boundingRadius.end());
+  const auto dv = table.view();
+  sdem::ShapeTableView<float> fv{dv.numShapes,         vf.data(),           nf.data(),          of.data(),
+                                 dv.faceLoopStart,     dv.loopVertex,       dv.loopEdge,        dv.shapeFaceStart,
+                                 dv.shapeVertexStart,  dv.shapeEdgeStart,   rf.data(),          bf.data(),
+                                 dv.convex};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.12, 0.12);
+  for (int s = 0; s < 3; ++s)
+    for (int k = 0; k < 500; ++k) {
+      const Vec3 p(u(rng), u(rng), u(rng));
+      const auto d = sdem::closestPointOnCore(dv, s, mpm::Vec3T<double>{p[0], p[1], p[2]});
+      const auto f = sdem::closestPointOnCore(fv, s, mpm::Vec3T<float>{float(p[0]), float(p[1]), float(p[2])});
+      EXPECT_NEAR(f.distance, d.distance, 2e-6 * 0.12);
+    }
+  // the law: float within 1e-5 relative of double over the barrier's range
+  const sdem::BarrierCoulombPhys<double> pd{1e4, 0.4, 0.3, 0.1, 0.1};
+  const sdem::BarrierCoulombPhys<float> pf{1e4f, 0.4f, 0.3f, 0.1f, 0.1f};
+  for (double x : {1e-3, 0.1, 0.5, 0.9}) {
+    const double R = 0.008, delta = x * R;
+    double xid[3] = {1e-5, 0, 0};
+    float xif[3] = {1e-5f, 0, 0};
+    const auto rd = sdem::barrierCoulomb(pd, R, delta, mpm::Vec3T<double>{0, 0, 1}, mpm::Vec3T<double>{0.1, 0.02, -0.3},
+                                         0.01, 1e-5, xid);
+    const auto rf2 = sdem::barrierCoulomb(pf, float(R), float(delta), mpm::Vec3T<float>{0, 0, 1},
+                                          mpm::Vec3T<float>{0.1f, 0.02f, -0.3f}, 0.01f, 1e-5f, xif);
+    EXPECT_NEAR(rf2.normalForce, rd.normalForce, 1e-5 * rd.normalForce) << "x = " << x;
+    EXPECT_NEAR(rf2.kn, rd.kn, 1e-5 * rd.kn) << "x = " << x;
+    EXPECT_NEAR(rf2.tangential.x, rd.tangential.x, 1e-5 * std::abs(rd.tangential.x) + 1e-12);
+  }
+}
+
+// Zero gravity: a granular blob thrown at a free cube. The particles' forces sum to minus the
+// block's at every step (Eqs 17-18), and the total momentum of particles + block is conserved.
+TEST(MpSdemCoupling, ImpulseBalanceAndMomentumConservation) {
+  auto prm = gridParams({24, 14, 14});
+  mpm::ParticleSet ps;
+  mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
+  for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.0;
+  auto solver = mpm::makeSolver(prm);
+  solver->setParticles(ps);
+  CoupledWorld w(std::move(solver));
+  w.world.gravity = Vec3::Zero();
+  const int cube = addCube(w, 0.02, 0.003, Vec3(0.125, 0.07, 0.07), 2000);
+  w.coupling.setPair(0, pair(0.3));
+  const Vec3 p0 = particleMomentum(w.mpm()) + w.world.engine.mass(cube) * w.world.engine.velocity(cube);
+  const double dt = 1e-5;
+  double maxForce = 0;
+  int steps = 0, contactSteps = 0;
+  for (; steps < 4000; ++steps) {
+    w.step(dt);
+    if (w.coupling.contactCount(cube) > 0) ++contactSteps;
+    maxForce = std::max(maxForce, w.coupling.force(cube).norm());
+    if (w.world.engine.velocity(cube).x() > 0.5) break;
+  }
+  ASSERT_GT(contactSteps, 50) << "the blob never hit the block";
+  EXPECT_GT(w.world.engine.velocity(cube).x(), 0.1);
+  const Vec3 p1 = particleMomentum(w.mpm()) + w.world.engine.mass(cube) * w.world.engine.velocity(cube);
+  EXPECT_NEAR((p1 - p0).norm() / p0.norm(), 0.0, 1e-9) << "p0 " << p0.transpose() << " p1 " << p1.transpose();
+  EXPECT_GT(maxForce, 0.0);
+}
+
+// Impulse to the particles' force slots = - impulse to the block, step by step (round-off).
+TEST(MpSdemCoupling, ParticleForcesBalanceBlockForce) {
+  auto prm = gridParams({20, 14, 14});
+  mpm::ParticleSet ps;
+  mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
+  for (std::size_t p = 0; p < ps.size(); ++p) {
+    ps.v[3 * p] = 1.5;
+    ps.v[3 * p + 2] = 0.2 * (ps.x[3 * p + 1] - 0.07) / 0.02;
+  }
+  auto solver = mpm::makeSolver(prm);
+  solver->setParticles(ps);
+  CoupledWorld w(std::move(solver));
+  w.world.gravity = Vec3::Zero();
+  const int cube = addCube(w, 0.02, 0.003, Vec3(0.12, 0.07, 0.07), 2000, true);
+  w.coupling.setPair(0, pair(0.5));
+  int checked = 0;
+  for (int s = 0; s < 3000 && checked < 200; ++s) {
+    w.coupling.computeForces(w.mpm(), 1e-5);
+    mpm::ParticleSet now;
+    w.mpm().getParticles(now);
+    Vec3 fp = Vec3::Zero();
+    double scale = 0;
+    for (std::size_t p = 0; p < now.size(); ++p)
+      for (int d = 0; d < 3; ++d) {
+        fp[d] += now.fext[3 * p + d];
+        scale += std::abs(now.fext[3 * p + d]);
+      }
+    if (scale > 0) {
+      EXPECT_NEAR((fp + w.coupling.force(cube)).norm(), 0.0, 1e-13 * scale);
+      EXPECT_NEAR((w.coupling.faceForce(cube) + w.coupling.edgeForce(cube) - w.coupling.force(cube)).norm(), 0.0,
+                  1e-13 * scale);
+      ++checked;
+    }
+    w.mpm().step(1e-5);
+  }
+  EXPECT_GE(checked, 200);
+}
+
+// A cube set on a granular layer under gravity settles and the flow carries its weight.
+TEST(MpSdemCoupling, BlockRestingOnGranularLayerCarriesItsWeight) {
+  auto prm = gridParams({12, 12, 10});
+  prm.gravity = {0, 0, -9.81};
+  prm.walls[4].friction = 0.5;
+  mpm::ParticleSet ps;
+  const double top = 0.05;
+  mpm::seedBox(prm, {0.02, 0.02, 0.02}, {0.10, 0.10, top}, 8, ps);
+  auto solver = mpm::makeSolver(prm);
+  solver->setParticles(ps);
+  CoupledWorld w(std::move(solver));
+  const double h = 0.02, R = 0.002;
+  const double rp = std::cbrt(3 * ps.volume0[0] / (4 * M_PI));
+  // the top particles sit a quarter cell below the layer's surface
+  const int cube = addCube(w, h, R, Vec3(0.06, 0.06, top - 0.0025 + rp + h + 1e-4), 2500);
+  w.coupling.setPair(0, pair(0.4, 0.5));
+  const double dt = 1e-4;
+  const double weight = w.world.engine.mass(cube) * 9.81;
+  double sum = 0, zSettled = 0;
+  int n = 0;
+  for (int s = 0; s < 3000; ++s) {
+    ASSERT_LE(dt, w.criticalTimeStep()) << "step " << s;
+    w.step(dt);
+    if (s == 2000) zSettled = w.world.engine.position(cube).z();
+    if (s >= 2000) {
+      sum += w.coupling.force(cube).z();
+      ++n;
+    }
+  }
+  EXPECT_NEAR(sum / n, weight, 0.02 * weight);
+  // settled: over the last 0.1 s it sinks less than a tenth of a material point's radius
+  // (the elastic layer still rings at ~1 mm/s and creeps slowly under the block)
+  EXPECT_NEAR(w.world.engine.position(cube).z(), zSettled, 0.1 * rp);
+  EXPECT_GT(w.coupling.contactCount(cube), 16);
+}
+
+TEST(MpSdemCoupling, BlockSumsDoNotDependOnThreadCount) {
+  auto run = [](int threads) {
+    omp_set_num_threads(threads);
+    auto prm = gridParams({20, 14, 14});
+    mpm::ParticleSet ps;
+    mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
+    for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.5;
+    auto solver = mpm::makeSolver(prm);
+    solver->setParticles(ps);
+    CoupledWorld w(std::move(solver));
+    w.world.gravity = Vec3::Zero();
+    const int cube = addCube(w, 0.02, 0.003, Vec3(0.108, 0.07, 0.07), 2000);
+    w.coupling.setPair(0, pair(0.5));
+    Vec3 impulse = Vec3::Zero();
+    for (int s = 0; s < 800; ++s) {
+      w.step(1e-5);
+      impulse += 1e-5 * w.coupling.force(cube);
+    }
+    return std::make_pair(w.world.engine.position(cube), impulse);
+  };
+  const int before = omp_get_max_threads();
+  const auto a = run(1), b = run(2);
+  omp_set_num_threads(before);
+  EXPECT_EQ(a.first, b.first);
+  EXPECT_EQ(a.second, b.second);
+  EXPECT_GT(a.second.norm(), 0.0);
+}
+
+TEST(MpSdemCoupling, BadInputIsRefusedClearly) {
+  auto prm = gridParams({20, 14, 14});
+  mpm::ParticleSet ps;
+  mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.10, 0.09, 0.09}, 8, ps);
+  auto solver = mpm::makeSolver(prm);
+  solver->setParticles(ps);
+  CoupledWorld w(std::move(solver));
+  const int cube = addCube(w, 0.02, 0.003, Vec3(0.07, 0.07, 0.07), 2000);  // inside the blob
+  // no pair for the block's material
+  try {
+    w.step(1e-5);
+    FAIL() << "a block without a coupling pair was accepted";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("coupling pair for SDEM material 0"), std::string::npos) << e.what();
+  }
+  w.coupling.setPair(0, pair());
+  try {
+    w.step(1e-5);
+    FAIL() << "particles seeded inside a block were accepted";
+  } catch (const RuntimeFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("reached the core of block " + std::to_string(100 + cube)), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(w.coupling.setHistorySlots(0), ParameterError);
+  sdem::BarrierPhys bad = pair();
+  bad.friction = -1;
+  EXPECT_THROW(w.coupling.setPair(0, bad), ParameterError);
+  EXPECT_THROW(w.coupling.setPair(3, pair()), ParameterError);
+}
+
+// A block added between steps joins the coupling (its shape enters the table) and is hit.
+TEST(MpSdemCoupling, BlockAddedMidRunIsCoupled) {
+  auto prm = gridParams({24, 14, 14});
+  mpm::ParticleSet ps;
+  mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
+  for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.0;
+  auto solver = mpm::makeSolver(prm);
+  solver->setParticles(ps);
+  CoupledWorld w(std::move(solver));
+  w.world.gravity = Vec3::Zero();
+  addCube(w, 0.01, 0.002, Vec3(0.02 + 0.2, 0.07, 0.12), 2000, true);  // far away
+  w.coupling.setPair(0, pair());
+  for (int s = 0; s < 100; ++s) w.step(1e-5);
+  EXPECT_EQ(w.coupling.totalContacts(), 0);
+  const int cube = addCube(w, 0.02, 0.003, Vec3(0.125, 0.07, 0.07), 2000);
+  int hit = 0;
+  for (int s = 0; s < 3000 && !hit; ++s) {
+    w.step(1e-5);
+    hit = w.coupling.contactCount(cube);
+  }
+  EXPECT_GT(hit, 0);
+  EXPECT_EQ(w.coupling.numBlocks(), 2);
+}
