@@ -78,6 +78,7 @@ inline std::vector<double> fromNumpy(const bp::object& o, std::size_t expected, 
 void exportShapes();
 void exportSdem();
 void exportMpm();
+void exportCoupling();
 
 }  // namespace py
 }  // namespace mpmsdem

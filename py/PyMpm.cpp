@@ -1,141 +1,10 @@
-// Binding of the MPM solver: a scene (the same JSON schema as the mpmsdem-run driver,
-// see examples/scenes/README.md), stepping, particle arrays, HDF5 + VTK outputs.
-#include <filesystem>
-#include <iomanip>
-#include <sstream>
-
-#include "PyConvert.hpp"
-#include "io/Hdf5Writer.hpp"
-#include "io/VtkWriter.hpp"
-#include "mpm/MpmScene.hpp"
-#include "mpm/MpmSolver.hpp"
+// Binding of the MPM solver (py/PyMpm.hpp).
+#include "PyMpm.hpp"
 
 namespace mpmsdem {
 namespace py {
 
 namespace {
-
-class PyMpm {
- public:
-  explicit PyMpm(const std::string& sceneJson) : scene_(mpm::parseScene(sceneJson, "MpmEngine scene")) {
-    solver_ = mpm::makeSolver(scene_.params, scene_.run.backend, scene_.run.precision);
-    solver_->setParticles(mpm::seedParticles(scene_));
-    fresh_ = false;
-  }
-
-  void step(double dt) {
-    solver_->step(dt);
-    fresh_ = false;
-  }
-  void run(long n, double dt) {
-    for (long i = 0; i < n; ++i) solver_->step(dt);
-    fresh_ = false;
-  }
-  double stableTimeStep() { return solver_->stableTimeStep(); }
-  double time() const { return solver_->time(); }
-  long steps() const { return solver_->steps(); }
-  std::size_t numParticles() const { return solver_->numParticles(); }
-  std::size_t memoryBytes() const { return solver_->memoryBytes(); }
-  std::string name() const { return solver_->name(); }
-  std::string sceneJson() const { return scene_.sourceJson; }
-
-  void setExternalForces(const bp::object& f) {
-    solver_->setExternalForces(fromNumpy(f, 3 * solver_->numParticles(), "forces"));
-  }
-
-  bp::dict particles() {
-    sync();
-    const auto& p = cache_;
-    const npy_intp n = static_cast<npy_intp>(p.size());
-    std::vector<double> density(n), phase(n);
-    for (npy_intp i = 0; i < n; ++i) {
-      density[i] = p.density(i);
-      phase[i] = p.phase[i];
-    }
-    bp::dict d;
-    d["x"] = numpyArray(p.x.data(), n, 3);
-    d["v"] = numpyArray(p.v.data(), n, 3);
-    d["stress"] = numpyArray(p.stress.data(), n, 6);
-    d["mass"] = numpyArray(p.mass.data(), n, 0);
-    d["volume0"] = numpyArray(p.volume0.data(), n, 0);
-    d["J"] = numpyArray(p.J.data(), n, 0);
-    d["density"] = numpyArray(density.data(), n, 0);
-    d["gammaDotP"] = numpyArray(p.gammaDotP.data(), n, 0);
-    d["phase"] = numpyArray(phase.data(), n, 0);
-    return d;
-  }
-
-  // Outputs: <dir>/mpm.h5 (append-only series + snapshots) and <dir>/vtk/particles_*.vtp + .pvd.
-  void openOutput(const std::string& dir, bool append) {
-    std::filesystem::create_directories(std::filesystem::path(dir) / "vtk");
-    const auto mode = append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate;
-    h5_ = std::make_unique<io::Hdf5Writer>((std::filesystem::path(dir) / "mpm.h5").string(), mode);
-    writeHeader(*h5_);
-    pvd_ = std::make_unique<io::PvdCollection>((std::filesystem::path(dir) / "particles.pvd").string(), append);
-    dir_ = dir;
-  }
-  void writeSnapshot() {
-    requireOutput();
-    sync();
-    const long k = h5_->writeSnapshot(cache_, solver_->time(), solver_->steps());
-    std::ostringstream name;
-    name << "vtk/particles_" << std::setw(6) << std::setfill('0') << k << ".vtp";
-    io::writeParticlesVtp((std::filesystem::path(dir_) / name.str()).string(), cache_);
-    pvd_->add(solver_->time(), name.str());
-  }
-  // A checkpoint: one HDF5 file with the scene and the full particle state at this time
-  // (the same layout as mpm.h5, so any output file also works as a checkpoint).
-  void saveCheckpoint(const std::string& path) {
-    sync();
-    const std::string tmp = path + ".tmp";
-    {
-      io::Hdf5Writer w(tmp, io::Hdf5Writer::Mode::Truncate);
-      writeHeader(w);
-      w.writeSnapshot(cache_, solver_->time(), solver_->steps());
-    }
-    std::filesystem::rename(tmp, path);
-  }
-  // Continue from snapshot `index` (-1: the last) of an mpm.h5 or checkpoint file.
-  void loadSnapshot(const std::string& path, long index) {
-    const long n = io::readNumSnapshots(path);
-    if (index < 0) index += n;
-    if (index < 0 || index >= n) throwParameter("index", index, "", "in [-" + std::to_string(n) + ", " +
-                                                 std::to_string(n) + ") (snapshots in " + path + ")");
-    mpm::ParticleSet p;
-    double time = 0;
-    long step = 0;
-    io::readSnapshot(path, index, p, &time, &step);
-    solver_->setParticles(p);
-    solver_->setClock(time, step);
-    fresh_ = false;
-  }
-  void appendSeries(const std::string& name, double value) {
-    requireOutput();
-    h5_->appendScalar(name, value);
-  }
-
- private:
-  void writeHeader(io::Hdf5Writer& w) const {
-    w.setAttribute("parameters", scene_.sourceJson);
-    w.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
-    w.setAttribute("solver", solver_->name());
-  }
-  void sync() {
-    if (!fresh_) solver_->getParticles(cache_);
-    fresh_ = true;
-  }
-  void requireOutput() const {
-    if (!h5_) throw ParameterError("output: call openOutput(dir) before writing outputs");
-  }
-
-  mpm::MpmScene scene_;
-  std::unique_ptr<mpm::MpmSolver> solver_;
-  mpm::ParticleSet cache_;
-  bool fresh_ = false;
-  std::unique_ptr<io::Hdf5Writer> h5_;
-  std::unique_ptr<io::PvdCollection> pvd_;
-  std::string dir_;
-};
 
 bool cudaAvailable() { return mpm::cudaAvailable(); }
 std::string sceneOf(const std::string& path) { return io::readStringAttribute(path, "parameters"); }
@@ -163,7 +32,8 @@ void exportMpm() {
       .add_property("numParticles", &PyMpm::numParticles)
       .add_property("memoryBytes", &PyMpm::memoryBytes)
       .add_property("name", &PyMpm::name)
-      .add_property("sceneJson", &PyMpm::sceneJson);
+      .add_property("sceneJson", &PyMpm::sceneJson)
+      .add_property("gravity", &PyMpm::gravity, "Gravity of the scene [m/s^2] (an incline resolved).");
 }
 
 }  // namespace py

@@ -26,4 +26,5 @@ BOOST_PYTHON_MODULE(_mpmsdem) {
   mpmsdem::py::exportShapes();
   mpmsdem::py::exportSdem();
   mpmsdem::py::exportMpm();
+  mpmsdem::py::exportCoupling();
 }

@@ -13,6 +13,9 @@ Main entry points (all SI units):
   contact forces every step (put ``engine.runner`` between ``ForceResetter`` and
   ``NewtonIntegrator`` in ``O.engines``).
 * :class:`MpmEngine` — the MPM granular-flow solver (CPU double, or CUDA float/double).
+* :class:`CoupledEngine` — the two coupled every step (paper §2.3): material points push the
+  blocks and the blocks push back; ``coupled.runner`` goes between ``ForceResetter`` and
+  ``NewtonIntegrator``.
 * :mod:`mpmsdem.analysis` — analytic references (paper Eq 19, runout fits, Froude numbers).
 """
 import os
@@ -40,9 +43,10 @@ _import_yade()
 from ._mpmsdem import SpheroPolyhedron, SdemMat, cudaAvailable  # noqa: E402
 from .sdem import SdemEngine  # noqa: E402
 from .mpm import MpmEngine  # noqa: E402
+from .coupling import CoupledEngine  # noqa: E402
 from . import analysis  # noqa: E402
 
-__all__ = ["SpheroPolyhedron", "SdemMat", "SdemEngine", "MpmEngine", "analysis", "cudaAvailable", "material", "run"]
+__all__ = ["SpheroPolyhedron", "SdemMat", "SdemEngine", "MpmEngine", "CoupledEngine", "analysis", "cudaAvailable", "material", "run"]
 
 
 def material(density, friction=0.5, poisson=0.3, barrierStiffness=1e4, normalDamping=0.0,

@@ -159,6 +159,11 @@ class MpmEngine:
         return self.solver.time
 
     @property
+    def gravity(self):
+        """Gravity acting on the flow [m/s²], as a tuple (an inclined flume's resolved)."""
+        return tuple(self.solver.gravity)
+
+    @property
     def numParticles(self):
         return self.solver.numParticles
 

@@ -187,21 +187,31 @@ class SdemEngine:
 
     # ------------------------------------------------------------------ stepping
     def _step(self):
+        self._beforeFirstStep()
+        try:
+            self._bridge.step(O.bodies, O.forces, O.dt)
+        except Exception as e:
+            self._fail(e)
+            raise
+        self._afterStep()
+
+    def _beforeFirstStep(self):
         if not self._checkedEngines:
             self._checkedEngines = True
             _warnDamping()
             if self.output is not None:  # opened here: every body has been added by now
                 self._bridge.openOutput(str(self.output), False)
                 self._nextRecord = self._nextVtk = O.time
-        try:
-            self._bridge.step(O.bodies, O.forces, O.dt)
-        except Exception as e:
-            self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
-            if self.saveOnFailure:
-                O.save(self.saveOnFailure + ".yade.gz")
-                self.save(self.saveOnFailure + ".sdem.json")
-                self.error += " [last good state saved: %s.yade.gz, %s.sdem.json]" % ((self.saveOnFailure,) * 2)
-            raise
+
+    def _fail(self, e):
+        """Record the error of a failed step and save the last good state (saveOnFailure)."""
+        self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
+        if self.saveOnFailure:
+            O.save(self.saveOnFailure + ".yade.gz")
+            self.save(self.saveOnFailure + ".sdem.json")
+            self.error += " [last good state saved: %s.yade.gz, %s.sdem.json]" % ((self.saveOnFailure,) * 2)
+
+    def _afterStep(self):
         if self.output is not None:
             t = O.time
             if t >= self._nextRecord - 1e-12:

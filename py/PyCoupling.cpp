@@ -1,0 +1,229 @@
+// Binding of the MP–SDEM coupling inside YADE (C++ side of mpmsdem.CoupledEngine). One call
+// per YADE step keeps the order of a coupled step (paper §2.3):
+//   block states from YADE -> block–block contacts -> MP–block contacts (particle forces into
+//   the MPM force buffer, block shares) -> MPM step -> block forces (contacts + flow) to
+//   O.forces; YADE's NewtonIntegrator then moves the blocks.
+// Particle data stays in the solver's memory (on the GPU for the CUDA backend).
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+
+#include "PyMpm.hpp"
+#include "PySdem.hpp"
+#include "coupling/CoupledWorld.hpp"
+#include "coupling/MpSdemCoupling.hpp"
+
+namespace mpmsdem {
+namespace py {
+
+namespace {
+
+class PyCoupling {
+ public:
+  PyCoupling(YadeSdemBridge& sdem, PyMpm& mpm) : sdem_(sdem), mpm_(mpm), coupling_(sdem.engine()) {}
+
+  void setPair(int material, double kc, double friction, double poisson, double normalDamping,
+               double tangentialDamping) {
+    sdem::BarrierPhys p;
+    p.barrierStiffness = kc;
+    p.friction = friction;
+    p.poisson = poisson;
+    p.normalDamping = normalDamping;
+    p.tangentialDamping = tangentialDamping;
+    coupling_.setPair(material, p);
+  }
+  int historySlots() const { return coupling_.historySlots(); }
+  void setHistorySlots(int s) { coupling_.setHistorySlots(s); }
+
+  void step(const bp::object& bodies, const bp::object& forces, double dt) {
+    using Clock = std::chrono::steady_clock;
+    sdem_.readStates(bodies);
+    sdem_.computeForces(dt);
+    const auto t0 = Clock::now();
+    coupling_.computeForces(mpm_.solver(), dt);
+    const auto t1 = Clock::now();
+    mpm_.step(dt);
+    const auto t2 = Clock::now();
+    const int n = coupling_.numBlocks();
+    force_.resize(n);
+    torque_.resize(n);
+    for (int i = 0; i < n; ++i) {
+      force_[i] = coupling_.force(i);
+      torque_[i] = coupling_.torque(i);
+    }
+    sdem_.writeForces(forces, &force_, &torque_);
+    sdem_.countStep();
+    couplingSeconds_ += std::chrono::duration<double>(t1 - t0).count();
+    mpmSeconds_ += std::chrono::duration<double>(t2 - t1).count();
+    ++steps_;
+    const double limit = contactStep();
+    if (dt > limit) {
+      if (strict_) {
+        std::ostringstream os;
+        os << "dt = " << dt << " s: must be <= the coupled contact critical step " << limit
+           << " s (MP-block and block-block contacts: sqrt(m / k) with the tangent barrier stiffness)";
+        throw RuntimeFailure(os.str());
+      }
+      ++warnings_;
+    }
+  }
+
+  double contactStep() const { return coupling::coupledContactStep(sdem_.engine(), coupling_); }
+  double criticalTimeStep() { return std::min(mpm_.solver().stableTimeStep(), contactStep()); }
+
+  Vec3 force(int i) const { return coupling_.force(i); }
+  Vec3 torque(int i) const { return coupling_.torque(i); }
+  Vec3 faceForce(int i) const { return coupling_.faceForce(i); }
+  Vec3 edgeForce(int i) const { return coupling_.edgeForce(i); }
+  int contactCount(int i) const { return coupling_.contactCount(i); }
+  long totalContacts() const { return coupling_.totalContacts(); }
+  long historyOverflow() const { return coupling_.historyOverflow(); }
+
+  bp::dict energies() const {
+    bp::dict d;
+    d["barrier"] = coupling_.barrierEnergy();
+    d["tangential"] = coupling_.springEnergy();
+    d["friction"] = coupling_.frictionDissipation();
+    d["damping"] = coupling_.dampingDissipation();
+    return d;
+  }
+  bp::dict timings() const {
+    bp::dict d;
+    d["steps"] = steps_;
+    d["coupling"] = couplingSeconds_;
+    d["mpm"] = mpmSeconds_;
+    return d;
+  }
+  void resetTimings() {
+    steps_ = 0;
+    couplingSeconds_ = mpmSeconds_ = 0;
+  }
+
+  // ---- outputs: <dir>/coupled.h5 (append-only series) and <dir>/scene.pvd (particles, part 0,
+  // and block surfaces, part 1, in one ParaView time series)
+  void openOutput(const std::string& dir, bool append) {
+    namespace fs = std::filesystem;
+    fs::create_directories(fs::path(dir) / "vtk");
+    h5_ = std::make_unique<io::Hdf5Writer>((fs::path(dir) / "coupled.h5").string(),
+                                           append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate);
+    std::ostringstream ids;
+    ids << "[";
+    for (int i = 0; i < sdem_.engine().numBodies(); ++i) ids << (i ? ", " : "") << sdem_.engine().externalId(i);
+    ids << "]";
+    h5_->setAttribute("ids", ids.str());
+    h5_->setAttribute("units",
+                      "SI: m, s, N, N m, J, rad. Per-block series are (records, 3 x blocks) in the order of the "
+                      "attribute ids: pos, vel, rotation (rotation vector from the first record's orientation), "
+                      "flow_force F_t, face_force F_f, edge_force F_e, flow_torque; contacts (records, blocks)");
+    pvd_ = std::make_unique<io::PvdCollection>((fs::path(dir) / "scene.pvd").string(), append);
+    dir_ = dir;
+  }
+  void record(double time, long step) {
+    requireOutput();
+    const sdem::SdemEngine& e = sdem_.engine();
+    const int n = std::min(e.numBodies(), coupling_.numBlocks());
+    if (ori0_.size() < static_cast<std::size_t>(n))
+      for (int i = static_cast<int>(ori0_.size()); i < n; ++i) ori0_.push_back(e.orientation(i));
+    std::vector<double> pos(3 * n), vel(3 * n), rot(3 * n), ft(3 * n), ff(3 * n), fe(3 * n), tq(3 * n), cnt(n);
+    for (int i = 0; i < n; ++i) {
+      const Eigen::AngleAxis<double> aa(e.orientation(i) * ori0_[i].conjugate());
+      const Vec3 rv = aa.angle() * aa.axis();
+      const Vec3 f = coupling_.force(i), a = coupling_.faceForce(i), b = coupling_.edgeForce(i),
+                 t = coupling_.torque(i);
+      for (int k = 0; k < 3; ++k) {
+        pos[3 * i + k] = e.position(i)[k];
+        vel[3 * i + k] = e.velocity(i)[k];
+        rot[3 * i + k] = rv[k];
+        ft[3 * i + k] = f[k];
+        ff[3 * i + k] = a[k];
+        fe[3 * i + k] = b[k];
+        tq[3 * i + k] = t[k];
+      }
+      cnt[i] = coupling_.contactCount(i);
+    }
+    h5_->appendScalar("time", time);
+    h5_->appendScalar("step", static_cast<double>(step));
+    h5_->appendVector("pos", pos);
+    h5_->appendVector("vel", vel);
+    h5_->appendVector("rotation", rot);
+    h5_->appendVector("flow_force", ft);
+    h5_->appendVector("face_force", ff);
+    h5_->appendVector("edge_force", fe);
+    h5_->appendVector("flow_torque", tq);
+    h5_->appendVector("contacts", cnt);
+  }
+  void appendSeries(const std::string& name, double value) {
+    requireOutput();
+    h5_->appendScalar(name, value);
+  }
+  void writeVtk(double time) {
+    requireOutput();
+    std::ostringstream p, b;
+    const std::size_t k = pvd_->size() / 2;
+    p << "vtk/scene_particles_" << std::setw(6) << std::setfill('0') << k << ".vtp";
+    b << "vtk/scene_bodies_" << std::setw(6) << std::setfill('0') << k << ".vtp";
+    mpm_.writeParticlesVtp((std::filesystem::path(dir_) / p.str()).string());
+    sdem_.writeBodiesVtp((std::filesystem::path(dir_) / b.str()).string());
+    pvd_->add(time, p.str(), 0);
+    pvd_->add(time, b.str(), 1);
+  }
+
+  bool strict() const { return strict_; }
+  void setStrict(bool s) { strict_ = s; }
+  long warnings() const { return warnings_; }
+
+ private:
+  void requireOutput() const {
+    if (!h5_) throw ParameterError("output: call openOutput(dir) before writing outputs");
+  }
+
+  YadeSdemBridge& sdem_;
+  PyMpm& mpm_;
+  coupling::MpSdemCoupling coupling_;
+  std::vector<Vec3> force_, torque_;
+  std::vector<Quat> ori0_;
+  bool strict_ = true;
+  long warnings_ = 0;
+  long steps_ = 0;
+  double couplingSeconds_ = 0, mpmSeconds_ = 0;
+  std::unique_ptr<io::Hdf5Writer> h5_;
+  std::unique_ptr<io::PvdCollection> pvd_;
+  std::string dir_;
+};
+
+}  // namespace
+
+void exportCoupling() {
+  bp::class_<PyCoupling, boost::noncopyable>(
+      "CouplingBridge", "C++ side of mpmsdem.CoupledEngine (use that class instead).",
+      bp::init<YadeSdemBridge&, PyMpm&>((bp::arg("sdem"), bp::arg("mpm")))
+          [bp::with_custodian_and_ward<1, 2, bp::with_custodian_and_ward<1, 3>>()])
+      .def("setPair", &PyCoupling::setPair,
+           (bp::arg("material"), bp::arg("barrierStiffness"), bp::arg("friction"), bp::arg("poisson"),
+            bp::arg("normalDamping"), bp::arg("tangentialDamping")))
+      .def("step", &PyCoupling::step)
+      .def("force", &PyCoupling::force)
+      .def("torque", &PyCoupling::torque)
+      .def("faceForce", &PyCoupling::faceForce)
+      .def("edgeForce", &PyCoupling::edgeForce)
+      .def("contactCount", &PyCoupling::contactCount)
+      .def("energies", &PyCoupling::energies)
+      .def("timings", &PyCoupling::timings)
+      .def("resetTimings", &PyCoupling::resetTimings)
+      .def("openOutput", &PyCoupling::openOutput)
+      .def("record", &PyCoupling::record)
+      .def("appendSeries", &PyCoupling::appendSeries)
+      .def("writeVtk", &PyCoupling::writeVtk)
+      .def("criticalTimeStep", &PyCoupling::criticalTimeStep)
+      .add_property("contactStep", &PyCoupling::contactStep)
+      .add_property("totalContacts", &PyCoupling::totalContacts)
+      .add_property("historyOverflow", &PyCoupling::historyOverflow)
+      .add_property("historySlots", &PyCoupling::historySlots, &PyCoupling::setHistorySlots)
+      .add_property("strict", &PyCoupling::strict, &PyCoupling::setStrict)
+      .add_property("timeStepWarnings", &PyCoupling::warnings);
+}
+
+}  // namespace py
+}  // namespace mpmsdem

@@ -1,0 +1,285 @@
+"""MPM flow and SDEM blocks coupled every step inside YADE (paper §2.3, Eqs 12–18).
+
+A material point is a sphere of radius R_p0 = (3 V0 / 4π)^(1/3) (Eq 13) that touches the
+blocks' rounded shapes through the same barrier normal law and Coulomb tangential law as
+block–block contacts (Eq 12); the force goes to the block at the contact point and,
+opposite, to the grid through the particle's P2G weights (Eqs 14–16). Typical use::
+
+    import mpmsdem
+    from yade import O
+    from yade.wrapper import ForceResetter, NewtonIntegrator
+    sdem = mpmsdem.SdemEngine()
+    copper = mpmsdem.material(density=8900, friction=0.67)
+    bed = sdem.box((1.0, 0.15, 0.02), 0.005, copper, pos=(0.8, 0.1, -0.02), fixed=True)
+    cube = sdem.box((0.01,) * 3, 0.001, copper, pos=(0.51, 0.1, 0.0101))
+    mpm = mpmsdem.MpmEngine(grid=..., material=..., particles=..., gravity=...)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={copper: {"friction": 0.21}})
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=..., damping=0)]
+    O.dt = 0.5 * coupled.criticalTimeStep()
+    mpmsdem.run(10000, coupled)
+
+``coupled.runner`` replaces ``sdem.runner`` and ``mpm.runner`` (it steps both).
+"""
+import math
+import sys
+import time as _time
+import warnings
+
+from yade import O
+from yade.minieigenHP import Quaternion, Vector3
+from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
+
+from . import _mpmsdem
+from .sdem import _bindStep
+
+DT_CHECKS = ("raise", "warn")
+PAIR_KEYS = ("friction", "barrierStiffness", "poisson", "normalDamping", "tangentialDamping")
+
+
+class CoupledEngine:
+    """Couples an :class:`SdemEngine` (blocks) and an :class:`MpmEngine` (flow).
+
+    :param sdem: the SDEM engine whose bodies are the blocks (all of them are coupled).
+    :param mpm: the MPM engine of the flow (CPU or CUDA backend).
+    :param pairs: contact physics between the flow and each block material, a dict
+        ``{SdemMat: {"friction": μ, "barrierStiffness": k_c [N/m], "poisson": ν,
+        "normalDamping": ζ_n, "tangentialDamping": ζ_t}}`` (a bare number is taken as μ);
+        missing keys default to the block material's own values. Every material used by a
+        block needs a pair: the flow–block friction is a property of the pair, not of the
+        block (paper Table 1: basal friction of the flow 0.21 on the bed).
+    :param dtCheck: ``"raise"`` stops the run when ``O.dt`` exceeds the critical step of the
+        MP–block and block–block contacts (tangent barrier stiffness with the MP and block
+        masses); ``"warn"`` warns once and counts (``timeStepWarnings``).
+    :param historySlots: simultaneous block contacts per material point that keep their
+        tangential history, in [1, 4] (default 2: a point between a block and the bed).
+    :param output: folder for ``coupled.h5`` (per block every ``outputEvery`` s: ``pos``,
+        ``vel``, ``rotation`` (rotation vector since the first record) [rad], ``flow_force``
+        F_t, ``face_force`` F_f, ``edge_force`` F_e (paper §3.2.3), ``flow_torque``,
+        ``contacts``; energies ``flow_kinetic``, ``flow_potential``, ``block_kinetic``,
+        ``dissipated`` [J]) and, with ``vtkEvery``, ``scene.pvd`` (particles and blocks in
+        one ParaView time series). The SDEM and MPM engines keep their own outputs if given.
+    :param plot: also feed ``yade.plot.addData`` every ``outputEvery`` s (``t``, and per
+        block id ``Ft_<id>``, ``Ff_<id>``, ``Fe_<id>`` [N], ``x_<id>`` [m], ``vx_<id>``
+        [m/s], ``rot_<id>`` [deg]), so ``plot.plots``/``plot.saveDataTxt`` work as with any
+        YADE engine. Needs ``outputEvery``.
+    :param verbose: progress line on stderr every 10 s of wall time.
+    """
+
+    def __init__(self, sdem, mpm, pairs, dtCheck="raise", historySlots=2, output=None, outputEvery=None,
+                 vtkEvery=None, plot=False, label="coupled", verbose=True):
+        from .mpm import MpmEngine
+        from .sdem import SdemEngine
+        if not isinstance(sdem, SdemEngine):
+            raise ValueError("sdem = %r: must be an mpmsdem.SdemEngine" % (sdem,))
+        if not isinstance(mpm, MpmEngine):
+            raise ValueError("mpm = %r: must be an mpmsdem.MpmEngine" % (mpm,))
+        if dtCheck not in DT_CHECKS:
+            raise ValueError("dtCheck = %r: must be one of %s" % (dtCheck, ", ".join(DT_CHECKS)))
+        if (output is not None or plot) and not (outputEvery and outputEvery > 0):
+            raise ValueError("outputEvery = %r s: must be > 0 when output or plot is set" % (outputEvery,))
+        if vtkEvery is not None and not (output is not None and vtkEvery > 0):
+            raise ValueError("vtkEvery = %r s: must be > 0, with output set" % (vtkEvery,))
+        self.sdem, self.mpm = sdem, mpm
+        self._bridge = _mpmsdem.CouplingBridge(sdem._bridge, mpm.solver)
+        self._bridge.strict = dtCheck == "raise"
+        self._bridge.historySlots = int(historySlots)
+        self.dtCheck = dtCheck
+        self._pairs = {}
+        if not isinstance(pairs, dict) or not pairs:
+            raise ValueError("pairs = %r: must be a non-empty dict {SdemMat: {...}} of flow-block contact "
+                             "physics" % (pairs,))
+        for mat, spec in pairs.items():
+            self.setPair(mat, spec)
+        self.output, self.outputEvery, self.vtkEvery, self.plot = output, outputEvery, vtkEvery, plot
+        self.verbose = verbose
+        self.error = None
+        self._started = False
+        self._warned = 0
+        self._nextRecord = self._nextVtk = None
+        self._ori0 = {}
+        self._wall0 = self._lastReport = None
+        self.runner = PyRunner(command=_bindStep("coupled", id(self), self._step), iterPeriod=1, initRun=True,
+                               label=label)
+
+    def setPair(self, material, spec):
+        """Set the flow–block contact physics for blocks of ``material`` (see ``pairs``)."""
+        if isinstance(spec, (int, float)):
+            spec = {"friction": float(spec)}
+        if not isinstance(spec, dict):
+            raise ValueError("pairs[%r] = %r: must be a dict with keys among %s, or a friction number"
+                             % (material, spec, ", ".join(PAIR_KEYS)))
+        unknown = set(spec) - set(PAIR_KEYS)
+        if unknown:
+            raise ValueError("pairs: unknown key(s) %s: allowed %s" % (", ".join(sorted(unknown)), ", ".join(PAIR_KEYS)))
+        k = self.sdem._materialIndex(material)
+        p = {key: float(spec.get(key, getattr(material, key))) for key in PAIR_KEYS}
+        self._bridge.setPair(k, p["barrierStiffness"], p["friction"], p["poisson"], p["normalDamping"],
+                             p["tangentialDamping"])
+        self._pairs[k] = p
+
+    # ------------------------------------------------------------------ stepping
+    def criticalTimeStep(self):
+        """The largest stable step of the coupled scene [s]: the MPM CFL step and the contact
+        step sqrt(m/k) of MP–block (MP mass) and block–block/MP contacts (block mass), times
+        the SDEM safety factor. Before the first step only the MPM part is known."""
+        return self._bridge.criticalTimeStep()
+
+    def _checkEngines(self):
+        engines = list(O.engines)
+        if self.sdem.runner in engines or self.mpm.runner in engines:
+            raise ValueError("O.engines holds sdem.runner or mpm.runner besides coupled.runner: the coupled runner "
+                             "steps both; use O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(...)]")
+        me = engines.index(self.runner) if self.runner in engines else -1
+        resetters = [i for i, e in enumerate(engines) if isinstance(e, ForceResetter)]
+        newtons = [i for i, e in enumerate(engines) if isinstance(e, NewtonIntegrator)]
+        if me < 0 or not resetters or not newtons or not (resetters[0] < me < newtons[0]):
+            raise ValueError("O.engines must be [ForceResetter(), coupled.runner, NewtonIntegrator(...)] (in this "
+                             "order): the coupled runner adds the block forces after they are reset and before "
+                             "YADE moves the blocks")
+        g = Vector3(engines[newtons[0]].gravity)
+        gm = self.mpm.gravity
+        if (g - Vector3(*gm)).norm() > 1e-9 * max(g.norm(), 1.0):
+            raise ValueError("NewtonIntegrator.gravity = %s differs from the MPM gravity %s: blocks and flow must "
+                             "fall the same way" % (tuple(g), tuple(gm)))
+
+    def _step(self):
+        if not self._started:
+            self._started = True
+            self._checkEngines()
+            self.sdem._beforeFirstStep()
+            if self.output is not None:
+                self._bridge.openOutput(str(self.output), False)
+            self._nextRecord = self._nextVtk = O.time
+            self._wall0 = self._lastReport = _time.time()
+        try:
+            self._bridge.step(O.bodies, O.forces, O.dt)
+        except Exception as e:
+            self._fail(e)
+            raise
+        self.sdem._afterStep()
+        self.mpm._afterStep()
+        t = self.mpm.time
+        if (self.output is not None or self.plot) and t >= self._nextRecord - 1e-12:
+            self._record(t)
+            self._nextRecord += self.outputEvery
+        if self.vtkEvery and t >= self._nextVtk - 1e-12:
+            self._bridge.writeVtk(t)
+            self._nextVtk += self.vtkEvery
+        if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
+            if self._warned == 0:
+                warnings.warn("mpmsdem.CoupledEngine: O.dt = %g s exceeds the contact critical step %g s at step %d"
+                              % (O.dt, self._bridge.contactStep, O.iter), RuntimeWarning)
+            self._warned = self._bridge.timeStepWarnings
+        if self.verbose and _time.time() - self._lastReport > 10.0:
+            self._lastReport = now = _time.time()
+            print("mpmsdem.CoupledEngine: t = %.4f s, step %d, %d MP-block contacts, critical step %.3g s (O.dt %.3g s)"
+                  ", %.1f ms/step" % (t, O.iter, self._bridge.totalContacts, self._bridge.contactStep, O.dt,
+                                      1e3 * (now - self._wall0) / max(O.iter, 1)), file=sys.stderr, flush=True)
+
+    def _fail(self, e):
+        self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
+        self.sdem._fail(e)
+        if self.sdem.error and "saved" in self.sdem.error:
+            self.error += self.sdem.error[self.sdem.error.index(" [last good"):]
+        if self.mpm.output is not None:  # the solver still holds the state of the last good step
+            self.mpm.solver.writeSnapshot()
+            self.error += " [particles of the last good step: last snapshot in %s]" % self.mpm.output
+
+    def _dissipated(self):
+        e = self._bridge.energies()
+        s = self.sdem.energies()
+        return e["friction"] + e["damping"] + s["friction"] + s["damping"]
+
+    def _record(self, t):
+        import numpy as np
+        ids = self.sdem.ids
+        if self.output is not None:
+            self._bridge.record(t, O.iter)
+            p = self.mpm.particles()
+            g = np.array(self.mpm.gravity)
+            self._bridge.appendSeries("flow_kinetic", 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum()))
+            self._bridge.appendSeries("flow_potential", -float((p["mass"] * (p["x"] @ g)).sum()))
+            self._bridge.appendSeries("block_kinetic", self.blockKineticEnergy())
+            self._bridge.appendSeries("dissipated", self._dissipated())
+        if self.plot:
+            from yade import plot
+            row = {"t": t}
+            for k, i in enumerate(ids):
+                b = O.bodies[i]
+                row["Ft_%d" % i] = self.force(i).norm()
+                row["Ff_%d" % i] = self.faceForce(i).norm()
+                row["Fe_%d" % i] = self.edgeForce(i).norm()
+                row["x_%d" % i] = b.state.pos[0]
+                row["vx_%d" % i] = b.state.vel[0]
+                q0 = self._ori0.setdefault(i, Quaternion(b.state.ori))
+                row["rot_%d" % i] = math.degrees((b.state.ori * q0.conjugate()).toAngleAxis()[0])
+            plot.addData(**row)
+
+    def blockKineticEnergy(self):
+        """Kinetic energy of the moving blocks (translation and rotation) [J]."""
+        e = 0.0
+        for i in self.sdem.ids:
+            b = O.bodies[i]
+            if not b.dynamic:
+                continue
+            s = b.state
+            wb = s.ori.conjugate() * s.angVel
+            e += 0.5 * s.mass * s.vel.squaredNorm() + 0.5 * sum(s.inertia[k] * wb[k] ** 2 for k in range(3))
+        return e
+
+    def check(self):
+        """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
+        if self.error:
+            raise RuntimeError("mpmsdem.CoupledEngine stopped the run at " + self.error)
+
+    # ------------------------------------------------------------------ read-out (last step)
+    def _index(self, yadeId):
+        self.sdem.shape(yadeId)  # ValueError for a non-SDEM id
+        return self.sdem._index[yadeId]
+
+    def force(self, yadeId):
+        """Force of the flow on a block in the last step, F_t [N] (world frame)."""
+        return self._bridge.force(self._index(yadeId))
+
+    def torque(self, yadeId):
+        """Torque of the flow on a block about its centroid [N m]."""
+        return self._bridge.torque(self._index(yadeId))
+
+    def faceForce(self, yadeId):
+        """Share of F_t through the block's face interiors, F_f [N] (paper §3.2.3)."""
+        return self._bridge.faceForce(self._index(yadeId))
+
+    def edgeForce(self, yadeId):
+        """Share of F_t through the block's edges and vertices, F_e [N]."""
+        return self._bridge.edgeForce(self._index(yadeId))
+
+    def contactCount(self, yadeId):
+        """Number of material points touching the block."""
+        return self._bridge.contactCount(self._index(yadeId))
+
+    @property
+    def totalContacts(self):
+        return self._bridge.totalContacts
+
+    @property
+    def timeStepWarnings(self):
+        return self._bridge.timeStepWarnings
+
+    @property
+    def historyOverflow(self):
+        """MP–block contacts that found no free history slot so far (see historySlots)."""
+        return self._bridge.historyOverflow
+
+    def energies(self):
+        """MP–block contact energies [J]: current barrier and tangential potentials, cumulative
+        slip and dashpot work."""
+        return dict(self._bridge.energies())
+
+    def timings(self):
+        """Wall time since the last reset [s]: steps, coupling (MP–block contacts), mpm (the MPM
+        step); the SDEM bridge's share is in ``sdem.timings()``."""
+        return dict(self._bridge.timings())
+
+    def resetTimings(self):
+        self._bridge.resetTimings()
+        self.sdem.resetTimings()
