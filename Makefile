@@ -8,7 +8,7 @@ YADE_PY  := $(shell ls -d /usr/lib/x86_64-linux-gnu/yade-double/py 2>/dev/null |
 export PYTHONPATH := $(CURDIR)/$(BUILD)/python:$(YADE_PY)$(if $(PYTHONPATH),:$(PYTHONPATH))
 export OMP_NUM_THREADS ?= $(JOBS)
 
-.PHONY: all deps configure build install demo test test-cpp test-py checks bench clean
+.PHONY: all deps configure build install demo test test-cpp test-py checks bench bench-peers clean
 
 all: build
 
@@ -46,6 +46,11 @@ test: test-cpp test-py checks
 bench: install
 	OMP_NUM_THREADS=1 $(PY) scripts/bench/bench_sdem.py
 	$(PY) scripts/bench/bench_mpm.py --build $(BUILD)
+
+# Opt-in: our MPM CPU solver against a Taichi implementation of the same scheme (needs PyPI
+# once, for .venv-peers/). Minutes of runs; not part of `make test`.
+bench-peers: build
+	$(PY) scripts/bench/bench_mpm_peers.py --build $(BUILD) --threads $(JOBS)
 
 clean:
 	rm -rf $(BUILD)
