@@ -129,9 +129,16 @@ void finalize(SpheroPolyhedron& s) {
 // Faces (convex polygons) of the convex hull of pts, coplanar hull triangles merged.
 // Holds the hull vertices and triangles, and the merged polygon loops (indices into
 // vertices, counter-clockwise from outside) with their planes.
+//
+// The result is canonical: it depends on the set of points only, not on their order nor on
+// how CGAL's hull happens to number its vertices and triangulate planar faces (its quickhull
+// keys maps by handle addresses, so two runs on the same points can number the hull
+// differently). Vertices are the loop corners in lexicographic order of (x, y, z), each loop
+// starts at its smallest index, loops are sorted, and planes and triangles are derived from
+// the loops alone. Shapes built from the same points are then bit-identical, so runs repeat.
 struct Hull {
   std::vector<Vec3> vertices;
-  std::vector<std::array<int, 3>> triangles;
+  std::vector<std::array<int, 3>> triangles;  // fan of each loop from its first corner
   std::vector<std::vector<int>> loops;
   std::vector<Vec3> normals;
   std::vector<Real> offsets;
@@ -164,40 +171,60 @@ void requireSolid(const std::vector<Vec3>& pts) {
                    "at least 4 points, not all coplanar");
 }
 
+bool lexLess(const Vec3& a, const Vec3& b) {
+  if (a.x() != b.x()) return a.x() < b.x();
+  if (a.y() != b.y()) return a.y() < b.y();
+  return a.z() < b.z();
+}
+
 Hull convexHullFaces(const std::vector<Vec3>& pts) {
   std::vector<CgalPoint> cp;
   cp.reserve(pts.size());
   for (const Vec3& p : pts) cp.emplace_back(p.x(), p.y(), p.z());
   CgalMesh sm;
   CGAL::convex_hull_3(cp.begin(), cp.end(), sm);
-  Hull h;
-  std::map<CgalMesh::Vertex_index, int> id;
+  // Hull vertices renumbered in lexicographic order, triangles rotated to start at their
+  // smallest index and sorted: the grouping below then visits them in a canonical order.
+  std::vector<Vec3> hv;
+  std::map<CgalMesh::Vertex_index, int> cgalId;
   for (auto v : sm.vertices()) {
-    id[v] = static_cast<int>(h.vertices.size());
+    cgalId[v] = static_cast<int>(hv.size());
     const CgalPoint& p = sm.point(v);
-    h.vertices.emplace_back(p.x(), p.y(), p.z());
+    hv.emplace_back(p.x(), p.y(), p.z());
   }
+  std::vector<int> order(hv.size()), rank(hv.size());
+  for (size_t i = 0; i < hv.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return lexLess(hv[a], hv[b]); });
+  std::vector<Vec3> verts(hv.size());
+  for (size_t i = 0; i < order.size(); ++i) {
+    rank[order[i]] = static_cast<int>(i);
+    verts[i] = hv[order[i]];
+  }
+  std::vector<std::array<int, 3>> tris;
   for (auto f : sm.faces()) {
     std::array<int, 3> t{};
     int k = 0;
-    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[k++] = id[v];
-    h.triangles.push_back(t);
+    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[k++] = rank[cgalId[v]];
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    tris.push_back(t);
   }
-  const Real tol = kRelTol * shapeSize(h.vertices);
+  std::sort(tris.begin(), tris.end());
+  const Real tol = kRelTol * shapeSize(verts);
   // Flood-fill groups of edge-adjacent triangles lying in one plane.
   std::map<std::pair<int, int>, int> triOfSide;
-  for (size_t t = 0; t < h.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) triOfSide[{h.triangles[t][k], h.triangles[t][(k + 1) % 3]}] = static_cast<int>(t);
-  std::vector<int> group(h.triangles.size(), -1);
+  for (size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) triOfSide[{tris[t][k], tris[t][(k + 1) % 3]}] = static_cast<int>(t);
+  std::vector<int> group(tris.size(), -1);
   auto triNormal = [&](int t) {
-    const auto& T = h.triangles[t];
-    return Vec3((h.vertices[T[1]] - h.vertices[T[0]]).cross(h.vertices[T[2]] - h.vertices[T[0]]));
+    const auto& T = tris[t];
+    return Vec3((verts[T[1]] - verts[T[0]]).cross(verts[T[2]] - verts[T[0]]));
   };
-  for (size_t seed = 0; seed < h.triangles.size(); ++seed) {
+  std::vector<std::vector<int>> loops;
+  for (size_t seed = 0; seed < tris.size(); ++seed) {
     if (group[seed] >= 0) continue;
-    const int g = static_cast<int>(h.loops.size());
+    const int g = static_cast<int>(loops.size());
     const Vec3 n = triNormal(static_cast<int>(seed)).normalized();
-    const Real d = n.dot(h.vertices[h.triangles[seed][0]]);
+    const Real d = n.dot(verts[tris[seed][0]]);
     std::vector<int> stack{static_cast<int>(seed)}, members;
     group[seed] = g;
     while (!stack.empty()) {
@@ -205,10 +232,10 @@ Hull convexHullFaces(const std::vector<Vec3>& pts) {
       stack.pop_back();
       members.push_back(t);
       for (int k = 0; k < 3; ++k) {
-        const auto it = triOfSide.find({h.triangles[t][(k + 1) % 3], h.triangles[t][k]});
+        const auto it = triOfSide.find({tris[t][(k + 1) % 3], tris[t][k]});
         if (it == triOfSide.end() || group[it->second] >= 0) continue;
         bool inPlane = true;
-        for (int c = 0; c < 3; ++c) inPlane = inPlane && std::abs(n.dot(h.vertices[h.triangles[it->second][c]]) - d) < tol;
+        for (int c = 0; c < 3; ++c) inPlane = inPlane && std::abs(n.dot(verts[tris[it->second][c]]) - d) < tol;
         if (inPlane) {
           group[it->second] = g;
           stack.push_back(it->second);
@@ -217,14 +244,11 @@ Hull convexHullFaces(const std::vector<Vec3>& pts) {
     }
     // Boundary of the group: sides whose twin is outside the group, chained into a loop.
     std::map<int, int> next;
-    Vec3 areaNormal = Vec3::Zero();
-    for (int t : members) {
-      areaNormal += triNormal(t);
+    for (int t : members)
       for (int k = 0; k < 3; ++k) {
-        const int a = h.triangles[t][k], b = h.triangles[t][(k + 1) % 3];
+        const int a = tris[t][k], b = tris[t][(k + 1) % 3];
         if (group[triOfSide.at({b, a})] != g) next[a] = b;
       }
-    }
     std::vector<int> loop{next.begin()->first};
     while (true) {
       const int nx = next.at(loop.back());
@@ -234,35 +258,51 @@ Hull convexHullFaces(const std::vector<Vec3>& pts) {
     // Drop corners where the boundary goes straight on (points inside a hull edge).
     std::vector<int> clean;
     for (size_t i = 0; i < loop.size(); ++i) {
-      const Vec3& pr = h.vertices[loop[(i + loop.size() - 1) % loop.size()]];
-      const Vec3& p = h.vertices[loop[i]];
-      const Vec3& nx = h.vertices[loop[(i + 1) % loop.size()]];
+      const Vec3& pr = verts[loop[(i + loop.size() - 1) % loop.size()]];
+      const Vec3& p = verts[loop[i]];
+      const Vec3& nx = verts[loop[(i + 1) % loop.size()]];
       if ((p - pr).normalized().cross((nx - p).normalized()).norm() > 1e-9) clean.push_back(loop[i]);
+    }
+    std::rotate(clean.begin(), std::min_element(clean.begin(), clean.end()), clean.end());
+    loops.push_back(clean);
+  }
+  std::sort(loops.begin(), loops.end());
+  // Keep the loop corners only (a hull vertex inside a face or an edge is no corner),
+  // renumbered in the same (lexicographic) order.
+  std::vector<int> keep(verts.size(), -1);
+  for (const auto& loop : loops)
+    for (int v : loop) keep[v] = 0;
+  Hull h;
+  for (size_t v = 0; v < verts.size(); ++v)
+    if (keep[v] == 0) {
+      keep[v] = static_cast<int>(h.vertices.size());
+      h.vertices.push_back(verts[v]);
+    }
+  for (auto& loop : loops) {
+    for (int& v : loop) v = keep[v];
+    Vec3 areaNormal = Vec3::Zero();
+    for (size_t i = 1; i + 1 < loop.size(); ++i) {
+      const Vec3& o = h.vertices[loop[0]];
+      areaNormal += (h.vertices[loop[i]] - o).cross(h.vertices[loop[i + 1]] - o);
+      h.triangles.push_back({loop[0], loop[i], loop[i + 1]});
     }
     const Vec3 fn = areaNormal.normalized();
     Real off = 0;
-    for (int v : clean) off += fn.dot(h.vertices[v]);
-    h.loops.push_back(clean);
+    for (int v : loop) off += fn.dot(h.vertices[v]);
     h.normals.push_back(fn);
-    h.offsets.push_back(off / clean.size());
+    h.offsets.push_back(off / loop.size());
   }
+  h.loops = std::move(loops);
   return h;
 }
 
-// Core faces from a hull: keep only vertices used by some loop, reindexed.
+// Core faces from a hull (its vertices are all loop corners).
 void coreFromHull(SpheroPolyhedron& s, const Hull& h) {
-  std::vector<int> remap(h.vertices.size(), -1);
-  s.vertices.clear();
+  s.vertices = h.vertices;
   s.faces.clear();
   for (size_t f = 0; f < h.loops.size(); ++f) {
     CoreFace face;
-    for (int v : h.loops[f]) {
-      if (remap[v] < 0) {
-        remap[v] = static_cast<int>(s.vertices.size());
-        s.vertices.push_back(h.vertices[v]);
-      }
-      face.loop.push_back(remap[v]);
-    }
+    face.loop = h.loops[f];
     face.normal = h.normals[f];
     face.offset = h.offsets[f];
     s.faces.push_back(face);
