@@ -514,6 +514,24 @@ std::shared_ptr<SpheroPolyhedron> SpheroPolyhedron::mesh(const std::vector<Vec3>
       throwParameter("mesh", "edge (" + std::to_string(orig[kv.first.first]) + ", " + std::to_string(orig[kv.first.second]) + ")",
                      "", "shared by exactly two triangles (it is used by " + std::to_string(kv.second) +
                              (kv.second == 1 ? ": the mesh is open)" : ": non-manifold)"));
+  // One body is one closed surface: several parts would otherwise pass every check above and
+  // be replaced by the convex hull of them all (convex path) or give one rigid body made of
+  // separate pieces. Parts are counted through shared vertices.
+  {
+    std::vector<int> parent(verts.size());
+    for (size_t v = 0; v < verts.size(); ++v) parent[v] = static_cast<int>(v);
+    auto root = [&](int v) {
+      while (parent[v] != v) v = parent[v] = parent[parent[v]];
+      return v;
+    };
+    for (const auto& t : tris)
+      for (int k = 1; k < 3; ++k) parent[root(t[k])] = root(t[0]);
+    size_t parts = 0;
+    for (size_t v = 0; v < verts.size(); ++v) parts += root(static_cast<int>(v)) == static_cast<int>(v) ? 1 : 0;
+    if (parts > 1)
+      throwParameter("mesh", std::to_string(parts) + " disconnected components", "",
+                     "one closed surface (split it into one body per part)");
+  }
   Real vol = 0;
   for (const auto& t : tris) vol += verts[t[0]].dot(verts[t[1]].cross(verts[t[2]])) / 6.0;
   if (!(vol > 0))

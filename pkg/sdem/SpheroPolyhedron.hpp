@@ -66,7 +66,8 @@ struct SpheroPolyhedron {
   //   planes moved in by R (faces of P may vanish from the core when R is large);
   //   R in (0, min(inradius of P, half its min width over face normals)).
   // mesh: closed, consistently oriented (counter-clockwise seen from outside) triangle mesh of
-  //   P [m], non-convex allowed; every edge in exactly two triangles, no zero-area triangle.
+  //   P [m], non-convex allowed; every edge in exactly two triangles, no zero-area triangle,
+  //   one connected surface (a mesh of several parts is refused: one body per part).
   //   A convex mesh takes the convexHull path. Otherwise faces = triangles (sides between
   //   coplanar triangles are not edges), each vertex moves so that each distinct incident
   //   face plane moves in by R (least squares; exact where at most 3 distinct planes meet),

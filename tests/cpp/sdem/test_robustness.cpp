@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdio>
+#include <fstream>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -92,6 +95,60 @@ std::vector<Vec3> boxWithExtraPoints() {
   return p;
 }
 
+// Triangle mesh in memory.
+struct Mesh {
+  std::vector<Vec3> v;
+  std::vector<std::array<int, 3>> t;
+  void add(const Mesh& m, const Vec3& shift) {
+    const int base = static_cast<int>(v.size());
+    for (const Vec3& p : m.v) v.push_back(p + shift);
+    for (const auto& tri : m.t) t.push_back({tri[0] + base, tri[1] + base, tri[2] + base});
+  }
+};
+
+// Cube of half side h centred at the origin, triangles counter-clockwise seen from outside.
+Mesh cubeMesh(Real h) {
+  Mesh m;
+  for (int i = 0; i < 8; ++i) m.v.emplace_back((i & 1 ? h : -h), (i & 2 ? h : -h), (i & 4 ? h : -h));
+  const int quads[6][4] = {{1, 3, 7, 5}, {0, 4, 6, 2}, {2, 6, 7, 3}, {0, 1, 5, 4}, {4, 5, 7, 6}, {0, 2, 3, 1}};
+  for (const auto& q : quads) {
+    m.t.push_back({q[0], q[1], q[2]});
+    m.t.push_back({q[0], q[2], q[3]});
+  }
+  return m;
+}
+
+// L-shaped prism (non-convex): cross-section (0,0) (2,0) (2,1) (1,1) (1,2) (0,2) times u,
+// z in [0, u]. Caps are fans from the reflex corner 3.
+Mesh lPrismMesh(Real u) {
+  const Real xy[6][2] = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
+  Mesh m;
+  for (int z = 0; z < 2; ++z)
+    for (const auto& p : xy) m.v.emplace_back(u * p[0], u * p[1], u * z);  // bottom 0..5, top 6..11
+  for (int i = 0; i < 6; ++i) {
+    const int j = (i + 1) % 6;
+    m.t.push_back({i, j, j + 6});
+    m.t.push_back({i, j + 6, i + 6});
+  }
+  for (int k : {4, 5, 0, 1}) {
+    const int k1 = k == 5 ? 0 : k + 1;
+    m.t.push_back({3 + 6, k + 6, k1 + 6});  // top, counter-clockwise seen from +z
+    m.t.push_back({3, k1, k});              // bottom
+  }
+  return m;
+}
+
+void expectComponentsError(const Mesh& m, Real R, int parts) {
+  try {
+    SpheroPolyhedron::mesh(m.v, m.t, R);
+    ADD_FAILURE() << "a mesh of " << parts << " parts was accepted";
+  } catch (const ParameterError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("mesh = " + std::to_string(parts) + " disconnected components"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("one body per part"), std::string::npos) << msg;
+  }
+}
+
 }  // namespace
 
 // The same points give the same shape, bit for bit, however often it is built and in
@@ -111,4 +168,39 @@ TEST(Robustness, ConvexHullIsCanonical) {
       expectBitIdentical(*SpheroPolyhedron::convexHull(perm, R), *ref, "shuffled points " + std::to_string(n));
     }
   }
+}
+
+// A closed mesh of several disjoint parts is refused instead of becoming the convex hull of
+// all of them (convex parts) or one rigid body of separate pieces (non-convex parts).
+TEST(Robustness, MeshOfDisjointPartsRefused) {
+  const Real R = 0.005;
+  const Mesh cube = cubeMesh(0.05), ell = lPrismMesh(0.1);
+  // each part alone is a valid body
+  EXPECT_TRUE(SpheroPolyhedron::mesh(cube.v, cube.t, R)->convex);
+  EXPECT_FALSE(SpheroPolyhedron::mesh(ell.v, ell.t, R)->convex);
+  Mesh twoCubes;
+  twoCubes.add(cube, Vec3::Zero());
+  twoCubes.add(cube, Vec3(0.3, 0, 0));
+  expectComponentsError(twoCubes, R, 2);
+  Mesh twoEll;
+  twoEll.add(ell, Vec3::Zero());
+  twoEll.add(ell, Vec3(0.5, 0.1, 0));
+  expectComponentsError(twoEll, R, 2);
+  Mesh three = twoEll;
+  three.add(cube, Vec3(0, 0, 0.4));
+  expectComponentsError(three, R, 3);
+  // the same through a mesh file
+  const std::string path = ::testing::TempDir() + "/mpmsdem_two_cubes.obj";
+  {
+    std::ofstream f(path);
+    for (const Vec3& p : twoCubes.v) f << "v " << p.x() << " " << p.y() << " " << p.z() << "\n";
+    for (const auto& t : twoCubes.t) f << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
+  }
+  try {
+    SpheroPolyhedron::meshFile(path, R);
+    ADD_FAILURE() << "a mesh file of 2 parts was accepted";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("2 disconnected components"), std::string::npos) << e.what();
+  }
+  std::remove(path.c_str());
 }
