@@ -223,6 +223,7 @@ def main():
         sys.exit("bench_mpm_peers: no executable mpmsdem-run at %s (build it, or pass --build/--exe)" % exe)
     py = ensure_peer_env(args.venv, args.peer_python, args.taichi)
 
+    load_before = os.getloadavg()[0]
     rows, failed = [], False
     with tempfile.TemporaryDirectory(prefix="bench_mpm_peers_") as tmp:
         for i, size in enumerate(args.sizes):
@@ -269,13 +270,17 @@ def main():
                 print("bench_mpm_peers: %s" % e, file=sys.stderr)
                 failed = True
 
+    load_after = os.getloadavg()[0]
+    # Other work on the machine slows OpenMP's barriers more than it slows the peer's kernels:
+    # say how busy the machine was.
+    load = "1-min load average %.1f before, %.1f after" % (load_before, load_after)
     text, md = table(rows) if rows else ("", "")
     peer_name = rows[0]["peer"]["solver"] if rows else "taichi"
     print()
     print(text, end="")
     print("ours: mpmsdem-run --bench (cpu-double, OpenMP); peer: %s; %d threads each; best of %d "
-          "interleaved runs; dt %g s; machine: %s"
-          % (peer_name, args.threads, args.repeats, args.dt, machine()))
+          "interleaved runs; dt %g s; machine: %s; %s"
+          % (peer_name, args.threads, args.repeats, args.dt, machine(), load))
     print("B/p: ours memoryBytes()/particles (both particle buffers, grid, bins); peer: its fields' bytes "
           "/ particles. RSS: peak resident size of the whole process (the peer's includes Python, Taichi and LLVM).")
     if args.markdown:
@@ -283,7 +288,8 @@ def main():
             f.write(md)
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"machine": machine(), "threads": args.threads, "dt": args.dt, "rows": rows}, f, indent=1)
+            json.dump({"machine": machine(), "load": load, "threads": args.threads, "dt": args.dt, "rows": rows},
+                      f, indent=1)
     return 1 if failed else 0
 
 
