@@ -133,8 +133,9 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     const T* R = blk.rot;
     const Vec3T<T> xb{R[0] * r.x + R[3] * r.y + R[6] * r.z, R[1] * r.x + R[4] * r.y + R[7] * r.z,
                       R[2] * r.x + R[5] * r.y + R[8] * r.z};
-    const sdem::CoreQuery<T> q = sdem::closestPointOnCore(S, blk.shape, xb);
     const T cutoff = S.sweepRadius[blk.shape] + rp;
+    if (sdem::coreDistanceLowerBound(S, blk.shape, xb) >= cutoff) continue;
+    const sdem::CoreQuery<T> q = sdem::closestPointOnCore(S, blk.shape, xb);
     if (q.distance >= cutoff) continue;
     const T delta = cutoff - q.distance;
     if (!(q.distance > T(0)) || !(delta < cutoff)) {

@@ -108,3 +108,67 @@ def dynamicPressureCoefficient(Fr):
 def hydrodynamicForce(rho, v, h, area, g=G):
     """Impact force of the hydrodynamic model, Eq 20: F = α_f ρ v² A, α_f from Fr = v/√(g h) [N]."""
     return dynamicPressureCoefficient(froude(v, h, g)) * rho * v * v * area
+
+
+def froudeDistance(v, L0, g=G):
+    """Fr1 = v / √(g L0), the Froude number on the block's distance from the source (paper §5)."""
+    return v / math.sqrt(g * L0)
+
+
+def flowAtStation(particles, x, halfWidth, bedZ=0.0, minPoints=4):
+    """Depth and velocity of the flow at a station of a flume (coordinates along the flume:
+    x downstream, z normal to the bed), from an MPM particle snapshot (``MpmEngine.particles()``).
+
+    Uses the material points with |x_p − x| ≤ halfWidth [m]: depth h_f = highest point − bedZ
+    [m] (the free surface; add half a particle spacing for the surface of the material), velocity
+    v_f = their mass-weighted mean downstream velocity [m/s]. Returns (h_f, v_f), or (0, 0) with
+    fewer than ``minPoints`` points at the station (the front has not arrived)."""
+    import numpy as np
+    sel = np.abs(particles["x"][:, 0] - x) <= halfWidth
+    if sel.sum() < minPoints:
+        return 0.0, 0.0
+    m = particles["mass"][sel]
+    h = float(particles["x"][sel, 2].max() - bedZ)
+    v = float((m * particles["v"][sel, 0]).sum() / m.sum())
+    return h, v
+
+
+class FlowProbe:
+    """Free-flow calibration (paper §3.2.3, §5): records h_f and v_f at a station of a flume
+    every call while the scene runs without the block, and reports them at the front's
+    arrival, with the Froude numbers Fr = v_f/√(g h_f) and Fr1 = v_f/√(g L0).
+
+    :param x: station (the block's upstream face) [m]; :param halfWidth: averaging half-width
+        along x [m] (one or two cells); :param bedZ: bed surface [m]; :param L0: distance from
+        the source to the station [m] (for Fr1); :param g: gravity magnitude [m/s²];
+        :param window: time after the front's arrival over which v_f and h_f are averaged [s].
+    """
+
+    def __init__(self, x, halfWidth, bedZ=0.0, L0=None, g=G, window=0.05):
+        self.x, self.halfWidth, self.bedZ, self.L0, self.g, self.window = x, halfWidth, bedZ, L0, g, window
+        self.records = []  # (t, h_f, v_f)
+
+    def sample(self, t, particles):
+        h, v = flowAtStation(particles, self.x, self.halfWidth, self.bedZ)
+        self.records.append((float(t), h, v))
+
+    @property
+    def arrival(self):
+        """Time the front reached the station [s], or None."""
+        for t, h, v in self.records:
+            if h > 0:
+                return t
+        return None
+
+    def result(self):
+        """dict(arrival [s], h_f [m], v_f [m/s], Fr, Fr1): means over ``window`` after arrival."""
+        t0 = self.arrival
+        if t0 is None:
+            raise ValueError("FlowProbe at x = %g m: the front never reached the station (run longer)" % self.x)
+        rows = [(h, v) for t, h, v in self.records if t0 <= t <= t0 + self.window and h > 0]
+        h = sum(r[0] for r in rows) / len(rows)
+        v = sum(r[1] for r in rows) / len(rows)
+        out = {"arrival": t0, "h_f": h, "v_f": v, "Fr": froude(v, h, self.g)}
+        if self.L0:
+            out["Fr1"] = froudeDistance(v, self.L0, self.g)
+        return out

@@ -91,6 +91,7 @@ TEST(ShapeTable, ClosestPointMatchesShapeQuery) {
       const auto ref = shapes[s]->closestPoint(p);
       const auto q = sdem::closestPointOnCore(view, s, mpm::Vec3T<double>{p[0], p[1], p[2]});
       ASSERT_NEAR(q.distance, ref.distance, 1e-14) << "shape " << s;
+      ASSERT_LE(sdem::coreDistanceLowerBound(view, s, mpm::Vec3T<double>{p[0], p[1], p[2]}), ref.distance + 1e-14);
       ASSERT_EQ(q.featureKind, ref.featureKind) << "shape " << s;
       ASSERT_EQ(q.featureIndex, ref.featureIndex) << "shape " << s;
       for (int d = 0; d < 3; ++d) ASSERT_NEAR(q.closest[d], ref.closest[d], 1e-14);

@@ -1,0 +1,180 @@
+"""MPM–SDEM coupling inside YADE (paper §2.3): momentum conservation through YADE's
+NewtonIntegrator, a wall holding a granular layer against earth-pressure theory, outputs a
+user reads (h5py, ParaView, yade.plot), clear errors for wrong set-ups."""
+import math
+import os
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+import mpmsdem
+from mpmsdem import analysis
+from yade import O, plot
+from yade.wrapper import ForceResetter, NewtonIntegrator
+
+GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
+
+
+def blob_and_cube(fixed=False, **kw):
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=2000, friction=0.3)
+    cube = sdem.box((0.02,) * 3, 0.003, mat, pos=(0.125, 0.07, 0.07), fixed=fixed)
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [24, 14, 14], "origin": [0, 0, 0]}, material=GLASS,
+                            particles=[{"lo": [0.04, 0.05, 0.05], "hi": [0.08, 0.09, 0.09], "ppc": 8,
+                                        "velocity": [1, 0, 0]}], gravity=(0, 0, 0), verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.3}, verbose=False, **kw)
+    return sdem, mpm, coupled, cube
+
+
+def momentum(mpm, body):
+    p = mpm.particles()
+    s = O.bodies[body].state
+    return (p["mass"][:, None] * p["v"]).sum(axis=0) + s.mass * np.array(s.vel)
+
+
+def test_blob_hitting_a_free_block_conserves_momentum_through_yade():
+    sdem, mpm, coupled, cube = blob_and_cube()
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    O.dt = 1e-5
+    p0 = momentum(mpm, cube)
+    hit = 0
+    for _ in range(30):
+        mpmsdem.run(100, coupled)
+        hit = max(hit, coupled.contactCount(cube))
+    p1 = momentum(mpm, cube)
+    assert hit > 4, "the blob never touched the block"
+    assert O.bodies[cube].state.vel[0] > 0.1  # pushed downstream
+    assert np.linalg.norm(p1 - p0) == pytest.approx(0, abs=1e-9 * np.linalg.norm(p0))
+    t = coupled.timings()
+    assert t["steps"] == 3000 and t["coupling"] > 0 and t["mpm"] > 0
+
+
+def test_fixed_wall_carries_the_thrust_of_a_granular_layer_at_rest():
+    """A fixed SDEM wall holds a granular layer (frictionless base and sides, so every vertical
+    section carries the same horizontal force): the wall's force equals the section force
+    -∫σ_xx dA = -Σ σ_xx V / L of the layer's own stresses, and the thrust coefficient
+    K = F / (½ρgh²w) lies between Rankine's active and passive values of the material's
+    friction angle (any static stress state of a Mohr-Coulomb material does)."""
+    dx, ppc, h, w, L = 0.01, 8, 0.06, 0.04, 0.1
+    rp = (3 * dx ** 3 / ppc / (4 * math.pi)) ** (1 / 3)  # Eq 13
+    Rw, hx = 0.004, 0.02
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    steel = mpmsdem.material(density=7800, friction=0.0)
+    xLast = L - dx / 4  # the wall's core face where the last column of points just touches it
+    wall = sdem.box((hx, 0.04, 0.06), Rw, steel, pos=(xLast + rp + Rw + hx - Rw, w / 2, 0.05), fixed=True)
+    mpm = mpmsdem.MpmEngine(grid={"dx": dx, "cells": [18, 8, 12], "origin": [-2 * dx, -2 * dx, -2 * dx]},
+                            material=GLASS, particles=[{"lo": [0, 0, 0], "hi": [L, w, h], "ppc": ppc}],
+                            walls={"-x": "free", "+x": "free", "-y": "free", "+y": "free", "-z": "free"},
+                            gravity=(0, 0, -9.81), verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={steel: {"friction": 0.0, "normalDamping": 0.3}},
+                                    verbose=False)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    O.dt = 0.5 * mpm.stableTimeStep()
+    wallF, sectionF = [], []
+    while O.time < 0.45:
+        mpmsdem.run(50, coupled)
+        if O.time > 0.35:
+            p = mpm.particles()
+            wallF.append(coupled.force(wall)[0])
+            sectionF.append(-(p["stress"][:, 0] * p["J"] * p["volume0"]).sum() / L)
+    F, S = float(np.mean(wallF)), float(np.mean(sectionF))
+    assert F == pytest.approx(S, rel=0.03), "wall %.4f N against section force %.4f N" % (F, S)
+    sinphi = math.sin(math.atan(GLASS["mu_s"]))
+    Ka, Kp = (1 - sinphi) / (1 + sinphi), (1 + sinphi) / (1 - sinphi)
+    K = F / (0.5 * GLASS["density"] * 9.81 * h ** 2 * w)
+    assert Ka <= K <= Kp, "K = %.3f outside [Ka %.3f, Kp %.3f]" % (K, Ka, Kp)
+    assert abs(coupled.force(wall)[2]) < 0.02 * F  # smooth wall: no shear
+    assert O.bodies[wall].state.vel.norm() == 0
+
+
+def test_outputs_h5py_paraview_and_yade_plot(tmp_path):
+    import h5py
+    out = str(tmp_path / "run")
+    sdem, mpm, coupled, cube = blob_and_cube(output=out, outputEvery=0.002, vtkEvery=0.01, plot=True)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    O.dt = 1e-5
+    mpmsdem.run(3000, coupled)
+    with h5py.File(os.path.join(out, "coupled.h5"), "r", locking=False) as f:
+        s = f["series"]
+        n = s["time"].shape[0]
+        assert n == 16  # t = dt, then every 2 ms up to 0.03 s
+        for name in ("pos", "vel", "rotation", "flow_force", "face_force", "edge_force", "flow_torque"):
+            assert s[name].shape == (n, 3), name
+        assert s["contacts"].shape == (n, 1)
+        # F_t = F_f + F_e at every record (paper §3.2.3)
+        np.testing.assert_allclose(s["flow_force"][:], s["face_force"][:] + s["edge_force"][:], rtol=0, atol=1e-12)
+        assert s["flow_force"][:, 0].max() > 0  # pushed downstream at some record
+        # energy bookkeeping: flow kinetic energy goes into the block and into dissipation
+        e0 = s["flow_kinetic"][0] + s["block_kinetic"][0]
+        e1 = s["flow_kinetic"][-1] + s["block_kinetic"][-1]
+        assert e1 < e0
+        assert s["block_kinetic"][-1] > 0
+    root = ET.parse(os.path.join(out, "scene.pvd")).getroot()
+    parts = [int(d.get("part")) for d in root.iter("DataSet")]
+    assert parts.count(0) == parts.count(1) == 4
+    for d in root.iter("DataSet"):
+        assert os.path.getsize(os.path.join(out, d.get("file"))) > 0
+    assert len(plot.data["t"]) == 16
+    assert max(plot.data["Ft_%d" % cube]) > 0
+
+
+def test_wrong_engine_lists_and_missing_pairs_are_refused():
+    sdem, mpm, coupled, cube = blob_and_cube()
+    O.dt = 1e-5
+    O.engines = [ForceResetter(), NewtonIntegrator(gravity=(0, 0, 0), damping=0), coupled.runner]
+    with pytest.raises(RuntimeError, match="ForceResetter.*coupled.runner.*NewtonIntegrator"):
+        mpmsdem.run(1, coupled)
+    O.reset()
+    sdem, mpm, coupled, cube = blob_and_cube()
+    O.engines = [ForceResetter(), sdem.runner, coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    with pytest.raises(RuntimeError, match="steps both"):
+        mpmsdem.run(1, coupled)
+    O.reset()
+    sdem, mpm, coupled, cube = blob_and_cube()
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    with pytest.raises(RuntimeError, match="gravity"):
+        mpmsdem.run(1, coupled)
+    O.reset()
+    sdem, mpm, coupled, cube = blob_and_cube()
+    other = mpmsdem.material(density=500)
+    sdem.box((0.01,) * 3, 0.002, other, pos=(0.2, 0.07, 0.07))
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    with pytest.raises(RuntimeError, match="coupling pair for SDEM material 1"):
+        mpmsdem.run(1, coupled)
+    with pytest.raises(ValueError, match="pairs"):
+        mpmsdem.CoupledEngine(sdem, mpm, pairs={})
+    with pytest.raises(ValueError, match="unknown key"):
+        mpmsdem.CoupledEngine(sdem, mpm, pairs={other: {"frction": 0.2}})
+    with pytest.raises(ValueError, match="coupling friction"):
+        mpmsdem.CoupledEngine(sdem, mpm, pairs={other: -0.1})
+
+
+def test_particles_seeded_inside_a_block_are_refused_at_the_first_step():
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=2000)
+    cube = sdem.box((0.02,) * 3, 0.003, mat, pos=(0.06, 0.07, 0.07))
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [24, 14, 14], "origin": [0, 0, 0]}, material=GLASS,
+                            particles=[{"lo": [0.04, 0.05, 0.05], "hi": [0.08, 0.09, 0.09], "ppc": 8}],
+                            gravity=(0, 0, 0), verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.3}, verbose=False)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    O.dt = 1e-5
+    with pytest.raises(RuntimeError, match="reached the core of block %d" % cube):
+        mpmsdem.run(1, coupled)
+
+
+def test_flow_at_station_and_froude_numbers_by_hand():
+    x = np.array([[0.50, 0, 0.01], [0.505, 0, 0.03], [0.51, 0, 0.05], [0.49, 0, 0.02], [0.60, 0, 0.2]])
+    v = np.array([[1.0, 0, 0], [2.0, 0, 0], [3.0, 0, 0], [2.0, 0, 0], [9.0, 0, 0]])
+    m = np.array([1.0, 1.0, 2.0, 1.0, 1.0])
+    h, vf = analysis.flowAtStation({"x": x, "v": v, "mass": m}, 0.5, 0.011, bedZ=0.0)
+    assert h == pytest.approx(0.05, abs=1e-15)
+    assert vf == pytest.approx((1 + 2 + 6 + 2) / 5.0, abs=1e-15)
+    probe = analysis.FlowProbe(0.5, 0.011, L0=0.2, window=0.1)
+    probe.sample(0.0, {"x": x + [1, 0, 0], "v": v, "mass": m})  # front not there yet
+    probe.sample(0.1, {"x": x, "v": v, "mass": m})
+    r = probe.result()
+    assert r["arrival"] == 0.1
+    assert r["Fr"] == pytest.approx(2.2 / math.sqrt(9.81 * 0.05), rel=1e-12)
+    assert r["Fr1"] == pytest.approx(2.2 / math.sqrt(9.81 * 0.2), rel=1e-12)
