@@ -274,16 +274,208 @@ struct Selection {
   }
 };
 
-// Is any selected vertex of P strictly inside Q's (convex) core?
-bool vertexInside(const PosedSpheroPolyhedron& P, const std::vector<int>& sel, const PosedSpheroPolyhedron& Q) {
+// ---- interpenetration of the cores. Cores whose interiors overlap by more than tol must be
+// reported: their features meet from behind, no contact rule accepts them, and the bodies
+// would pass through each other with no force. A vertex of one core inside the other is not
+// enough to find them: equal cubes created coincident, or overlapping with aligned faces,
+// have none.
+
+// Largest and smallest projection of P's core on axis n.
+Real maxAlong(const PosedSpheroPolyhedron& P, const Vec3& n) {
+  Real m = -INFINITY;
+  for (const Vec3& x : P.vertices) m = std::max(m, n.dot(x));
+  return m;
+}
+Real minAlong(const PosedSpheroPolyhedron& P, const Vec3& n) {
+  Real m = INFINITY;
+  for (const Vec3& x : P.vertices) m = std::min(m, n.dot(x));
+  return m;
+}
+
+// Does every vertex of Q lie in front of face f of P, or less than tol behind its plane?
+bool faceSeparates(const PosedSpheroPolyhedron& P, int f, const PosedSpheroPolyhedron& Q, Real tol) {
+  const Vec3& n = P.faceNormals[f];
+  const Real limit = P.faceOffsets[f] - tol;
+  for (const Vec3& x : Q.vertices)
+    if (n.dot(x) <= limit) return false;
+  return true;
+}
+
+// Separating-axis test of two convex cores, on the faces of their Minkowski difference:
+// the face normals of A, those of B, and the cross products of the edge pairs whose arcs
+// on the Gauss map cross (Gregorius, GDC 2013). The cores interpenetrate when the
+// separation along every one of these axes is below -tol. `hint`: a first axis to try
+// (a contact normal from A to B, which separates a pair in contact), or zero.
+bool convexCoresInterpenetrate(const PosedSpheroPolyhedron& A, const PosedSpheroPolyhedron& B, Real tol,
+                               const Vec3& hint) {
+  if (hint.squaredNorm() > 0 && minAlong(B, hint) - maxAlong(A, hint) > -tol) return false;
+  for (int f = 0; f < static_cast<int>(A.faceNormals.size()); ++f)
+    if (faceSeparates(A, f, B, tol)) return false;
+  for (int f = 0; f < static_cast<int>(B.faceNormals.size()); ++f)
+    if (faceSeparates(B, f, A, tol)) return false;
+  const auto& EA = A.shape->edges;
+  const auto& EB = B.shape->edges;
+  for (size_t ea = 0; ea < EA.size(); ++ea) {
+    const Vec3& a = A.faceNormals[EA[ea].f0];
+    const Vec3& b = A.faceNormals[EA[ea].f1];
+    const Vec3 u = a.cross(b);  // normal of the great circle through a and b
+    for (size_t eb = 0; eb < EB.size(); ++eb) {
+      // arc of B's edge on the Gauss map of -B: from c = -n0 to d = -n1
+      const Vec3 c = -B.faceNormals[EB[eb].f0];
+      const Vec3 d = -B.faceNormals[EB[eb].f1];
+      const Real cu = c.dot(u), du = d.dot(u);
+      if (cu * du >= 0) continue;
+      const Vec3 w = c.cross(d);
+      const Real aw = a.dot(w), bw = b.dot(w);
+      if (aw * bw >= 0 || cu * bw <= 0) continue;
+      // The arcs cross at +-n: A's support along n is edge ea, B's support along -n is eb.
+      Vec3 n = A.edgeDir[ea].cross(B.edgeDir[eb]);
+      const Real len = n.norm();
+      if (!(len > 0)) continue;  // parallel edges: the face normals above cover them
+      n /= len;
+      if (n.dot(a + b) < 0) n = -n;
+      const Real sep = len > 1e-6
+                           ? n.dot(B.vertices[EB[eb].v0] - A.vertices[EA[ea].v0])
+                           : minAlong(B, n) - maxAlong(A, n);  // n not accurate enough for the shortcut
+      if (sep > -tol) return false;
+    }
+  }
+  return true;
+}
+
+// Is any selected vertex of P inside Q's convex core by more than tol?
+bool vertexInside(const PosedSpheroPolyhedron& P, const std::vector<int>& sel, const PosedSpheroPolyhedron& Q,
+                  Real tol) {
   if (!Q.shape->convex) return false;
   for (int v : sel) {
     bool inside = true;
     for (size_t f = 0; f < Q.faceNormals.size() && inside; ++f)
-      inside = Q.faceNormals[f].dot(P.vertices[v]) - Q.faceOffsets[f] < 0;
+      inside = Q.faceNormals[f].dot(P.vertices[v]) - Q.faceOffsets[f] < -tol;
     if (inside) return true;
   }
   return false;
+}
+
+// Is x inside face polygon f of P (convex, in its plane) by more than tol from every side?
+bool insidePolygon(const PosedSpheroPolyhedron& P, int f, const Vec3& x, Real tol) {
+  const std::vector<int>& loop = P.shape->faces[f].loop;
+  const Vec3& n = P.faceNormals[f];
+  for (size_t k = 0; k < loop.size(); ++k) {
+    const Vec3& a = P.vertices[loop[k]];
+    const Vec3& b = P.vertices[loop[(k + 1) % loop.size()]];
+    const Vec3 inward = n.cross(b - a);
+    if ((x - a).dot(inward) <= tol * inward.norm()) return false;
+  }
+  return true;
+}
+
+// Does a side of a selected face of P (ridges, valleys and flat diagonals alike) pass through
+// the interior of a selected face of Q, its ends more than tol on either side of the plane?
+// Then part of P's surface, hence of P, lies inside Q.
+bool sideThroughFace(const PosedSpheroPolyhedron& P, const std::vector<int>& pf, const PosedSpheroPolyhedron& Q,
+                     const std::vector<int>& qf, Real tol) {
+  for (int f : pf) {
+    const std::vector<int>& loop = P.shape->faces[f].loop;
+    for (size_t k = 0; k < loop.size(); ++k) {
+      const int i0 = loop[k], i1 = loop[(k + 1) % loop.size()];
+      if (i0 > i1) continue;  // each side once (the neighbour face runs it the other way)
+      const Vec3& p0 = P.vertices[i0];
+      const Vec3& p1 = P.vertices[i1];
+      const Vec3 lo = p0.cwiseMin(p1), hi = p0.cwiseMax(p1);
+      for (int g : qf) {
+        if (!boxesOverlap(lo, hi, Q.faceLo[g], Q.faceHi[g])) continue;
+        const Real s0 = Q.faceNormals[g].dot(p0) - Q.faceOffsets[g];
+        const Real s1 = Q.faceNormals[g].dot(p1) - Q.faceOffsets[g];
+        if (!((s0 < -tol && s1 > tol) || (s0 > tol && s1 < -tol))) continue;
+        if (insidePolygon(Q, g, p0 + (s0 / (s0 - s1)) * (p1 - p0), tol)) return true;
+      }
+    }
+  }
+  return false;
+}
+
+// Projection interval of face polygon f of P on the in-plane direction t.
+void polygonInterval(const PosedSpheroPolyhedron& P, int f, const Vec3& t, Real& lo, Real& hi) {
+  lo = INFINITY;
+  hi = -INFINITY;
+  for (int v : P.shape->faces[f].loop) {
+    const Real x = t.dot(P.vertices[v]);
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
+}
+
+// Two coplanar faces with the same outward normal whose polygons overlap by more than tol:
+// just behind the common area both bodies are solid. (Opposite normals are a touching contact.)
+bool coplanarFacesOverlap(const PosedSpheroPolyhedron& A, const std::vector<int>& af, const PosedSpheroPolyhedron& B,
+                          const std::vector<int>& bf, Real tol) {
+  for (int fa : af)
+    for (int fb : bf) {
+      const Vec3& n = A.faceNormals[fa];
+      if (1 - n.dot(B.faceNormals[fb]) > 1e-12 || std::abs(A.faceOffsets[fa] - B.faceOffsets[fb]) > tol) continue;
+      if (!boxesOverlap(A.faceLo[fa], A.faceHi[fa], B.faceLo[fb], B.faceHi[fb])) continue;
+      // 2D separating axes: the in-plane normals of both polygons' sides
+      bool overlap = true;
+      for (int pass = 0; pass < 2 && overlap; ++pass) {
+        const PosedSpheroPolyhedron& P = pass == 0 ? A : B;
+        const int f = pass == 0 ? fa : fb;
+        const std::vector<int>& loop = P.shape->faces[f].loop;
+        for (size_t k = 0; k < loop.size() && overlap; ++k) {
+          const Vec3 t = n.cross(P.vertices[loop[(k + 1) % loop.size()]] - P.vertices[loop[k]]).normalized();
+          Real la, ha, lb, hb;
+          polygonInterval(A, fa, t, la, ha);
+          polygonInterval(B, fb, t, lb, hb);
+          overlap = std::min(ha, hb) - std::max(la, lb) > tol;
+        }
+      }
+      if (overlap) return true;
+    }
+  return false;
+}
+
+// Distance from x to the core surface of P.
+Real surfaceDistance(const PosedSpheroPolyhedron& P, const Vec3& x) {
+  Real best = INFINITY;
+  for (size_t f = 0; f < P.faceNormals.size(); ++f) {
+    const Real s = P.faceNormals[f].dot(x) - P.faceOffsets[f];
+    if (std::abs(s) >= best) continue;
+    if (insidePolygon(P, static_cast<int>(f), x - s * P.faceNormals[f], 0)) {
+      best = std::abs(s);
+      continue;
+    }
+    const std::vector<int>& loop = P.shape->faces[f].loop;
+    for (size_t k = 0; k < loop.size(); ++k) {
+      const Vec3& a = P.vertices[loop[k]];
+      const Vec3 ab = P.vertices[loop[(k + 1) % loop.size()]] - a;
+      const Real t = std::clamp((x - a).dot(ab) / ab.squaredNorm(), Real(0), Real(1));
+      best = std::min(best, (x - a - t * ab).norm());
+    }
+  }
+  return best;
+}
+
+// P entirely inside Q (possible only when P's core box lies in Q's): the first vertex of P
+// farther than tol from Q's surface tells on which side P lies. Called only when the
+// surfaces do not cross, so all of P is on one side.
+bool coreInside(const PosedSpheroPolyhedron& P, const PosedSpheroPolyhedron& Q, Real tol) {
+  if ((P.coreLo.array() < Q.coreLo.array() - tol).any() || (P.coreHi.array() > Q.coreHi.array() + tol).any())
+    return false;
+  for (const Vec3& x : P.vertices) {
+    if (surfaceDistance(Q, x) <= tol) continue;
+    return Q.shape->closestPoint(Q.ori.conjugate() * (x - Q.pos)).distance == 0;
+  }
+  return false;
+}
+
+// Interpenetration of cores when one at least is not convex (no separating-axis theorem).
+// Interiors overlap by more than tol only if a vertex lies inside a convex core, the surfaces
+// cross (a face side through a face), coincide over an area with the same outward normal,
+// or one core contains the other.
+bool coresInterpenetrateGeneral(const PosedSpheroPolyhedron& A, const Selection& sa, const PosedSpheroPolyhedron& B,
+                                 const Selection& sb, Real tol) {
+  return vertexInside(A, sa.v, B, tol) || vertexInside(B, sb.v, A, tol) || sideThroughFace(A, sa.f, B, sb.f, tol) ||
+         sideThroughFace(B, sb.f, A, sa.f, tol) || coplanarFacesOverlap(A, sa.f, B, sb.f, tol) ||
+         coreInside(A, B, tol) || coreInside(B, A, tol);
 }
 
 }  // namespace
@@ -309,7 +501,10 @@ bool Ig2_SpheroPolyhedron_SpheroPolyhedron::go(const PosedSpheroPolyhedron& A, c
   thread_local Selection sa, sb;
   sa.build(A, loA, hiA);
   sb.build(B, loB, hiB);
-  if (vertexInside(A, sa.v, B) || vertexInside(B, sb.v, A)) return false;
+  // Interiors can overlap only where the core boxes overlap by more than tol.
+  const bool boxesMeet = (A.coreHi.cwiseMin(B.coreHi) - A.coreLo.cwiseMax(B.coreLo)).minCoeff() > tol;
+  const bool convexPair = A.shape->convex && B.shape->convex;
+  if (boxesMeet && !convexPair && coresInterpenetrateGeneral(A, sa, B, sb, tol)) return false;
 
   PairContext c{A, B, cutoff, tol, out, out.size()};
   for (int v : sa.v)
@@ -324,6 +519,17 @@ bool Ig2_SpheroPolyhedron_SpheroPolyhedron::go(const PosedSpheroPolyhedron& A, c
     for (int e : sa.e) vertexEdge(c, B, v, A, e, false);
   for (int va : sa.v)
     for (int vb : sb.v) vertexVertex(c, va, vb);
+  if (boxesMeet && convexPair) {
+    // The normal of the closest contact separates two convex cores in contact: tried first.
+    Vec3 hint = Vec3::Zero();
+    Real dmin = INFINITY;
+    for (size_t k = c.first; k < out.size(); ++k)
+      if (out[k].distance < dmin) dmin = out[k].distance, hint = out[k].normal;
+    if (convexCoresInterpenetrate(A, B, tol, hint)) {
+      out.resize(c.first);
+      return false;
+    }
+  }
   return true;
 }
 

@@ -74,9 +74,14 @@ class Ig2_SpheroPolyhedron_SpheroPolyhedron {
   // 2R for any face wider than 5R.
   static constexpr Real patchCosine = 0.9;
 
-  // Append the contacts between A and B to `out`. Returns false when the cores are found
-  // interpenetrating (a vertex of one core inside the other, convex, core): the caller must
-  // stop the run, the time step was too large for the barrier.
+  // Append the contacts between A and B to `out`. Returns false (and appends nothing) when
+  // the cores interpenetrate, their interiors overlapping by more than tolerance(): the
+  // caller must stop the run (time step too large for the barrier, or bodies created
+  // overlapping). Decided when the core boxes overlap: for two convex cores by the
+  // separating-axis test (face normals, and cross products of edge pairs that form faces of
+  // the Minkowski difference); otherwise by a vertex inside a convex core, a face side
+  // through a face, coplanar faces with the same outward normal overlapping over an area, or
+  // one core inside the other. Touching cores (gap 0) are not interpenetrating.
   static bool go(const PosedSpheroPolyhedron& A, const PosedSpheroPolyhedron& B, std::vector<SdemGeom>& out);
 
   // Length tolerance of the feature tests for this pair [m].
