@@ -278,7 +278,7 @@ def build(sc, n, ti):
                 phase[p] = ti.cast(2, ti.u8)
                 gdp[p] = 0.0
                 bad[None] += 1
-            if vp.norm() > max_speed:
+            if not vp.norm() <= max_speed:  # a NaN speed fails this test too
                 bad[None] += 1
 
     @ti.kernel
