@@ -1,6 +1,8 @@
 // Binding of the SDEM engine and its YADE bridge (py/PySdem.hpp).
 #include "PySdem.hpp"
 
+#include "io/MeshReader.hpp"
+
 namespace mpmsdem {
 namespace py {
 
@@ -8,9 +10,21 @@ namespace {
 
 void validateMaterial(const SdemMaterial& m) { m.validate(); }
 
+// The vertices and triangles SpheroPolyhedron.meshFile builds its shape from: a checkpoint
+// stores them, so that it restores the same shape (same feature indices) without the file.
+bp::tuple readMeshFile(const std::string& path, double scale) {
+  const io::TriangleMesh m = io::readMesh(path, scale);
+  bp::list v, t;
+  for (const Vec3& x : m.vertices) v.append(bp::make_tuple(x[0], x[1], x[2]));
+  for (const auto& tr : m.triangles) t.append(bp::make_tuple(tr[0], tr[1], tr[2]));
+  return bp::make_tuple(v, t);
+}
+
 }  // namespace
 
 void exportSdem() {
+  bp::def("readMeshFile", &readMeshFile, (bp::arg("path"), bp::arg("scale") = 1.0),
+          "(vertices, triangles) of an STL/OBJ file as SpheroPolyhedron.meshFile reads it [m].");
   bp::class_<SdemMaterial>("SdemMat",
                            "Contact material of a sphero-polyhedron block (paper Eqs 9-11). SI units.")
       .def_readwrite("density", &SdemMaterial::density, "Mass density [kg/m^3], > 0.")
@@ -30,6 +44,10 @@ void exportSdem() {
       .def("addBody", &YadeSdemBridge::addBody)
       .def("refresh", &YadeSdemBridge::refresh)
       .def("step", &YadeSdemBridge::step)
+      .def("rollBack", &YadeSdemBridge::rollBack)
+      .def("setStepClock", &YadeSdemBridge::setStepClock)
+      .def("setDissipation", &YadeSdemBridge::setDissipation)
+      .add_property("goodTime", &YadeSdemBridge::goodTime)
       .def("timings", &YadeSdemBridge::timings)
       .def("resetTimings", &YadeSdemBridge::resetTimings)
       .def("contacts", &YadeSdemBridge::contacts)

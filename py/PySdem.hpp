@@ -9,6 +9,7 @@
 // share of each step.
 #pragma once
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <memory>
@@ -57,12 +58,47 @@ class YadeSdemBridge {
   }
 
   // One step inside YADE's loop: bodies = O.bodies, forces = O.forces, dt = O.dt.
+  // The state read here is kept as the last good one only once its forces were computed
+  // without error: a failed step can then roll the bodies back (rollBack()).
   void step(const bp::object& bodies, const bp::object& forces, double dt) {
     readStates(bodies);
+    keepState(pending_);
     computeForces(dt);
+    std::swap(good_, pending_);
     writeForces(forces, nullptr, nullptr);
     ++steps_;
   }
+
+  // After a failed step: put the SDEM bodies (YADE states and this engine) and the contact
+  // histories back to the state at the start of the last step that completed. The blow-up
+  // guard fires on a state NewtonIntegrator produced from the previous step's forces, so the
+  // state YADE holds then is already bad; the one before it is the newest that stepped
+  // without error. Returns the YADE iteration that state started, or -1 when no step
+  // completed yet (nothing changed).
+  long rollBack(const bp::object& bodies) {
+    if (!good_.valid) return -1;
+    const int n = engine_.numBodies();
+    for (int i = 0; i < n; ++i) {
+      if (engine_.isFixed(i)) continue;
+      bp::object st = bodies[engine_.externalId(i)].attr("state");
+      st.attr("pos") = good_.pos[i];
+      st.attr("ori") = good_.ori[i];
+      st.attr("vel") = good_.vel[i];
+      st.attr("angVel") = good_.angVel[i];
+      engine_.setState(i, good_.pos[i], good_.ori[i], good_.vel[i], good_.angVel[i]);
+    }
+    engine_.setContactHistories(good_.histories);
+    frictionOffset_ = good_.friction - engine_.frictionDissipation();
+    dampingOffset_ = good_.damping - engine_.dampingDissipation();
+    return good_.iter;
+  }
+  // YADE iteration and time at which the kept good state started (set from Python, which
+  // knows O.iter and O.time; -1 / NaN before the first completed step).
+  void setStepClock(long iter, double time) {
+    pending_.iter = iter;
+    pending_.time = time;
+  }
+  double goodTime() const { return good_.valid ? good_.time : std::nan(""); }
 
   // The three stages of step(), also composed by the coupled engine.
   // Body states from YADE (bodies that cannot move are read once).
@@ -200,11 +236,16 @@ class YadeSdemBridge {
   }
 
   // ---- outputs: <dir>/sdem.h5 (append-only series) and <dir>/bodies.pvd + vtk/bodies_*.vtp
-  void openOutput(const std::string& dir, bool append) {
+  // append: continue the files of a restored run; records after `time` (the checkpoint's),
+  // left by the run that went on past it, are dropped. Returns the times of the last HDF5
+  // record and the last VTK entry kept (NaN: none), from which the next ones are due.
+  bp::tuple openOutput(const std::string& dir, bool append, double time) {
     namespace fs = std::filesystem;
     fs::create_directories(fs::path(dir) / "vtk");
     h5_ = std::make_unique<io::Hdf5Writer>((fs::path(dir) / "sdem.h5").string(),
                                            append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate);
+    double lastRecord = std::nan(""), lastVtk = std::nan("");
+    if (append) h5_->truncateSeriesAfter("time", time, &lastRecord);
     std::ostringstream ids;
     ids << "[";
     for (int i = 0; i < engine_.numBodies(); ++i) ids << (i ? ", " : "") << engine_.externalId(i);
@@ -213,7 +254,9 @@ class YadeSdemBridge {
     h5_->setAttribute("units", "SI: m, s, N, N m; ori as quaternion w x y z; per-body series are (records, 3 x bodies) "
                                "in the order of the attribute ids");
     pvd_ = std::make_unique<io::PvdCollection>((fs::path(dir) / "bodies.pvd").string(), append);
+    if (append) lastVtk = pvd_->dropAfter(time);
     dir_ = dir;
+    return bp::make_tuple(lastRecord, lastVtk);
   }
   // One record of the state of the last step: time, step, per body pos, ori, vel, angVel,
   // force, torque, and the number of contact points.
@@ -281,12 +324,46 @@ class YadeSdemBridge {
   long warnings() const { return engine_.timeStepWarnings(); }
   double barrierEnergy() const { return engine_.barrierEnergy(); }
   double tangentialEnergy() const { return engine_.tangentialEnergy(); }
-  double frictionDissipation() const { return engine_.frictionDissipation(); }
-  double dampingDissipation() const { return engine_.dampingDissipation(); }
+  // Cumulative dissipations continue across a restore (setDissipation) and a roll-back: the
+  // engine's own counters start at 0, the offsets carry what came before.
+  double frictionDissipation() const { return engine_.frictionDissipation() + frictionOffset_; }
+  double dampingDissipation() const { return engine_.dampingDissipation() + dampingOffset_; }
+  void setDissipation(double friction, double damping) {
+    frictionOffset_ = friction - engine_.frictionDissipation();
+    dampingOffset_ = damping - engine_.dampingDissipation();
+  }
   int numContacts() const { return static_cast<int>(engine_.contacts().size()); }
 
  private:
+  struct KeptState {
+    std::vector<Vec3> pos, vel, angVel;
+    std::vector<Quat> ori;
+    std::vector<sdem::ContactHistoryEntry> histories;
+    double friction = 0, damping = 0, time = std::nan("");
+    long iter = -1;
+    bool valid = false;
+  };
+  void keepState(KeptState& k) const {
+    const int n = engine_.numBodies();
+    k.pos.resize(n);
+    k.ori.resize(n);
+    k.vel.resize(n);
+    k.angVel.resize(n);
+    for (int i = 0; i < n; ++i) {
+      k.pos[i] = engine_.position(i);
+      k.ori[i] = engine_.orientation(i);
+      k.vel[i] = engine_.velocity(i);
+      k.angVel[i] = engine_.angularVelocity(i);
+    }
+    k.histories = engine_.contactHistories();
+    k.friction = frictionDissipation();
+    k.damping = dampingDissipation();
+    k.valid = true;
+  }
+
   SdemEngine engine_;
+  KeptState good_, pending_;
+  double frictionOffset_ = 0, dampingOffset_ = 0;
   std::vector<bp::object> states_;
   std::vector<char> readOnce_;
   std::unique_ptr<io::Hdf5Writer> h5_;

@@ -172,6 +172,33 @@ void Hdf5Writer::setAttribute(const std::string& name, double value) {
   flush();
 }
 
+long Hdf5Writer::truncateSeriesAfter(const std::string& timeName, double time, double* lastKept) {
+  if (!linkExists(series_, timeName)) return 0;
+  std::size_t rows = 0, cols = 0;
+  const std::vector<double> t = readArray<double>(series_, timeName, H5T_NATIVE_DOUBLE, rows, cols, path_);
+  hsize_t keep = 0;
+  while (keep < rows && t[keep * cols] <= time) ++keep;
+  if (keep > 0 && lastKept) *lastKept = t[(keep - 1) * cols];
+  for (auto& kv : openSeries_) H5Dclose(kv.second);
+  openSeries_.clear();
+  H5G_info_t info;
+  check(H5Gget_info(series_, &info), path_, "cannot list /series");
+  for (hsize_t k = 0; k < info.nlinks; ++k) {
+    char name[256];
+    if (H5Lget_name_by_idx(series_, ".", H5_INDEX_NAME, H5_ITER_INC, k, name, sizeof name, H5P_DEFAULT) < 0) continue;
+    Handle dset(check(H5Dopen2(series_, name, H5P_DEFAULT), path_, std::string("cannot open series ") + name),
+                H5Dclose);
+    Handle space(H5Dget_space(dset), H5Sclose);
+    hsize_t dims[2] = {0, 1};
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    if (dims[0] <= keep) continue;
+    dims[0] = keep;
+    check(H5Dset_extent(dset, dims), path_, std::string("cannot cut series ") + name);
+  }
+  flush();
+  return static_cast<long>(keep);
+}
+
 void Hdf5Writer::appendScalar(const std::string& name, double value) { appendRow(name, &value, 1, false); }
 
 void Hdf5Writer::appendVector(const std::string& name, const std::vector<double>& values) {

@@ -56,6 +56,14 @@ class Hdf5Writer {
   // Write /snapshots/<index>/ for the particles; returns the snapshot index used.
   long writeSnapshot(const mpm::ParticleSet& particles, double time, long step);
 
+  // Restart from a checkpoint taken before the file's end: keep the records of /series/*
+  // whose /series/<timeName> value is <= time, drop the later ones (every series is cut to
+  // that many records, so series recorded together stay aligned) and return how many were
+  // kept (0 when there is no <timeName> series); `lastKept` receives the time of the last
+  // record kept (unchanged when none is). The file then holds no record after the
+  // checkpoint, so the continued run appends without duplicates or steps back in time.
+  long truncateSeriesAfter(const std::string& timeName, double time, double* lastKept = nullptr);
+
   // Number of records in /series/<name> (0 when absent) and of snapshots in the file.
   long seriesLength(const std::string& name) const;
   long numSnapshots() const { return nextSnapshot_; }

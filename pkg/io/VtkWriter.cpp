@@ -1,5 +1,7 @@
 #include "io/VtkWriter.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -258,6 +260,13 @@ PvdCollection::PvdCollection(const std::string& path, bool append) : path_(path)
 void PvdCollection::add(double time, const std::string& file, int part) {
   entries_.push_back({time, part, file});
   rewrite();
+}
+
+double PvdCollection::dropAfter(double time) {
+  entries_.erase(std::remove_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.time > time; }),
+                 entries_.end());
+  rewrite();
+  return entries_.empty() ? std::nan("") : entries_.back().time;
 }
 
 void PvdCollection::rewrite() const {

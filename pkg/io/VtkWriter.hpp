@@ -52,6 +52,10 @@ class PvdCollection {
   void add(double time, const std::string& file, int part = 0);
 
   std::size_t size() const { return entries_.size(); }
+  // Drop the entries later than `time` (a restart from an earlier checkpoint) and rewrite
+  // the .pvd; the continued run's files then take their places. Returns the time of the
+  // last entry kept (NaN when none is left).
+  double dropAfter(double time);
 
  private:
   struct Entry {

@@ -90,6 +90,8 @@ class SdemEngine:
         self.verbose = verbose
         self._lastReport = None  # (wall time, step) of the last progress line
         self._checkedEngines = False
+        self._appendOutput = False  # restore(): continue the files in `output`
+        self._rolledBackAt = None   # O.iter of a failure whose bodies were put back (save() time)
         self.error = None
         self.runner = PyRunner(command=_bindStep("sdem", id(self), self._step), iterPeriod=1, initRun=True,
                                label=label)
@@ -124,8 +126,12 @@ class SdemEngine:
 
         Coordinates are multiplied by ``scale``. Placement as in :meth:`polyhedron`.
         """
-        shape = _mpmsdem.SpheroPolyhedron.meshFile(str(path), float(sweepRadius), float(scale))
-        recipe = {"kind": "meshFile", "path": str(path), "sweepRadius": sweepRadius, "scale": scale}
+        # The file's triangles go into the recipe: a checkpoint then restores the shape from
+        # any working folder, with the file moved or gone.
+        verts, tris = _mpmsdem.readMeshFile(str(path), float(scale))
+        shape = _mpmsdem.SpheroPolyhedron.mesh(verts, tris, float(sweepRadius))
+        recipe = {"kind": "mesh", "vertices": [list(v) for v in verts], "triangles": [list(t) for t in tris],
+                  "sweepRadius": sweepRadius, "source": str(path), "scale": scale}
         return self._add(shape, recipe, material, pos, ori, fixed, color, centroidPlacement=pos is not None)
 
     def _materialIndex(self, mat):
@@ -189,6 +195,7 @@ class SdemEngine:
     def _step(self):
         self._beforeFirstStep()
         try:
+            self._bridge.setStepClock(O.iter, O.time)
             self._bridge.step(O.bodies, O.forces, O.dt)
         except Exception as e:
             self._fail(e)
@@ -200,16 +207,38 @@ class SdemEngine:
             self._checkedEngines = True
             _warnDamping()
             if self.output is not None:  # opened here: every body has been added by now
-                self._bridge.openOutput(str(self.output), False)
-                self._nextRecord = self._nextVtk = O.time
+                t = O.time
+                # records after t were written by a run that went on past the checkpoint we
+                # restart from: dropped, so the series never repeat or go back in time
+                lastRecord, lastVtk = self._bridge.openOutput(str(self.output), self._appendOutput,
+                                                              t + 1e-9 * self.outputEvery)
+                self._nextRecord = t if math.isnan(lastRecord) else max(t, lastRecord + self.outputEvery)
+                self._nextVtk = t if (math.isnan(lastVtk) or not self.vtkEvery) else max(t, lastVtk + self.vtkEvery)
 
     def _fail(self, e):
-        """Record the error of a failed step and save the last good state (saveOnFailure)."""
+        """Record the error of a failed step, put the SDEM bodies back to the last good state
+        and save it (saveOnFailure).
+
+        The last good state is the one at the start of the last step that completed: when the
+        blow-up guard fires, the state YADE holds was produced by NewtonIntegrator from the
+        previous step's forces and is already bad, so the failed step's own start cannot be
+        trusted. YADE has no setter for O.iter and O.time: they stay at the failed step, one
+        step after the state (the checkpoint records the state's own time)."""
         self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
+        it = self._bridge.rollBack(O.bodies)
+        if it >= 0:
+            self._rolledBackAt = O.iter
+            self.error += " [bodies put back to their state at the start of step %d (t = %.6g s)]" % (
+                it, self._bridge.goodTime)
         if self.saveOnFailure:
             O.save(self.saveOnFailure + ".yade.gz")
             self.save(self.saveOnFailure + ".sdem.json")
-            self.error += " [last good state saved: %s.yade.gz, %s.sdem.json]" % ((self.saveOnFailure,) * 2)
+            self.error += (" [last good state saved: %s.yade.gz, %s.sdem.json; to resume: O.load(%r), "
+                           "engine = mpmsdem.SdemEngine.restore(%r), O.engines = [ForceResetter(), engine.runner, "
+                           "NewtonIntegrator(...)], and a smaller O.dt (now %g s; the critical step is "
+                           "engine.criticalTimeStep after a step)]"
+                           % (self.saveOnFailure, self.saveOnFailure, self.saveOnFailure + ".yade.gz",
+                              self.saveOnFailure + ".sdem.json", O.dt))
 
     def _afterStep(self):
         if self.output is not None:
@@ -298,8 +327,12 @@ class SdemEngine:
         """Write the engine's state (shapes' recipes, materials, contact histories) as JSON,
         to go alongside ``O.save()``; restore with :meth:`SdemEngine.restore`."""
         hist = [[a, b, ka, kb, ia, ib, list(xi)] for (a, b, ka, kb, ia, ib, xi) in self._bridge.histories()]
+        rolledBack = self._rolledBackAt is not None and self._rolledBackAt == O.iter
         data = {"format": "mpmsdem-sdem-1", "dtCheck": self.dtCheck,
                 "timeStepSafety": self._bridge.timeStepSafety, "maxSpeed": self._bridge.maxSpeed,
+                "time": self._bridge.goodTime if rolledBack else O.time,
+                "frictionDissipation": self._bridge.frictionDissipation,
+                "dampingDissipation": self._bridge.dampingDissipation,
                 "bodies": self._recipes, "histories": hist}
         tmp = str(path) + ".tmp"
         with open(tmp, "w") as f:
@@ -307,11 +340,17 @@ class SdemEngine:
         os.replace(tmp, str(path))
 
     @classmethod
-    def restore(cls, path, **engineKw):
+    def restore(cls, path, appendOutput=True, **engineKw):
         """Rebuild an engine from :meth:`save` for bodies already in ``O.bodies`` (after
         ``O.load()``); returns it. Put its ``runner`` back into ``O.engines``. The saved
         dtCheck, timeStepSafety and maxSpeed are used unless given in ``engineKw``, which takes
-        the other constructor arguments too (output, saveOnFailure, label, ...)."""
+        the other constructor arguments too (output, saveOnFailure, label, ...).
+
+        The checkpoint is self-contained (shapes stored with their geometry): it restores from
+        any working folder. With ``output``, ``sdem.h5`` and ``bodies.pvd`` are continued
+        (``appendOutput``): records later than the checkpoint, left by a run that went on past
+        it, are dropped first. The friction and damping dissipations continue from their saved
+        values."""
         with open(path) as f:
             data = json.load(f)
         if data.get("format") != "mpmsdem-sdem-1":
@@ -319,6 +358,7 @@ class SdemEngine:
         kw = {k: data[k] for k in ("dtCheck", "timeStepSafety", "maxSpeed") if k in data}
         kw.update(engineKw)
         eng = cls(**kw)
+        eng._appendOutput = bool(appendOutput)
         mats = {}
         for r in data["bodies"]:
             key = json.dumps(r["material"], sort_keys=True)
@@ -328,12 +368,16 @@ class SdemEngine:
                 shape = _mpmsdem.SpheroPolyhedron.box(r["halfExtents"], r["sweepRadius"])
             elif r["kind"] == "hull":
                 shape = _mpmsdem.SpheroPolyhedron.convexHull(r["points"], r["sweepRadius"])
-            else:
+            elif r["kind"] == "mesh":
+                shape = _mpmsdem.SpheroPolyhedron.mesh(r["vertices"], r["triangles"], r["sweepRadius"])
+            else:  # "meshFile": checkpoints written before shapes were stored with their geometry
                 shape = _mpmsdem.SpheroPolyhedron.meshFile(r["path"], r["sweepRadius"], r["scale"])
             rec = {k: v for k, v in r.items() if k not in ("yadeId", "fixed", "material")}
             eng._add(shape, rec, mats[key], None, None, r["fixed"], None, centroidPlacement=False,
                      yadeId=r["yadeId"])
         eng._bridge.setHistories([tuple(h[:6]) + (Vector3(*h[6]),) for h in data["histories"]])
+        eng._bridge.setDissipation(float(data.get("frictionDissipation", 0.0)),
+                                   float(data.get("dampingDissipation", 0.0)))
         return eng
 
 
