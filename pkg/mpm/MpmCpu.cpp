@@ -244,7 +244,9 @@ void MpmCpu::step(double dt) {
     const long p = firstBad;
     std::ostringstream os;
     os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s): particle " << p
-       << " has a non-finite state or a speed above " << maxSpeedAllowed_ << " m/s (1e3 x P-wave speed): x = ("
+       << " has a non-finite state, a speed above " << maxSpeedAllowed_
+       << " m/s (1e3 x P-wave speed) or a volume ratio J outside [" << kMinJ << ", " << kMaxJ
+       << "] (crushed or torn apart: no granular material does that; a step too large for the loading?): x = ("
        << out.x[0][p] << ", " << out.x[1][p] << ", " << out.x[2][p] << ") m, v = (" << out.v[0][p] << ", "
        << out.v[1][p] << ", " << out.v[2][p] << ") m/s, J = " << out.J[p]
        << ". The particle state is kept at the start of this step.";

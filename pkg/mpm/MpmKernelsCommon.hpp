@@ -130,10 +130,20 @@ MPM_HD_INLINE void gridNodeUpdate(int node, T* grid, int nNodes, const GridConst
   for (int d = 0; d < 3; ++d) grid[(4 + d) * nNodes + node] = vn[d];
 }
 
+// Admissible volume ratio J = V/V0 of a material point. A granular material changes its
+// volume by tens of per cent at most (random loose to dense packing, or the elastic strain
+// p/K under any pressure the flows of interest reach); J below kMinJ (crushed to 1/1000 of its
+// volume, denser than the solid grains) or above kMaxJ (torn to 1000 x its volume) only comes
+// from a numerical failure, e.g. a step too large for the loading, that would otherwise run
+// on with flattened particles. The bounds are 1000 x beyond anything physical so that no
+// sound run stops.
+constexpr double kMinJ = 1e-3;
+constexpr double kMaxJ = 1e3;
+
 // Result of the G2P of one particle.
 template <typename T>
 struct G2PResult {
-  bool ok;    // false: non-finite state or |v| above StepConst::maxSpeed
+  bool ok;    // false: non-finite state, |v| above StepConst::maxSpeed, or J outside [kMinJ, kMaxJ]
   T speed;    // |v_p| after the step [m/s]
 };
 
@@ -199,7 +209,7 @@ MPM_HD_INLINE G2PResult<T> g2pParticle(int p, const ParticleIn<T>& P, const Part
   Q.gdp[p] = gdp;
   Q.phase[p] = phase;
   const T speed = hdSqrt(dot(v, v));
-  ok = ok && hdIsFinite(J) && speed <= sc.maxSpeed;
+  ok = ok && hdIsFinite(J) && J >= T(kMinJ) && J <= T(kMaxJ) && speed <= sc.maxSpeed;
   return {ok, speed};
 }
 

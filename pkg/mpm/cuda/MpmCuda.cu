@@ -265,7 +265,9 @@ void MpmCuda<T>::step(double dt) {
     for (int i = 0; i < 7; ++i) CUDA_CHECK(cudaMemcpy(&xv[i], src[i] + p, sizeof(T), cudaMemcpyDeviceToHost));
     std::ostringstream os;
     os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name() << "): particle " << p
-       << " has a non-finite state or a speed above " << maxSpeedAllowed_ << " m/s (1e3 x P-wave speed): x = ("
+       << " has a non-finite state, a speed above " << maxSpeedAllowed_
+       << " m/s (1e3 x P-wave speed) or a volume ratio J outside [" << kMinJ << ", " << kMaxJ
+       << "] (crushed or torn apart: no granular material does that; a step too large for the loading?): x = ("
        << xv[0] << ", " << xv[1] << ", " << xv[2] << ") m, v = (" << xv[3] << ", " << xv[4] << ", " << xv[5]
        << ") m/s, J = " << xv[6] << ". The particle state is kept at the start of this step.";
     throw RuntimeFailure(os.str());
