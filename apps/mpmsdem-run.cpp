@@ -10,7 +10,9 @@
 //   --steps N                run exactly N steps (N >= 1) instead of run.duration
 //   --restart                continue from the last snapshot of the output folder's mpm.h5
 //                            (its particles, time and step), appending to its outputs;
-//                            --steps then counts the steps of this run
+//                            --steps then counts the steps of this run. The scene must be
+//                            the one the run was started with (the file's "parameters"),
+//                            except for kRestartFree below (exit 2 naming what changed)
 //   --bench                  write no files, take no diagnostics; print one JSON line on
 //                            stdout at the end: backend, precision, solver, particles,
 //                            steps, seconds (step loop wall time), particle_updates_per_s,
@@ -39,6 +41,7 @@
 #include <iostream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/Error.hpp"
 #ifdef MPMSDEM_WITH_HDF5
@@ -229,6 +232,52 @@ int runBench(MpmSolver& solver, const MpmScene& scene, long maxSteps) {
 }
 
 #ifdef MPMSDEM_WITH_HDF5
+// Scene keys a restart may change: how long to run and what to write, where, and on which
+// backend. Everything else (grid, material, particles, gravity, walls, flip_alpha, cfl,
+// run.dt, run.dt_factor) defines the run being continued: changing it would silently glue
+// two different simulations into one output.
+const char* const kRestartFree[] = {"description", "run.duration", "run.output_every", "run.series_every",
+                                    "run.output_dir", "run.vtk", "run.backend", "run.precision"};
+
+// Key paths where two scenes differ (objects compared key by key, anything else as a whole).
+void sceneDifferences(const nlohmann::json& a, const nlohmann::json& b, const std::string& path,
+                      std::vector<std::string>& out) {
+  for (const char* free : kRestartFree)
+    if (path == free) return;
+  if (a.is_object() && b.is_object()) {
+    std::vector<std::string> keys;
+    for (auto it = a.begin(); it != a.end(); ++it) keys.push_back(it.key());
+    for (auto it = b.begin(); it != b.end(); ++it)
+      if (!a.contains(it.key())) keys.push_back(it.key());
+    for (const std::string& k : keys) {
+      const std::string sub = path.empty() ? k : path + "." + k;
+      static const nlohmann::json absent;  // null: key missing on one side
+      sceneDifferences(a.contains(k) ? a.at(k) : absent, b.contains(k) ? b.at(k) : absent, sub, out);
+    }
+    return;
+  }
+  if (a != b) out.push_back(path);
+}
+
+// --restart with a scene that is not the one stored in the output's mpm.h5: a ParameterError.
+void checkRestartScene(const MpmScene& scene, const std::string& h5) {
+  std::string stored;
+  try {
+    stored = io::readStringAttribute(h5, "parameters");
+  } catch (const RuntimeFailure&) {
+    throwParameter("--restart", h5, "", "an mpm.h5 written by mpmsdem-run (it has no \"parameters\" attribute)");
+  }
+  std::vector<std::string> diff;
+  sceneDifferences(nlohmann::json::parse(stored), nlohmann::json::parse(scene.sourceJson), "", diff);
+  if (diff.empty()) return;
+  std::string changed, free;
+  for (const auto& d : diff) changed += (changed.empty() ? "" : ", ") + d;
+  for (const char* f : kRestartFree) free += (free.empty() ? "" : ", ") + std::string(f);
+  throw ParameterError("--restart: the scene differs from the one the run in " + h5 + " was started with (changed: " +
+                       changed + "). A restart continues that run: only " + free +
+                       " may change. Undo the change, or start a new run in another output folder (--out).");
+}
+
 class OutputRun {
  public:
   // restart: append to the outputs already in the folder instead of starting them anew.
@@ -379,6 +428,7 @@ int main(int argc, char** argv) {
     if (opt.restart) {
       const std::string h5 = (std::filesystem::path(scene.run.outputDir) / "mpm.h5").string();
       if (!std::filesystem::exists(h5)) throwParameter("--restart", h5, "", "an existing mpm.h5 of an earlier run");
+      checkRestartScene(scene, h5);
       const long last = io::readNumSnapshots(h5) - 1;
       if (last < 0) throwParameter("--restart", h5, "", "a file holding at least one snapshot");
       ParticleSet particles;

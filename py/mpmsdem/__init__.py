@@ -41,7 +41,7 @@ def _import_yade():
 _import_yade()
 
 from ._mpmsdem import SpheroPolyhedron, SdemMat, cudaAvailable  # noqa: E402
-from .sdem import SdemEngine  # noqa: E402
+from .sdem import SdemEngine, _dispatch  # noqa: E402,F401  (_dispatch: the engines' PyRunner commands)
 from .mpm import MpmEngine  # noqa: E402
 from .coupling import CoupledEngine  # noqa: E402
 from . import analysis  # noqa: E402
@@ -70,6 +70,9 @@ def run(steps, *engines):
     ``engines`` (SdemEngine, MpmEngine) stopped the run. YADE reports an error raised inside a
     PyRunner on its log and stops, but does not always raise it from ``O.run``."""
     from yade import O
+    for e in engines:  # a misplaced or missing runner: say so now, not after a silent run
+        if isinstance(e, (SdemEngine, MpmEngine)):
+            e._checkEngines()
     try:
         O.run(int(steps), True)
     except RuntimeError:

@@ -118,6 +118,13 @@ class MpmEngine:
             print("mpmsdem.MpmEngine: t = %.4f s, step %d, %.3g particle-updates/s"
                   % (t, self.solver.steps, rate), file=sys.stderr, flush=True)
 
+    def _checkEngines(self):
+        """ValueError unless this engine's runner is in O.engines (the flow needs no other
+        engine and no order)."""
+        if self.runner not in list(O.engines):
+            raise ValueError("O.engines does not hold this MpmEngine's runner: put it there (O.engines = "
+                             "[mpm.runner], or next to other engines), else the flow does not move")
+
     def check(self):
         """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
         if self.error:

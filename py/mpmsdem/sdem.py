@@ -33,14 +33,31 @@ from . import _mpmsdem
 DT_CHECKS = ("raise", "warn")
 
 
+# Step functions of the engines of this process, by the name their PyRunner command calls.
+_REGISTRY = {}
+
+
 def _bindStep(kind, key, step):
-    """Put ``step`` into the namespace YADE's PyRunner commands run in (``__main__``) and return
-    the shortest command calling it: PyRunner compiles its command every step, so a bare call
-    is the cheapest bridge into our code."""
-    import __main__
-    name = "_mpmsdem_%s_%d" % (kind, key)
-    setattr(__main__, name, step)
-    return name + "()"
+    """Register ``step`` and return the PyRunner command that calls it. The command goes
+    through :func:`_dispatch` rather than naming a function in ``__main__``: a scene saved with
+    ``O.save`` and loaded in another process keeps the command but not the function, and YADE
+    would then report only a ``NameError`` on a generated name."""
+    name = "%s_%d" % (kind, key)
+    _REGISTRY[name] = step
+    return "__import__('mpmsdem')._dispatch(%r)" % name
+
+
+def _dispatch(name):
+    """Run the step registered as ``name`` (the PyRunner commands of mpmsdem engines)."""
+    try:
+        step = _REGISTRY[name]
+    except KeyError:
+        raise RuntimeError(
+            "this mpmsdem engine (%r) is not registered in this process: after O.load(), rebuild it with "
+            "mpmsdem.SdemEngine.restore(...) or mpmsdem.MpmEngine.restore(...) and put its runner in O.engines in "
+            "place of the loaded one (e.g. O.engines = [ForceResetter(), engine.runner, NewtonIntegrator(...)])"
+            % name) from None
+    step()
 
 
 class SdemEngine:
@@ -90,6 +107,7 @@ class SdemEngine:
         self.verbose = verbose
         self._lastReport = None  # (wall time, step) of the last progress line
         self._checkedEngines = False
+        self._checkedOrder = False  # O.engines checked (runner path only: CoupledEngine checks its own)
         self._appendOutput = False  # restore(): continue the files in `output`
         self._rolledBackAt = None   # O.iter of a failure whose bodies were put back (save() time)
         self.error = None
@@ -192,7 +210,30 @@ class SdemEngine:
         return [r["yadeId"] for r in self._recipes]
 
     # ------------------------------------------------------------------ stepping
+    def _checkEngines(self):
+        """ValueError unless O.engines runs ForceResetter, this runner, NewtonIntegrator in this
+        order: forces reset before the contacts add theirs, bodies moved after. Any other order
+        fails later with a misleading time-step error (forces added twice or lost), and without
+        the runner blocks fall through each other silently."""
+        from yade.wrapper import ForceResetter, NewtonIntegrator
+        engines = list(O.engines)
+        me = engines.index(self.runner) if self.runner in engines else -1
+        resetters = [i for i, e in enumerate(engines) if isinstance(e, ForceResetter)]
+        newtons = [i for i, e in enumerate(engines) if isinstance(e, NewtonIntegrator)]
+        if me < 0 or not resetters or not newtons or not (resetters[0] < me < newtons[0]):
+            raise ValueError("O.engines = [%s]: must be [ForceResetter(), sdem.runner, NewtonIntegrator(...)] (in this "
+                             "order; other engines may come before or after): the SDEM runner adds the contact forces "
+                             "after ForceResetter clears them and before NewtonIntegrator moves the bodies"
+                             % ", ".join(type(e).__name__ for e in engines))
+
     def _step(self):
+        if not self._checkedOrder:
+            self._checkedOrder = True
+            try:
+                self._checkEngines()
+            except ValueError as e:
+                self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
+                raise
         self._beforeFirstStep()
         try:
             self._bridge.setStepClock(O.iter, O.time)

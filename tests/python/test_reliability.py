@@ -25,11 +25,10 @@ def _finite(v):
 
 def _kill(engine):
     """What a killed process leaves: the engine gone, with its open output files closed. The
-    runner's command keeps a reference in __main__ (see sdem._bindStep): drop it too."""
-    import __main__
-    for name in [n for n in vars(__main__) if n.startswith("_mpmsdem_")]:
-        if getattr(getattr(__main__, name), "__self__", None) is engine:
-            delattr(__main__, name)
+    registry of runner commands keeps a reference (see sdem._bindStep): drop it too."""
+    from mpmsdem import sdem
+    for name in [n for n, f in sdem._REGISTRY.items() if getattr(f, "__self__", None) is engine]:
+        del sdem._REGISTRY[name]
     O.reset()
     gc.collect()
 
@@ -129,3 +128,94 @@ def test_checkpoint_restores_from_another_folder_without_the_mesh_file(tmp_path,
     O.engines = [ForceResetter(), eng2.runner, NewtonIntegrator(gravity=g, damping=0)]
     run(eng2, 400)
     assert (O.bodies[block].state.pos - ref).norm() < 1e-12
+
+
+# ---------------------------------------------------------------- 4. driver restart, same scene
+def _driver():
+    exe = os.environ.get("MPMSDEM_RUN") or os.path.join(os.path.dirname(os.path.abspath(mpmsdem.__file__)),
+                                                         "..", "..", "mpmsdem-run")
+    if not os.path.exists(exe):
+        pytest.skip("mpmsdem-run not found next to the build's Python package (set MPMSDEM_RUN)")
+    return exe
+
+
+SCENE = {"grid": {"dx": 0.02, "cells": [12, 6, 10], "origin": [-0.04, -0.04, -0.04]},
+         "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.38, "mu_2": 0.64},
+         "particles": [{"lo": [0, 0, 0], "hi": [0.08, 0.04, 0.08], "ppc": 8}],
+         "run": {"duration": 0.01, "dt": 2e-4, "output_every": 0.004, "vtk": "none"}}
+
+
+def test_driver_restart_refuses_an_edited_scene(tmp_path):
+    import subprocess
+    exe = _driver()
+    path, out = tmp_path / "scene.json", str(tmp_path / "out")
+    drive = lambda scene, *a: (path.write_text(json.dumps(scene)),  # noqa: E731
+                               subprocess.run([exe, str(path), "--out", out, *a], capture_output=True, text=True))[1]
+    assert drive(SCENE, "--steps", "20").returncode == 0
+    edited = json.loads(json.dumps(SCENE))
+    edited["material"]["mu_s"] = 0.5
+    edited["particles"][0]["hi"][2] = 0.06
+    r = drive(edited, "--restart")
+    assert r.returncode == 2, r.stderr
+    assert "material.mu_s" in r.stderr and "particles" in r.stderr and "run.duration" in r.stderr
+    # a longer run, another output cadence or backend are what a restart is for
+    longer = json.loads(json.dumps(SCENE))
+    longer["run"]["duration"] = 0.02
+    longer["description"] = "the same run, longer"
+    r = drive(longer, "--restart", "--steps", "5")
+    assert r.returncode == 0, r.stderr
+
+
+# ---------------------------------------------------------------- 6. engine order
+def test_misplaced_or_missing_sdem_runner_is_a_clear_error():
+    from yade.wrapper import PyRunner
+    eng, cube, slab, m = cubeOnSlab(gap=0.001, verbose=False)
+    O.dt = 1e-4
+    newton = NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)
+    for engines in ([ForceResetter(), newton, eng.runner],     # runner after the integrator
+                    [eng.runner, newton],                       # no ForceResetter
+                    [ForceResetter(), newton]):                 # no runner: the cube would fall through
+        O.engines = engines
+        with pytest.raises(ValueError, match=r"ForceResetter\(\), sdem.runner, NewtonIntegrator"):
+            run(eng, 2)
+        assert O.iter == 0
+    # plain O.run: the runner checks on its first step
+    O.engines = [ForceResetter(), newton, eng.runner]
+    with pytest.raises(RuntimeError, match=r"ForceResetter\(\), sdem.runner, NewtonIntegrator"):
+        O.run(1, True)
+    with pytest.raises(RuntimeError, match=r"ForceResetter\(\), sdem.runner, NewtonIntegrator"):
+        eng.check()
+    eng.error = None
+    O.engines = [ForceResetter(), eng.runner, newton]
+    run(eng, 2)                                                 # the right order runs
+
+
+def test_mpm_runner_missing_is_a_clear_error():
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.02, "cells": [8, 8, 8], "origin": [0, 0, 0]},
+                            material={"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.3,
+                                      "mu_2": 0.6},
+                            particles=[{"lo": [0.04, 0.04, 0.04], "hi": [0.08, 0.08, 0.08], "ppc": 1}], verbose=False)
+    O.engines = []
+    O.dt = 1e-4
+    with pytest.raises(ValueError, match="MpmEngine's runner"):
+        mpmsdem.run(2, mpm)
+    O.engines = [mpm.runner]
+    mpmsdem.run(2, mpm)
+    assert mpm.solver.steps == 2
+
+
+def test_runner_of_a_scene_loaded_elsewhere_says_how_to_rebuild(tmp_path):
+    # A saved scene loaded in a process that has not rebuilt the engine: its PyRunner's
+    # command must say what to do, not raise a NameError on a generated name.
+    import subprocess
+    import sys
+    eng, cube, slab, m = cubeOnSlab(gap=0.001, verbose=False)
+    O.dt = 1e-4
+    run(eng, 2)
+    O.save(str(tmp_path / "scene.yade.gz"))
+    code = ("import mpmsdem\nfrom yade import O\nO.load(%r)\ntry:\n    O.run(1, True)\nexcept Exception as e:\n"
+            "    print('ERROR', e)\n" % str(tmp_path / "scene.yade.gz"))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    text = r.stdout + r.stderr
+    assert "not registered in this process" in text and "SdemEngine.restore" in text, text
+    assert "NameError" not in text, text
