@@ -25,7 +25,8 @@
 //                   solver, and on failure "failure" (message) and "failure_snapshot".
 //   particles.pvd + vtk/particles_NNNNNN.vtp   ParaView series (unless run.vtk = "none").
 // Progress lines go to stdout (stderr with --bench) every 5 % of the run.
-// Exit status: 0 done; 2 bad parameters or command line; 3 run failure (NaN, blow-up, step
+// Exit status: 0 done; 2 bad parameters or command line (a scene too large for the memory
+// included); 3 run failure (NaN, blow-up, step
 // above the stable one), after writing the last good state as a final snapshot; 1 other
 // errors (e.g. I/O).
 #include <omp.h>
@@ -39,6 +40,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <new>
 #include <optional>
 #include <string>
 #include <vector>
@@ -411,9 +413,11 @@ class OutputRun {
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::string sceneSize;  // for an out-of-memory message
   try {
     const Options opt = parseArgs(argc, argv);
     MpmScene scene = loadScene(opt.scene);
+    sceneSize = sceneSizeDescription(scene);
     if (opt.backend) scene.run.backend = *opt.backend;
     if (opt.precision) scene.run.precision = *opt.precision;
     if (opt.out) scene.run.outputDir = *opt.out;
@@ -464,6 +468,11 @@ int main(int argc, char** argv) {
   } catch (const RuntimeFailure& e) {
     std::fprintf(stderr, "mpmsdem-run: failure: %s\n", e.what());
     return 3;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "mpmsdem-run: parameter error: out of memory for %s: reduce grid.cells (a coarser dx or "
+                         "a smaller domain) or the particles per cell (ppc)\n",
+                 sceneSize.empty() ? "the scene" : sceneSize.c_str());
+    return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mpmsdem-run: error: %s\n", e.what());
     return 1;

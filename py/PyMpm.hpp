@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <memory>
+#include <new>
 #include <sstream>
 
 #include "PyConvert.hpp"
@@ -20,8 +21,13 @@ namespace py {
 class PyMpm {
  public:
   explicit PyMpm(const std::string& sceneJson) : scene_(mpm::parseScene(sceneJson, "MpmEngine scene")) {
-    solver_ = mpm::makeSolver(scene_.params, scene_.run.backend, scene_.run.precision);
-    solver_->setParticles(mpm::seedParticles(scene_));
+    try {
+      solver_ = mpm::makeSolver(scene_.params, scene_.run.backend, scene_.run.precision);
+      solver_->setParticles(mpm::seedParticles(scene_));
+    } catch (const std::bad_alloc&) {
+      throw ParameterError("out of memory for " + mpm::sceneSizeDescription(scene_) +
+                           ": reduce grid.cells (a coarser dx or a smaller domain) or the particles per cell (ppc)");
+    }
     fresh_ = false;
   }
 

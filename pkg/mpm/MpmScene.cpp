@@ -373,6 +373,9 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
     root = json::parse(jsonText);
   } catch (const json::parse_error& e) {
     throw ParameterError(source + ": not valid JSON: " + e.what());
+  } catch (const json::exception& e) {  // e.g. 1e999: a number beyond the double range
+    throw ParameterError(source + ": a number is out of range (every number must be a finite double, "
+                         "|x| < 1.8e308): " + e.what());
   }
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
   checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "cfl", "walls", "material", "particles", "run"});
@@ -395,11 +398,38 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
 }
 
 MpmScene loadScene(const std::string& path) {
+  // A device or a pipe (e.g. /dev/zero) would be read forever: only regular files, and of a
+  // size no scene reaches (meshes live in their own files).
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throwParameter("scene file", "'" + path + "'", "", "an existing, readable regular JSON file");
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && size > kMaxSceneBytes)
+    throwParameter("scene file", "'" + path + "' (" + std::to_string(size) + " bytes)", "",
+                   "a JSON file of at most " + std::to_string(kMaxSceneBytes) + " bytes");
   std::ifstream is(path);
   if (!is) throwParameter("scene file", "'" + path + "'", "", "an existing, readable JSON file");
   std::stringstream ss;
   ss << is.rdbuf();
   return parseScene(ss.str(), path, std::filesystem::path(path).parent_path().string());
+}
+
+std::string sceneSizeDescription(const MpmScene& scene) {
+  const auto& c = scene.params.cells;
+  const double nodes = double(c[0] + 1) * double(c[1] + 1) * double(c[2] + 1);
+  double particles = 0;  // boxes exactly; meshes by their bounding box (an upper bound)
+  for (const ParticleBox& b : scene.boxes) {
+    double n = 1;
+    for (int a = 0; a < 3; ++a) n *= std::round((b.hi[a] - b.lo[a]) / scene.params.dx) * b.ppc[a];
+    particles += n;
+  }
+  std::ostringstream os;
+  // 7 values per node (mass, old and new velocity) and ~20 per particle in double, twice
+  // (the solver keeps the state at the start of a step)
+  os << "grid.cells = [" << c[0] << ", " << c[1] << ", " << c[2] << "] (" << nodes << " nodes, about "
+     << nodes * 7 * 8 / 1e9 << " GB) and about " << particles << " particles (about "
+     << particles * 2 * 20 * 8 / 1e9 << " GB)";
+  return os.str();
 }
 
 ParticleSet seedParticles(const MpmScene& scene) {

@@ -79,6 +79,7 @@
 // that of the box for a box-shaped mesh with faces on grid lines).
 #pragma once
 #include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -127,9 +128,15 @@ struct MpmScene {
 // the text in messages; relative mesh paths are taken from `baseDir` (as given when empty).
 MpmScene parseScene(const std::string& jsonText, const std::string& source = "scene",
                     const std::string& baseDir = "");
-// Read the file and parse it, mesh paths relative to the file's folder; a missing file is a
+// Read the file and parse it, mesh paths relative to the file's folder; a missing file, one
+// that is not a regular file (a device, a pipe) or one above kMaxSceneBytes is a
 // ParameterError naming the path.
+constexpr std::uintmax_t kMaxSceneBytes = 16u << 20;
 MpmScene loadScene(const std::string& path);
+
+// Memory of the grid and the particles a scene needs, for an out-of-memory message that names
+// grid.cells and the particle count (the solver's own estimate of its arrays).
+std::string sceneSizeDescription(const MpmScene& scene);
 
 // Check a backend/precision pair (after command-line overrides): float needs CUDA.
 void validateBackend(Backend backend, Precision precision);

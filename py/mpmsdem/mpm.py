@@ -17,6 +17,7 @@ material points. Example, an MPM-only YADE script::
     mpm.check()
 """
 import json
+import math
 import sys
 import time as _time
 
@@ -56,7 +57,7 @@ class MpmEngine:
                  "run": {"duration": 1.0, "backend": backend, "precision": precision}}
         if walls:
             scene["walls"] = walls
-        self._setup(json.dumps(scene), output, outputEvery, label, verbose)
+        self._setup(json.dumps(_plain(scene, ""), allow_nan=False), output, outputEvery, label, verbose)
 
     def _setup(self, sceneJson, output, outputEvery, label, verbose):
         self.solver = _mpmsdem.MpmSolver(sceneJson)
@@ -181,3 +182,27 @@ class MpmEngine:
 
 def _kineticEnergy(p):
     return 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum())
+
+
+def _plain(obj, path):
+    """The scene as plain JSON values: numpy arrays and scalars (and YADE vectors) become lists
+    and numbers; a NaN or infinite number is a ValueError naming its key path (JSON has no
+    such numbers: the C++ parser would report only a column)."""
+    if isinstance(obj, dict):
+        return {k: _plain(v, "%s.%s" % (path, k) if path else str(k)) for k, v in obj.items()}
+    if isinstance(obj, (str, bool)) or obj is None:
+        return obj
+    if hasattr(obj, "tolist") and not isinstance(obj, (int, float)):  # numpy array or scalar
+        return _plain(obj.tolist(), path)
+    if isinstance(obj, (list, tuple)) or (hasattr(obj, "__len__") and hasattr(obj, "__getitem__")):
+        return [_plain(obj[i], "%s[%d]" % (path, i)) for i in range(len(obj))]
+    if isinstance(obj, int):
+        return obj
+    try:
+        x = float(obj)
+    except (TypeError, ValueError):
+        raise ValueError("%s = %r: must be a number, a list, a string or a dict (the scene schema of "
+                         "examples/scenes/README.md)" % (path, obj)) from None
+    if not math.isfinite(x):
+        raise ValueError("%s = %r: must be a finite number" % (path, obj))
+    return x

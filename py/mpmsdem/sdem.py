@@ -432,26 +432,41 @@ def _warnDamping():
 
 
 def _vec(v, name):
+    # NaN/inf caught here, where the caller can be named: later they surface as a blow-up
+    # blamed on the time step.
     try:
         if len(v) != 3:
             raise TypeError
-        return Vector3(float(v[0]), float(v[1]), float(v[2]))
-    except TypeError:
-        raise ValueError("%s = %r: must be a 3-vector [m]" % (name, v)) from None
+        out = Vector3(float(v[0]), float(v[1]), float(v[2]))
+    except (TypeError, ValueError):
+        raise ValueError("%s = %r: must be a 3-vector of finite numbers [m]" % (name, v)) from None
+    if not all(math.isfinite(out[k]) for k in range(3)):
+        raise ValueError("%s = %r: must be a 3-vector of finite numbers [m]" % (name, v))
+    return out
 
 
 def _quat(q):
-    if isinstance(q, Quaternion):
-        return q
-    if len(q) == 4:
-        return Quaternion(*[float(c) for c in q])
-    raise ValueError("ori = %r: must be a Quaternion" % (q,))
+    try:
+        if not isinstance(q, Quaternion):
+            if len(q) != 4:
+                raise TypeError
+            q = Quaternion(*[float(c) for c in q])
+        c = [q[k] for k in range(4)]
+    except (TypeError, ValueError):
+        raise ValueError("ori = %r: must be a Quaternion (or 4 finite numbers w, x, y, z)" % (q,)) from None
+    n = math.sqrt(sum(x * x for x in c))
+    if not (math.isfinite(n) and n > 0):
+        raise ValueError("ori = %r: must be a Quaternion of finite, not all zero components" % (q,))
+    return q
 
 
 def _material(d):
     m = _mpmsdem.SdemMat()
     for k, v in d.items():
-        setattr(m, k, v)
+        try:
+            setattr(m, k, float(v))
+        except (TypeError, ValueError):
+            raise ValueError("%s = %r: must be a number (see mpmsdem.material for its range)" % (k, v)) from None
     m.validate()
     return m
 

@@ -219,3 +219,51 @@ def test_runner_of_a_scene_loaded_elsewhere_says_how_to_rebuild(tmp_path):
     text = r.stdout + r.stderr
     assert "not registered in this process" in text and "SdemEngine.restore" in text, text
     assert "NameError" not in text, text
+
+
+# ---------------------------------------------------------------- 7. bad input named
+def test_non_finite_or_mistyped_sdem_inputs_name_the_parameter():
+    eng = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=1000)
+    with pytest.raises(ValueError, match="pos = .*finite"):
+        eng.box((0.05,) * 3, 0.005, mat, pos=(float("nan"), 0, 0))
+    with pytest.raises(ValueError, match="ori = .*finite"):
+        eng.box((0.05,) * 3, 0.005, mat, ori=(float("nan"), 0, 0, 1))
+    with pytest.raises(ValueError, match="ori = "):
+        eng.box((0.05,) * 3, 0.005, mat, ori=(0, 0, 0, 0))
+    with pytest.raises(ValueError, match="density = 'abc': must be a number"):
+        mpmsdem.material(density="abc")
+    with pytest.raises(ValueError, match="friction = "):
+        mpmsdem.material(density=1000, friction=None)
+    assert eng.ids == []
+
+
+def test_mpm_engine_takes_numpy_and_names_a_nan():
+    grid = {"dx": 0.02, "cells": np.array([8, 8, 8]), "origin": np.zeros(3)}
+    mat = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": np.float64(0.3), "mu_2": 0.6}
+    box = {"lo": np.array([0.04, 0.04, 0.04]), "hi": np.array([0.08, 0.08, 0.08]), "ppc": np.int64(1)}
+    mpm = mpmsdem.MpmEngine(grid=grid, material=mat, particles=[box], gravity=np.array([0, 0, -9.81]), verbose=False)
+    assert mpm.numParticles == 8
+    with pytest.raises(ValueError, match=r"material.mu_s = nan: must be a finite number"):
+        mpmsdem.MpmEngine(grid=grid, material=dict(mat, mu_s=float("nan")), particles=[box], verbose=False)
+    with pytest.raises(ValueError, match=r"particles\[0\].hi\[2\] = inf"):
+        mpmsdem.MpmEngine(grid=grid, material=mat, particles=[dict(box, hi=[0.08, 0.08, float("inf")])],
+                          verbose=False)
+
+
+def test_driver_names_bad_scene_files_and_sizes(tmp_path):
+    import subprocess
+    exe = _driver()
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(SCENE).replace('"density": 1600', '"density": 1e999'))
+    r = subprocess.run([exe, str(path), "--bench", "--steps", "1"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "out of range" in r.stderr, r.stderr
+    r = subprocess.run([exe, "/dev/zero", "--bench", "--steps", "1"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "/dev/zero" in r.stderr and "regular" in r.stderr, r.stderr
+    # 600^3 cells need ~12 GB of grid: under a 2 GB cap, a message naming grid.cells, exit 2
+    huge = json.loads(json.dumps(SCENE))
+    huge["grid"] = {"dx": 0.02, "cells": [600, 600, 600], "origin": [-0.04, -0.04, -0.04]}
+    path.write_text(json.dumps(huge))
+    r = subprocess.run(["bash", "-c", 'ulimit -v 2000000 && exec "$0" "$1" --bench --steps 1', exe, str(path)],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "out of memory" in r.stderr and "grid.cells = [600, 600, 600]" in r.stderr, r.stderr
