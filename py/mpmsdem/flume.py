@@ -83,11 +83,13 @@ class Flume:
         if n ** 3 != ppc:
             raise ValueError("ppc = %r: must be a perfect cube (1, 8, 27, ...)" % (ppc,))
         rp = (3.0 * dx ** 3 / ppc / (4.0 * math.pi)) ** (1.0 / 3.0)  # Eq 13
-        # Grid aligned so that the lowest material points touch the bed's rounded surface.
+        # Grid aligned so that the lowest material points touch the bed's rounded surface; the
+        # grid's own bottom wall lies two cells lower, under the bed, so that only the SDEM bed
+        # (through the coupling pair) holds the flow and gives it its basal friction.
         zLow = bedSweep + rp - dx / (2.0 * n)
         height = columnHeight + max(b.z + 2 * b.half[2] for b in blocks) if blocks else columnHeight
         cells = [int(math.ceil(length / dx)) + 4, int(round(width / dx)) + 4,
-                 int(math.ceil((max(height, columnHeight) + 0.05) / dx)) + 4]
+                 int(math.ceil((max(height, columnHeight) + 0.05) / dx)) + 6]
         self.sdem = SdemEngine(dtCheck="raise", verbose=verbose,
                                output=output, outputEvery=outputEvery if output else None)
         bedMat = _material(density=2500, friction=1.0, barrierStiffness=bedBarrierStiffness)
@@ -109,11 +111,11 @@ class Flume:
             pairs[mat] = {"friction": b.flowFriction}
             self.blockIds.append(i)
         self.mpm = MpmEngine(
-            grid={"dx": dx, "cells": cells, "origin": [-2 * dx, -2 * dx, zLow - 2 * dx]},
+            grid={"dx": dx, "cells": cells, "origin": [-2 * dx, -2 * dx, zLow - 4 * dx]},
             material=granular,
             particles=[{"lo": [0, 0, zLow], "hi": [columnLength, width, zLow + columnHeight], "ppc": ppc}],
             gravity={"g": 9.81, "incline_deg": inclineDeg},
-            walls={"-x": "free", "+x": "free", "-y": sideWallFriction, "+y": sideWallFriction, "-z": basalFriction,
+            walls={"-x": "free", "+x": "free", "-y": sideWallFriction, "+y": sideWallFriction, "-z": "free",
                    "+z": "free"},
             backend=backend, precision=precision, verbose=verbose,
             output=os.path.join(output, "mpm") if output else None, outputEvery=vtkEvery or outputEvery)

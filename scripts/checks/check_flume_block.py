@@ -1,0 +1,86 @@
+#!/usr/bin/env python3
+"""Check: a coarse version of the paper's §3.2 scene (copper cube in an inclined glass-bead
+flume, Table 1 materials, MPM–SDEM coupled in YADE) against stored reference numbers.
+
+Coarse scene (seconds on one core): flume 0.7 m long, 0.1 m wide, 10°; column 0.16 m long,
+0.1 m high; dx 0.02 m, 8 points per cell (1,600 material points); a 0.02 m copper cube 0.1 m
+downstream of the column; 0.6 s.
+
+Asserts:
+- conservation: the flow's mass is the seeded mass, exactly;
+- the flow reaches the cube and pushes it downstream (travel > 0, F_t peak > 0) and the cube's
+  state stays finite;
+- travel distance and peak impact force (10 ms mean) within a relative tolerance of the
+  stored reference (scripts/checks/reference/flume_block.json): 15 % and 25 %. The granular
+  impact is chaotic at this resolution: compiler flags or thread counts move both by a few
+  per cent; a change of the method moves them by far more.
+
+    /usr/bin/python3 scripts/checks/check_flume_block.py [--regenerate]
+
+``--regenerate`` stores the numbers of this run as the new reference (after a deliberate
+change of the method; say why in the commit).
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+import mpmsdem
+from mpmsdem.flume import Block, Flume
+from yade import O
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REF = os.path.join(HERE, "reference", "flume_block.json")
+TOL = {"travel": 0.15, "peak_force": 0.25}
+
+
+def run():
+    cube = Block(half=(0.01,) * 3, x=0.26, density=8900, friction=0.67, flowFriction=0.21)
+    scene = Flume(length=0.7, width=0.1, columnLength=0.16, columnHeight=0.1, dx=0.02, blocks=[cube], verbose=False)
+    m0 = float(scene.mpm.particles()["mass"].sum())
+    scene.run(0.6, sampleEvery=0.002)
+    p = scene.mpm.particles()
+    peak, tPeak = scene.peakForce(0, smooth=0.01)
+    state = O.bodies[scene.blockIds[0]].state
+    return {"travel": scene.travel(0), "peak_force": peak, "peak_time": tPeak,
+            "mass_error": abs(float(p["mass"].sum()) - m0), "finite": all(math.isfinite(v) for v in state.pos),
+            "particles": scene.mpm.numParticles}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--regenerate", action="store_true", help="store this run's numbers as the reference")
+    args = ap.parse_args()
+    r = run()
+    print("flume block (coarse §3.2): %d material points, travel %.4f m, peak force %.4f N at %.3f s"
+          % (r["particles"], r["travel"], r["peak_force"], r["peak_time"]))
+    failures = []
+    if r["mass_error"] != 0:
+        failures.append("flow mass changed by %g kg" % r["mass_error"])
+    if not r["finite"]:
+        failures.append("the cube's state is not finite")
+    if not (r["travel"] > 0 and r["peak_force"] > 0):
+        failures.append("the flow did not push the cube (travel %g m, peak %g N)" % (r["travel"], r["peak_force"]))
+    if args.regenerate:
+        os.makedirs(os.path.dirname(REF), exist_ok=True)
+        with open(REF, "w") as f:
+            json.dump({k: r[k] for k in ("travel", "peak_force", "peak_time", "particles")}, f, indent=1)
+        print("reference written: %s" % REF)
+    else:
+        ref = json.load(open(REF))
+        for key, tol in TOL.items():
+            rel = abs(r[key] - ref[key]) / abs(ref[key])
+            status = "ok" if rel <= tol else "DRIFT"
+            print("  %-10s %.4f (reference %.4f, %+.1f %%, tolerance %.0f %%) %s"
+                  % (key, r[key], ref[key], 100 * (r[key] / ref[key] - 1), 100 * tol, status))
+            if rel > tol:
+                failures.append("%s = %.4f drifted %.1f %% from the reference %.4f (tolerance %.0f %%)"
+                                % (key, r[key], 100 * rel, ref[key], 100 * tol))
+    if failures:
+        print("FAILED: " + "; ".join(failures), file=sys.stderr)
+        sys.exit(1)
+    print("OK")
+
+
+main()
