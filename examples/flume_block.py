@@ -149,5 +149,5 @@ def main(argv):
     return summary
 
 
-if __name__ == "__main__" or "yade" in sys.argv[0]:
+if __name__ == "__main__":  # also under `yade -x`, which runs scripts as __main__
     main(sys.argv[1:])

@@ -1,5 +1,5 @@
 // Conversions between Python objects and the core's types, shared by the binding files.
-// YADE registers converters for Eigen's Vector3d/Quaterniond process-wide (DESIGN §1), so
+// YADE registers converters for Eigen's Vector3d/Quaterniond process-wide, so
 // values we return are YADE's own Vector3/Quaternion. Inputs are accepted as YADE vectors
 // or as any 3-sequence, so plain tuples work too.
 #pragma once

@@ -1,4 +1,4 @@
-// Hypoelastic mu(I) model of the paper's Appendix B with the two corrections of DESIGN §3
+// Hypoelastic mu(I) model of the paper's Appendix B with the two corrections of docs/physics.md
 // (xi = I_0/(d sqrt(rho_s)); alpha_1 = xi G dt sqrt(p_tr)). Shared by CPU and CUDA code.
 // Sign convention: Cauchy stress, tension positive; pressure p = -tr(sigma)/3 > 0 in compression.
 #pragma once

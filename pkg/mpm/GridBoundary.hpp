@@ -1,4 +1,4 @@
-// Wall boundary conditions on grid nodes (paper Appendix A, corrected per DESIGN §3).
+// Wall boundary conditions on grid nodes (paper Appendix A, corrected as in docs/physics.md).
 // The grid domain is a box with six walls (index 0..5 = -x,+x,-y,+y,-z,+z). A wall acts on
 // the nodes of its layer: node index <= kWallLayer on the low side of an axis, >=
 // cells - kWallLayer on the high side. Material points are kept at least kWallLayer cells

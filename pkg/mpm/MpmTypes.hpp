@@ -13,7 +13,7 @@
 namespace mpmsdem {
 namespace mpm {
 
-// Granular material of Appendix B (with DESIGN §3 corrections). SI units.
+// Granular material of Appendix B (with the corrections of docs/physics.md). SI units.
 struct GranularMaterial {
   double density = 1600;       // rho_0, initial bulk density of the material points [kg/m^3], > 0
   double youngModulus = 1e6;   // E [Pa], > 0 (Table 1: 1 MPa)

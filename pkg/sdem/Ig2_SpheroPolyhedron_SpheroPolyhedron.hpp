@@ -1,5 +1,5 @@
 // Ig2_SpheroPolyhedron_SpheroPolyhedron: narrow-phase contact geometry between two
-// sphero-polyhedra (paper §2.2, Fig 3, Eq 7; DESIGN §3 "Contact features").
+// sphero-polyhedra (paper §2.2, Fig 3, Eq 7; docs/physics.md).
 //
 // Core feature pairs are enumerated (vertex–face both ways, edge–edge, vertex–edge both
 // ways, vertex–vertex); a pair is a contact when its core distance d < R_A + R_B and it

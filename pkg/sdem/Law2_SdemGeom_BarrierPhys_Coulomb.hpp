@@ -1,5 +1,5 @@
 // Law2_SdemGeom_BarrierPhys_Coulomb: contact law of two sphero-polyhedra (paper Eqs 9–11,
-// with DESIGN §3's reading of Eq 10 as a force).
+// with Eq 10 read as a force, docs/physics.md).
 //
 // Normal: log barrier b(d) = -k_c (d - R)^2 ln(d / R) on the core gap d = R - delta,
 // R = R_A + R_B, whose force is Eq 10:

@@ -1,4 +1,4 @@
-// Mass properties of a rounded sphero-polyhedron (DESIGN §3, paper §2.2).
+// Mass properties of a rounded sphero-polyhedron (paper §2.2; docs/physics.md).
 // The rounded body is the Minkowski sum of the core polyhedron S and a ball of radius R.
 // It is split into disjoint pieces whose moments are integrated in closed form:
 //   core polyhedron            signed tetrahedra from the origin (exact, any closed core)

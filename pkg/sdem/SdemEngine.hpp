@@ -1,5 +1,5 @@
 // SdemEngine: block–block contact forces of a set of sphero-polyhedra (paper §2.2, Eqs 5–11;
-// DESIGN §2–3). Broad phase (sort-and-sweep on x over the rounded bodies' AABBs, fixed–fixed
+// docs/physics.md). Broad phase (sort-and-sweep on x over the rounded bodies' AABBs, fixed–fixed
 // pairs skipped), narrow phase (Ig2_SpheroPolyhedron_SpheroPolyhedron), pair physics
 // (Ip2_SdemMat_SdemMat_BarrierPhys), law (Law2_SdemGeom_BarrierPhys_Coulomb), force and torque
 // sums, tangential histories kept across steps.

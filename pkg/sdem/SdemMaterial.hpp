@@ -1,5 +1,5 @@
 // SdemMaterial: the contact material of a sphero-polyhedron block (paper §2.2, Eqs 9–11;
-// DESIGN §3). Pair properties are derived from two materials by
+// docs/physics.md). Pair properties are derived from two materials by
 // Ip2_SdemMat_SdemMat_BarrierPhys.
 #pragma once
 #include <cmath>

@@ -1,4 +1,4 @@
-// SpheroPolyhedron: the SDEM shape (paper §2.2, Fig 2; DESIGN §3).
+// SpheroPolyhedron: the SDEM shape (paper §2.2, Fig 2; docs/physics.md).
 // A block of outer shape P is the Minkowski sum of an eroded core S (P shrunk by R)
 // and a sphere of radius R. All geometry here is in the BODY frame: origin at the
 // centroid of the rounded body, axes along its principal axes of inertia.

@@ -13,7 +13,7 @@ def slidingDistance(t, thetaDeg, mu, g=G):
 
 
 def barrierForce(delta, R, kc):
-    """Normal force of the log barrier (paper Eq 10 read as a force, DESIGN §3) [N]:
+    """Normal force of the log barrier (paper Eq 10 read as a force, docs/physics.md) [N]:
     F_n = −k_c δ [2 ln((R−δ)/R) − R/(R−δ) + 1], 0 ≤ δ < R, R = R_i + R_j."""
     if not 0 <= delta < R:
         raise ValueError("delta = %g m: must be in [0, R = %g m)" % (delta, R))
@@ -21,7 +21,7 @@ def barrierForce(delta, R, kc):
 
 
 def barrierStiffness(delta, R, kc):
-    """Tangent stiffness k_n = dF_n/dδ of the barrier force [N/m] (DESIGN §3)."""
+    """Tangent stiffness k_n = dF_n/dδ of the barrier force [N/m]."""
     if not 0 <= delta < R:
         raise ValueError("delta = %g m: must be in [0, R = %g m)" % (delta, R))
     g = 2.0 * math.log((R - delta) / R) - R / (R - delta) + 1.0

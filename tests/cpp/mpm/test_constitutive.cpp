@@ -1,4 +1,4 @@
-// Appendix B mu(I) model (with DESIGN §3 corrections) and the Appendix A wall condition.
+// Appendix B mu(I) model (with the corrections of docs/physics.md) and the Appendix A wall condition.
 #include <gtest/gtest.h>
 
 #include <cmath>
