@@ -18,15 +18,6 @@ namespace coupling {
 
 using mpm::Vec3T;
 
-template <typename T>
-MPM_HD_INLINE T hdCbrt(T a) {
-#if defined(__CUDA_ARCH__)
-  return cbrt(a);
-#else
-  return std::cbrt(a);
-#endif
-}
-
 // Pose and motion of one block for this step (world frame).
 template <typename T>
 struct BlockState {
@@ -120,7 +111,7 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     H.key[H.slots * p + k] = -1;
   }
   int used = 0;
-  const T rp = hdCbrt(T(3) * P.vol0[p] / T(4 * 3.14159265358979323846));
+  const T rp = mpm::hdCbrt(T(3) * P.vol0[p] / T(4 * 3.14159265358979323846));
   const T mp = P.mass[p];
   const Vec3T<T> vp{P.v[0][p], P.v[1][p], P.v[2][p]};
   Vec3T<T> fsum{T(0), T(0), T(0)};

@@ -35,6 +35,30 @@ MPM_HD_INLINE T hdFloor(T a) {
 #endif
 }
 template <typename T>
+MPM_HD_INLINE T hdCbrt(T a) {
+#if defined(__CUDA_ARCH__)
+  return cbrt(a);
+#else
+  return std::cbrt(a);
+#endif
+}
+template <typename T>
+MPM_HD_INLINE T hdLog1p(T a) {
+#if defined(__CUDA_ARCH__)
+  return log1p(a);
+#else
+  return std::log1p(a);
+#endif
+}
+template <typename T>
+MPM_HD_INLINE T hdAtan2(T y, T x) {
+#if defined(__CUDA_ARCH__)
+  return atan2(y, x);
+#else
+  return std::atan2(y, x);
+#endif
+}
+template <typename T>
 MPM_HD_INLINE bool hdIsFinite(T a) {
 #if defined(__CUDA_ARCH__)
   return isfinite(a);

@@ -18,23 +18,6 @@ namespace sdem {
 using mpm::Vec3T;
 
 template <typename T>
-MPM_HD_INLINE T hdLog1p(T a) {
-#if defined(__CUDA_ARCH__)
-  return log1p(a);
-#else
-  return std::log1p(a);
-#endif
-}
-template <typename T>
-MPM_HD_INLINE T hdAtan2(T y, T x) {
-#if defined(__CUDA_ARCH__)
-  return atan2(y, x);
-#else
-  return std::atan2(y, x);
-#endif
-}
-
-template <typename T>
 MPM_HD_INLINE Vec3T<T> cross(const Vec3T<T>& a, const Vec3T<T>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
@@ -140,7 +123,7 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
         const Vec3T<T> a = vertexAt(S.loopVertex[l0]) - p, b = vertexAt(S.loopVertex[i]) - p,
                        c = vertexAt(S.loopVertex[i + 1]) - p;
         const T la = norm(a), lb = norm(b), lc = norm(c);
-        omega += T(2) * hdAtan2(mpm::dot(a, cross(b, c)),
+        omega += T(2) * mpm::hdAtan2(mpm::dot(a, cross(b, c)),
                                 la * lb * lc + mpm::dot(a, b) * lc + mpm::dot(b, c) * la + mpm::dot(c, a) * lb);
       }
     }
@@ -177,20 +160,20 @@ template <typename T>
 MPM_HD_INLINE T barrierForce(T kc, T R, T delta) {
   if (!(delta > T(0))) return T(0);
   const T x = delta / R;
-  return -kc * delta * (T(2) * hdLog1p(-x) - x / (T(1) - x));
+  return -kc * delta * (T(2) * mpm::hdLog1p(-x) - x / (T(1) - x));
 }
 // Tangent stiffness k_n = dF_n/ddelta [N/m].
 template <typename T>
 MPM_HD_INLINE T barrierStiffness(T kc, T R, T delta) {
   if (!(delta > T(0))) return T(0);
   const T x = delta / R;
-  return -kc * (T(2) * hdLog1p(-x) - T(3) * x / (T(1) - x) - x / ((T(1) - x) * (T(1) - x)));
+  return -kc * (T(2) * mpm::hdLog1p(-x) - T(3) * x / (T(1) - x) - x / ((T(1) - x) * (T(1) - x)));
 }
 // Barrier potential b(R - delta) [J]; F_n = db/ddelta.
 template <typename T>
 MPM_HD_INLINE T barrierPotential(T kc, T R, T delta) {
   if (!(delta > T(0))) return T(0);
-  return -kc * delta * delta * hdLog1p(-delta / R);
+  return -kc * delta * delta * mpm::hdLog1p(-delta / R);
 }
 
 // Pair parameters of the law (YADE's IPhys role), plain values for device use.
