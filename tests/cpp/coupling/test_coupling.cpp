@@ -75,6 +75,21 @@ Vec3 particleMomentum(mpm::MpmSolver& s) {
   return m;
 }
 
+// Zero gravity: a 4 x 4 x 4-cell blob of glass beads (8 points per cell) moving at vx along x
+// in a grid of `cellsX` x 14 x 14 cells.
+std::unique_ptr<CoupledWorld> blobWorld(int cellsX, double vx, mpm::Backend backend = mpm::Backend::Cpu,
+                                        mpm::Precision precision = mpm::Precision::Double) {
+  auto prm = gridParams({cellsX, 14, 14});
+  mpm::ParticleSet ps;
+  mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
+  for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = vx;
+  auto solver = mpm::makeSolver(prm, backend, precision);
+  solver->setParticles(ps);
+  auto w = std::make_unique<CoupledWorld>(std::move(solver));
+  w->world.gravity = Vec3::Zero();
+  return w;
+}
+
 }  // namespace
 
 TEST(ShapeTable, ClosestPointMatchesShapeQuery) {
@@ -142,14 +157,8 @@ TEST(ShapeTable, FloatFormulasAgreeWithDouble) {
 // Zero gravity: a granular blob thrown at a free cube. The particles' forces sum to minus the
 // block's at every step (Eqs 17-18), and the total momentum of particles + block is conserved.
 TEST(MpSdemCoupling, ImpulseBalanceAndMomentumConservation) {
-  auto prm = gridParams({24, 14, 14});
-  mpm::ParticleSet ps;
-  mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
-  for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.0;
-  auto solver = mpm::makeSolver(prm);
-  solver->setParticles(ps);
-  CoupledWorld w(std::move(solver));
-  w.world.gravity = Vec3::Zero();
+  auto world = blobWorld(24, 1.0);
+  CoupledWorld& w = *world;
   const int cube = addCube(w, 0.02, 0.003, Vec3(0.125, 0.07, 0.07), 2000);
   w.coupling.setPair(0, pair(0.3));
   const Vec3 p0 = particleMomentum(w.mpm()) + w.world.engine.mass(cube) * w.world.engine.velocity(cube);
@@ -246,14 +255,8 @@ TEST(MpSdemCoupling, BlockRestingOnGranularLayerCarriesItsWeight) {
 TEST(MpSdemCoupling, BlockSumsDoNotDependOnThreadCount) {
   auto run = [](int threads) {
     omp_set_num_threads(threads);
-    auto prm = gridParams({20, 14, 14});
-    mpm::ParticleSet ps;
-    mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
-    for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.5;
-    auto solver = mpm::makeSolver(prm);
-    solver->setParticles(ps);
-    CoupledWorld w(std::move(solver));
-    w.world.gravity = Vec3::Zero();
+    auto world = blobWorld(20, 1.5);
+    CoupledWorld& w = *world;
     const int cube = addCube(w, 0.02, 0.003, Vec3(0.108, 0.07, 0.07), 2000);
     w.coupling.setPair(0, pair(0.5));
     Vec3 impulse = Vec3::Zero();
@@ -303,14 +306,8 @@ TEST(MpSdemCoupling, BadInputIsRefusedClearly) {
 
 // A block added between steps joins the coupling (its shape enters the table) and is hit.
 TEST(MpSdemCoupling, BlockAddedMidRunIsCoupled) {
-  auto prm = gridParams({24, 14, 14});
-  mpm::ParticleSet ps;
-  mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
-  for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.0;
-  auto solver = mpm::makeSolver(prm);
-  solver->setParticles(ps);
-  CoupledWorld w(std::move(solver));
-  w.world.gravity = Vec3::Zero();
+  auto world = blobWorld(24, 1.0);
+  CoupledWorld& w = *world;
   addCube(w, 0.01, 0.002, Vec3(0.02 + 0.2, 0.07, 0.12), 2000, true);  // far away
   w.coupling.setPair(0, pair());
   for (int s = 0; s < 100; ++s) w.step(1e-5);
@@ -330,14 +327,8 @@ TEST(MpSdemCoupling, BlockAddedMidRunIsCoupled) {
 TEST(MpSdemCoupling, CpuAndCudaAgree) {
   if (!mpm::cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine: CPU-vs-CUDA coupling check skipped";
   auto run = [](mpm::Backend backend, mpm::Precision precision) {
-    auto prm = gridParams({24, 14, 14});
-    mpm::ParticleSet ps;
-    mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
-    for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.0;
-    auto solver = mpm::makeSolver(prm, backend, precision);
-    solver->setParticles(ps);
-    CoupledWorld w(std::move(solver));
-    w.world.gravity = Vec3::Zero();
+    auto world = blobWorld(24, 1.0, backend, precision);
+    CoupledWorld& w = *world;
     const int cube = addCube(w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000);
     w.coupling.setPair(0, pair(0.3));
     Vec3 impulse = Vec3::Zero();
