@@ -109,7 +109,16 @@ def column_collapse(duration=0.6):
 
 def flume_block():
     import importlib.util
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "flume_block.py")
+    import sys
+    # under `yade -x`, __file__ names yade itself: look beside this script as named on the
+    # command line, then in ./examples
+    dirs = [os.path.dirname(os.path.abspath(a)) for a in sys.argv if a.endswith("demo.py")]
+    dirs += [os.path.dirname(os.path.abspath(__file__)), os.path.join(os.getcwd(), "examples")]
+    path = next((os.path.join(d, "flume_block.py") for d in dirs if os.path.isfile(os.path.join(d, "flume_block.py"))),
+                None)
+    if path is None:
+        raise RuntimeError("demo: examples/flume_block.py not found beside demo.py or in ./examples (run from the "
+                           "repository root)")
     spec = importlib.util.spec_from_file_location("flume_block", path)
     example = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(example)
