@@ -116,11 +116,16 @@ def format_table(rows):
             "%.3g" % r["seconds"], "%.3e" % r["particle_updates_per_s"],
             "%.0f" % r["bytes_per_particle"],
             ("%.1f" % r["ratio"]) if r.get("ratio") is not None else "n/a"])
+    return render_table(head, body)
+
+
+def render_table(head, body, mdRule="---|"):
+    """(aligned text, markdown) of a table given its header and rows of strings."""
     widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)]
     text = "  ".join(h.rjust(w) for h, w in zip(head, widths)) + "\n"
     for b in body:
         text += "  ".join(c.rjust(w) for c, w in zip(b, widths)) + "\n"
-    md = "| " + " | ".join(head) + " |\n|" + "---|" * len(head) + "\n"
+    md = "| " + " | ".join(head) + " |\n|" + mdRule * len(head) + "\n"
     for b in body:
         md += "| " + " | ".join(b) + " |\n"
     return text, md

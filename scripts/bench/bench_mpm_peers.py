@@ -31,6 +31,8 @@ import sys
 import tempfile
 import threading
 
+from bench_mpm import render_table  # same folder: one table renderer for both benchmarks
+
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PEER = os.path.join(REPO, "scripts", "bench", "peers", "taichi_mpm.py")
 BASE_SCENE = os.path.join(REPO, "examples", "scenes", "column_collapse.json")
@@ -176,14 +178,7 @@ def table(rows):
             "%.6f" % c["front_x"] if c else "n/a", "%.6f" % p["front_x"],
             ("%.1e" % (abs(c["kinetic_energy"] - p["kinetic_energy"]) / max(abs(c["kinetic_energy"]), 1e-300)))
             if c else "n/a"])
-    widths = [max(len(h), *(len(b[i]) for b in body)) for i, h in enumerate(head)]
-    text = "  ".join(h.rjust(w) for h, w in zip(head, widths)) + "\n"
-    for b in body:
-        text += "  ".join(c.rjust(w) for c, w in zip(b, widths)) + "\n"
-    md = "| " + " | ".join(head) + " |\n|" + "---:|" * len(head) + "\n"
-    for b in body:
-        md += "| " + " | ".join(b) + " |\n"
-    return text, md
+    return render_table(head, body, mdRule="---:|")
 
 
 def main():
