@@ -69,7 +69,7 @@ void MpSdemCoupling::setHistories(const std::vector<long long>& keys, const std:
 }
 
 // Blocks in: shapes of new bodies join the table; pose and motion of every body.
-void MpSdemCoupling::syncBlocks(const mpm::MpmParams&) {
+void MpSdemCoupling::syncBlocks() {
   const int n = sdem_.numBodies();
   for (int i = static_cast<int>(blockShape_.size()); i < n; ++i) {
     const sdem::SpheroPolyhedron* s = &sdem_.shape(i);
@@ -157,7 +157,7 @@ void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
 void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
   const mpm::MpmParams& g = solver.params();
-  syncBlocks(g);
+  syncBlocks();
   mpm::ParticleView view = solver.openForceBuffer();
   if (view.device && !device_) {
     device_ = makeCouplingDeviceBackend(view.precision);

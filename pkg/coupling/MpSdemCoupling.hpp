@@ -88,7 +88,7 @@ class MpSdemCoupling {
   double binSize() const { return binSize_; }
 
  private:
-  void syncBlocks(const mpm::MpmParams& grid);
+  void syncBlocks();
   void buildBins(const mpm::MpmParams& grid);
   void runCpu(const CouplingStepInput& in, CouplingStepOutput& out);
   const double* sums(int block, int offset) const;
