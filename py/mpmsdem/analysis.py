@@ -172,3 +172,36 @@ class FlowProbe:
         if self.L0:
             out["Fr1"] = froudeDistance(v, self.L0, self.g)
         return out
+
+
+def checkAgainstReference(values, path, tolerances, regenerate=False, stored=None):
+    """Regression check of a scene's numbers against a stored reference (JSON), the way the
+    project's checks and a user's regression scripts use it.
+
+    :param values: dict of this run's numbers; :param path: the reference JSON file;
+    :param tolerances: {key: relative tolerance} of the keys compared (two-sided);
+    :param regenerate: store ``values`` (the keys in ``stored``, default those of
+        ``tolerances``) as the new reference instead of comparing.
+    Prints one line per compared key; returns the list of drift messages (empty: all within).
+    """
+    import json
+    import os
+    if regenerate:
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+        with open(path, "w") as f:
+            json.dump({k: values[k] for k in (stored or tolerances)}, f, indent=1)
+        print("reference written: %s" % path)
+        return []
+    with open(path) as f:
+        ref = json.load(f)
+    width = max(len(k) for k in tolerances)
+    failures = []
+    for key, tol in tolerances.items():
+        rel = abs(values[key] - ref[key]) / abs(ref[key])
+        print("  %-*s %.4f (reference %.4f, %+.1f %%, tolerance %.0f %%) %s"
+              % (width, key, values[key], ref[key], 100 * (values[key] / ref[key] - 1), 100 * tol,
+                 "ok" if rel <= tol else "DRIFT"))
+        if rel > tol:
+            failures.append("%s = %.4f drifted %.1f %% from the reference %.4f (tolerance %.0f %%)"
+                            % (key, values[key], 100 * rel, ref[key], 100 * tol))
+    return failures

@@ -21,12 +21,12 @@ Asserts:
 change of the method; say why in the commit).
 """
 import argparse
-import json
 import math
 import os
 import sys
 
 import mpmsdem
+from mpmsdem import analysis
 from mpmsdem.flume import Block, Flume
 from yade import O
 
@@ -62,21 +62,8 @@ def main():
         failures.append("the cube's state is not finite")
     if not (r["travel"] > 0 and r["peak_force"] > 0):
         failures.append("the flow did not push the cube (travel %g m, peak %g N)" % (r["travel"], r["peak_force"]))
-    if args.regenerate:
-        os.makedirs(os.path.dirname(REF), exist_ok=True)
-        with open(REF, "w") as f:
-            json.dump({k: r[k] for k in ("travel", "peak_force", "peak_time", "particles")}, f, indent=1)
-        print("reference written: %s" % REF)
-    else:
-        ref = json.load(open(REF))
-        for key, tol in TOL.items():
-            rel = abs(r[key] - ref[key]) / abs(ref[key])
-            status = "ok" if rel <= tol else "DRIFT"
-            print("  %-10s %.4f (reference %.4f, %+.1f %%, tolerance %.0f %%) %s"
-                  % (key, r[key], ref[key], 100 * (r[key] / ref[key] - 1), 100 * tol, status))
-            if rel > tol:
-                failures.append("%s = %.4f drifted %.1f %% from the reference %.4f (tolerance %.0f %%)"
-                                % (key, r[key], 100 * rel, ref[key], 100 * tol))
+    failures += analysis.checkAgainstReference(r, REF, TOL, args.regenerate,
+                                               stored=("travel", "peak_force", "peak_time", "particles"))
     if failures:
         print("FAILED: " + "; ".join(failures), file=sys.stderr)
         sys.exit(1)

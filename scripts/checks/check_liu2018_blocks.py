@@ -26,7 +26,6 @@ moves them by more.
 change of the method; say why in the commit).
 """
 import argparse
-import json
 import math
 import os
 import sys
@@ -105,22 +104,8 @@ def main():
     if not (r["travel_middle"] > 0 and r["travel_top"] > 0 and r["peak_force_bottom"] > 0):
         failures.append("the flow did not push the stack (travel middle %g m, top %g m, peak %g N)"
                         % (r["travel_middle"], r["travel_top"], r["peak_force_bottom"]))
-    if args.regenerate:
-        os.makedirs(os.path.dirname(REF), exist_ok=True)
-        with open(REF, "w") as f:
-            json.dump({k: r[k] for k in ("peak_force_bottom", "peak_time", "x_middle", "x_top", "particles")}, f,
-                      indent=1)
-        print("reference written: %s" % REF)
-    else:
-        ref = json.load(open(REF))
-        for key, tol in TOL.items():
-            rel = abs(r[key] - ref[key]) / abs(ref[key])
-            status = "ok" if rel <= tol else "DRIFT"
-            print("  %-17s %.4f (reference %.4f, %+.1f %%, tolerance %.0f %%) %s"
-                  % (key, r[key], ref[key], 100 * (r[key] / ref[key] - 1), 100 * tol, status))
-            if rel > tol:
-                failures.append("%s = %.4f drifted %.1f %% from the reference %.4f (tolerance %.0f %%)"
-                                % (key, r[key], 100 * rel, ref[key], 100 * tol))
+    failures += analysis.checkAgainstReference(r, REF, TOL, args.regenerate,
+                                               stored=("peak_force_bottom", "peak_time", "x_middle", "x_top", "particles"))
     if failures:
         print("FAILED: " + "; ".join(failures), file=sys.stderr)
         sys.exit(1)

@@ -178,3 +178,14 @@ def test_flow_at_station_and_froude_numbers_by_hand():
     assert r["arrival"] == 0.1
     assert r["Fr"] == pytest.approx(2.2 / math.sqrt(9.81 * 0.05), rel=1e-12)
     assert r["Fr1"] == pytest.approx(2.2 / math.sqrt(9.81 * 0.2), rel=1e-12)
+
+
+def test_check_against_reference_stores_then_flags_drift_both_ways(tmp_path):
+    ref = str(tmp_path / "ref" / "scene.json")
+    assert analysis.checkAgainstReference({"travel": 0.2, "peak": 5.0, "n": 7}, ref, {"travel": 0.1, "peak": 0.2},
+                                          regenerate=True, stored=("travel", "peak", "n")) == []
+    assert analysis.checkAgainstReference({"travel": 0.219, "peak": 4.01}, ref, {"travel": 0.1, "peak": 0.2}) == []
+    high = analysis.checkAgainstReference({"travel": 0.221, "peak": 5.0}, ref, {"travel": 0.1, "peak": 0.2})
+    low = analysis.checkAgainstReference({"travel": 0.2, "peak": 3.99}, ref, {"travel": 0.1, "peak": 0.2})
+    assert len(high) == 1 and high[0].startswith("travel = 0.2210 drifted 10.5 %")
+    assert len(low) == 1 and low[0].startswith("peak = 3.9900 drifted 20.2 %")
