@@ -25,6 +25,7 @@ void exportMpm() {
       .def("openOutput", &PyMpm::openOutput, (bp::arg("dir"), bp::arg("append") = false))
       .def("writeSnapshot", &PyMpm::writeSnapshot)
       .def("appendSeries", &PyMpm::appendSeries, (bp::arg("name"), bp::arg("value")))
+      .def("appendVector", &PyMpm::appendVector, (bp::arg("name"), bp::arg("values")))
       .def("saveCheckpoint", &PyMpm::saveCheckpoint, (bp::arg("path")))
       .def("loadSnapshot", &PyMpm::loadSnapshot, (bp::arg("path"), bp::arg("index") = -1))
       .add_property("time", &PyMpm::time)

@@ -130,6 +130,12 @@ class PyMpm {
     requireOutput();
     h5_->appendScalar(name, value);
   }
+  void appendVector(const std::string& name, const bp::object& values) {
+    requireOutput();
+    std::vector<double> v;
+    for (long i = 0; i < bp::len(values); ++i) v.push_back(bp::extract<double>(values[i]));
+    h5_->appendVector(name, v);
+  }
 
  private:
   void writeHeader(io::Hdf5Writer& w) const {
