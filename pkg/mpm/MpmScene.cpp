@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "common/Error.hpp"
+#include "common/SceneJson.hpp"
 #include "io/MeshReader.hpp"
 #include "mpm/GridBoundary.hpp"
 #include "mpm/Seeding.hpp"
@@ -21,75 +22,8 @@ namespace {
 
 using nlohmann::json;
 
-std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
+using namespace scenejson;
 
-// Every key of `obj` must be in `allowed`.
-void checkKeys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) {
-  std::set<std::string> ok(allowed.begin(), allowed.end());
-  for (auto it = obj.begin(); it != obj.end(); ++it) {
-    if (!ok.count(it.key())) {
-      std::string list;
-      for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      throw ParameterError("unknown key '" + join(path, it.key()) + "': allowed keys" +
-                           (path.empty() ? "" : " in '" + path + "'") + " are " + list);
-    }
-  }
-}
-
-const json& requireObject(const json& parent, const std::string& path, const char* key) {
-  if (!parent.contains(key)) throw ParameterError("missing required key '" + join(path, key) + "'");
-  const json& v = parent.at(key);
-  if (!v.is_object()) throwParameter(join(path, key), v.dump(), "", "a JSON object");
-  return v;
-}
-
-double number(const json& v, const std::string& name) {
-  if (!v.is_number()) throwParameter(name, v.dump(), "", "a number");
-  return v.get<double>();
-}
-
-double requireNumber(const json& obj, const std::string& path, const char* key) {
-  if (!obj.contains(key)) throw ParameterError("missing required key '" + join(path, key) + "'");
-  return number(obj.at(key), join(path, key));
-}
-
-double optNumber(const json& obj, const std::string& path, const char* key, double def) {
-  return obj.contains(key) ? number(obj.at(key), join(path, key)) : def;
-}
-
-std::string optString(const json& obj, const std::string& path, const char* key, const std::string& def,
-                      std::initializer_list<const char*> allowed) {
-  if (!obj.contains(key)) return def;
-  const json& v = obj.at(key);
-  std::string list;
-  for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string("\"") + a + "\"";
-  if (!v.is_string()) throwParameter(join(path, key), v.dump(), "", "one of " + list);
-  const std::string s = v.get<std::string>();
-  for (const char* a : allowed)
-    if (s == a) return s;
-  throwParameter(join(path, key), v.dump(), "", "one of " + list);
-}
-
-std::array<double, 3> vec3(const json& v, const std::string& name) {
-  if (!v.is_array() || v.size() != 3) throwParameter(name, v.dump(), "", "an array of 3 numbers");
-  std::array<double, 3> out{};
-  for (int a = 0; a < 3; ++a) out[a] = number(v[a], name + "[" + std::to_string(a) + "]");
-  return out;
-}
-
-// value must be finite and satisfy lo <(=) value <(=) hi.
-void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
-                bool hiOpen) {
-  const bool ok = std::isfinite(value) && (loOpen ? value > lo : value >= lo) && (hiOpen ? value < hi : value <= hi);
-  if (ok) return;
-  std::ostringstream range;
-  range << "in " << (loOpen ? "(" : "[") << lo << ", ";
-  if (std::isinf(hi))
-    range << "inf)";
-  else
-    range << hi << (hiOpen ? ")" : "]");
-  throwParameter(name, value, unit, range.str());
-}
 const double kInf = INFINITY;
 
 void parseGrid(const json& root, MpmParams& p) {
@@ -151,6 +85,24 @@ void parseWalls(const json& root, MpmParams& p) {
   }
 }
 
+void parseGate(const json& root, MpmParams& p) {
+  if (!root.contains("gate")) return;
+  const json& j = root.at("gate");
+  if (!j.is_object()) throwParameter("gate", j.dump(), "", "a JSON object {x, bottom, speed, open_at, friction}");
+  checkKeys(j, "gate", {"x", "bottom", "speed", "open_at", "friction"});
+  GateSpec& g = p.gate;
+  g.enabled = true;
+  g.x = requireNumber(j, "gate", "x");
+  const double lo = materialRegionLo(p)[0], hi = materialRegionHi(p)[0];
+  checkRange("gate.x", g.x, "m", lo, false, hi, false);
+  g.bottom = optNumber(j, "gate", "bottom", g.bottom);  // any JSON number is finite
+  g.speed = optNumber(j, "gate", "speed", g.speed);
+  checkRange("gate.speed", g.speed, "m/s", 0, false, kInf, true);
+  g.openAt = optNumber(j, "gate", "open_at", g.openAt);
+  checkRange("gate.open_at", g.openAt, "s", 0, false, kInf, true);
+  g.friction = optNumber(j, "gate", "friction", g.friction);
+  checkRange("gate.friction", g.friction, "", 0, false, kInf, true);
+}
 void parseMaterial(const json& root, MpmParams& p) {
   const json& m = requireObject(root, "", "material");
   checkKeys(m, "material", {"density", "young_modulus", "poisson_ratio", "mu_s", "mu_2", "I0", "grain_diameter",
@@ -378,7 +330,9 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
                          "|x| < 1.8e308): " + e.what());
   }
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
-  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "cfl", "walls", "material", "particles", "run"});
+  // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
+  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "cfl", "walls", "material", "particles", "run",
+                       "blocks", "block_materials"});
   if (root.contains("description") && !root.at("description").is_string())
     throwParameter("description", root.at("description").dump(), "", "a string");
   MpmScene s;
@@ -389,6 +343,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   s.params.cfl = optNumber(root, "", "cfl", s.params.cfl);
   checkRange("cfl", s.params.cfl, "", 0, true, 1, false);
   parseWalls(root, s.params);
+  parseGate(root, s.params);
   parseMaterial(root, s.params);
   parseParticles(root, s, baseDir);
   parseRun(root, s.run);

@@ -21,6 +21,16 @@
 //                                   each wall: "free" (free slip, the default), "noslip",
 //                                   or a Coulomb friction coefficient >= 0 (0 = free slip).
 //                                   Walls never let material through.
+//   "gate": {                       a release gate (mpm/Gate.hpp); absent: none
+//     "x": 0.3,                     (req) plane of the gate, normal to x [m], in the material
+//                                   region; it holds the material upstream of it (x below)
+//     "bottom": 0,                  z_0, height of its lower edge until open_at [m] (z is the
+//                                   bed normal in a flume: gravity is rotated, the grid not)
+//     "speed": 0,                   lift speed of the edge [m/s], >= 0; 0: removed at once
+//     "open_at": 0,                 t_open, when the lift starts [s], >= 0; the edge is at
+//                                   z_0 + speed * max(0, t - open_at)
+//     "friction": 0                 Coulomb coefficient between material and gate, >= 0
+//   },
 //   "material": {                   (req)
 //     "density": 1600,              (req) initial bulk density rho_0 [kg/m^3], > 0
 //     "young_modulus": 1e6,         (req) E [Pa], > 0
@@ -55,6 +65,8 @@
 //                                   entry's box or mesh bounding box (a refusal by bounding
 //                                   boxes: simple, and it never lets two entries put material
 //                                   in the same place, whatever their ppc).
+//   "blocks": [...], "block_materials": {...}   rigid blocks coupled with the flow: see
+//                                   pkg/coupling/CoupledScene.hpp (a scene without them is MPM only)
 //   "run": {                        (req)
 //     "duration": 1.0,              (req) simulated time [s], > 0
 //     "dt": "auto",                 fixed step [s] > 0, or "auto": dt_factor * stable step,

@@ -1,6 +1,7 @@
 #include "sdem/SdemEngine.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -257,17 +258,42 @@ void SdemEngine::setContactHistories(const std::vector<ContactHistoryEntry>& ent
 // ------------------------------------------------------------------ SdemWorld
 
 namespace {
-// World-frame inverse-inertia product: omega = R I^-1 R^T L.
-Vec3 omegaFromL(const Quat& q, const Vec3& inertia, const Vec3& L) {
-  const Vec3 lb = q.conjugate() * L;
-  return q * Vec3(lb.cwiseQuotient(inertia));
-}
+constexpr char kDofLetters[] = "xyzXYZ";
+constexpr unsigned kRotationDofs = 070;
+
+// Turn q by the rotation vector omega dt (YADE's rotation of spherical and DOF-blocked bodies).
 Quat advance(const Quat& q, const Vec3& omega, Real dt) {
   const Real angle = omega.norm() * dt;
   if (angle == 0) return q;
   return (Quat(Eigen::AngleAxis<Real>(angle, omega.normalized())) * q).normalized();
 }
+// q + s dq/dt with dq/dt = q (0, w_body) / 2, component-wise (not normalised).
+Quat addRate(const Quat& q, const Quat& base, const Vec3& wBody, Real s) {
+  const Quat r = base * Quat(0, wBody.x(), wBody.y(), wBody.z());
+  return Quat(q.w() + 0.5 * s * r.w(), q.x() + 0.5 * s * r.x(), q.y() + 0.5 * s * r.y(), q.z() + 0.5 * s * r.z());
+}
 }  // namespace
+
+void SdemWorld::setBlockedDofs(int i, const std::string& dofs) {
+  if (i < 0 || i >= engine.numBodies())
+    throwParameter("body", i, "", "in [0, " + std::to_string(engine.numBodies()) + ")");
+  unsigned mask = 0;
+  for (char c : dofs) {
+    const char* at = std::strchr(kDofLetters, c);
+    if (c == '\0' || !at) throwParameter("blockedDOFs", "'" + dofs + "'", "", "letters among x y z X Y Z");
+    mask |= 1u << (at - kDofLetters);
+  }
+  blocked_.resize(engine.numBodies(), 0);
+  blocked_[i] = mask;
+}
+
+std::string SdemWorld::blockedDofs(int i) const {
+  std::string s;
+  const unsigned mask = i >= 0 && i < static_cast<int>(blocked_.size()) ? blocked_[i] : 0;
+  for (int k = 0; k < 6; ++k)
+    if (mask & (1u << k)) s += kDofLetters[k];
+  return s;
+}
 
 void SdemWorld::step(Real dt, const std::vector<Vec3>* extraForce, const std::vector<Vec3>* extraTorque) {
   const int n = engine.numBodies();
@@ -277,6 +303,7 @@ void SdemWorld::step(Real dt, const std::vector<Vec3>* extraForce, const std::ve
   engine.computeForces(dt);
   angMom_.resize(n, Vec3::Zero());
   lastAngVel_.resize(n, Vec3::Constant(std::numeric_limits<Real>::quiet_NaN()));
+  blocked_.resize(n, 0);
   for (int i = 0; i < n; ++i) {
     const Quat& q = engine.orientation(i);
     Vec3 v = engine.velocity(i), w = engine.angularVelocity(i);
@@ -286,17 +313,28 @@ void SdemWorld::step(Real dt, const std::vector<Vec3>* extraForce, const std::ve
       x += dt * v;
       qn = advance(q, w, dt);
     } else {
+      const unsigned mask = blocked_[i];
       const Vec3& I = engine.principalInertia(i);
-      // angular velocity changed from outside since our last step: re-derive L from it
-      if (!(w.array() == lastAngVel_[i].array()).all()) angMom_[i] = q * Vec3(I.cwiseProduct(q.conjugate() * w));
       const Vec3 T = engine.torque(i) + (extraTorque ? (*extraTorque)[i] : Vec3::Zero());
-      const Vec3 Lnow = angMom_[i] + 0.5 * dt * T;  // L(t)
-      angMom_[i] += dt * T;                         // L(t + dt/2)
-      const Quat qHalf = advance(q, omegaFromL(q, I, Lnow), 0.5 * dt);
-      w = omegaFromL(qHalf, I, angMom_[i]);
-      qn = advance(q, w, dt);
+      if (mask & kRotationDofs) {
+        for (int k = 0; k < 3; ++k)
+          if (!(mask & (8u << k))) w[k] += dt * T[k] / I[k];
+        qn = advance(q, w, dt);
+      } else {
+        // angular velocity changed from outside since our last step: re-derive L from it
+        if (!(w.array() == lastAngVel_[i].array()).all()) angMom_[i] = q * Vec3(I.cwiseProduct(q.conjugate() * w));
+        const Mat3 toBody = q.conjugate().toRotationMatrix();
+        const Vec3 wNow = (toBody * (angMom_[i] + 0.5 * dt * T)).cwiseQuotient(I);  // body frame, at t
+        const Quat qHalf = addRate(q, q, wNow, 0.5 * dt);
+        angMom_[i] += dt * T;  // L(t + dt/2)
+        const Vec3 wHalf = (toBody * angMom_[i]).cwiseQuotient(I);
+        qn = addRate(q, qHalf, wHalf, dt);
+        w = qn * wHalf;
+        qn.normalize();
+      }
       const Vec3 F = engine.force(i) + (extraForce ? (*extraForce)[i] : Vec3::Zero());
-      v += dt * (F / engine.mass(i) + gravity);
+      for (int k = 0; k < 3; ++k)
+        if (!(mask & (1u << k))) v[k] += dt * (F[k] / engine.mass(i) + gravity[k]);
       x += dt * v;
       if (!x.allFinite() || !v.allFinite() || !w.allFinite()) {
         std::ostringstream os;

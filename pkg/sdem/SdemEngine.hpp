@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -180,12 +181,20 @@ class SdemEngine {
   Real barrierEnergy_ = 0, springEnergy_ = 0, frictionWork_ = 0, dampingWork_ = 0;
 };
 
-// Minimal rigid-body world for C++ tests and drivers: YADE-like leapfrog.
-// Per step: forces at x(t); v(t+dt/2) = v(t-dt/2) + dt (F/m + g); x(t+dt) = x(t) + dt v(t+dt/2).
-// Rotation of aspherical bodies: world angular momentum L(t+dt/2) = L(t-dt/2) + dt T, the
-// orientation advanced with the angular velocity at mid-step obtained from L and a predicted
-// mid-step orientation (principal inertia in the body frame). Fixed bodies move kinematically
-// with their set velocities.
+// Minimal rigid-body world for C++ tests and the driver, integrating as YADE's
+// NewtonIntegrator does (damping 0, exactAsphericalRot), so that a scene run by the driver and
+// by YADE gives the same trajectories (tests/python/test_driver_blocks.py):
+//  - translation, leapfrog: v(t+dt/2) = v(t-dt/2) + dt (F/m + g), x(t+dt) = x(t) + dt v(t+dt/2);
+//    a blocked translational DOF keeps its velocity (neither force nor gravity acts on it);
+//  - rotation with no rotational DOF blocked: world angular momentum L(t+dt/2) = L(t-dt/2) + dt T;
+//    body-frame rates at t (from L(t) = L(t-dt/2) + dt T/2) and at t+dt/2 (both through the
+//    orientation at t) drive a half-step and a full-step update of the quaternion components
+//    (q' = q + dt/2 q (0, w_body)), which is then normalised;
+//  - rotation with a rotational DOF blocked: omega += dt T / I per world axis, blocked axes
+//    kept, orientation turned by |omega| dt about omega (YADE's choice for such bodies);
+//  - fixed bodies move kinematically with their set velocities.
+// YADE ignores an angular velocity set on an aspherical body (its angular momentum rules);
+// here a velocity set from outside (setState) re-derives the angular momentum from it.
 class SdemWorld {
  public:
   SdemEngine engine;
@@ -195,6 +204,10 @@ class SdemWorld {
   // the engine (a coupling) added to the contact forces of this step.
   void step(Real dt, const std::vector<Vec3>* extraForce = nullptr, const std::vector<Vec3>* extraTorque = nullptr);
   Real time() const { return time_; }
+  // Degrees of freedom of body i that forces do not change, YADE's blockedDOFs: a string of
+  // letters among x y z (translations) and X Y Z (rotations about world axes), "" for none.
+  void setBlockedDofs(int i, const std::string& dofs);
+  std::string blockedDofs(int i) const;
   // Translational + rotational kinetic energy of the non-fixed bodies [J].
   Real kineticEnergy() const;
   // Gravitational potential energy -sum m g . x of the non-fixed bodies [J].
@@ -202,6 +215,7 @@ class SdemWorld {
 
  private:
   std::vector<Vec3> angMom_, lastAngVel_;
+  std::vector<unsigned> blocked_;  // bit k: DOF "xyzXYZ"[k] blocked
   Real time_ = 0;
 };
 

@@ -1,13 +1,17 @@
 // SpheroPolyhedron factories, body frame, point queries (see SpheroPolyhedron.hpp).
-// CGAL (convex hull, linear program) is used in this file only.
+// CGAL (convex hull, linear program) is used in this file only, and only by the factories that
+// take points or a convex mesh: a build without CGAL (MPMSDEM_WITH_CGAL unset: the driver-only
+// build for machines without it) keeps box, fromCore and non-convex meshes.
 #include "sdem/SpheroPolyhedron.hpp"
 
+#ifdef MPMSDEM_WITH_CGAL
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Gmpzf.h>
 #include <CGAL/QP_functions.h>
 #include <CGAL/QP_models.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_3.h>
+#endif
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
@@ -24,10 +28,6 @@
 namespace mpmsdem {
 namespace sdem {
 namespace {
-
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using CgalPoint = Kernel::Point_3;
-using CgalMesh = CGAL::Surface_mesh<CgalPoint>;
 
 constexpr Real kPi = 3.14159265358979323846;
 // Two face normals closer than this (1 - cos of the angle) are one plane (~1.4e-5 rad).
@@ -125,6 +125,11 @@ void finalize(SpheroPolyhedron& s) {
   for (const Vec3& v : s.vertices) rmax = std::max(rmax, v.norm());
   s.boundingRadius = rmax + s.sweepRadius;
 }
+
+#ifdef MPMSDEM_WITH_CGAL
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using CgalPoint = Kernel::Point_3;
+using CgalMesh = CGAL::Surface_mesh<CgalPoint>;
 
 // Faces (convex polygons) of the convex hull of pts, coplanar hull triangles merged.
 // Holds the hull vertices and triangles, and the merged polygon loops (indices into
@@ -400,6 +405,16 @@ std::shared_ptr<SpheroPolyhedron> convexFromPoints(const std::vector<Vec3>& poin
   return s;
 }
 
+#else
+// Without CGAL there is no hull: convex shapes come as core tables (SpheroPolyhedron::fromCore),
+// which a build with CGAL writes (the driver's scene files).
+std::shared_ptr<SpheroPolyhedron> convexFromPoints(const std::vector<Vec3>&, Real, const char* what) {
+  throw ParameterError(std::string(what) + ": this build has no CGAL (a driver-only build), which convex hulls and "
+                       "convex meshes need: give the block as a core table (\"core\" in a scene file; "
+                       "mpmsdem.driver.writeScene writes them from a YADE script), or use a box");
+}
+#endif  // MPMSDEM_WITH_CGAL
+
 // Signed distance along -n from point c to the first triangle of the mesh hit by the ray.
 Real rayThickness(const Vec3& c, const Vec3& dir, const std::vector<Vec3>& V,
                   const std::vector<std::array<int, 3>>& T, size_t skip) {
@@ -454,6 +469,86 @@ std::shared_ptr<SpheroPolyhedron> SpheroPolyhedron::box(const Vec3& halfExtents,
     s->faces.push_back(face);
     s->outerTriangles.push_back({loops[f][0], loops[f][1], loops[f][2]});
     s->outerTriangles.push_back({loops[f][0], loops[f][2], loops[f][3]});
+  }
+  finalize(*s);
+  return s;
+}
+
+std::shared_ptr<SpheroPolyhedron> SpheroPolyhedron::fromCore(const std::vector<Vec3>& vertices,
+                                                             const std::vector<std::vector<int>>& faces, Real R,
+                                                             bool convex, const std::vector<Vec3>& outerVertices,
+                                                             const std::vector<std::array<int, 3>>& outerTriangles) {
+  checkRadiusPositive(R);
+  const int nv = static_cast<int>(vertices.size());
+  if (nv < 4) throwParameter("core.vertices", std::to_string(nv) + " vertices", "", "at least 4");
+  if (faces.size() < 4) throwParameter("core.faces", std::to_string(faces.size()) + " faces", "", "at least 4");
+  for (const Vec3& v : vertices)
+    if (!v.allFinite()) throwParameter("core.vertices", "a non-finite coordinate", "", "finite coordinates");
+  const Real tol = kRelTol * shapeSize(vertices);
+  auto s = std::make_shared<SpheroPolyhedron>();
+  s->sweepRadius = R;
+  s->convex = convex;
+  s->vertices = vertices;
+  std::map<std::pair<int, int>, int> sideFace;
+  Real volume6 = 0;
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const std::vector<int>& loop = faces[f];
+    const std::string name = "core.faces[" + std::to_string(f) + "]";
+    if (loop.size() < 3) throwParameter(name, std::to_string(loop.size()) + " corners", "", "at least 3");
+    for (int v : loop)
+      if (v < 0 || v >= nv) throwParameter(name, "vertex index " + std::to_string(v), "", "in [0, " + std::to_string(nv) + ")");
+    // Newell's normal: exact for planar loops, and defined for any corner order.
+    Vec3 area = Vec3::Zero();
+    for (size_t i = 0; i < loop.size(); ++i) area += vertices[loop[i]].cross(vertices[loop[(i + 1) % loop.size()]]);
+    if (!(area.norm() > tol * tol)) throwParameter(name, "a face of zero area", "", "faces of non-zero area");
+    CoreFace face;
+    face.loop = loop;
+    face.normal = area.normalized();
+    face.offset = 0;
+    for (int v : loop) face.offset += face.normal.dot(vertices[v]) / static_cast<Real>(loop.size());
+    for (int v : loop)
+      if (std::abs(face.normal.dot(vertices[v]) - face.offset) > tol)
+        throwParameter(name, "corner " + std::to_string(v) + " off the face's plane by " +
+                                 num(std::abs(face.normal.dot(vertices[v]) - face.offset)) + " m",
+                       "", "planar faces");
+    for (size_t i = 0; i < loop.size(); ++i) {
+      const int a = loop[i], b = loop[(i + 1) % loop.size()];
+      if (!sideFace.emplace(std::make_pair(a, b), static_cast<int>(f)).second)
+        throwParameter(name, "side (" + std::to_string(a) + ", " + std::to_string(b) + ")", "",
+                       "each side in two faces, traversed in opposite directions (consistent orientation)");
+      if (i >= 1 && i + 1 < loop.size())  // fan triangle (0, i, i+1): signed volume x 6
+        volume6 += vertices[loop[0]].dot(vertices[loop[i]].cross(vertices[loop[i + 1]]));
+    }
+    s->faces.push_back(face);
+  }
+  for (const auto& kv : sideFace)
+    if (!sideFace.count({kv.first.second, kv.first.first}))
+      throwParameter("core.faces", "side (" + std::to_string(kv.first.first) + ", " + std::to_string(kv.first.second) +
+                                       ") in one face only", "", "a closed surface");
+  if (!(volume6 > 0))
+    throwParameter("core.faces", "enclosed volume " + num(volume6 / 6) + " m^3", "",
+                   "positive: loops counter-clockwise seen from outside");
+  if (convex)
+    for (size_t f = 0; f < s->faces.size(); ++f)
+      for (int v = 0; v < nv; ++v)
+        if (s->faces[f].normal.dot(vertices[v]) > s->faces[f].offset + tol)
+          throwParameter("core.convex", "true", "",
+                         "false for this core: vertex " + std::to_string(v) + " lies outside the plane of face " +
+                             std::to_string(f));
+  if (outerVertices.empty() != outerTriangles.empty())
+    throwParameter("outer", "vertices without triangles or triangles without vertices", "", "both or neither");
+  if (!outerVertices.empty()) {
+    for (const auto& t : outerTriangles)
+      for (int v : t)
+        if (v < 0 || v >= static_cast<int>(outerVertices.size()))
+          throwParameter("outer.triangles", "vertex index " + std::to_string(v), "",
+                         "in [0, " + std::to_string(outerVertices.size()) + ")");
+    s->outerVertices = outerVertices;
+    s->outerTriangles = outerTriangles;
+  } else {
+    s->outerVertices = vertices;
+    for (const CoreFace& f : s->faces)
+      for (size_t i = 1; i + 1 < f.loop.size(); ++i) s->outerTriangles.push_back({f.loop[0], f.loop[i], f.loop[i + 1]});
   }
   finalize(*s);
   return s;

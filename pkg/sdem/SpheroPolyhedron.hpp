@@ -81,6 +81,20 @@ struct SpheroPolyhedron {
   static std::shared_ptr<SpheroPolyhedron> mesh(const std::vector<Vec3>& vertices,
                                                 const std::vector<std::array<int, 3>>& triangles, Real R);
   static std::shared_ptr<SpheroPolyhedron> meshFile(const std::string& path, Real R, Real scale = 1.0);
+  // fromCore: a shape table, as the factories above made it (how the driver's scene files carry
+  //   blocks to machines without CGAL): core vertices [m], faces as vertex loops counter-clockwise
+  //   seen from outside (planar polygons, convex cores; triangles, non-convex ones), R [m] > 0,
+  //   whether the core is convex, and optionally the outer shape for display (else the core's
+  //   faces). Refused with a ParameterError naming the entry: indices out of range, a face that
+  //   is not planar or has no area, a surface that is not closed and consistently oriented, an
+  //   inward-oriented surface, a core flagged convex that is not. Needs no CGAL. Topology, mass
+  //   properties and the body frame are computed as by the other factories: a table taken in a
+  //   body frame comes back in that frame (framePosition, frameOrientation = identity, to
+  //   round-off).
+  static std::shared_ptr<SpheroPolyhedron> fromCore(const std::vector<Vec3>& vertices,
+                                                    const std::vector<std::vector<int>>& faces, Real R, bool convex,
+                                                    const std::vector<Vec3>& outerVertices = {},
+                                                    const std::vector<std::array<int, 3>>& outerTriangles = {});
 
   // Closest point of the CORE to a point p given in the body frame.
   // Returns the distance d >= 0 (0 if p is inside the core), the closest point, the feature

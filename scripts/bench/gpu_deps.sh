@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Copies the header-only dependencies (Eigen, nlohmann-json) and GoogleTest's sources from
 # this machine's Debian packages into .deps/ (git-ignored), so that a GPU machine with no
-# package registry can build the MPM part. Then, with the device tool:
-#   run(command="bash scripts/bench/gpu_run.sh", carry=[".deps"])
+# package registry can build the solvers and the driver (MPMSDEM_DRIVER_ONLY). Then copy the
+# repository with .deps/ to the GPU machine and run scripts/bench/gpu_run.sh there.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bash tools/install-deps.sh

@@ -1,0 +1,80 @@
+#include "common/SceneJson.hpp"
+
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "common/Error.hpp"
+
+namespace mpmsdem {
+namespace scenejson {
+
+std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
+
+void checkKeys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) {
+  std::set<std::string> ok(allowed.begin(), allowed.end());
+  for (auto it = obj.begin(); it != obj.end(); ++it) {
+    if (!ok.count(it.key())) {
+      std::string list;
+      for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      throw ParameterError("unknown key '" + join(path, it.key()) + "': allowed keys" +
+                           (path.empty() ? "" : " in '" + path + "'") + " are " + list);
+    }
+  }
+}
+
+const json& requireObject(const json& parent, const std::string& path, const char* key) {
+  if (!parent.contains(key)) throw ParameterError("missing required key '" + join(path, key) + "'");
+  const json& v = parent.at(key);
+  if (!v.is_object()) throwParameter(join(path, key), v.dump(), "", "a JSON object");
+  return v;
+}
+
+double number(const json& v, const std::string& name) {
+  if (!v.is_number()) throwParameter(name, v.dump(), "", "a number");
+  return v.get<double>();
+}
+
+double requireNumber(const json& obj, const std::string& path, const char* key) {
+  if (!obj.contains(key)) throw ParameterError("missing required key '" + join(path, key) + "'");
+  return number(obj.at(key), join(path, key));
+}
+
+double optNumber(const json& obj, const std::string& path, const char* key, double def) {
+  return obj.contains(key) ? number(obj.at(key), join(path, key)) : def;
+}
+
+std::string optString(const json& obj, const std::string& path, const char* key, const std::string& def,
+                      std::initializer_list<const char*> allowed) {
+  if (!obj.contains(key)) return def;
+  const json& v = obj.at(key);
+  std::string list;
+  for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string("\"") + a + "\"";
+  if (!v.is_string()) throwParameter(join(path, key), v.dump(), "", "one of " + list);
+  const std::string s = v.get<std::string>();
+  for (const char* a : allowed)
+    if (s == a) return s;
+  throwParameter(join(path, key), v.dump(), "", "one of " + list);
+}
+
+std::array<double, 3> vec3(const json& v, const std::string& name) {
+  if (!v.is_array() || v.size() != 3) throwParameter(name, v.dump(), "", "an array of 3 numbers");
+  std::array<double, 3> out{};
+  for (int a = 0; a < 3; ++a) out[a] = number(v[a], name + "[" + std::to_string(a) + "]");
+  return out;
+}
+
+void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
+                bool hiOpen) {
+  const bool ok = std::isfinite(value) && (loOpen ? value > lo : value >= lo) && (hiOpen ? value < hi : value <= hi);
+  if (ok) return;
+  std::ostringstream range;
+  range << "in " << (loOpen ? "(" : "[") << lo << ", ";
+  if (std::isinf(hi))
+    range << "inf)";
+  else
+    range << hi << (hiOpen ? ")" : "]");
+  throwParameter(name, value, unit, range.str());
+}
+}  // namespace scenejson
+}  // namespace mpmsdem

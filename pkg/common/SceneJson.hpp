@@ -1,0 +1,32 @@
+// Reading the driver's JSON scene files (MPM part: pkg/mpm/MpmScene, blocks:
+// pkg/coupling/CoupledScene): each accessor names the key path and the allowed range in its
+// ParameterError, e.g. "material.poisson_ratio = 0.7: must be in [0, 0.5)".
+#pragma once
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <initializer_list>
+#include <string>
+
+namespace mpmsdem {
+namespace scenejson {
+
+using nlohmann::json;
+
+// "path.key", or "key" at the root.
+std::string join(const std::string& path, const std::string& key);
+// Every key of `obj` must be in `allowed` (else names the unknown key and the allowed ones).
+void checkKeys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed);
+const json& requireObject(const json& parent, const std::string& path, const char* key);
+double number(const json& v, const std::string& name);
+double requireNumber(const json& obj, const std::string& path, const char* key);
+double optNumber(const json& obj, const std::string& path, const char* key, double def);
+std::string optString(const json& obj, const std::string& path, const char* key, const std::string& def,
+                      std::initializer_list<const char*> allowed);
+std::array<double, 3> vec3(const json& v, const std::string& name);
+// value must be finite and satisfy lo <(=) value <(=) hi (hi may be infinite).
+void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
+                bool hiOpen);
+
+}  // namespace scenejson
+}  // namespace mpmsdem
