@@ -56,5 +56,42 @@ MPM_HD_INLINE void applyWalls(Vec3T<T>& v, const int i[3], const int cells[3], c
   }
 }
 
+// The nodes a gate (mpm/Gate.hpp) acts on in one step: the x layers i0..i1 (every j) and,
+// in them, the z layers k0..nodes[2]-1. Set on the host each step from the gate's position
+// and edge height; empty when i1 < i0 or k0 >= nodes[2].
+struct GateBand {
+  int i0, i1, k0;
+  int nodes[3];
+};
+
+MPM_HD_INLINE int gateBandSize(const GateBand& b) {
+  if (b.i1 < b.i0 || b.k0 >= b.nodes[2]) return 0;
+  return (b.i1 - b.i0 + 1) * b.nodes[1] * (b.nodes[2] - b.k0);
+}
+
+// Flat grid index of the t-th node of the band, 0 <= t < gateBandSize(b).
+MPM_HD_INLINE int gateBandNode(int t, const GateBand& b) {
+  const int nk = b.nodes[2] - b.k0;
+  const int k = b.k0 + t % nk;
+  const int r = t / nk;
+  const int j = r % b.nodes[1];
+  const int i = b.i0 + r / b.nodes[1];
+  return (i * b.nodes[1] + j) * b.nodes[2] + k;
+}
+
+// The gate on one node of the band: a wall facing -x (the velocity component into the gate,
+// +x, removed; Coulomb friction mu as for the walls). Returns the impulse the gate gives the
+// node's material this step, m (v_after - v_before) [N s].
+template <typename T>
+MPM_HD_INLINE Vec3T<T> applyGateNode(int node, const T* mass, T* vx, T* vy, T* vz, T mu) {
+  const Vec3T<T> before{vx[node], vy[node], vz[node]};
+  Vec3T<T> v = before;
+  applyWall(v, 0, T(1), mu);
+  vx[node] = v.x;
+  vy[node] = v.y;
+  vz[node] = v.z;
+  return mass[node] * (v - before);
+}
+
 }  // namespace mpm
 }  // namespace mpmsdem

@@ -223,8 +223,21 @@ void MpmCpu::step(double dt) {
   for (long i = 0; i < kGridComponents * nN; ++i) gridData[i] = 0.0;
   scatter(dt, in);
   const GridConst<double> g = grid_;
+  if (hooks_.empty()) {
 #pragma omp parallel for schedule(static)
-  for (long i = 0; i < nN; ++i) gridNodeUpdate(static_cast<int>(i), gridData, nNodes_, g, dt);
+    for (long i = 0; i < nN; ++i) gridNodeUpdate(static_cast<int>(i), gridData, nNodes_, g, dt);
+  } else {
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < nN; ++i) gridNodeVelocity(static_cast<int>(i), gridData, nNodes_, g, dt);
+    GridView view = gridViewFrame(dt);
+    view.precision = Precision::Double;
+    view.device = false;
+    view.mass = gridData;
+    for (int d = 0; d < 3; ++d) view.v[d] = gridData + (4 + d) * nN;
+    applyGridHooks(view);
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < nN; ++i) gridNodeWalls(static_cast<int>(i), gridData, nNodes_, g);
+  }
 
   StepConst<double> sc;
   sc.dt = dt;

@@ -1,8 +1,9 @@
-// makeSolver: parameter validation and backend selection. cudaAvailable.
+// makeSolver: parameter validation, backend selection, the gate's hook. cudaAvailable.
 #include <cmath>
 #include <sstream>
 
 #include "common/Error.hpp"
+#include "mpm/Gate.hpp"
 #include "mpm/MpmCpu.hpp"
 #include "mpm/MpmSolver.hpp"
 #ifdef MPMSDEM_WITH_CUDA
@@ -55,6 +56,12 @@ void validate(const MpmParams& p) {
   requirePositive("material.solidDensity", m.solidDensity, "kg/m^3");
   if (!(m.criticalDensity >= 0) || !std::isfinite(m.criticalDensity))
     throwParameter("material.criticalDensity", m.criticalDensity, "kg/m^3", ">= 0 (0 means = density)");
+  validateGate(p);
+}
+
+std::unique_ptr<MpmSolver> withGate(std::unique_ptr<MpmSolver> solver, const GateSpec& gate) {
+  if (gate.enabled) solver->addGridHook(std::make_shared<Gate>(gate));
+  return solver;
 }
 
 }  // namespace
@@ -63,11 +70,11 @@ std::unique_ptr<MpmSolver> makeSolver(const MpmParams& params, Backend backend, 
   validate(params);
   if (backend == Backend::Cpu) {
     if (precision != Precision::Double) throwParameter("precision", "Float", "", "Double for the CPU backend");
-    return std::make_unique<MpmCpu>(params);
+    return withGate(std::make_unique<MpmCpu>(params), params.gate);
   }
 #ifdef MPMSDEM_WITH_CUDA
   if (!cudaAvailable()) throw RuntimeFailure("backend = Cuda: this build has the CUDA backend but no CUDA device was found");
-  return makeCudaSolver(params, precision);
+  return withGate(makeCudaSolver(params, precision), params.gate);
 #else
   throw RuntimeFailure("backend = Cuda: this build has no CUDA backend (nvcc was not found at configure time)");
 #endif

@@ -6,7 +6,8 @@
 // c * nNodes + n, node (i, j, k) at n = (i * nodes[1] + j) * nodes[2] + k.
 // After P2G: c = 0 mass, 1..3 momentum of the particle velocities (sum w m v),
 // 4..6 that momentum plus dt times the internal and external particle forces.
-// After the grid update: 1..3 old velocity, 4..6 new velocity (gravity and walls applied).
+// After the grid update: 1..3 old velocity, 4..6 new velocity (gravity, grid hooks and walls
+// applied).
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -107,27 +108,42 @@ MPM_HD_INLINE void p2gParticle(int p, const ParticleIn<T>& P, const GridConst<T>
       }
 }
 
-// Grid update of one node (Eq 3): v_old = p/m, v_new = (p + dt f)/m + dt g, then walls.
+// Grid velocities of one node (Eq 3): v_old = p/m, v_new = (p + dt f)/m + dt g; an empty node
+// is zeroed (mass included, so grid hooks see it at rest).
 template <typename T>
-MPM_HD_INLINE void gridNodeUpdate(int node, T* grid, int nNodes, const GridConst<T>& g, T dt) {
+MPM_HD_INLINE void gridNodeVelocity(int node, T* grid, int nNodes, const GridConst<T>& g, T dt) {
   const T m = grid[node];
   if (!(m > g.massEps)) {
     for (int c = 0; c < kGridComponents; ++c) grid[c * nNodes + node] = T(0);
     return;
   }
   const T inv = T(1) / m;
-  Vec3T<T> vn{T(0), T(0), T(0)};
   for (int d = 0; d < 3; ++d) {
     grid[(1 + d) * nNodes + node] *= inv;
-    vn[d] = grid[(4 + d) * nNodes + node] * inv + dt * g.gravity[d];
+    grid[(4 + d) * nNodes + node] = grid[(4 + d) * nNodes + node] * inv + dt * g.gravity[d];
   }
+}
+
+// The walls on the new velocity of one node.
+template <typename T>
+MPM_HD_INLINE void gridNodeWalls(int node, T* grid, int nNodes, const GridConst<T>& g) {
   int idx[3];
   idx[2] = node % g.nodes[2];
   const int r = node / g.nodes[2];
   idx[1] = r % g.nodes[1];
   idx[0] = r / g.nodes[1];
+  Vec3T<T> vn{grid[4 * nNodes + node], grid[5 * nNodes + node], grid[6 * nNodes + node]};
   applyWalls(vn, idx, g.cells, g.wallFriction);
   for (int d = 0; d < 3; ++d) grid[(4 + d) * nNodes + node] = vn[d];
+}
+
+// Grid update of one node without grid hooks: velocities, then walls. A solver with hooks
+// runs the two halves as separate passes with the hooks between them; the values are the
+// same (each half stores and reloads T).
+template <typename T>
+MPM_HD_INLINE void gridNodeUpdate(int node, T* grid, int nNodes, const GridConst<T>& g, T dt) {
+  gridNodeVelocity(node, grid, nNodes, g, dt);
+  gridNodeWalls(node, grid, nNodes, g);
 }
 
 // Admissible volume ratio J = V/V0 of a material point. A granular material changes its

@@ -331,8 +331,8 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   }
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
   // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
-  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "cfl", "walls", "material", "particles", "run",
-                       "blocks", "block_materials"});
+  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "cfl", "walls", "gate", "material", "particles",
+                       "run", "blocks", "block_materials"});
   if (root.contains("description") && !root.at("description").is_string())
     throwParameter("description", root.at("description").dump(), "", "a string");
   MpmScene s;

@@ -4,6 +4,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "common/Error.hpp"
 
@@ -33,6 +34,36 @@ struct ParticleView {
   void* force[3] = {};             // external force of the next step [N], accumulate into it (Eq 14)
 };
 
+// The grid as a grid-node hook sees it (GridHook::apply), in the backend's own memory (host
+// for the CPU backend, device for CUDA) and precision: the element type of the arrays is
+// double or float as `precision` says. Node (i, j, k), at origin + (i, j, k) dx, is element
+// (i * nodes[1] + j) * nodes[2] + k of every array. The velocities are those the step ends
+// with: momentum over mass with gravity and the internal and external forces of this step
+// applied, the walls not yet. A hook may change them in place (the mass is read-only); empty
+// nodes have mass 0 and velocity 0 and must stay at rest. Valid only inside apply().
+struct GridView {
+  Precision precision = Precision::Double;
+  bool device = false;      // true: CUDA device pointers
+  int nodes[3] = {};        // nodes per axis (cells + 1)
+  double origin[3] = {};    // position of node (0, 0, 0) [m]
+  double dx = 0;            // node spacing [m]
+  const void* mass = nullptr;  // node mass [kg]
+  void* v[3] = {};          // node velocity at the end of the step [m/s]
+  double time = 0;          // time at the start of the step [s] (the velocities are those of time + dt)
+  double dt = 0;            // step [s]
+};
+
+// A stage of every step on the grid nodes (co-simulation face: boundary conditions or a
+// coupling imposed on the grid), run after gravity and external forces and before the
+// walls, so that the walls still win. On CUDA, apply() must queue its work on the default
+// stream (the step's kernels run there, so nothing needs a host round trip). A hook that
+// throws fails the step before any particle changes (the state of the step's start is kept).
+class GridHook {
+ public:
+  virtual ~GridHook() = default;
+  virtual void apply(const GridView& grid) = 0;
+};
+
 class MpmSolver {
  public:
   virtual ~MpmSolver() = default;
@@ -56,9 +87,23 @@ class MpmSolver {
   // between host and device.
   virtual ParticleView openForceBuffer() = 0;
 
-  // One explicit step: P2G, grid update (gravity, external forces, walls), G2P,
+  // One explicit step: P2G, grid update (gravity, external forces, grid hooks, walls), G2P,
   // constitutive update. Throws RuntimeFailure on a NaN / blow-up (names the particle).
   virtual void step(double dt) = 0;
+
+  // Add a grid-node hook, run every step in the order added (see GridHook). makeSolver adds
+  // the gate of MpmParams::gate this way.
+  void addGridHook(std::shared_ptr<GridHook> hook) {
+    if (!hook) throwParameter("hook", "null", "", "a GridHook");
+    hooks_.push_back(std::move(hook));
+  }
+  // The first hook of type H, or nullptr.
+  template <class H>
+  H* findGridHook() const {
+    for (const auto& h : hooks_)
+      if (auto* p = dynamic_cast<H*>(h.get())) return p;
+    return nullptr;
+  }
 
   // Largest stable step: cfl * dx / (elastic wave speed + max particle speed) [s].
   virtual double stableTimeStep() = 0;
@@ -91,12 +136,31 @@ class MpmSolver {
   }
 
  protected:
+  // A view of the grid without its arrays (the backend sets precision, device, mass and v).
+  GridView gridViewFrame(double dt) const {
+    GridView g;
+    const MpmParams& p = params();
+    for (int d = 0; d < 3; ++d) {
+      g.nodes[d] = p.cells[d] + 1;
+      g.origin[d] = p.origin[d];
+    }
+    g.dx = p.dx;
+    g.time = time_;
+    g.dt = dt;
+    return g;
+  }
+  void applyGridHooks(const GridView& grid) {
+    for (const auto& h : hooks_) h->apply(grid);
+  }
+
   double time_ = 0;
   long steps_ = 0;
+  std::vector<std::shared_ptr<GridHook>> hooks_;
 };
 
-// Build a solver. Throws ParameterError on invalid parameters (each names the parameter and
-// its range), and RuntimeFailure when the CUDA backend is asked for but unavailable.
+// Build a solver, with a Gate hook when params.gate is enabled (findGridHook<Gate>() reads
+// it). Throws ParameterError on invalid parameters (each names the parameter and its range),
+// and RuntimeFailure when the CUDA backend is asked for but unavailable.
 std::unique_ptr<MpmSolver> makeSolver(const MpmParams& params, Backend backend = Backend::Cpu,
                                       Precision precision = Precision::Double);
 

@@ -32,6 +32,21 @@ struct WallSpec {
   double friction = 0;
 };
 
+// A release gate (mpm/Gate.hpp): a plane normal to x at `x` holding the material on its
+// upstream side (x below `x`) above its lower edge, which is lifted along z. Heights are in
+// the grid frame: for an inclined flume (gravity rotated, grid not) z is the bed normal.
+// Edge height z_g(t) = bottom + speed * max(0, t - openAt); speed 0 or infinity: the gate is
+// removed at once at openAt. Applied on the grid nodes after gravity and external forces and
+// before the walls. Range checks: makeSolver (ParameterError naming "gate.<field>").
+struct GateSpec {
+  bool enabled = false;  // false: no gate
+  double x = 0;          // plane position [m], finite, inside the material region (inside the wall layers)
+  double bottom = 0;     // z_0, height of the lower edge until openAt [m], finite
+  double speed = 0;      // lift speed of the edge [m/s], >= 0 (0 or infinity: instant removal at openAt)
+  double openAt = 0;     // t_open, when the lift starts [s], finite and >= 0
+  double friction = 0;   // Coulomb coefficient between material and gate [-], finite and >= 0 (0 = smooth)
+};
+
 struct MpmParams {
   double dx = 0.01;                        // grid spacing Delta x [m], > 0
   std::array<double, 3> origin{0, 0, 0};   // lower corner of the grid domain [m]
@@ -40,6 +55,7 @@ struct MpmParams {
   double flipAlpha = 0.99;                 // alpha, FLIP/PIC blend, Eq 4, in [0, 1]
   double cfl = 0.3;                        // CFL number for the time-step estimate, in (0, 1]
   std::array<WallSpec, 6> walls{};         // box walls of the grid domain
+  GateSpec gate{};                         // release gate (default: none)
   GranularMaterial material{};
 };
 

@@ -244,8 +244,21 @@ void MpmCuda<T>::step(double dt) {
     cudak::p2gKernel<T><<<blocksFor(n_), kThreads>>>(n, in, grid_, dtT, nodes_, nNodes_);
     CUDA_CHECK(cudaGetLastError());
   }
-  cudak::gridKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_, dtT);
-  CUDA_CHECK(cudaGetLastError());
+  if (hooks_.empty()) {
+    cudak::gridKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_, dtT);
+    CUDA_CHECK(cudaGetLastError());
+  } else {
+    cudak::gridVelocityKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_, dtT);
+    CUDA_CHECK(cudaGetLastError());
+    GridView view = gridViewFrame(dt);
+    view.precision = sizeof(T) == sizeof(float) ? Precision::Float : Precision::Double;
+    view.device = true;
+    view.mass = nodes_;
+    for (int d = 0; d < 3; ++d) view.v[d] = nodes_ + static_cast<std::size_t>(4 + d) * nNodes_;
+    applyGridHooks(view);
+    cudak::gridWallsKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_);
+    CUDA_CHECK(cudaGetLastError());
+  }
   StepConst<T> sc;
   sc.dt = dtT;
   sc.alpha = static_cast<T>(params_.flipAlpha);

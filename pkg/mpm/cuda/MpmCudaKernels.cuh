@@ -37,6 +37,21 @@ __global__ void gridKernel(int nNodes, T* grid, GridConst<T> g, T dt) {
   gridNodeUpdate(i, grid, nNodes, g, dt);
 }
 
+// The grid update in two halves, with the grid hooks launched between them.
+template <typename T>
+__global__ void gridVelocityKernel(int nNodes, T* grid, GridConst<T> g, T dt) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= nNodes) return;
+  gridNodeVelocity(i, grid, nNodes, g, dt);
+}
+
+template <typename T>
+__global__ void gridWallsKernel(int nNodes, T* grid, GridConst<T> g) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= nNodes) return;
+  gridNodeWalls(i, grid, nNodes, g);
+}
+
 // flags[0]: smallest failing particle index (atomicMin); flags[1]: float bits of the largest
 // speed (atomicMax; non-negative floats order like their bit patterns).
 // Largest value over the warp; every lane calls it (inactive lanes must pass 0 via the
@@ -47,6 +62,28 @@ __device__ __forceinline__ unsigned int warpMaxU32(unsigned int v) {
     v = o > v ? o : v;
   }
   return v;
+}
+
+// Sum over the warp, delivered to lane 0; every lane calls it.
+__device__ __forceinline__ double warpSum(double v) {
+  for (int off = 16; off > 0; off >>= 1) v += __shfl_down_sync(0xffffffffu, v, off);
+  return v;
+}
+
+// The gate on the `count` nodes of its band; one thread per node, the impulse summed per warp
+// and added to impulse[0..2] (blockDim is a multiple of 32, so whole warps reach the sums).
+template <typename T>
+__global__ void gateKernel(GateBand b, int count, const T* mass, T* vx, T* vy, T* vz, T mu, double* impulse) {
+  const int t = blockIdx.x * blockDim.x + threadIdx.x;
+  double p[3] = {0.0, 0.0, 0.0};
+  if (t < count) {
+    const Vec3T<T> d = applyGateNode(gateBandNode(t, b), mass, vx, vy, vz, mu);
+    for (int c = 0; c < 3; ++c) p[c] = static_cast<double>(d[c]);
+  }
+  for (int c = 0; c < 3; ++c) {
+    const double s = warpSum(p[c]);
+    if ((threadIdx.x & 31u) == 0u && s != 0.0) atomicAdd(impulse + c, s);
+  }
 }
 
 template <typename T>
