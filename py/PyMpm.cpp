@@ -21,6 +21,11 @@ void exportMpm() {
       .def("run", &PyMpm::run, (bp::arg("steps"), bp::arg("dt")))
       .def("stableTimeStep", &PyMpm::stableTimeStep)
       .def("setExternalForces", &PyMpm::setExternalForces, (bp::arg("forces")))
+      .def("gateImpulse", &PyMpm::gateImpulse,
+           "Impulse the scene's gate has given the material since the solver was built [N s] (x: minus the push of "
+           "the material on the gate); ValueError without a gate.")
+      .def("gateEdgeHeight", &PyMpm::gateEdgeHeight, (bp::arg("t")),
+           "Height of the gate's lower edge at time t [m], inf once removed; ValueError without a gate.")
       .def("particles", &PyMpm::particles)
       .def("openOutput", &PyMpm::openOutput, (bp::arg("dir"), bp::arg("append") = false))
       .def("writeSnapshot", &PyMpm::writeSnapshot)

@@ -12,6 +12,7 @@
 #include "PyConvert.hpp"
 #include "io/Hdf5Writer.hpp"
 #include "io/VtkWriter.hpp"
+#include "mpm/Gate.hpp"
 #include "mpm/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 
@@ -51,6 +52,14 @@ class PyMpm {
     const auto& g = scene_.params.gravity;
     return bp::make_tuple(g[0], g[1], g[2]);
   }
+
+  // The scene's gate: impulse it has given the material since the solver was built [N s],
+  // and the height of its lower edge at time t [m] (inf once removed).
+  bp::tuple gateImpulse() const {
+    const std::array<double, 3> j = gate().impulse();
+    return bp::make_tuple(j[0], j[1], j[2]);
+  }
+  double gateEdgeHeight(double t) const { return gate().edgeHeight(t); }
 
   void setExternalForces(const bp::object& f) {
     solver_->setExternalForces(fromNumpy(f, 3 * solver_->numParticles(), "forces"));
@@ -138,6 +147,11 @@ class PyMpm {
   }
 
  private:
+  const mpm::Gate& gate() const {
+    const mpm::Gate* g = solver_->findGridHook<mpm::Gate>();
+    if (!g) throw ParameterError("gate: this scene has none (give the scene a \"gate\", MpmEngine(gate=...))");
+    return *g;
+  }
   void writeHeader(io::Hdf5Writer& w) const {
     w.setAttribute("parameters", scene_.sourceJson);
     w.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");

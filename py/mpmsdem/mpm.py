@@ -39,6 +39,14 @@ class MpmEngine:
     :param gravity: ``[gx, gy, gz]`` [m/s²] or ``{"g": 9.81, "incline_deg": θ}`` (flume
         inclined about y, flowing toward +x: gravity is rotated, not the grid).
     :param walls: per wall ``"-x"``…``"+z"``: ``"free"``, ``"noslip"`` or a friction μ_w ≥ 0.
+    :param gate: a release gate (``pkg/mpm/Gate.hpp``), a plane normal to x holding the material
+        upstream of it above its lower edge, which is lifted along z (the bed normal in a flume):
+        ``{"x": plane [m] (required, inside the wall layers), "bottom": edge height z_0 until
+        open_at [m] (default 0), "speed": lift speed [m/s] ≥ 0 (default 0; 0 or ``math.inf``:
+        removed at once at open_at), "open_at": t_open [s] ≥ 0 (default 0), "friction":
+        material–gate Coulomb μ ≥ 0 (default 0)}``; edge height z_0 + speed·max(0, t − t_open).
+        It acts on the grid before the walls; ``solver.gateImpulse()`` is the impulse it has
+        given the flow [N s]. None (default): no gate.
     :param flipAlpha: FLIP/PIC blend α of Eq 4, in [0, 1] (default 0.99).
     :param cfl: CFL number of :meth:`stableTimeStep`, in (0, 1].
     :param backend: ``"cpu"`` (double, OpenMP) or ``"cuda"``; :param precision: ``"double"``
@@ -50,13 +58,20 @@ class MpmEngine:
     """
 
     def __init__(self, grid, material, particles, gravity=(0, 0, -9.81), walls=None, flipAlpha=0.99, cfl=0.3,
-                 backend="cpu", precision="double", output=None, outputEvery=None, label="mpm", verbose=True):
+                 backend="cpu", precision="double", output=None, outputEvery=None, label="mpm", verbose=True,
+                 gate=None):
         scene = {"grid": grid, "material": material, "particles": list(particles),
                  "gravity": list(gravity) if not isinstance(gravity, dict) else gravity,
                  "flip_alpha": flipAlpha, "cfl": cfl,
                  "run": {"duration": 1.0, "backend": backend, "precision": precision}}
         if walls:
             scene["walls"] = walls
+        if gate is not None:
+            if not isinstance(gate, dict):
+                raise ValueError("gate = %r: must be a dict {x, bottom, speed, open_at, friction}" % (gate,))
+            scene["gate"] = dict(gate)
+            if scene["gate"].get("speed") == math.inf:  # JSON has no infinity; 0 means the same
+                scene["gate"]["speed"] = 0
         self._setup(json.dumps(_plain(scene, ""), allow_nan=False), output, outputEvery, label, verbose)
 
     def _setup(self, sceneJson, output, outputEvery, label, verbose):
