@@ -5,6 +5,7 @@
 //   O.forces; YADE's NewtonIntegrator then moves the blocks.
 // Particle data stays in the solver's memory (on the GPU for the CUDA backend).
 #include <chrono>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -170,6 +171,46 @@ class PyCoupling {
     pvd_->add(time, b.str(), 1);
   }
 
+  // ---- checkpoint: tangential histories as raw bytes (int64 keys, float64 xi; the restart
+  // is bit-for-bit), the cumulative dissipations, and each block's orientation at the first
+  // record (the origin of the `rotation` series).
+  bp::tuple histories() const {
+    if (mpm_.solver().name().find("cuda") != std::string::npos || mpm_.solver().name().find("CUDA") != std::string::npos)
+      throw ParameterError("checkpoint: the MP-block histories of the CUDA backend stay on the device; coupled "
+                           "checkpoints need MpmEngine(backend=\"cpu\")");
+    const auto& k = coupling_.historyKeys();
+    const auto& x = coupling_.historyXi();
+    return bp::make_tuple(bytes(k.data(), k.size() * sizeof(long long)), bytes(x.data(), x.size() * sizeof(double)),
+                          coupling_.historySlots());
+  }
+  void setHistories(const bp::object& keys, const bp::object& xi) {
+    char *kp = nullptr, *xp = nullptr;
+    Py_ssize_t kn = 0, xn = 0;
+    if (PyBytes_AsStringAndSize(keys.ptr(), &kp, &kn) < 0 || PyBytes_AsStringAndSize(xi.ptr(), &xp, &xn) < 0)
+      bp::throw_error_already_set();
+    if (kn % sizeof(long long) || xn % sizeof(double))
+      throw ParameterError("checkpoint histories: byte lengths are not whole int64 / float64 arrays");
+    std::vector<long long> k(kn / sizeof(long long));
+    std::vector<double> x(xn / sizeof(double));
+    if (kn) std::memcpy(k.data(), kp, kn);
+    if (xn) std::memcpy(x.data(), xp, xn);
+    coupling_.setHistories(k, x);
+  }
+  void setDissipation(double friction, double damping) { coupling_.setDissipation(friction, damping); }
+  bp::list referenceOrientations() const {
+    bp::list l;
+    for (const Quat& q : ori0_) l.append(bp::make_tuple(q.w(), q.x(), q.y(), q.z()));
+    return l;
+  }
+  void setReferenceOrientations(const bp::list& l) {
+    ori0_.clear();
+    for (long i = 0; i < bp::len(l); ++i) {
+      bp::object q = l[i];
+      ori0_.push_back(Quat(bp::extract<double>(q[0]), bp::extract<double>(q[1]), bp::extract<double>(q[2]),
+                           bp::extract<double>(q[3])));
+    }
+  }
+
   bool strict() const { return strict_; }
   void setStrict(bool s) { strict_ = s; }
   long warnings() const { return warnings_; }
@@ -177,6 +218,9 @@ class PyCoupling {
  private:
   void requireOutput() const {
     if (!h5_) throw ParameterError("output: call openOutput(dir) before writing outputs");
+  }
+  static bp::object bytes(const void* data, std::size_t n) {
+    return bp::object(bp::handle<>(PyBytes_FromStringAndSize(static_cast<const char*>(data), static_cast<Py_ssize_t>(n))));
   }
 
   YadeSdemBridge& sdem_;
@@ -217,6 +261,11 @@ void exportCoupling() {
       .def("appendSeries", &PyCoupling::appendSeries)
       .def("writeVtk", &PyCoupling::writeVtk)
       .def("criticalTimeStep", &PyCoupling::criticalTimeStep)
+      .def("histories", &PyCoupling::histories)
+      .def("setHistories", &PyCoupling::setHistories)
+      .def("setDissipation", &PyCoupling::setDissipation)
+      .def("referenceOrientations", &PyCoupling::referenceOrientations)
+      .def("setReferenceOrientations", &PyCoupling::setReferenceOrientations)
       .add_property("contactStep", &PyCoupling::contactStep)
       .add_property("totalContacts", &PyCoupling::totalContacts)
       .add_property("historyOverflow", &PyCoupling::historyOverflow)

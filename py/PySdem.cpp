@@ -20,9 +20,29 @@ bp::tuple readMeshFile(const std::string& path, double scale) {
   return bp::make_tuple(v, t);
 }
 
+// A restart from a checkpoint taken at `time`: records, snapshots and ParaView entries later
+// than it were written by the run that went on past the checkpoint and are dropped, so that
+// the continued run appends without duplicates or steps back in time. Either path may be
+// empty or name a file that does not exist yet (nothing to do). Returns (time of the last
+// series record kept or NaN, snapshots kept, time of the last .pvd entry kept or NaN).
+bp::tuple truncateOutputsAfter(const std::string& h5, const std::string& pvd, double time) {
+  double lastRecord = std::nan("");
+  long snapshots = 0;
+  double lastVtk = std::nan("");
+  if (!h5.empty() && std::filesystem::exists(h5)) {
+    io::Hdf5Writer w(h5, io::Hdf5Writer::Mode::Append);
+    w.truncateSeriesAfter("time", time, &lastRecord);
+    snapshots = w.dropSnapshotsAfter(time);
+  }
+  if (!pvd.empty() && std::filesystem::exists(pvd)) lastVtk = io::PvdCollection(pvd, true).dropAfter(time);
+  return bp::make_tuple(lastRecord, snapshots, lastVtk);
+}
+
 }  // namespace
 
 void exportSdem() {
+  bp::def("truncateOutputsAfter", &truncateOutputsAfter, (bp::arg("h5"), bp::arg("pvd"), bp::arg("time")),
+          "Drop the HDF5 series records, snapshots and .pvd entries later than time [s] (a restart).");
   bp::def("readMeshFile", &readMeshFile, (bp::arg("path"), bp::arg("scale") = 1.0),
           "(vertices, triangles) of an STL/OBJ file as SpheroPolyhedron.meshFile reads it [m].");
   bp::class_<SdemMaterial>("SdemMat",
@@ -54,6 +74,7 @@ void exportSdem() {
       .def("histories", &YadeSdemBridge::histories)
       .def("openOutput", &YadeSdemBridge::openOutput)
       .def("record", &YadeSdemBridge::record)
+      .def("recordCurrent", &YadeSdemBridge::recordCurrent)
       .def("writeVtk", &YadeSdemBridge::writeVtk)
       .def("setHistories", &YadeSdemBridge::setHistories)
       .def("force", &YadeSdemBridge::force)

@@ -260,20 +260,31 @@ class YadeSdemBridge {
   }
   // One record of the state of the last step: time, step, per body pos, ori, vel, angVel,
   // force, torque, and the number of contact points.
-  void record(double time, long step) {
+  void record(double time, long step) { recordOf(engine_, time, step); }
+  // A record of the state YADE holds now, after the last step moved the bodies: the forces
+  // are those the next step would compute, taken on a copy of the engine so that the contact
+  // histories and dissipations the run continues from are untouched.
+  void recordCurrent(const bp::object& bodies, double time, long step, double dt) {
     requireOutput();
-    const int n = engine_.numBodies();
+    readStates(bodies);
+    SdemEngine probe = engine_;
+    probe.computeForces(dt);
+    recordOf(probe, time, step);
+  }
+  void recordOf(const SdemEngine& e, double time, long step) {
+    requireOutput();
+    const int n = e.numBodies();
     std::vector<double> pos(3 * n), ori(4 * n), vel(3 * n), angVel(3 * n), f(3 * n), t(3 * n);
     for (int i = 0; i < n; ++i) {
-      const Quat& q = engine_.orientation(i);
+      const Quat& q = e.orientation(i);
       const double qc[4] = {q.w(), q.x(), q.y(), q.z()};
       for (int k = 0; k < 4; ++k) ori[4 * i + k] = qc[k];
       for (int k = 0; k < 3; ++k) {
-        pos[3 * i + k] = engine_.position(i)[k];
-        vel[3 * i + k] = engine_.velocity(i)[k];
-        angVel[3 * i + k] = engine_.angularVelocity(i)[k];
-        f[3 * i + k] = engine_.force(i)[k];
-        t[3 * i + k] = engine_.torque(i)[k];
+        pos[3 * i + k] = e.position(i)[k];
+        vel[3 * i + k] = e.velocity(i)[k];
+        angVel[3 * i + k] = e.angularVelocity(i)[k];
+        f[3 * i + k] = e.force(i)[k];
+        t[3 * i + k] = e.torque(i)[k];
       }
     }
     h5_->appendScalar("time", time);
@@ -284,7 +295,7 @@ class YadeSdemBridge {
     h5_->appendVector("angVel", angVel);
     h5_->appendVector("force", f);
     h5_->appendVector("torque", t);
-    h5_->appendScalar("contacts", static_cast<double>(engine_.contacts().size()));
+    h5_->appendScalar("contacts", static_cast<double>(e.contacts().size()));
   }
   // The outer shapes of all bodies at their current pose, for ParaView.
   void writeVtk(double time) {

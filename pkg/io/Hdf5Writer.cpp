@@ -199,6 +199,24 @@ long Hdf5Writer::truncateSeriesAfter(const std::string& timeName, double time, d
   return static_cast<long>(keep);
 }
 
+long Hdf5Writer::dropSnapshotsAfter(double time) {
+  while (nextSnapshot_ > 0) {
+    const std::string name = snapshotName(nextSnapshot_ - 1);
+    double t = 0;
+    {
+      Handle g(check(H5Gopen2(snapshots_, name.c_str(), H5P_DEFAULT), path_, "cannot open snapshot " + name),
+               H5Gclose);
+      Handle a(check(H5Aopen(g, "time", H5P_DEFAULT), path_, "no attribute time in snapshot " + name), H5Aclose);
+      check(H5Aread(a, H5T_NATIVE_DOUBLE, &t), path_, "cannot read the time of snapshot " + name);
+    }
+    if (t <= time) break;
+    check(H5Ldelete(snapshots_, name.c_str(), H5P_DEFAULT), path_, "cannot drop snapshot " + name);
+    --nextSnapshot_;
+  }
+  flush();
+  return nextSnapshot_;
+}
+
 void Hdf5Writer::appendScalar(const std::string& name, double value) { appendRow(name, &value, 1, false); }
 
 void Hdf5Writer::appendVector(const std::string& name, const std::vector<double>& values) {

@@ -63,6 +63,9 @@ class Hdf5Writer {
   // record kept (unchanged when none is). The file then holds no record after the
   // checkpoint, so the continued run appends without duplicates or steps back in time.
   long truncateSeriesAfter(const std::string& timeName, double time, double* lastKept = nullptr);
+  // The same for /snapshots: drop the numbered snapshots whose `time` attribute is later than
+  // `time` (numbering continues after the last one kept); returns how many are kept.
+  long dropSnapshotsAfter(double time);
 
   // Number of records in /series/<name> (0 when absent) and of snapshots in the file.
   long seriesLength(const std::string& name) const;

@@ -46,7 +46,8 @@ from .mpm import MpmEngine  # noqa: E402
 from .coupling import CoupledEngine  # noqa: E402
 from . import analysis  # noqa: E402
 
-__all__ = ["SpheroPolyhedron", "SdemMat", "SdemEngine", "MpmEngine", "CoupledEngine", "analysis", "cudaAvailable", "material", "run"]
+__all__ = ["SpheroPolyhedron", "SdemMat", "SdemEngine", "MpmEngine", "CoupledEngine", "analysis", "cudaAvailable", "material", "run",
+           "saveCheckpoint", "lastCheckpoint", "loadCheckpoint"]
 
 
 def material(density, friction=0.5, poisson=0.3, barrierStiffness=1e4, normalDamping=0.0,
@@ -81,3 +82,88 @@ def run(steps, *engines):
         raise
     for e in engines:
         e.check()
+    for e in engines:  # the series end with the state the run reached (files at their own cadence)
+        e.finish(False)
+
+
+# What each engine kind writes into a checkpoint folder, and how it is rebuilt.
+_CHECKPOINT_FILES = (("coupled", "coupled"), ("sdem", "sdem.json"), ("mpm", "mpm.h5"))
+
+
+def saveCheckpoint(folder, engine, keep=2):
+    """Save the YADE scene (``O.save``) and ``engine`` (an SdemEngine, MpmEngine or
+    CoupledEngine) as one checkpoint, ``folder/ck_<O.iter>/``, and keep the newest ``keep``
+    (>= 1). The files are written into a temporary folder that is renamed when complete, so a
+    run killed at any instant leaves only whole checkpoints (:func:`lastCheckpoint` finds the
+    newest). Returns the checkpoint's path."""
+    import shutil
+    from yade import O
+    if not (isinstance(keep, int) and keep >= 1):
+        raise ValueError("keep = %r: must be an integer >= 1" % (keep,))
+    kind = _engineKind(engine)
+    os.makedirs(folder, exist_ok=True)
+    name = "ck_%012d" % O.iter
+    final, tmp = os.path.join(folder, name), os.path.join(folder, name + ".tmp")
+    shutil.rmtree(tmp, ignore_errors=True)
+    os.makedirs(tmp)
+    O.save(os.path.join(tmp, "scene.yade.gz"))
+    if kind == "coupled":
+        engine.save(os.path.join(tmp, "coupled"))
+    else:
+        engine.save(os.path.join(tmp, dict(_CHECKPOINT_FILES)[kind]))
+    shutil.rmtree(final, ignore_errors=True)
+    os.rename(tmp, final)
+    done = sorted(d for d in os.listdir(folder) if d.startswith("ck_") and not d.endswith(".tmp"))
+    for d in done[:-keep]:
+        shutil.rmtree(os.path.join(folder, d), ignore_errors=True)
+    return final
+
+
+def lastCheckpoint(folder):
+    """The newest complete checkpoint of :func:`saveCheckpoint` in ``folder`` (a path), or
+    None when there is none; a half-written one left by a killed run is removed."""
+    import shutil
+    if not os.path.isdir(folder):
+        return None
+    names = sorted(os.listdir(folder))
+    for d in names:
+        if d.startswith("ck_") and d.endswith(".tmp"):
+            shutil.rmtree(os.path.join(folder, d), ignore_errors=True)
+    done = [d for d in names if d.startswith("ck_") and not d.endswith(".tmp")]
+    return os.path.join(folder, done[-1]) if done else None
+
+
+def loadCheckpoint(path, **restoreKw):
+    """Continue from a checkpoint of :func:`saveCheckpoint`: ``O.load`` its scene, rebuild the
+    engine with its ``restore`` (``restoreKw``: outputs and other arguments of that method)
+    and put the new runner in ``O.engines`` where the saved one was. Returns the engine; run
+    on with ``mpmsdem.run(n, engine)``."""
+    from yade import O
+    from yade.wrapper import PyRunner
+    files = os.listdir(path) if os.path.isdir(path) else []
+    if "scene.yade.gz" not in files:
+        raise ValueError("path = %r: not a checkpoint of mpmsdem.saveCheckpoint (no scene.yade.gz)" % (path,))
+    O.load(os.path.join(path, "scene.yade.gz"))
+    if "coupled.coupled.json" in files:
+        engine = CoupledEngine.restore(os.path.join(path, "coupled"), **restoreKw)
+    elif "sdem.json" in files:
+        engine = SdemEngine.restore(os.path.join(path, "sdem.json"), **restoreKw)
+    elif "mpm.h5" in files:
+        engine = MpmEngine.restore(os.path.join(path, "mpm.h5"), **restoreKw)
+    else:
+        raise ValueError("path = %r: no engine state (sdem.json, mpm.h5 or coupled.*) beside scene.yade.gz" % (path,))
+    engines = list(O.engines)
+    slots = [i for i, e in enumerate(engines) if isinstance(e, PyRunner) and "mpmsdem')._dispatch(" in e.command]
+    if len(slots) != 1:
+        raise ValueError("path = %r: the saved O.engines hold %d mpmsdem runners, expected 1: set O.engines "
+                         "yourself with the returned engine's runner" % (path, len(slots)))
+    engines[slots[0]] = engine.runner
+    O.engines = engines
+    return engine
+
+
+def _engineKind(engine):
+    for kind, cls in (("coupled", CoupledEngine), ("sdem", SdemEngine), ("mpm", MpmEngine)):
+        if isinstance(engine, cls):
+            return kind
+    raise ValueError("engine = %r: must be an mpmsdem SdemEngine, MpmEngine or CoupledEngine" % (engine,))

@@ -97,6 +97,7 @@ class CoupledEngine:
         self._warned = 0
         self._nextRecord = self._nextVtk = None
         self._ori0 = {}
+        self._appendOutput = False  # restore(): continue the files in `output`
         self._wall0 = self._lastReport = None
         self.runner = PyRunner(command=_bindStep("coupled", id(self), self._step), iterPeriod=1, initRun=True,
                                label=label)
@@ -147,9 +148,9 @@ class CoupledEngine:
             self._started = True
             self._checkEngines()
             self.sdem._beforeFirstStep()
-            if self.output is not None:
-                self._bridge.openOutput(str(self.output), False)
             self._nextRecord = self._nextVtk = O.time
+            if self.output is not None:
+                self._openOutput()
             self._wall0 = self._lastReport = _time.time()
         try:
             self._bridge.step(O.bodies, O.forces, O.dt)
@@ -157,14 +158,17 @@ class CoupledEngine:
             self._fail(e)
             raise
         self.sdem._afterStep()
-        self.mpm._afterStep()
+        self.mpm._afterStep(O.dt)
         t = self.mpm.time
-        if (self.output is not None or self.plot) and t >= self._nextRecord - 1e-12:
+        slack = 0.5 * O.dt  # t is a sum of steps: it may fall a rounding error short of a record time
+        if (self.output is not None or self.plot) and t >= self._nextRecord - slack:
             self._record(t)
-            self._nextRecord += self.outputEvery
-        if self.vtkEvery and t >= self._nextVtk - 1e-12:
+            while self._nextRecord <= t + slack:
+                self._nextRecord += self.outputEvery
+        if self.vtkEvery and t >= self._nextVtk - slack:
             self._bridge.writeVtk(t)
-            self._nextVtk += self.vtkEvery
+            while self._nextVtk <= t + slack:
+                self._nextVtk += self.vtkEvery
         if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
             if self._warned == 0:
                 warnings.warn("mpmsdem.CoupledEngine: O.dt = %g s exceeds the contact critical step %g s at step %d"
@@ -175,6 +179,21 @@ class CoupledEngine:
             print("mpmsdem.CoupledEngine: t = %.4f s, step %d, %d MP-block contacts, critical step %.3g s (O.dt %.3g s)"
                   ", %.1f ms/step" % (t, O.iter, self._bridge.totalContacts, self._bridge.contactStep, O.dt,
                                       1e3 * (now - self._wall0) / max(O.iter, 1)), file=sys.stderr, flush=True)
+
+    def _openOutput(self):
+        import os
+        t = O.time
+        h5 = os.path.join(str(self.output), "coupled.h5")
+        append = self._appendOutput and os.path.exists(h5)
+        if append:
+            # records after the checkpoint's time were written by a run that went on past it
+            lastRecord, _, lastVtk = _mpmsdem.truncateOutputsAfter(
+                h5, os.path.join(str(self.output), "scene.pvd"), t + 1e-9 * self.outputEvery)
+            if not math.isnan(lastRecord):
+                self._nextRecord = max(t, lastRecord + self.outputEvery)
+            if self.vtkEvery and not math.isnan(lastVtk):
+                self._nextVtk = max(t, lastVtk + self.vtkEvery)
+        self._bridge.openOutput(str(self.output), append)
 
     def _fail(self, e):
         self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
@@ -232,6 +251,88 @@ class CoupledEngine:
         if self.error:
             raise RuntimeError("mpmsdem.CoupledEngine stopped the run at " + self.error)
 
+    # ------------------------------------------------------------------ checkpoint
+    def save(self, prefix):
+        """Write a checkpoint of the coupled state, to go alongside ``O.save(prefix +
+        ".yade.gz")``: ``prefix.sdem.json`` (:meth:`SdemEngine.save`), ``prefix.mpm.h5``
+        (:meth:`MpmEngine.save`) and ``prefix.coupled.json`` (flow–block pairs, the MP–block
+        tangential histories, dissipations, each block's reference orientation). Continue with
+        :meth:`CoupledEngine.restore`; the restart is bit-for-bit (CPU backend). The
+        ``.coupled.json`` is written last and names the time of the other two, so a set left
+        half-written by a kill is refused at restore rather than mixed."""
+        import base64
+        import json
+        import os
+        keys, xi, slots = self._bridge.histories()
+        self.sdem.save(prefix + ".sdem.json")
+        self.mpm.save(prefix + ".mpm.h5")
+        mats = {k: m for m, k in self.sdem._materials}
+        data = {"format": "mpmsdem-coupled-1", "time": O.time, "iter": O.iter, "mpmTime": self.mpm.time,
+                "mpmSteps": self.mpm.solver.steps, "dtCheck": self.dtCheck, "historySlots": slots,
+                "pairs": [{"material": _matDictOf(mats[k]), "pair": p} for k, p in sorted(self._pairs.items())],
+                "historyKeys": base64.b64encode(keys).decode(), "historyXi": base64.b64encode(xi).decode(),
+                "dissipation": [self._bridge.energies()["friction"], self._bridge.energies()["damping"]],
+                "referenceOrientations": [list(q) for q in self._bridge.referenceOrientations()],
+                "plotOrientations": {str(i): [q[k] for k in range(4)] for i, q in self._ori0.items()}}
+        tmp = prefix + ".coupled.json.tmp"
+        with open(tmp, "w") as f:
+            json.dump(data, f)
+        os.replace(tmp, prefix + ".coupled.json")
+
+    @classmethod
+    def restore(cls, prefix, output=None, outputEvery=None, vtkEvery=None, plot=False, appendOutput=True,
+                sdemKw=None, mpmKw=None, **kw):
+        """A coupled engine continuing from :meth:`save` after ``O.load(prefix + ".yade.gz")``:
+        the SDEM engine, the MPM engine and the coupling state are rebuilt; put its ``runner``
+        in ``O.engines`` in place of the loaded one. ``output``/``outputEvery``/``vtkEvery``/
+        ``plot`` as in the constructor; with ``output`` the files there are continued
+        (``appendOutput``), records later than the checkpoint dropped first. ``sdemKw`` and
+        ``mpmKw`` go to :meth:`SdemEngine.restore` and :meth:`MpmEngine.restore` (their own
+        outputs, for instance)."""
+        import base64
+        import json
+        from .mpm import MpmEngine
+        from .sdem import SdemEngine, _material
+        with open(prefix + ".coupled.json") as f:
+            data = json.load(f)
+        if data.get("format") != "mpmsdem-coupled-1":
+            raise ValueError("prefix = %r: %s.coupled.json is not an mpmsdem coupled checkpoint" % (prefix, prefix))
+        with open(prefix + ".sdem.json") as f:
+            sdemTime = json.load(f).get("time")
+        sdemKw = dict(sdemKw or {}, verbose=kw.get("verbose", True))
+        sdem = SdemEngine.restore(prefix + ".sdem.json", **sdemKw)
+        mpm = MpmEngine.restore(prefix + ".mpm.h5", **dict(mpmKw or {}, verbose=kw.get("verbose", True)))
+        if sdemTime != data["time"] or mpm.solver.steps != data["mpmSteps"] or mpm.time != data["mpmTime"]:
+            raise ValueError("prefix = %r: the checkpoint's files are from different times (sdem %r s, mpm %r s, "
+                             "coupled %r s): a save was interrupted; restart from an earlier checkpoint"
+                             % (prefix, sdemTime, mpm.time, data["time"]))
+        if abs(O.time - data["time"]) > 1e-9 * max(abs(data["time"]), 1e-300) or O.iter != data["iter"]:
+            raise ValueError("prefix = %r: O.time = %r s, O.iter = %d, but the checkpoint is at t = %r s, step %d: "
+                             "O.load(%r) first" % (prefix, O.time, O.iter, data["time"], data["iter"],
+                                                   prefix + ".yade.gz"))
+        mats = {json.dumps(_matDictOf(m), sort_keys=True): m for m, k in sdem._materials}
+        pairs = {}
+        for entry in data["pairs"]:
+            key = json.dumps(entry["material"], sort_keys=True)
+            mat = mats.get(key) or mats.setdefault(key, _material(entry["material"]))
+            pairs[mat] = entry["pair"]
+        eng = cls(sdem, mpm, pairs, dtCheck=kw.pop("dtCheck", data["dtCheck"]),
+                  historySlots=data["historySlots"], output=output, outputEvery=outputEvery, vtkEvery=vtkEvery,
+                  plot=plot, **kw)
+        eng._bridge.setHistories(base64.b64decode(data["historyKeys"]), base64.b64decode(data["historyXi"]))
+        eng._bridge.setDissipation(*data["dissipation"])
+        eng._bridge.setReferenceOrientations(data["referenceOrientations"])
+        eng._ori0 = {int(i): Quaternion(*q) for i, q in data["plotOrientations"].items()}
+        eng._appendOutput = bool(appendOutput)
+        return eng
+
+    def finish(self, files=True):
+        """The SDEM and MPM engines' final records (:meth:`SdemEngine.finish`,
+        :meth:`MpmEngine.finish`; ``files``: also the VTK file and the snapshot);
+        ``coupled.h5`` keeps its regular records."""
+        self.sdem.finish(vtk=files)
+        self.mpm.finish(snapshot=files)
+
     # ------------------------------------------------------------------ read-out (last step)
     def _index(self, yadeId):
         self.sdem.shape(yadeId)  # ValueError for a non-SDEM id
@@ -283,3 +384,8 @@ class CoupledEngine:
     def resetTimings(self):
         self._bridge.resetTimings()
         self.sdem.resetTimings()
+
+
+def _matDictOf(m):
+    from .sdem import _matDict
+    return _matDict(m)

@@ -77,6 +77,7 @@ class MpmEngine:
     def _setup(self, sceneJson, output, outputEvery, label, verbose):
         self.solver = _mpmsdem.MpmSolver(sceneJson)
         self.output = None
+        self._lastSeriesStep = self._lastSnapshotStep = None
         self.verbose = verbose
         self.seriesPeriod = 10  # steps between time-series records (time, kinetic energy, front)
         self.error = None
@@ -90,11 +91,40 @@ class MpmEngine:
     def _openOutput(self, output, outputEvery, append):
         if not (outputEvery and outputEvery > 0):
             raise ValueError("outputEvery = %r s: must be > 0 when output is set" % (outputEvery,))
+        import os
+        t = self.solver.time
+        h5 = os.path.join(str(output), "mpm.h5")
+        append = append and os.path.exists(h5)
+        if append:
+            # records and snapshots after t were written by a run that went on past the
+            # checkpoint we restart from: dropped, so the files never repeat or go back in time
+            _mpmsdem.truncateOutputsAfter(h5, os.path.join(str(output), "particles.pvd"), t)
         self.solver.openOutput(str(output), bool(append))
         self.output, self.outputEvery = output, outputEvery
-        # next snapshot: now for a new run, the next multiple of outputEvery when appending
-        t = self.solver.time
-        self._nextOutput = (int(t / outputEvery + 1e-9) + 1) * outputEvery if append else t
+        self._lastSeriesStep = self._lastSnapshotStep = None
+        if append:  # the state at t is the checkpoint's, already in the file
+            self._lastSeriesStep = self._lastSnapshotStep = self.solver.steps
+            self._nextOutput = (int(t / outputEvery + 1e-9) + 1) * outputEvery
+        else:  # snapshot 0 and the first record hold the initial state, before step 1
+            self._recordSeries(0.0)
+            self._writeSnapshot()
+            self._nextOutput = t + outputEvery
+
+    def _recordSeries(self, dt):
+        d = _diagnostics(self.solver.particles())
+        self.solver.appendSeries("time", self.solver.time)
+        self.solver.appendSeries("step", float(self.solver.steps))
+        self.solver.appendSeries("dt", float(dt))
+        for name in SERIES[3:]:
+            if name == "centre_of_mass":
+                self.solver.appendVector(name, d[name])
+            else:
+                self.solver.appendSeries(name, d[name])
+        self._lastSeriesStep = self.solver.steps
+
+    def _writeSnapshot(self):
+        self.solver.writeSnapshot()
+        self._lastSnapshotStep = self.solver.steps
 
     # ------------------------------------------------------------------ stepping
     def stableTimeStep(self):
@@ -104,7 +134,7 @@ class MpmEngine:
     def step(self, dt):
         """One MPM step of ``dt`` seconds, then outputs if due."""
         self.solver.step(float(dt))
-        self._afterStep()
+        self._afterStep(float(dt))
 
     def _yadeStep(self):
         try:
@@ -112,21 +142,21 @@ class MpmEngine:
         except Exception as e:
             self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
             if self.output is not None:  # the last good state: the solver keeps it on failure
-                self.solver.writeSnapshot()
+                self._writeSnapshot()
                 self.error += " [last good state saved as the last snapshot in %s]" % self.output
             raise
 
-    def _afterStep(self):
+    def _afterStep(self, dt):
         t = self.solver.time
         if self.output is not None:
-            if self.solver.steps % self.seriesPeriod == 0:
-                p = self.solver.particles()
-                self.solver.appendSeries("time", t)
-                self.solver.appendSeries("kinetic_energy", _kineticEnergy(p))
-                self.solver.appendSeries("front_x", float(p["x"][:, 0].max()))
-            if t >= self._nextOutput - 1e-12:
-                self.solver.writeSnapshot()
-                self._nextOutput += self.outputEvery
+            if self.solver.steps % self.seriesPeriod == 0 and self._lastSeriesStep != self.solver.steps:
+                self._recordSeries(dt)
+            # half a step of slack: t is a sum of steps and may fall a rounding error short
+            if t >= self._nextOutput - 0.5 * dt:
+                if self._lastSnapshotStep != self.solver.steps:
+                    self._writeSnapshot()
+                while self._nextOutput <= t + 0.5 * dt:
+                    self._nextOutput += self.outputEvery
         now = _time.time()
         if self.verbose and now - self._lastReport > 10.0:
             self._lastReport = now
@@ -140,6 +170,18 @@ class MpmEngine:
         if self.runner not in list(O.engines):
             raise ValueError("O.engines does not hold this MpmEngine's runner: put it there (O.engines = "
                              "[mpm.runner], or next to other engines), else the flow does not move")
+
+    def finish(self, snapshot=True):
+        """Record the current state in the series of ``mpm.h5`` and, with ``snapshot``, as a
+        snapshot (and ParaView file), unless this step has them: the outputs of a run then end
+        with its final state. :func:`mpmsdem.run` calls ``finish(snapshot=False)`` after each
+        run; call it after a plain ``O.run`` yourself."""
+        if self.output is None:
+            return
+        if self._lastSeriesStep != self.solver.steps:
+            self._recordSeries(O.dt if O.dt > 0 else 0.0)
+        if snapshot and self._lastSnapshotStep != self.solver.steps:
+            self._writeSnapshot()
 
     def check(self):
         """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
@@ -193,6 +235,22 @@ class MpmEngine:
     def front(self, axis=0):
         """Position of the flow front: the largest particle coordinate along ``axis`` [m]."""
         return float(self.solver.particles()["x"][:, axis].max())
+
+
+# The /series of mpm.h5, the same as the driver mpmsdem-run writes (docs/outputs.md).
+SERIES = ("time", "step", "dt", "kinetic_energy", "front_x", "height_z", "centre_of_mass", "max_speed",
+          "flowing_fraction", "gasified_fraction")
+
+
+def _diagnostics(p):
+    import numpy as np
+    m, x, v = p["mass"], p["x"], p["v"]
+    v2 = (v ** 2).sum(axis=1)
+    n = max(len(m), 1)
+    return {"kinetic_energy": 0.5 * float((m * v2).sum()), "front_x": float(x[:, 0].max()),
+            "height_z": float(x[:, 2].max()), "centre_of_mass": [float(c) for c in (m @ x) / m.sum()],
+            "max_speed": float(np.sqrt(v2.max())), "flowing_fraction": float((p["phase"] == 1).sum()) / n,
+            "gasified_fraction": float((p["phase"] == 2).sum()) / n}
 
 
 def _kineticEnergy(p):

@@ -99,6 +99,7 @@ class SdemEngine:
             raise ValueError("vtkEvery = %r s: must be > 0, with output set" % (vtkEvery,))
         self.output, self.outputEvery, self.vtkEvery = output, outputEvery, vtkEvery
         self._nextRecord = self._nextVtk = None  # set when the outputs open, at the first step
+        self._lastRecordIter = self._lastVtkIter = None
         self._materials = []      # (SdemMat, index)
         self._recipes = []        # how each body was made, for save()/restore()
         self._index = {}          # YADE id -> engine index
@@ -284,12 +285,21 @@ class SdemEngine:
     def _afterStep(self):
         if self.output is not None:
             t = O.time
-            if t >= self._nextRecord - 1e-12:
-                self._bridge.record(t, O.iter)
-                self._nextRecord += self.outputEvery
-            if self.vtkEvery and t >= self._nextVtk - 1e-12:
-                self._bridge.writeVtk(t)
-                self._nextVtk += self.vtkEvery
+            # half a step of slack: O.time is a sum of steps and may fall a rounding error short
+            # of the record time it reaches
+            slack = 0.5 * O.dt
+            if t >= self._nextRecord - slack:
+                if self._lastRecordIter != O.iter:  # finish() may have recorded this state
+                    self._bridge.record(t, O.iter)
+                    self._lastRecordIter = O.iter
+                while self._nextRecord <= t + slack:
+                    self._nextRecord += self.outputEvery
+            if self.vtkEvery and t >= self._nextVtk - slack:
+                if self._lastVtkIter != O.iter:
+                    self._bridge.writeVtk(t)
+                    self._lastVtkIter = O.iter
+                while self._nextVtk <= t + slack:
+                    self._nextVtk += self.vtkEvery
         if self.verbose and O.iter % 1000 == 0:
             self._progress()
         if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
@@ -308,6 +318,22 @@ class SdemEngine:
                   "%.1f us/step" % (O.time, O.iter, self._bridge.numContacts, self._bridge.criticalTimeStep, O.dt,
                                     1e6 * (now - wall) / max(O.iter - it, 1)), file=sys.stderr, flush=True)
             self._lastReport = (now, O.iter)
+
+    def finish(self, vtk=True):
+        """Record the state YADE holds now (the bodies as the last step moved them, at O.time)
+        in ``sdem.h5`` and, with ``vtk`` and ``vtkEvery``, as a ParaView file, unless this step
+        has them: the outputs of a run then end with its final state (a 1 s run ends with a
+        record at t = 1 s). :func:`mpmsdem.run` calls ``finish(vtk=False)`` after each run;
+        call it after a plain ``O.run`` yourself. The record's forces are those the next step
+        will compute; the run continues exactly as without the call."""
+        if self.output is None or self._nextRecord is None or self.error:
+            return
+        if self._lastRecordIter != O.iter:
+            self._bridge.recordCurrent(O.bodies, O.time, O.iter, O.dt)
+            self._lastRecordIter = O.iter
+        if vtk and self.vtkEvery and self._lastVtkIter != O.iter:
+            self._bridge.writeVtk(O.time)
+            self._lastVtkIter = O.iter
 
     def check(self):
         """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""

@@ -88,7 +88,8 @@ def test_restore_continues_outputs_and_dissipation_without_duplicates(tmp_path):
     with h5py.File(out / "sdem.h5", "r", locking=False) as f:
         t = f["series/time"][:]
         assert np.all(np.diff(t) > 0)               # nothing twice, never back in time
-        assert np.allclose(t, np.arange(10) * 0.01, atol=1e-9)  # history before the checkpoint kept
+        # history before the checkpoint kept, and the run's final state (t = 0.1 s) recorded
+        assert np.allclose(t, np.arange(11) * 0.01, atol=1e-9)
         for name in ("step", "pos", "ori", "vel", "contacts"):
             assert f["series/" + name].shape[0] == len(t), name
     import xml.etree.ElementTree as ET

@@ -1,0 +1,269 @@
+"""Fault injection: SDEM, MPM and coupled runs killed (SIGKILL) at random steps and restarted
+from their last checkpoint, the way docs/outputs.md tells a user to (``mpmsdem.saveCheckpoint``
+every few steps; on start, ``mpmsdem.lastCheckpoint`` + ``mpmsdem.loadCheckpoint``), must end
+exactly where an unbroken run of the same scene ends:
+
+- every output file (sdem.h5, mpm.h5, coupled.h5) opens with h5py;
+- its /series/time is strictly increasing (no duplicate, no step back) and continuous (no
+  gap: the same records as the unbroken run);
+- every series and snapshot array, and the final YADE body states and particle arrays, are
+  bit-identical to the unbroken run's (the restarts are documented as bit-for-bit on the CPU).
+
+Each run is a child process forked from this one (YADE imported once), killed by the parent
+with SIGKILL once it reports the randomly drawn step; kills land anywhere, also while an
+output record or a checkpoint is being written. Exit status 0 when every check holds, 1 with
+the failures listed otherwise.
+
+    python3 scripts/checks/check_fault_injection.py [--seed S] [--kills N]
+"""
+import argparse
+import os
+import random
+import shutil
+import signal
+import struct
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+import mpmsdem
+from yade import O
+from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.path.join(HERE, "..", "..", "tests", "data")
+
+# steps of a whole run, steps between checkpoints, output intervals
+PLAN = {"sdem": (3000, 100), "mpm": (400, 25), "coupled": (400, 25)}
+_progressFd = None
+
+
+def _progress():
+    if _progressFd is not None:
+        os.write(_progressFd, struct.pack("q", O.iter))
+
+
+def _progressRunner():
+    return PyRunner(command="__import__('__main__')._progress()", iterPeriod=1, label="progress")
+
+
+# ------------------------------------------------------------------ the three scenes
+def buildSdem(out):
+    eng = mpmsdem.SdemEngine(output=out, outputEvery=2.5e-3, vtkEvery=0.02, verbose=False)
+    mat = mpmsdem.material(density=500.0, friction=0.4, barrierStiffness=1e4, normalDamping=0.3)
+    eng.box((0.6, 0.6, 0.05), 0.005, mat, pos=(0, 0, -0.05), fixed=True)
+    eng.mesh(os.path.join(DATA, "l_prism.obj"), 0.005, mat, pos=(0, 0, 0.0505))
+    eng.polyhedron([(-0.04, -0.03, 0), (0.05, -0.04, 0.01), (0.03, 0.05, -0.01), (-0.05, 0.04, 0.0),
+                    (0.0, 0.0, 0.06), (0.02, -0.01, 0.055)], 0.004, mat, pos=(0.02, 0.03, 0.14))
+    O.engines = [ForceResetter(), eng.runner, NewtonIntegrator(gravity=(2.0, 0.5, -9.81), damping=0),
+                 _progressRunner()]
+    O.dt = 5e-5
+    return eng
+
+
+GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
+
+
+def buildMpm(out):
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.02, "cells": [12, 6, 10], "origin": [-0.04, -0.04, -0.04]},
+                            material=GLASS, particles=[{"lo": [0, 0, 0], "hi": [0.08, 0.04, 0.08], "ppc": 8}],
+                            walls={"-z": 0.4}, output=out, outputEvery=4e-3, verbose=False)
+    O.engines = [mpm.runner, _progressRunner()]
+    O.dt = 2e-4
+    return mpm
+
+
+def buildCoupled(out):
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=2000, friction=0.3)
+    sdem.box((0.02,) * 3, 0.003, mat, pos=(0.125, 0.07, 0.07))
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [24, 14, 14], "origin": [0, 0, 0]}, material=GLASS,
+                            particles=[{"lo": [0.08, 0.05, 0.05], "hi": [0.10, 0.09, 0.09], "ppc": 8,
+                                        "velocity": [3, 0, 0]}],
+                            gravity=(0, 0, -9.81), output=os.path.join(out, "mpm"), outputEvery=5e-4, verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.3}, output=out, outputEvery=2e-4, verbose=False)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0),
+                 _progressRunner()]
+    O.dt = 1e-5
+    return coupled
+
+
+def restoreKw(kind, out):
+    """The outputs a restarted run continues (as a user passes them to loadCheckpoint)."""
+    if kind == "sdem":
+        return {"output": out, "outputEvery": 2.5e-3, "vtkEvery": 0.02, "verbose": False}
+    if kind == "mpm":
+        return {"output": out, "outputEvery": 4e-3, "verbose": False}
+    return {"output": out, "outputEvery": 2e-4, "verbose": False,
+            "mpmKw": {"output": os.path.join(out, "mpm"), "outputEvery": 5e-4}}
+
+
+def runChild(kind, work):
+    """A run as a user script does it: continue from the last checkpoint if there is one,
+    checkpoint every few steps, end with the final state in final.npz."""
+    total, every = PLAN[kind]
+    out, cks = os.path.join(work, "out"), os.path.join(work, "ck")
+    ck = mpmsdem.lastCheckpoint(cks)
+    if ck:
+        engine = mpmsdem.loadCheckpoint(ck, **restoreKw(kind, out))
+    else:
+        engine = {"sdem": buildSdem, "mpm": buildMpm, "coupled": buildCoupled}[kind](out)
+        mpmsdem.saveCheckpoint(cks, engine)
+    while O.iter < total:
+        mpmsdem.run(min(every, total - O.iter), engine)
+        mpmsdem.saveCheckpoint(cks, engine)
+    final = {}
+    sdem = engine if kind == "sdem" else getattr(engine, "sdem", None)
+    for i in (sdem.ids if sdem else []):
+        s = O.bodies[i].state
+        final["body%d" % i] = np.array([*s.pos, *s.ori, *s.vel, *s.angVel])
+    mpm = engine if kind == "mpm" else getattr(engine, "mpm", None)
+    if mpm:
+        for k, v in mpm.particles().items():
+            final["mp_" + k] = v
+    final["clock"] = np.array([O.iter, O.time])
+    np.savez(os.path.join(work, "final.npz"), **final)
+
+
+def fork(kind, work, killAt=None):
+    """Run runChild in a forked process; SIGKILL it once it reports step >= killAt. Returns
+    (killed, last step reported)."""
+    global _progressFd
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # child
+        os.close(r)
+        _progressFd = w
+        code = 0
+        try:
+            O.reset()
+            runChild(kind, work)
+        except BaseException as e:  # noqa: BLE001  (reported to the parent through the exit status)
+            print("child %s failed: %r" % (kind, e), file=sys.stderr, flush=True)
+            code = 1
+        os._exit(code)
+    os.close(w)
+    last, killed, buf = -1, False, b""
+    while True:
+        chunk = os.read(r, 65536)
+        if not chunk:
+            break
+        buf += chunk
+        n = len(buf) // 8
+        if n:
+            last = struct.unpack("q", buf[8 * (n - 1):8 * n])[0]
+            buf = buf[8 * n:]
+        if killAt is not None and not killed and last >= killAt:
+            os.kill(pid, signal.SIGKILL)
+            killed = True
+    os.close(r)
+    _, status = os.waitpid(pid, 0)
+    if killed:
+        if not (os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL) and os.WEXITSTATUS(status) != 0:
+            raise RuntimeError("%s child failed before the kill (status %d)" % (kind, status))
+    elif not (os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0):
+        raise RuntimeError("%s child failed (status %d)" % (kind, status))
+    return killed, last
+
+
+# ------------------------------------------------------------------ comparisons
+def h5Arrays(path):
+    import h5py
+    out = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda name, obj: out.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
+        for name, g in f.get("snapshots", {}).items():
+            out["snapshots/%s@time" % name] = np.array(g.attrs["time"])
+    return out
+
+
+def compare(kind, ref, broken, failures):
+    files = {"sdem": ["sdem.h5"], "mpm": ["mpm.h5"], "coupled": ["coupled.h5", "mpm/mpm.h5"]}[kind]
+    for name in files:
+        try:
+            a, b = h5Arrays(os.path.join(ref, "out", name)), h5Arrays(os.path.join(broken, "out", name))
+        except Exception as e:  # noqa: BLE001
+            failures.append("%s: %s unreadable: %r" % (kind, name, e))
+            continue
+        t = b.get("series/time")
+        if t is None or len(t) < 2:
+            failures.append("%s: %s has no time series" % (kind, name))
+        elif not np.all(np.diff(t) > 0):
+            failures.append("%s: %s time not strictly increasing (duplicates or steps back) at records %s"
+                            % (kind, name, np.nonzero(np.diff(t) <= 0)[0][:5].tolist()))
+        if a.keys() != b.keys():
+            failures.append("%s: %s datasets differ: only unbroken %s, only restarted %s" % (
+                kind, name, sorted(set(a) - set(b))[:5], sorted(set(b) - set(a))[:5]))
+        for k in sorted(set(a) & set(b)):
+            x, y = np.asarray(a[k]), np.asarray(b[k])
+            if x.shape != y.shape:
+                failures.append("%s: %s %s shape %s, unbroken %s (records lost or repeated)" % (
+                    kind, name, k, y.shape, x.shape))
+            elif x.tobytes() != y.tobytes():
+                failures.append("%s: %s %s differs from the unbroken run (max |diff| %g)" % (
+                    kind, name, k, float(np.max(np.abs(x.astype(float) - y.astype(float))))))
+    with np.load(os.path.join(ref, "final.npz")) as a, np.load(os.path.join(broken, "final.npz")) as b:
+        for k in a.files:
+            if k not in b.files or a[k].tobytes() != b[k].tobytes():
+                failures.append("%s: final state %s differs from the unbroken run" % (kind, k))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seed", type=int, default=None, help="seed of the kill steps (default: from the clock)")
+    ap.add_argument("--kills", type=int, default=20, help="kills per kind of run (>= 1, default 20)")
+    ap.add_argument("--kinds", default="sdem,mpm,coupled", help="comma-separated subset of sdem,mpm,coupled")
+    ap.add_argument("--keep", action="store_true", help="keep the work folder (printed)")
+    a = ap.parse_args()
+    if a.kills < 1:
+        ap.error("--kills = %d: must be >= 1" % a.kills)
+    seed = a.seed if a.seed is not None else int(time.time() * 1000) % 2 ** 31
+    print("check_fault_injection: seed %d (rerun with --seed %d), %d kills per kind" % (seed, seed, a.kills))
+    rng = random.Random(seed)
+    root = tempfile.mkdtemp(prefix="fault_injection_")
+    failures = []
+    try:
+        for kind in a.kinds.split(","):
+            if kind not in PLAN:
+                ap.error("--kinds: %r is not one of %s" % (kind, ", ".join(PLAN)))
+            t0 = time.time()
+            total, every = PLAN[kind]
+            ref, broken = os.path.join(root, kind + "_ref"), os.path.join(root, kind + "_killed")
+            fork(kind, ref)
+            kills, steps = 0, []
+            while kills < a.kills:
+                ck = mpmsdem.lastCheckpoint(os.path.join(broken, "ck"))
+                start = int(os.path.basename(ck)[3:]) if ck else 0
+                # spread over the run: a kill within ~1.5 x an even share of it after the restart
+                target = min(total - 1, start + rng.randint(0, max(1, int(1.5 * total / a.kills))))
+                killed, last = fork(kind, broken, killAt=target)
+                if not killed:
+                    break
+                kills += 1
+                steps.append(last)
+            if os.path.exists(os.path.join(broken, "final.npz")):
+                failures.append("%s: a killed run wrote its final state" % kind)
+            fork(kind, broken)
+            compare(kind, ref, broken, failures)
+            print("  %-8s %d kills at steps %s; %.1f s" % (kind, kills, steps, time.time() - t0))
+            if kills < a.kills:
+                failures.append("%s: only %d kills (the run ended first)" % (kind, kills))
+    finally:
+        if a.keep:
+            print("work folder:", root)
+        else:
+            shutil.rmtree(root, ignore_errors=True)
+    if failures:
+        print("check_fault_injection: FAILED (seed %d)" % seed)
+        for f in failures:
+            print("  " + f)
+        return 1
+    print("check_fault_injection: OK — restarted runs bit-identical to unbroken ones, outputs readable, "
+          "time series strictly increasing and complete")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
