@@ -30,7 +30,7 @@ from yade.minieigenHP import Quaternion, Vector3
 from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
 
 from . import _mpmsdem
-from .sdem import _bindStep
+from .sdem import _bindStep, _nextOnGrid
 
 DT_CHECKS = ("raise", "warn")
 PAIR_KEYS = ("friction", "barrierStiffness", "poisson", "normalDamping", "tangentialDamping")
@@ -190,10 +190,11 @@ class CoupledEngine:
             lastRecord, _, lastVtk = _mpmsdem.truncateOutputsAfter(
                 h5, os.path.join(str(self.output), "scene.pvd"), t + 1e-9 * self.outputEvery)
             if not math.isnan(lastRecord):
-                self._nextRecord = max(t, lastRecord + self.outputEvery)
+                self._nextRecord = max(t, _nextOnGrid(lastRecord, self.outputEvery))
             if self.vtkEvery and not math.isnan(lastVtk):
                 self._nextVtk = max(t, lastVtk + self.vtkEvery)
         self._bridge.openOutput(str(self.output), append)
+        self.sdem._outputsOpen = self.sdem._outputsOpen or h5
 
     def _fail(self, e):
         self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)

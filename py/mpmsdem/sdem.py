@@ -100,6 +100,7 @@ class SdemEngine:
         self.output, self.outputEvery, self.vtkEvery = output, outputEvery, vtkEvery
         self._nextRecord = self._nextVtk = None  # set when the outputs open, at the first step
         self._lastRecordIter = self._lastVtkIter = None
+        self._outputsOpen = None  # the per-body output file being written (no bodies may be added then)
         self._materials = []      # (SdemMat, index)
         self._recipes = []        # how each body was made, for save()/restore()
         self._index = {}          # YADE id -> engine index
@@ -165,6 +166,15 @@ class SdemEngine:
         return k
 
     def _add(self, shape, recipe, material, pos, ori, fixed, color, centroidPlacement, yadeId=None):
+        if yadeId is None and self._outputsOpen:
+            # each per-body series has one column block per body, its width fixed when the file
+            # was opened: a new body has no place there
+            raise ValueError(
+                "%s(): adding a body after the run started writing %s is not supported (its per-body series have "
+                "their width fixed at the first step). Add every body before the first step, or continue in a new "
+                "output folder: checkpoint (mpmsdem.saveCheckpoint, or engine.save + O.save), restore it with "
+                "output=<new folder>, then add the body before the restored engine's first step"
+                % (recipe["kind"] if recipe["kind"] != "hull" else "polyhedron", self._outputsOpen))
         k = self._materialIndex(material)
         q = _quat(ori) if ori is not None else Quaternion.Identity
         if centroidPlacement:
@@ -254,7 +264,8 @@ class SdemEngine:
                 # restart from: dropped, so the series never repeat or go back in time
                 lastRecord, lastVtk = self._bridge.openOutput(str(self.output), self._appendOutput,
                                                               t + 1e-9 * self.outputEvery)
-                self._nextRecord = t if math.isnan(lastRecord) else max(t, lastRecord + self.outputEvery)
+                self._outputsOpen = os.path.join(str(self.output), "sdem.h5")
+                self._nextRecord = t if math.isnan(lastRecord) else max(t, _nextOnGrid(lastRecord, self.outputEvery))
                 self._nextVtk = t if (math.isnan(lastVtk) or not self.vtkEvery) else max(t, lastVtk + self.vtkEvery)
 
     def _fail(self, e):
@@ -446,6 +457,12 @@ class SdemEngine:
         eng._bridge.setDissipation(float(data.get("frictionDissipation", 0.0)),
                                    float(data.get("dampingDissipation", 0.0)))
         return eng
+
+
+def _nextOnGrid(last, every):
+    """The first multiple of ``every`` after ``last``: a restarted run keeps the record times of
+    the unbroken one, also when its last record was an extra one (finish()) between them."""
+    return (math.floor(last / every * (1 + 1e-12) + 1e-9) + 1) * every
 
 
 def _warnDamping():

@@ -1,0 +1,155 @@
+"""Outputs as docs/outputs.md describes them: layout of sdem.h5 and mpm.h5, the final state of
+a run recorded, the coupled checkpoint continuing bit-for-bit, bodies added mid-run refused
+while a per-body output is being written."""
+import gc
+
+import numpy as np
+import pytest
+
+import mpmsdem
+from yade import O
+from yade.wrapper import ForceResetter, NewtonIntegrator
+
+from scenes import cubeOnSlab, run
+
+h5py = pytest.importorskip("h5py")
+
+DRIVER_SERIES = {"time", "step", "dt", "kinetic_energy", "front_x", "height_z", "centre_of_mass", "max_speed",
+                 "flowing_fraction", "gasified_fraction"}  # apps/mpmsdem-run.cpp, recordSeries
+GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
+
+
+def _forget(*engines):
+    """What a killed process leaves: the engines gone, their files closed."""
+    from mpmsdem import sdem
+    for name in [n for n, f in sdem._REGISTRY.items() if getattr(f, "__self__", None) in engines]:
+        del sdem._REGISTRY[name]
+    O.reset()
+    gc.collect()
+
+
+def test_sdem_h5_layout_and_the_final_state_of_a_run_is_recorded(tmp_path):
+    eng, cube, slab, m = cubeOnSlab(thetaDeg=20.0, mu=0.2, output=str(tmp_path), outputEvery=0.01, verbose=False)
+    O.dt = 1e-4
+    run(eng, 1000)                                  # a 0.1 s run
+    pos = np.array(O.bodies[cube].state.pos)
+    with h5py.File(tmp_path / "sdem.h5", "r", locking=False) as f:
+        s = f["series"]
+        assert set(s) == {"time", "step", "pos", "ori", "vel", "angVel", "force", "torque", "contacts"}
+        t = s["time"][:]
+        assert len(t) == 11 and t[-1] == pytest.approx(0.1, abs=1e-12)  # 0, 0.01, ..., 0.1: the end included
+        assert s["step"].dtype == np.float64 and s["step"][-1] == 1000
+        assert list(np.asarray(eval(f.attrs["ids"]))) == [slab, cube]
+        assert s["pos"].shape == (11, 6) and s["ori"].shape == (11, 8) and s["contacts"].shape == (11,)
+        np.testing.assert_array_equal(s["pos"][-1, 3:], pos)          # the state YADE holds at the end
+        final = s["force"][-1, 3:].copy()
+        assert final[2] > 0                                           # resting on the bed
+    # the final record's force is the one the next step computes, and taking it changed nothing
+    run(eng, 1)
+    np.testing.assert_array_equal(np.array(eng.force(cube)), final)
+    run(eng, 99)                                    # continuing: no duplicate of t = 0.1
+    with h5py.File(tmp_path / "sdem.h5", "r", locking=False) as f:
+        t = f["series/time"][:]
+        assert np.all(np.diff(t) > 0)
+        np.testing.assert_allclose(t[10:], [0.1, 0.1001, 0.11], rtol=0, atol=1e-12)  # each run's end, then the grid
+
+
+def test_mpm_h5_has_the_driver_series_and_snapshot_0_before_step_1(tmp_path):
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.02, "cells": [10, 6, 10], "origin": [-0.04, -0.04, -0.04]},
+                            material=GLASS, particles=[{"lo": [0, 0, 0], "hi": [0.08, 0.04, 0.08], "ppc": 1}],
+                            output=str(tmp_path), outputEvery=0.002, verbose=False)
+    x0 = mpm.particles()["x"].copy()
+    O.engines = [mpm.runner]
+    O.dt = 2e-4
+    mpmsdem.run(25, mpm)
+    with h5py.File(tmp_path / "mpm.h5", "r", locking=False) as f:
+        assert set(f["series"]) == DRIVER_SERIES
+        s = f["series"]
+        n = len(s["time"])
+        assert all(s[k].shape[0] == n for k in DRIVER_SERIES)
+        assert s["centre_of_mass"].shape == (n, 3)
+        # step 0, then every 10 steps, then the final state (step 25)
+        np.testing.assert_array_equal(s["step"][:], [0, 10, 20, 25])
+        assert s["time"][-1] == pytest.approx(0.005, abs=1e-12) and s["dt"][0] == 0 and s["dt"][-1] == 2e-4
+        snap0 = f["snapshots/000000"]
+        assert snap0.attrs["time"] == 0 and snap0.attrs["step"] == 0
+        np.testing.assert_array_equal(snap0["x"][:], x0)
+        assert sorted(f["snapshots"]) == ["000000", "000001", "000002"]  # t = 0, 0.002, 0.004
+        com = s["centre_of_mass"][-1]
+        p = mpm.particles()
+        np.testing.assert_allclose(com, (p["mass"][:, None] * p["x"]).sum(0) / p["mass"].sum(), rtol=0, atol=1e-12)
+
+
+def _coupledScene(out=None):
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=2000, friction=0.3)
+    cube = sdem.box((0.02,) * 3, 0.003, mat, pos=(0.125, 0.07, 0.07))
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [24, 14, 14], "origin": [0, 0, 0]}, material=GLASS,
+                            particles=[{"lo": [0.08, 0.05, 0.05], "hi": [0.10, 0.09, 0.09], "ppc": 8,
+                                        "velocity": [3, 0, 0]}], gravity=(0, 0, -9.81), verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: {"friction": 0.3, "tangentialDamping": 0.2}},
+                                    output=out, outputEvery=1e-4 if out else None, verbose=False)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    O.dt = 1e-5
+    return coupled, cube
+
+
+def test_coupled_checkpoint_continues_bit_for_bit(tmp_path):
+    out = str(tmp_path / "out")
+    coupled, cube = _coupledScene(out)
+    mpmsdem.run(250, coupled)                       # the blob is on the block: histories matter
+    assert coupled.contactCount(cube) > 10 and coupled.energies()["friction"] > 0
+    ck = mpmsdem.saveCheckpoint(str(tmp_path / "ck"), coupled)
+    mpmsdem.run(150, coupled)
+    ref = {"x": coupled.mpm.particles()["x"].copy(), "v": coupled.mpm.particles()["v"].copy(),
+           "body": [*O.bodies[cube].state.pos, *O.bodies[cube].state.ori, *O.bodies[cube].state.angVel],
+           "friction": coupled.energies()["friction"]}
+    with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:
+        refSeries = {k: f["series/" + k][:] for k in f["series"]}
+    _forget(coupled, coupled.sdem, coupled.mpm)
+    coupled2 = mpmsdem.loadCheckpoint(ck, output=out, outputEvery=1e-4, verbose=False)
+    assert O.engines[1] is coupled2.runner
+    mpmsdem.run(150, coupled2)
+    np.testing.assert_array_equal(coupled2.mpm.particles()["x"], ref["x"])
+    np.testing.assert_array_equal(coupled2.mpm.particles()["v"], ref["v"])
+    assert [*O.bodies[cube].state.pos, *O.bodies[cube].state.ori, *O.bodies[cube].state.angVel] == ref["body"]
+    assert coupled2.energies()["friction"] == ref["friction"]
+    with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:  # records after the checkpoint replaced, once
+        for k, v in refSeries.items():
+            np.testing.assert_array_equal(f["series/" + k][:], v, err_msg=k)
+
+
+def test_a_half_written_coupled_checkpoint_is_refused(tmp_path):
+    coupled, cube = _coupledScene()
+    mpmsdem.run(20, coupled)
+    prefix = str(tmp_path / "ck")
+    O.save(prefix + ".yade.gz")
+    coupled.save(prefix)
+    mpmsdem.run(10, coupled)
+    coupled.sdem.save(prefix + ".sdem.json")        # a save killed after its first file
+    _forget(coupled, coupled.sdem, coupled.mpm)
+    O.load(prefix + ".yade.gz")
+    with pytest.raises(ValueError, match="different times.*earlier checkpoint"):
+        mpmsdem.CoupledEngine.restore(prefix, verbose=False)
+
+
+def test_adding_a_body_while_a_per_body_output_is_written_is_refused_at_the_call(tmp_path):
+    eng, cube, slab, m = cubeOnSlab(gap=0.001, output=str(tmp_path / "s"), outputEvery=0.01, verbose=False)
+    mat = mpmsdem.material(density=1000)
+    extra = eng.box((0.02,) * 3, 0.002, mat, pos=(0.3, 0, 0.1))   # before the first step: fine
+    O.dt = 1e-4
+    run(eng, 10)
+    n = len(O.bodies)
+    with pytest.raises(ValueError, match=r"box\(\): adding a body after the run started writing .*sdem.h5.*new "
+                                         r"output folder"):
+        eng.box((0.02,) * 3, 0.002, mat, pos=(0.6, 0, 0.1))
+    assert len(O.bodies) == n and eng.ids == [slab, cube, extra]   # nothing half-added
+    run(eng, 10)
+    # the coupled engine's coupled.h5 is per block too
+    _forget(eng)
+    coupled, cube = _coupledScene(str(tmp_path / "c"))
+    mpmsdem.run(2, coupled)
+    with pytest.raises(ValueError, match=r"polyhedron\(\): .*coupled.h5"):
+        coupled.sdem.polyhedron([(0, 0, 0), (0.01, 0, 0), (0, 0.01, 0), (0, 0, 0.01)], 0.001, mat,
+                                pos=(0.2, 0.07, 0.07))
+    # without outputs, blocks may join a running coupled scene (tests/python/test_coupled_yade.py)
