@@ -1,9 +1,11 @@
-// mpmsdem-run: plain C++ driver (no YADE, no Python) for JSON-described MPM scenes.
+// mpmsdem-run: plain C++ driver (no YADE, no Python) for JSON-described MPM scenes, and coupled
+// MPM–SDEM scenes when the scene has "blocks" (pkg/coupling/CoupledScene.hpp).
 //
 //   mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR]
 //                          [--steps N] [--restart] [--bench]
 //
-// The scene schema is documented in pkg/mpm/MpmScene.hpp and examples/scenes/README.md.
+// The scene schema is documented in pkg/mpm/MpmScene.hpp (flow), pkg/coupling/CoupledScene.hpp
+// (blocks) and examples/scenes/README.md.
 // Options override the scene's "run" settings:
 //   --backend, --precision   solver backend and precision ("float" needs "cuda")
 //   --out DIR                output folder (run.output_dir)
@@ -24,6 +26,14 @@
 //                   run.output_every, root attributes units, parameters (scene JSON),
 //                   solver, and on failure "failure" (message) and "failure_snapshot".
 //   particles.pvd + vtk/particles_NNNNNN.vtp   ParaView series (unless run.vtk = "none").
+//   With blocks: coupled.h5 (pkg/coupling/CoupledOutput.hpp: per-block pos, vel, rotation,
+//                   flow_force, face_force, edge_force, flow_torque, contacts, and the energies
+//                   flow_kinetic, flow_potential, block_kinetic, dissipated, every
+//                   run.series_every) and scene.pvd (particles and blocks, every
+//                   run.output_every) in place of particles.pvd. The time step is the smaller
+//                   of the MPM step and the contact step (CoupledWorld::criticalTimeStep);
+//                   --restart is refused (block states and contact histories are not in
+//                   mpm.h5).
 // Progress lines go to stdout (stderr with --bench) every 5 % of the run.
 // Exit status: 0 done; 2 bad parameters or command line (a scene too large for the memory
 // included); 3 run failure (NaN, blow-up, step
@@ -46,7 +56,10 @@
 #include <vector>
 
 #include "common/Error.hpp"
+#include "coupling/CoupledScene.hpp"
+#include "coupling/CoupledWorld.hpp"
 #ifdef MPMSDEM_WITH_HDF5
+#include "coupling/CoupledOutput.hpp"
 #include "io/Hdf5Writer.hpp"
 #endif
 #include "io/VtkWriter.hpp"
@@ -164,6 +177,15 @@ std::string formatDuration(double s) {
   return buf;
 }
 
+// What a step advances: the MPM solver alone, or the coupled world that owns it.
+struct Stepper {
+  MpmSolver& solver;
+  coupling::CoupledWorld* coupled = nullptr;
+  void step(double dt) { coupled ? coupled->step(dt) : solver.step(dt); }
+  // MPM CFL step, and with blocks the contact step of the last step's contacts [s]
+  double stableStep() { return coupled ? coupled->criticalTimeStep() : solver.stableTimeStep(); }
+};
+
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -172,21 +194,25 @@ double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock:
 constexpr double kStepSlack = 1.0001;
 
 // Time step for the next step: fixed or auto, never past the end time when running by time.
-double nextStep(MpmSolver& solver, const RunSettings& run, bool byTime) {
+double nextStep(Stepper& st, const RunSettings& run, bool byTime) {
+  MpmSolver& solver = st.solver;
   double dt;
   if (run.dt > 0) {
-    const double stable = solver.stableTimeStep();
+    const double stable = st.stableStep();
     if (run.dt > stable * kStepSlack) {
-      char msg[256];
+      char msg[320];
       std::snprintf(msg, sizeof msg,
-                    "run.dt = %.6g s exceeds the stable step %.6g s at t = %.6g s, step %ld (use \"dt\": \"auto\" "
-                    "or a smaller dt)",
-                    run.dt, stable, solver.time(), solver.steps());
+                    "run.dt = %.6g s exceeds the stable step %.6g s at t = %.6g s, step %ld (%s; use \"dt\": "
+                    "\"auto\" or a smaller dt)",
+                    run.dt, stable, solver.time(), solver.steps(),
+                    st.coupled && stable < solver.stableTimeStep()
+                        ? "the contact step of the MP-block and block contacts, sqrt(m/k) times the safety factor"
+                        : "the MPM CFL step");
       throw RuntimeFailure(msg);
     }
     dt = run.dt;
   } else {
-    dt = run.dtFactor * solver.stableTimeStep();
+    dt = run.dtFactor * st.stableStep();
   }
   if (byTime) dt = std::min(dt, run.duration - solver.time());
   return dt;
@@ -204,12 +230,13 @@ double progressFraction(const MpmSolver& solver, const RunSettings& run, long ma
                       : solver.time() / run.duration;
 }
 
-int runBench(MpmSolver& solver, const MpmScene& scene, long maxSteps) {
+int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
+  MpmSolver& solver = st.solver;
   const std::size_t n = solver.numParticles();
   const auto t0 = Clock::now();
   double nextReport = 0.05;
   while (!finished(solver, scene.run, maxSteps)) {
-    solver.step(nextStep(solver, scene.run, maxSteps == 0));
+    st.step(nextStep(st, scene.run, maxSteps == 0));
     const double f = progressFraction(solver, scene.run, maxSteps);
     if (f >= nextReport) {
       const double el = since(t0);
@@ -228,7 +255,8 @@ int runBench(MpmSolver& solver, const MpmScene& scene, long maxSteps) {
                         {"seconds", seconds},
                         {"particle_updates_per_s", n * double(solver.steps()) / seconds},
                         {"bytes_per_particle", n ? double(solver.memoryBytes()) / n : 0.0},
-                        {"threads", omp_get_max_threads()}};
+                        {"threads", omp_get_max_threads()},
+                        {"blocks", st.coupled ? st.coupled->world.engine.numBodies() : 0}};
   std::cout << out.dump() << std::endl;
   return 0;
 }
@@ -283,20 +311,25 @@ void checkRestartScene(const MpmScene& scene, const std::string& h5) {
 class OutputRun {
  public:
   // restart: append to the outputs already in the folder instead of starting them anew.
-  OutputRun(MpmSolver& solver, const MpmScene& scene, bool restart)
-      : solver_(solver),
+  OutputRun(Stepper& stepper, const MpmScene& scene, bool restart)
+      : stepper_(stepper),
+        solver_(stepper.solver),
         scene_(scene),
         restart_(restart),
         dir_(scene.run.outputDir),
         h5_((std::filesystem::create_directories(dir_), (dir_ / "mpm.h5").string()),
             restart ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate),
-        pvd_(scene.run.vtk == "none"
+        pvd_(scene.run.vtk == "none" || stepper.coupled
                  ? std::nullopt
                  : std::optional<io::PvdCollection>(std::in_place, (dir_ / "particles.pvd").string(), restart)) {
     if (pvd_) std::filesystem::create_directories(dir_ / "vtk");
+    if (stepper.coupled) {
+      coupled_.emplace(dir_.string(), false, stepper.coupled->world.engine);
+      coupled_->h5().setAttribute("parameters", scene.sourceJson);
+    }
     h5_.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
     h5_.setAttribute("parameters", scene.sourceJson);
-    h5_.setAttribute("solver", solver.name());
+    h5_.setAttribute("solver", solver_.name());
   }
 
   int run(long maxSteps) {
@@ -325,8 +358,8 @@ class OutputRun {
     double dt = 0;
     try {
       while (!finished(solver_, run, maxSteps)) {
-        dt = nextStep(solver_, run, byTime);
-        solver_.step(dt);
+        dt = nextStep(stepper_, run, byTime);
+        stepper_.step(dt);
         const double t = solver_.time();
         const bool series = t >= nextSeries * (1 - 1e-12), output = t >= nextOutput * (1 - 1e-12);
         const double f = progressFraction(solver_, run, maxSteps, firstStep);
@@ -355,6 +388,10 @@ class OutputRun {
       // The solver keeps the state at the start of the failed step: save it.
       solver_.getParticles(state_);
       const long index = writeSnapshot();
+      if (coupled_) {
+        recordBlocks();
+        coupled_->h5().setAttribute("failure", e.what());
+      }
       h5_.setAttribute("failure", e.what());
       h5_.setAttribute("failure_snapshot", double(index));
       std::fprintf(stderr, "mpmsdem-run: run failure: %s\nmpmsdem-run: last good state (t = %.6g s, step %ld) "
@@ -383,10 +420,28 @@ class OutputRun {
     h5_.appendScalar("max_speed", d.maxSpeed);
     h5_.appendScalar("flowing_fraction", d.flowing);
     h5_.appendScalar("gasified_fraction", d.gasified);
+    if (coupled_) recordBlocks();
+  }
+
+  // One coupled.h5 record: block series and energies (§5.4) at the solver's time.
+  void recordBlocks() {
+    coupling::CoupledWorld& w = *stepper_.coupled;
+    const sdem::SdemEngine& e = w.world.engine;
+    coupled_->record(solver_.time(), solver_.steps(), e, w.coupling);
+    const auto& g = solver_.params().gravity;
+    double potential = 0;
+    for (std::size_t i = 0; i < state_.size(); ++i)
+      potential -= state_.mass[i] * (g[0] * state_.x[3 * i] + g[1] * state_.x[3 * i + 1] + g[2] * state_.x[3 * i + 2]);
+    coupled_->appendSeries("flow_kinetic", diagnose(state_).kineticEnergy);
+    coupled_->appendSeries("flow_potential", potential);
+    coupled_->appendSeries("block_kinetic", w.world.kineticEnergy());
+    coupled_->appendSeries("dissipated", w.coupling.frictionDissipation() + w.coupling.dampingDissipation() +
+                                             e.frictionDissipation() + e.dampingDissipation());
   }
 
   long writeSnapshot() {
     const long index = h5_.writeSnapshot(state_, solver_.time(), solver_.steps());
+    if (coupled_ && scene_.run.vtk != "none") coupled_->writeVtk(solver_.time(), state_, stepper_.coupled->world.engine);
     if (pvd_) {
       char name[64];
       std::snprintf(name, sizeof name, "vtk/particles_%06ld.vtp", index);
@@ -398,12 +453,14 @@ class OutputRun {
     return index;
   }
 
+  Stepper& stepper_;
   MpmSolver& solver_;
   const MpmScene& scene_;
   bool restart_;
   std::filesystem::path dir_;
   io::Hdf5Writer h5_;
   std::optional<io::PvdCollection> pvd_;
+  std::optional<coupling::CoupledOutput> coupled_;
   ParticleSet state_;
   double state_time_ = -1;  // time of the last snapshot written
 };
@@ -422,8 +479,12 @@ int main(int argc, char** argv) {
     if (opt.precision) scene.run.precision = *opt.precision;
     if (opt.out) scene.run.outputDir = *opt.out;
     validateBackend(scene.run.backend, scene.run.precision);
+    const coupling::SceneBlocks blocks = coupling::parseBlocks(scene.sourceJson);
     auto solver = makeSolver(scene.params, scene.run.backend, scene.run.precision);
     long maxSteps = opt.steps;
+    if (opt.restart && !blocks.empty())
+      throw ParameterError("--restart: not available for scenes with blocks (mpm.h5 holds the particles, not the "
+                           "block states and contact histories): run the scene again from the start");
 #ifndef MPMSDEM_WITH_HDF5
     if (!opt.bench)
       throw ParameterError("this mpmsdem-run was built without HDF5 (an MPM-only build, CMakeLists.txt): it runs "
@@ -449,18 +510,25 @@ int main(int argc, char** argv) {
     {
       solver->setParticles(seedParticles(scene));
     }
-    if (scene.run.dt > 0 && scene.run.dt > solver->stableTimeStep() * kStepSlack) {
+    MpmSolver& mpm = *solver;
+    std::optional<coupling::CoupledWorld> coupled;
+    if (!blocks.empty()) {
+      coupled.emplace(std::move(solver));
+      coupling::addBlocks(blocks, *coupled);
+    }
+    Stepper stepper{mpm, coupled ? &*coupled : nullptr};
+    if (scene.run.dt > 0 && scene.run.dt > mpm.stableTimeStep() * kStepSlack) {
       char range[128];
       std::snprintf(range, sizeof range, "<= the stable step %.6g s (cfl dx / wave speed), or \"auto\"",
-                    solver->stableTimeStep());
+                    mpm.stableTimeStep());
       throwParameter("run.dt", scene.run.dt, "s", range);
     }
 #ifdef MPMSDEM_WITH_HDF5
-    if (opt.bench) return runBench(*solver, scene, maxSteps);
-    OutputRun out(*solver, scene, opt.restart);
+    if (opt.bench) return runBench(stepper, scene, maxSteps);
+    OutputRun out(stepper, scene, opt.restart);
     return out.run(maxSteps);
 #else
-    return runBench(*solver, scene, maxSteps);  // other runs were refused above
+    return runBench(stepper, scene, maxSteps);  // other runs were refused above
 #endif
   } catch (const ParameterError& e) {
     std::fprintf(stderr, "mpmsdem-run: parameter error: %s\n", e.what());

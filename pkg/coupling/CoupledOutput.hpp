@@ -1,0 +1,47 @@
+// Outputs of a coupled run, written alike by mpmsdem.CoupledEngine (YADE) and mpmsdem-run:
+//   <dir>/coupled.h5  append-only series (pkg/io/Hdf5Writer): time, step, and per block, in the
+//                     order of the root attribute "ids": pos, vel, rotation (rotation vector from
+//                     the block's reference orientation), flow_force F_t, face_force F_f,
+//                     edge_force F_e (§3.2.3), flow_torque (each records x 3 blocks), contacts
+//                     (records x blocks); energy series are appended by the caller.
+//   <dir>/scene.pvd   one ParaView time series: particles (part 0) and block surfaces (part 1)
+//                     in vtk/scene_particles_NNNNNN.vtp and vtk/scene_bodies_NNNNNN.vtp.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "coupling/MpSdemCoupling.hpp"
+#include "io/Hdf5Writer.hpp"
+#include "io/VtkWriter.hpp"
+#include "sdem/SdemEngine.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+class CoupledOutput {
+ public:
+  // Creates dir and dir/vtk; append continues an existing coupled.h5 and scene.pvd.
+  CoupledOutput(const std::string& dir, bool append, const sdem::SdemEngine& engine);
+
+  // Orientation the "rotation" series is measured from, per block index (default: the
+  // orientation at a block's first record).
+  void setReferenceOrientations(const std::vector<Quat>& ori0) { ori0_ = ori0; }
+
+  void record(double time, long step, const sdem::SdemEngine& engine, const MpSdemCoupling& coupling);
+  void appendSeries(const std::string& name, double value) { h5_.appendScalar(name, value); }
+  void writeVtk(double time, const mpm::ParticleSet& particles, const sdem::SdemEngine& engine);
+  io::Hdf5Writer& h5() { return h5_; }
+
+ private:
+  std::string dir_;
+  io::Hdf5Writer h5_;
+  io::PvdCollection pvd_;
+  std::vector<Quat> ori0_;
+};
+
+// Outer surfaces of the SDEM bodies at their current poses (ids: the bodies' external ids).
+std::vector<io::RigidSurface> bodySurfaces(const sdem::SdemEngine& engine);
+
+}  // namespace coupling
+}  // namespace mpmsdem

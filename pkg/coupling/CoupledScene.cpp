@@ -1,0 +1,228 @@
+#include "coupling/CoupledScene.hpp"
+
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "common/Error.hpp"
+#include "common/SceneJson.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+namespace {
+
+using namespace scenejson;
+
+Vec3 toVec(const std::array<double, 3>& a) { return Vec3(a[0], a[1], a[2]); }
+
+Vec3 optVec(const json& obj, const std::string& path, const char* key, const Vec3& def) {
+  if (!obj.contains(key)) return def;
+  const Vec3 v = toVec(vec3(obj.at(key), join(path, key)));
+  if (!v.allFinite()) throwParameter(join(path, key), obj.at(key).dump(), "", "finite numbers");
+  return v;
+}
+
+void readPhys(const json& j, const std::string& path, sdem::BarrierPhys& p) {
+  checkKeys(j, path, {"friction", "barrier_stiffness", "poisson", "normal_damping", "tangential_damping"});
+  p.friction = requireNumber(j, path, "friction");
+  p.barrierStiffness = optNumber(j, path, "barrier_stiffness", p.barrierStiffness);
+  p.poisson = optNumber(j, path, "poisson", p.poisson);
+  p.normalDamping = optNumber(j, path, "normal_damping", p.normalDamping);
+  p.tangentialDamping = optNumber(j, path, "tangential_damping", p.tangentialDamping);
+  const double inf = INFINITY;
+  checkRange(join(path, "friction"), p.friction, "", 0, false, inf, true);
+  checkRange(join(path, "barrier_stiffness"), p.barrierStiffness, "N/m", 0, true, inf, true);
+  checkRange(join(path, "poisson"), p.poisson, "", -1, true, 0.5, true);
+  checkRange(join(path, "normal_damping"), p.normalDamping, "", 0, false, inf, true);
+  checkRange(join(path, "tangential_damping"), p.tangentialDamping, "", 0, false, inf, true);
+}
+
+BlockMaterialSpec readMaterial(const json& j, const std::string& path, const std::string& name) {
+  if (!j.is_object()) throwParameter(path, j.dump(), "", "a JSON object");
+  checkKeys(j, path, {"density", "friction", "poisson", "barrier_stiffness", "normal_damping", "tangential_damping",
+                      "flow"});
+  BlockMaterialSpec m;
+  m.name = name;
+  sdem::SdemMaterial& s = m.material;
+  s.density = requireNumber(j, path, "density");
+  s.friction = optNumber(j, path, "friction", s.friction);
+  s.poisson = optNumber(j, path, "poisson", s.poisson);
+  s.barrierStiffness = optNumber(j, path, "barrier_stiffness", s.barrierStiffness);
+  s.normalDamping = optNumber(j, path, "normal_damping", s.normalDamping);
+  s.tangentialDamping = optNumber(j, path, "tangential_damping", s.tangentialDamping);
+  try {
+    s.validate();
+  } catch (const ParameterError& e) {  // name the scene key, not the C++ field
+    throw ParameterError(path + "." + e.what());
+  }
+  readPhys(requireObject(j, path, "flow"), join(path, "flow"), m.flow);
+  return m;
+}
+
+std::vector<Vec3> points(const json& v, const std::string& name) {
+  if (!v.is_array()) throwParameter(name, v.dump().substr(0, 80), "", "an array of [x, y, z] points");
+  std::vector<Vec3> out;
+  for (std::size_t i = 0; i < v.size(); ++i) out.push_back(toVec(vec3(v[i], name + "[" + std::to_string(i) + "]")));
+  return out;
+}
+
+std::vector<int> indices(const json& v, const std::string& name) {
+  if (!v.is_array()) throwParameter(name, v.dump().substr(0, 80), "", "an array of vertex indices");
+  std::vector<int> out;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const std::string n = name + "[" + std::to_string(i) + "]";
+    if (!v[i].is_number_integer()) throwParameter(n, v[i].dump(), "", "an integer vertex index");
+    out.push_back(v[i].get<int>());
+  }
+  return out;
+}
+
+std::shared_ptr<const sdem::SpheroPolyhedron> readShape(const json& b, const std::string& path) {
+  const bool isBox = b.contains("box"), isCore = b.contains("core");
+  if (isBox == isCore) throw ParameterError(path + ": give exactly one of \"box\" or \"core\" (the block's shape)");
+  if (isBox && b.contains("outer"))
+    throw ParameterError(path + ".outer: only with \"core\" (a box is displayed as itself)");
+  const double R = requireNumber(b, path, "sweep_radius");
+  try {
+    if (isBox) return sdem::SpheroPolyhedron::box(toVec(vec3(b.at("box"), join(path, "box"))), R);
+    const std::string cp = join(path, "core");
+    const json& c = requireObject(b, path, "core");
+    checkKeys(c, cp, {"vertices", "faces", "convex"});
+    if (!c.contains("vertices") || !c.contains("faces"))
+      throw ParameterError(cp + ": needs \"vertices\" and \"faces\"");
+    const std::vector<Vec3> verts = points(c.at("vertices"), join(cp, "vertices"));
+    const json& f = c.at("faces");
+    if (!f.is_array()) throwParameter(join(cp, "faces"), f.dump().substr(0, 80), "", "an array of vertex loops");
+    std::vector<std::vector<int>> faces;
+    for (std::size_t i = 0; i < f.size(); ++i) faces.push_back(indices(f[i], join(cp, "faces") + "[" + std::to_string(i) + "]"));
+    bool convex = true;
+    if (c.contains("convex")) {
+      if (!c.at("convex").is_boolean()) throwParameter(join(cp, "convex"), c.at("convex").dump(), "", "true or false");
+      convex = c.at("convex").get<bool>();
+    }
+    std::vector<Vec3> outerV;
+    std::vector<std::array<int, 3>> outerT;
+    if (b.contains("outer")) {
+      const std::string op = join(path, "outer");
+      const json& o = requireObject(b, path, "outer");
+      checkKeys(o, op, {"vertices", "triangles"});
+      if (!o.contains("vertices") || !o.contains("triangles"))
+        throw ParameterError(op + ": needs \"vertices\" and \"triangles\"");
+      outerV = points(o.at("vertices"), join(op, "vertices"));
+      const json& t = o.at("triangles");
+      if (!t.is_array()) throwParameter(join(op, "triangles"), t.dump().substr(0, 80), "", "an array of triangles");
+      for (std::size_t i = 0; i < t.size(); ++i) {
+        const std::string n = join(op, "triangles") + "[" + std::to_string(i) + "]";
+        const std::vector<int> tri = indices(t[i], n);
+        if (tri.size() != 3) throwParameter(n, t[i].dump(), "", "3 vertex indices");
+        outerT.push_back({tri[0], tri[1], tri[2]});
+      }
+    }
+    return sdem::SpheroPolyhedron::fromCore(verts, faces, R, convex, outerV, outerT);
+  } catch (const ParameterError& e) {
+    const std::string msg = e.what();
+    if (msg.rfind(path, 0) == 0) throw;
+    // the factories name their own parameters (sweepRadius, core.faces[3], ...): say which block
+    throw ParameterError(path + ": " + msg);
+  }
+}
+
+}  // namespace
+
+SceneBlocks parseBlocks(const std::string& sceneJson) {
+  const json root = json::parse(sceneJson);
+  SceneBlocks out;
+  if (!root.contains("blocks")) {
+    if (root.contains("block_materials"))
+      throw ParameterError("block_materials without blocks: add \"blocks\" or remove \"block_materials\"");
+    return out;
+  }
+  const json& list = root.at("blocks");
+  if (!list.is_array()) throwParameter("blocks", list.dump().substr(0, 80), "", "a list of blocks");
+  if (list.empty()) return out;
+  const json& mats = requireObject(root, "", "block_materials");
+  std::map<std::string, int> matIndex;
+  for (auto it = mats.begin(); it != mats.end(); ++it) {
+    matIndex[it.key()] = static_cast<int>(out.materials.size());
+    out.materials.push_back(readMaterial(it.value(), join("block_materials", it.key()), it.key()));
+  }
+  std::set<int> ids;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string path = "blocks[" + std::to_string(i) + "]";
+    const json& b = list[i];
+    if (!b.is_object()) throwParameter(path, b.dump().substr(0, 80), "", "a JSON object");
+    checkKeys(b, path, {"material", "box", "core", "outer", "sweep_radius", "position", "orientation", "velocity",
+                        "angular_velocity", "fixed", "blocked_dofs", "id"});
+    BlockSpec s;
+    if (!b.contains("material") || !b.at("material").is_string())
+      throw ParameterError(path + ".material: required, the name of one of block_materials");
+    const std::string mat = b.at("material").get<std::string>();
+    if (!matIndex.count(mat)) {
+      std::string names;
+      for (const auto& kv : matIndex) names += (names.empty() ? "\"" : ", \"") + kv.first + "\"";
+      throwParameter(join(path, "material"), "\"" + mat + "\"", "", "one of block_materials: " + names);
+    }
+    s.material = matIndex.at(mat);
+    s.shape = readShape(b, path);
+    if (!b.contains("position")) throw ParameterError("missing required key '" + join(path, "position") + "'");
+    s.position = optVec(b, path, "position", Vec3::Zero());
+    if (b.contains("orientation")) {
+      const json& q = b.at("orientation");
+      if (!q.is_array() || q.size() != 4) throwParameter(join(path, "orientation"), q.dump(), "", "[w, x, y, z]");
+      double c[4];
+      for (int k = 0; k < 4; ++k) c[k] = number(q[k], join(path, "orientation") + "[" + std::to_string(k) + "]");
+      s.orientation = Quat(c[0], c[1], c[2], c[3]);
+      if (!(std::abs(s.orientation.norm() - 1) < 1e-6))
+        throwParameter(join(path, "orientation"), q.dump(), "", "a unit quaternion [w, x, y, z] (norm 1 within 1e-6)");
+      s.orientation.normalize();
+    }
+    s.velocity = optVec(b, path, "velocity", Vec3::Zero());
+    s.angularVelocity = optVec(b, path, "angular_velocity", Vec3::Zero());
+    if (b.contains("fixed")) {
+      if (!b.at("fixed").is_boolean()) throwParameter(join(path, "fixed"), b.at("fixed").dump(), "", "true or false");
+      s.fixed = b.at("fixed").get<bool>();
+    }
+    if (b.contains("blocked_dofs")) {
+      const json& d = b.at("blocked_dofs");
+      const std::string letters = "xyzXYZ";
+      if (!d.is_string() || d.get<std::string>().find_first_not_of(letters) != std::string::npos)
+        throwParameter(join(path, "blocked_dofs"), d.dump(), "", "a string of letters among x y z X Y Z");
+      s.blockedDofs = d.get<std::string>();
+    }
+    s.id = static_cast<int>(i);
+    if (b.contains("id")) {
+      const json& v = b.at("id");
+      if (!v.is_number_integer() || v.get<long long>() < 0 || v.get<long long>() > 2147483647)
+        throwParameter(join(path, "id"), v.dump(), "", "an integer in [0, 2^31)");
+      s.id = v.get<int>();
+    }
+    if (!ids.insert(s.id).second) throwParameter(join(path, "id"), s.id, "", "unique among the blocks");
+    out.blocks.push_back(s);
+  }
+  return out;
+}
+
+void addBlocks(const SceneBlocks& scene, CoupledWorld& world) {
+  sdem::SdemEngine& engine = world.world.engine;
+  const auto& g = world.mpm().params().gravity;
+  world.world.gravity = Vec3(g[0], g[1], g[2]);
+  std::vector<int> matIndex;
+  for (const BlockMaterialSpec& m : scene.materials) {
+    matIndex.push_back(engine.addMaterial(m.material));
+    world.coupling.setPair(matIndex.back(), m.flow);
+  }
+  for (const BlockSpec& b : scene.blocks) {
+    const sdem::SpheroPolyhedron& s = *b.shape;
+    const double rho = scene.materials[b.material].material.density;
+    const int i = engine.addBody(b.shape, matIndex[b.material], rho * s.volume, rho * s.inertiaPerDensity, b.id);
+    const Vec3 centroid = b.position + b.orientation * s.framePosition;
+    const Quat ori = (b.orientation * s.frameOrientation).normalized();
+    engine.setState(i, centroid, ori, b.velocity, b.angularVelocity);
+    engine.setFixed(i, b.fixed);
+    if (!b.blockedDofs.empty()) world.world.setBlockedDofs(i, b.blockedDofs);
+  }
+}
+
+}  // namespace coupling
+}  // namespace mpmsdem

@@ -1,0 +1,122 @@
+"""Scene files for the plain C++ driver ``mpmsdem-run``, written from a YADE coupled set-up.
+
+The driver runs a coupled scene without YADE or Python (machines without YADE, such as GPU
+machines, and long batch runs). ``writeScene`` takes a :class:`mpmsdem.CoupledEngine` as set
+up in a YADE script, before its first step, and writes the flow (the MPM scene it was built
+from) and its blocks (shape tables, materials with their flow pairs, poses, velocities,
+``fixed``/``blockedDOFs`` from ``O.bodies``) as one JSON file::
+
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={copper: {"friction": 0.21}})
+    mpmsdem.driver.writeScene("flume.json", coupled, duration=2.0, dt=O.dt, outputDir="out")
+    # then, anywhere:  mpmsdem-run flume.json [--backend cuda]
+
+Blocks are written as core tables (vertices, faces, sweep radius) in their body frame, so a
+driver built without CGAL runs convex hulls and meshes too. The driver moves blocks as YADE's
+``NewtonIntegrator`` (damping 0) does: the same scene gives the same trajectories (test:
+tests/python/test_driver_blocks.py). Schema: pkg/coupling/CoupledScene.hpp.
+"""
+import json
+import math
+
+from yade import O
+
+RUN_KEYS = {"outputEvery": "output_every", "seriesEvery": "series_every", "outputDir": "output_dir",
+            "vtk": "vtk", "backend": "backend", "precision": "precision", "dtFactor": "dt_factor"}
+
+
+def sceneDict(coupled, duration, dt="auto", **run):
+    """The driver scene of ``coupled`` as a dict (see :func:`writeScene`)."""
+    from .coupling import CoupledEngine
+    if not isinstance(coupled, CoupledEngine):
+        raise ValueError("coupled = %r: must be an mpmsdem.CoupledEngine" % (coupled,))
+    if coupled.mpm.time > 0 or coupled._started:
+        raise ValueError("coupled: already stepped (t = %g s); write the scene before the first step: the driver "
+                         "seeds the particles from the scene, not from the current state" % coupled.mpm.time)
+    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+        raise ValueError("duration = %r s: must be a finite number > 0" % (duration,))
+    if dt != "auto" and not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+        raise ValueError("dt = %r s: must be > 0 or \"auto\"" % (dt,))
+    unknown = set(run) - set(RUN_KEYS)
+    if unknown:
+        raise ValueError("unknown run setting(s) %s: allowed %s" % (", ".join(sorted(unknown)), ", ".join(sorted(RUN_KEYS))))
+    scene = json.loads(coupled.mpm.solver.sceneJson)
+    settings = {"duration": float(duration), "dt": dt if dt == "auto" else float(dt)}
+    for k, v in run.items():
+        settings[RUN_KEYS[k]] = v
+    backend = scene.get("run", {})
+    for k in ("backend", "precision"):
+        if k in backend and k not in settings:
+            settings[k] = backend[k]
+    scene["run"] = settings
+    sdem = coupled.sdem
+    materials, names = {}, {}
+    for mat, k in sdem._materials:
+        if k not in coupled._pairs:
+            continue
+        name = "material_%d" % k
+        names[k] = name
+        pair = coupled._pairs[k]
+        materials[name] = {"density": mat.density, "friction": mat.friction, "poisson": mat.poisson,
+                           "barrier_stiffness": mat.barrierStiffness, "normal_damping": mat.normalDamping,
+                           "tangential_damping": mat.tangentialDamping,
+                           "flow": {"friction": pair["friction"], "barrier_stiffness": pair["barrierStiffness"],
+                                    "poisson": pair["poisson"], "normal_damping": pair["normalDamping"],
+                                    "tangential_damping": pair["tangentialDamping"]}}
+    blocks = []
+    for i in sdem.ids:
+        k = _materialIndex(coupled, i)
+        if k not in names:
+            raise ValueError("body %d: its material has no flow pair in coupled (pairs=...): every block needs one" % i)
+        shape = sdem.shape(i)
+        b = O.bodies[i]
+        s = b.state
+        blocks.append({
+            "id": i, "material": names[k],
+            "core": {"vertices": [list(v) for v in shape.coreVertices()],
+                     "faces": [list(f) for f in shape.coreFaces()], "convex": bool(shape.convex)},
+            "outer": {"vertices": [list(v) for v in shape.outerVertices()],
+                      "triangles": [list(t) for t in shape.outerTriangles()]},
+            "sweep_radius": shape.sweepRadius,
+            "position": list(s.pos), "orientation": [s.ori[3], s.ori[0], s.ori[1], s.ori[2]],
+            "velocity": list(s.vel), "angular_velocity": list(s.angVel),
+            "fixed": not b.dynamic, **_dofs(b)})
+    scene["block_materials"] = materials
+    scene["blocks"] = blocks
+    return scene
+
+
+def writeScene(path, coupled, duration, dt="auto", **run):
+    """Write the coupled scene of ``coupled`` (an :class:`mpmsdem.CoupledEngine` before its
+    first step) as a JSON scene for ``mpmsdem-run``.
+
+    :param duration: simulated time [s], > 0.
+    :param dt: fixed step [s] (e.g. ``O.dt``, to compare with the YADE run) or ``"auto"``.
+    :param run: other run settings of the scene (``outputEvery``, ``seriesEvery`` [s],
+        ``outputDir``, ``vtk``, ``backend``, ``precision``, ``dtFactor``).
+    :returns: the path written.
+    """
+    scene = sceneDict(coupled, duration, dt, **run)
+    with open(path, "w") as f:
+        json.dump(scene, f, allow_nan=False)
+    return path
+
+
+def _materialIndex(coupled, yadeId):
+    # The engine keeps a body's material values, not the object: equal values are one material
+    # unless their flow pairs differ, which the file could not tell apart.
+    from .sdem import _matDict
+    sdem = coupled.sdem
+    values = sdem._recipes[sdem._index[yadeId]]["material"]
+    ks = [k for mat, k in sdem._materials if _matDict(mat) == values]
+    pairs = {json.dumps(coupled._pairs.get(k), sort_keys=True) for k in ks}
+    if len(pairs) > 1:
+        raise ValueError("body %d: several block materials with the same values but different flow pairs; give "
+                         "them different values (e.g. density) so that the scene file can tell them apart" % yadeId)
+    return ks[0]
+
+
+def _dofs(body):
+    # YADE's fixed bodies are non-dynamic (all DOFs blocked); the driver says that with "fixed"
+    if not body.dynamic:
+        return {"blocked_dofs": ""}
+    return {"blocked_dofs": body.state.blockedDOFs}

@@ -1,0 +1,141 @@
+"""The plain C++ driver runs coupled scenes (blocks in the JSON scene, pkg/coupling/CoupledScene.hpp):
+a scene written from a YADE set-up by mpmsdem.driver.writeScene gives the same block trajectories
+and flow forces through mpmsdem-run as through YADE (its rigid-body update is YADE's
+NewtonIntegrator's, blockedDOFs included), and bad block entries are refused by name."""
+import json
+import math
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import mpmsdem
+from mpmsdem import driver
+from yade import O
+from yade.wrapper import ForceResetter, NewtonIntegrator
+
+h5py = pytest.importorskip("h5py")
+
+GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
+G = (0, 0, -9.81)
+
+
+def driver_exe():
+    exe = os.environ.get("MPMSDEM_RUN") or os.path.join(os.path.dirname(os.path.abspath(mpmsdem.__file__)),
+                                                         "..", "..", "mpmsdem-run")
+    if not os.path.exists(exe):
+        pytest.skip("mpmsdem-run not found next to the build's Python package (set MPMSDEM_RUN)")
+    return exe
+
+
+def scene(out):
+    """A granular blob falls onto and pushes two blocks resting on a fixed bed: a tilted
+    convex hull (unequal principal moments: exact aspherical rotation) and a box that may only
+    slide along x and turn about z (blockedDOFs 'yzXY')."""
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    bedMat = mpmsdem.material(density=2500, friction=0.4)
+    wood = mpmsdem.material(density=700, friction=0.5)
+    bed = sdem.box((0.16, 0.08, 0.01), 0.002, bedMat, pos=(0.12, 0.07, 0.01), fixed=True)
+    pts = [(0, 0, 0), (0.04, 0, 0), (0, 0.03, 0), (0.035, 0.03, 0.005), (0.005, 0.004, 0.025), (0.03, 0.025, 0.03)]
+    hull = sdem.polyhedron([(x + 0.11, y + 0.03, z + 0.0205) for x, y, z in pts], 0.002, wood)
+    box = sdem.box((0.012, 0.015, 0.01), 0.002, wood, pos=(0.125, 0.1, 0.0305))
+    O.bodies[box].state.blockedDOFs = "yzXY"
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [26, 16, 12], "origin": [-0.01, -0.01, -0.01]},
+                            material=GLASS, particles=[{"lo": [0.03, 0.03, 0.03], "hi": [0.08, 0.11, 0.07],
+                                                        "ppc": 8, "velocity": [1.0, 0, 0]}],
+                            gravity=G, verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={bedMat: 0.3, wood: {"friction": 0.2, "normalDamping": 0.1}},
+                                    output=str(out), outputEvery=4e-5, verbose=False)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=G, damping=0)]
+    O.dt = 4e-5
+    return coupled, (bed, hull, box)
+
+
+def series(path):
+    with h5py.File(path, "r", locking=False) as f:
+        s = f["series"]
+        return {k: np.array(s[k]) for k in s}, json.loads(f.attrs["ids"])
+
+
+def test_driver_matches_yade_for_the_same_coupled_scene(tmp_path):
+    exe = driver_exe()
+    coupled, (bed, hull, box) = scene(tmp_path / "yade")
+    steps = 1200
+    path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=O.dt, seriesEvery=O.dt,
+                             outputEvery=0.02, outputDir=str(tmp_path / "driver"), vtk="none")
+    O.run(steps, True)
+    coupled.check()
+    r = subprocess.run([exe, path, "--steps", str(steps)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    y, yid = series(tmp_path / "yade" / "coupled.h5")
+    d, did = series(tmp_path / "driver" / "coupled.h5")
+    assert yid == did == [bed, hull, box]
+    # Both record every step. The driver's record j holds the state at t = j dt (j = 0: the
+    # initial state) and the flow forces of the step that led there; the YADE runner records
+    # after its MPM step and before NewtonIntegrator moves the blocks: its record i holds the
+    # blocks at i dt and the forces computed there.
+    assert len(y["time"]) == steps and len(d["time"]) == steps + 1
+    yp, dp = y["pos"], d["pos"][:steps]
+    # the flow did act: the blocks moved and were pushed
+    assert np.abs(dp[-1, 3:6] - dp[0, 3:6]).max() > 2e-3
+    assert np.abs(y["flow_force"][:, 3:]).max() > 0.05
+    # same trajectories and forces: round-off only (measured: 5e-16 relative in position, 4e-14 in
+    # velocity, rotation and force after 1200 steps)
+    for k in ("pos", "vel", "rotation"):
+        a, b = y[k], d[k][:steps]
+        assert np.abs(a - b).max() <= 1e-11 * np.abs(a).max(), k
+    a, b = y["flow_force"], d["flow_force"][1:]
+    assert np.abs(a - b).max() <= 1e-11 * np.abs(a).max()
+    assert np.abs(y["flow_kinetic"] - d["flow_kinetic"][1:]).max() <= 1e-9 * np.abs(y["flow_kinetic"]).max()
+    # blockedDOFs 'yzXY' held in the driver: y, z fixed, rotation about z only; the bed fixed
+    p = d["pos"][:, 6:9]
+    assert np.abs(p[:, 1:] - p[0, 1:]).max() == 0
+    assert np.abs(d["rotation"][:, 6:8]).max() == 0
+    assert np.abs(d["rotation"][:, 8]).max() > 1e-4
+    assert np.abs(d["pos"][:, 0:3] - d["pos"][0, 0:3]).max() == 0
+
+
+def test_bad_block_entries_are_refused_by_name(tmp_path):
+    exe = driver_exe()
+    base = {"grid": {"dx": 0.02, "cells": [10, 10, 10], "origin": [0, 0, 0]}, "material": GLASS,
+            "particles": [{"lo": [0.04, 0.04, 0.04], "hi": [0.08, 0.08, 0.08], "ppc": 1}],
+            "run": {"duration": 0.001, "vtk": "none"},
+            "block_materials": {"wood": {"density": 700, "flow": {"friction": 0.2}}},
+            "blocks": [{"material": "wood", "box": [0.02, 0.02, 0.02], "sweep_radius": 0.002,
+                        "position": [0.14, 0.1, 0.1]}]}
+    cases = [
+        (("blocks", 0, "material"), "steel", "blocks[0].material"),
+        (("blocks", 0, "sweep_radius"), 0.03, "sweepRadius"),
+        (("blocks", 0, "blocked_dofs"), "xq", "blocks[0].blocked_dofs"),
+        (("blocks", 0, "orientation"), [1, 1, 0, 0], "blocks[0].orientation"),
+        (("blocks", 0, "colour"), "red", "unknown key 'blocks[0].colour'"),
+        (("block_materials", "wood", "density"), -1, "block_materials.wood.density"),
+        (("block_materials", "wood", "flow"), {"friction": -0.1}, "block_materials.wood.flow.friction"),
+    ]
+    for keys, value, expect in cases:
+        s = json.loads(json.dumps(base))
+        target = s
+        for k in keys[:-1]:
+            target = target[k]
+        target[keys[-1]] = value
+        path = tmp_path / "bad.json"
+        path.write_text(json.dumps(s))
+        r = subprocess.run([exe, str(path), "--out", str(tmp_path / "o")], capture_output=True, text=True)
+        assert r.returncode == 2 and expect in r.stderr, (keys, r.stderr)
+    # a core table that is not closed
+    s = json.loads(json.dumps(base))
+    del s["blocks"][0]["box"]
+    s["blocks"][0]["core"] = {"vertices": [[0, 0, 0], [0.02, 0, 0], [0, 0.02, 0], [0, 0, 0.02]],
+                              "faces": [[0, 2, 1], [0, 1, 3], [0, 3, 2]]}
+    (tmp_path / "bad.json").write_text(json.dumps(s))
+    r = subprocess.run([exe, str(tmp_path / "bad.json"), "--out", str(tmp_path / "o")], capture_output=True, text=True)
+    assert r.returncode == 2 and "blocks[0]" in r.stderr and "core.faces" in r.stderr, r.stderr
+    # a scene with blocks cannot be restarted (block states are not in mpm.h5): refused, not glued
+    s = json.loads(json.dumps(base))
+    (tmp_path / "ok.json").write_text(json.dumps(s))
+    r = subprocess.run([exe, str(tmp_path / "ok.json"), "--out", str(tmp_path / "o2")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    r = subprocess.run([exe, str(tmp_path / "ok.json"), "--out", str(tmp_path / "o2"), "--restart"], capture_output=True,
+                       text=True)
+    assert r.returncode == 2 and "--restart" in r.stderr and "blocks" in r.stderr
