@@ -6,9 +6,11 @@
 // facing -x (Coulomb friction as for the walls, GridBoundary.hpp) on the nodes within the
 // B-spline reach of the gate, 1.5 dx: nodes with |x_node - x_g| < 1.5 dx and z_node > z_g -
 // 1.5 dx, where z_g is taken at the end of the step. Every material point at or above the edge
-// then has all its grid nodes held, so no such point crosses the plane; points below z_g -
-// 3 dx are free, those in between partly held (the edge is resolved to the grid, as the walls
-// are). Like a wall it only removes the velocity into the gate: material may move away from it.
+// then has all its grid nodes held, so no such point crosses the plane, and a closed gate with
+// its edge on the bed holds the whole column; points below z_g - 3 dx are free, those in
+// between partly held. The opening the flow sees thus lags the edge by about 1.5 dx (1.5 dx / v
+// in time): the price of never letting material above the edge through. Like a wall it only
+// removes the velocity into the gate: material may move away from it.
 #pragma once
 #include <array>
 

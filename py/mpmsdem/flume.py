@@ -3,9 +3,11 @@ with an SDEM bed and blocks downstream, coupled every step.
 
 Coordinates follow the flume: x downstream along the bed, y across, z normal to the bed (the
 bed surface is z = 0); gravity is rotated by the incline, not the grid. The column occupies
-0 ≤ x ≤ columnLength behind a gate at x = 0 (the grid's −x wall), full width. Side walls are
-grid walls; the bed is a fixed SDEM slab, so the flow–bed friction is the coupling pair of the
-bed material and blocks rest on it through SDEM contacts.
+0 ≤ x ≤ columnLength, full width, with the grid's −x wall behind it. By default it starts free
+at t = 0; with ``gate`` a release gate at x = columnLength holds it until ``open_at`` and is
+then lifted, as in the experiments. Side walls are grid walls; the bed is a fixed SDEM slab, so
+the flow–bed friction is the coupling pair of the bed material and blocks rest on it through
+SDEM contacts.
 
     scene = mpmsdem.flume.Flume(dx=0.02, blocks=[mpmsdem.flume.Block(half=(0.01,) * 3, x=0.51)])
     scene.run(1.5)
@@ -65,6 +67,13 @@ class Flume:
     :param blocks: list of :class:`Block`; :param bedSweep: R of the bed slab [m];
     :param dtFactor: O.dt = dtFactor × the MPM CFL step at the start (the contact step is
         checked every step by the coupled engine);
+    :param gate: release gate on the column's downstream face (x = columnLength), its lower
+        edge on the bed until ``open_at`` and then lifted normal to the bed:
+        ``{"speed": lift speed [m/s] ≥ 0 (0 or math.inf: removed at once; default 0),
+        "open_at": t_open [s] ≥ 0 (default 0), "friction": material–gate Coulomb μ ≥ 0
+        (default 0: smooth)}``. The column settles behind it until t_open; no material above
+        the edge passes it (the grid resolves the edge: the opening the flow sees lags the
+        edge by about 1.5 dx). None (default): no gate, the column starts free at t = 0.
     :param backend, precision: MPM backend; :param output: folder for all outputs (None: none),
         :param outputEvery: record interval [s]; :param vtkEvery: ParaView interval [s].
     """
@@ -72,7 +81,10 @@ class Flume:
     def __init__(self, length=1.8, width=0.2, inclineDeg=10.0, columnLength=0.3, columnHeight=0.2, dx=0.01, ppc=8,
                  granular=None, basalFriction=0.21, sideWallFriction=0.0, blocks=(), bedSweep=0.005,
                  bedBarrierStiffness=1e4, dtFactor=0.5, backend="cpu", precision="double", output=None,
-                 outputEvery=0.01, vtkEvery=None, plot=False, verbose=True):
+                 outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None):
+        if gate is not None and (not isinstance(gate, dict) or set(gate) - {"speed", "open_at", "friction"}):
+            raise ValueError("gate = %r: must be None or a dict with keys among speed [m/s], open_at [s], friction"
+                             % (gate,))
         O.reset()
         self.inclineDeg, self.dx, self.length, self.width = inclineDeg, dx, length, width
         self.columnLength, self.columnHeight = columnLength, columnHeight
@@ -118,6 +130,7 @@ class Flume:
             walls={"-x": "free", "+x": "free", "-y": sideWallFriction, "+y": sideWallFriction, "-z": "free",
                    "+z": "free"},
             backend=backend, precision=precision, verbose=verbose,
+            gate=None if gate is None else dict(gate, x=columnLength, bottom=0.0),
             output=os.path.join(output, "mpm") if output else None, outputEvery=vtkEvery or outputEvery)
         self.coupled = CoupledEngine(self.sdem, self.mpm, pairs=pairs, output=output, outputEvery=outputEvery,
                                      vtkEvery=vtkEvery, plot=plot, verbose=verbose)
@@ -151,6 +164,16 @@ class Flume:
             self.sample()
 
     # ------------------------------------------------------------------ results
+    def gateImpulse(self):
+        """Impulse the gate has given the flow so far [N s], (x, y, z) in the flume frame (x < 0
+        while it holds the column); ValueError without a gate."""
+        return self.mpm.solver.gateImpulse()
+
+    def gateEdgeHeight(self, t=None):
+        """Height of the gate's lower edge above the bed at time t (default: now) [m], inf once
+        removed; ValueError without a gate."""
+        return self.mpm.solver.gateEdgeHeight(self.mpm.time if t is None else t)
+
     def travel(self, k):
         """Travel distance of block k along the flume so far, S_b [m]."""
         return O.bodies[self.blockIds[k]].state.pos[0] - self.x0[k]
