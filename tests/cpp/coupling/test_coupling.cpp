@@ -5,7 +5,10 @@
 
 #include <omp.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
+#include <fstream>
 #include <random>
 
 #include "common/Error.hpp"
@@ -19,11 +22,25 @@ using sdem::SpheroPolyhedron;
 
 namespace {
 
+// The stored core table of the test hull (tests/data/hull_core.json), for builds without CGAL.
+std::shared_ptr<SpheroPolyhedron> storedHull() {
+  std::ifstream is(std::string(MPMSDEM_TEST_DATA) + "/hull_core.json");
+  const nlohmann::json j = nlohmann::json::parse(is);
+  std::vector<Vec3> v;
+  for (const auto& p : j.at("vertices")) v.emplace_back(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
+  return SpheroPolyhedron::fromCore(v, j.at("faces").get<std::vector<std::vector<int>>>(),
+                                    j.at("sweep_radius").get<double>(), true);
+}
+
 std::vector<std::shared_ptr<SpheroPolyhedron>> testShapes() {
   std::vector<std::shared_ptr<SpheroPolyhedron>> s;
   s.push_back(SpheroPolyhedron::box(Vec3(0.05, 0.03, 0.02), 0.005));
+#ifdef MPMSDEM_WITH_CGAL
   s.push_back(SpheroPolyhedron::convexHull(
       {Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.08, 0), Vec3(0.02, 0.03, 0.09), Vec3(0.07, 0.06, 0.05)}, 0.004));
+#else
+  s.push_back(storedHull());
+#endif
   s.push_back(SpheroPolyhedron::meshFile(std::string(MPMSDEM_TEST_DATA) + "/l_prism.obj", 0.01));
   return s;
 }
@@ -91,6 +108,47 @@ std::unique_ptr<CoupledWorld> blobWorld(int cellsX, double vx, mpm::Backend back
 }
 
 }  // namespace
+
+#ifdef MPMSDEM_WITH_CGAL
+// The stored table that builds without CGAL use is the hull CGAL builds today, and fromCore
+// gives back its geometry and mass properties (a table written in the body frame stays there).
+TEST(ShapeTable, StoredHullTableIsTheCgalHull) {
+  const auto built = testShapes()[1];
+  const auto stored = storedHull();
+  ASSERT_EQ(built->vertices.size(), stored->vertices.size());
+  ASSERT_EQ(built->faces.size(), stored->faces.size());
+  for (std::size_t i = 0; i < built->vertices.size(); ++i)
+    EXPECT_LE((built->vertices[i] - stored->vertices[i]).norm(), 1e-15) << i;
+  for (std::size_t f = 0; f < built->faces.size(); ++f) EXPECT_EQ(built->faces[f].loop, stored->faces[f].loop) << f;
+  EXPECT_NEAR(stored->volume, built->volume, 1e-14 * built->volume);
+  EXPECT_LE((stored->inertiaPerDensity - built->inertiaPerDensity).norm(), 1e-12 * built->inertiaPerDensity.norm());
+  EXPECT_LE(stored->framePosition.norm(), 1e-15);
+  EXPECT_LE(stored->frameOrientation.angularDistance(Quat::Identity()), 1e-12);
+}
+#endif
+
+// fromCore refuses tables that are not closed, consistently oriented solids, naming the entry.
+TEST(ShapeTable, FromCoreRefusesBadTables) {
+  const std::vector<Vec3> v{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  const std::vector<std::vector<int>> tet{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  EXPECT_NO_THROW(SpheroPolyhedron::fromCore(v, tet, 0.1, true));
+  auto refused = [&](const std::vector<std::vector<int>>& faces, const std::string& what, bool convex = true) {
+    try {
+      SpheroPolyhedron::fromCore(v, faces, 0.1, convex);
+    } catch (const ParameterError& e) {
+      return std::string(e.what()).find(what) != std::string::npos;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused({{0, 2, 1}, {0, 1, 3}, {0, 3, 2}}, "at least 4"));
+  EXPECT_TRUE(refused({{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {0, 2, 3}}, "core.faces[3]"));      // side used twice
+  EXPECT_TRUE(refused({{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}}, "positive"));           // inward
+  EXPECT_TRUE(refused({{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 7}}, "vertex index 7"));
+  EXPECT_THROW(SpheroPolyhedron::fromCore(v, tet, -0.1, true), ParameterError);
+  // a mass from the table: a unit right tetrahedron's core has volume 1/6
+  const auto s = SpheroPolyhedron::fromCore(v, tet, 1e-6, true);
+  EXPECT_NEAR(s->volume, 1.0 / 6.0, 1e-5);
+}
 
 TEST(ShapeTable, ClosestPointMatchesShapeQuery) {
   const auto shapes = testShapes();
