@@ -169,6 +169,8 @@ TEST(Gate, HoldsAColumnOnAnInclineAndTheMomentumBalances) {
   EXPECT_EQ(J[1], 0.0);  // smooth gate: no tangential impulse
   EXPECT_EQ(J[2], 0.0);
   const double force = -(J[0] - jWindow[0]) / (window * dt);
+  std::printf("closed gate on a %.0f deg incline: force %.4f N, downslope weight %.4f N, momentum balance error %.2e N s\n",
+              10.0, force, weight, momentumX(out) - p0 - weight * t - J[0]);
   EXPECT_NEAR(force / weight, 1.0, 0.03) << "gate force " << force << " N, downslope weight " << weight << " N";
   EXPECT_LT(maxSpeed(out), 0.02);  // at rest: far below sqrt(g H) = 0.8 m/s
   EXPECT_LT(front(out), xg + 0.01 * prm.dx);
