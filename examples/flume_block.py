@@ -23,6 +23,7 @@ import sys
 import time
 
 import mpmsdem
+import mpmsdem.driver
 from mpmsdem import analysis
 from mpmsdem.flume import Block, Flume
 
@@ -40,6 +41,9 @@ def parse(argv):
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"))
     ap.add_argument("--precision", default="double", choices=("double", "float"))
     ap.add_argument("--no-plots", action="store_true", help="skip the PNG")
+    ap.add_argument("--driver-scene", metavar="JSON", default=None,
+                    help="write the coupled scene (with the cube, same O.dt) for the C++ driver mpmsdem-run to "
+                         "JSON and exit (e.g. to run it on a GPU machine: mpmsdem-run JSON --backend cuda)")
     return ap.parse_known_args(argv)[0]
 
 
@@ -116,9 +120,22 @@ def plot(scene, ff, path):
     fig.savefig(path, dpi=90)
 
 
+def driverScene(dx, duration, a):
+    """Write the coupled scene as the C++ driver's JSON (mpmsdem.driver.writeScene)."""
+    from yade import O
+    cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=0.67, flowFriction=0.21)
+    scene = Flume(dx=dx, blocks=[cube], backend=a.backend, precision=a.precision, verbose=False)
+    mpmsdem.driver.writeScene(a.driver_scene, scene.coupled, duration=duration, dt=O.dt, outputDir=a.out,
+                              outputEvery=0.05, seriesEvery=0.002)
+    print("driver scene for the cube in the flume (dx %g m, %d material points, O.dt %.3g s, %g s) written to %s: "
+          "mpmsdem-run %s" % (dx, scene.mpm.numParticles, O.dt, duration, a.driver_scene, a.driver_scene))
+
+
 def main(argv):
     a = parse(argv)
     dx, duration = settings(a)
+    if a.driver_scene:
+        return driverScene(dx, duration, a)
     out = os.path.abspath(a.out)
     os.makedirs(out, exist_ok=True)
     t0 = time.time()

@@ -13,6 +13,7 @@
 
 #include "PyMpm.hpp"
 #include "PySdem.hpp"
+#include "coupling/CoupledOutput.hpp"
 #include "coupling/CoupledWorld.hpp"
 #include "coupling/MpSdemCoupling.hpp"
 
@@ -74,11 +75,13 @@ class PyCoupling {
   double contactStep() const { return coupling::coupledContactStep(sdem_.engine(), coupling_); }
   double criticalTimeStep() { return std::min(mpm_.solver().stableTimeStep(), contactStep()); }
 
-  Vec3 force(int i) const { return coupling_.force(i); }
-  Vec3 torque(int i) const { return coupling_.torque(i); }
-  Vec3 faceForce(int i) const { return coupling_.faceForce(i); }
-  Vec3 edgeForce(int i) const { return coupling_.edgeForce(i); }
-  int contactCount(int i) const { return coupling_.contactCount(i); }
+  // A block of the SDEM engine that no coupling step has seen yet (before the first step, the
+  // initial record) has had no flow force.
+  Vec3 force(int i) const { return seen(i) ? coupling_.force(i) : Vec3::Zero(); }
+  Vec3 torque(int i) const { return seen(i) ? coupling_.torque(i) : Vec3::Zero(); }
+  Vec3 faceForce(int i) const { return seen(i) ? coupling_.faceForce(i) : Vec3::Zero(); }
+  Vec3 edgeForce(int i) const { return seen(i) ? coupling_.edgeForce(i) : Vec3::Zero(); }
+  int contactCount(int i) const { return seen(i) ? coupling_.contactCount(i) : 0; }
   long totalContacts() const { return coupling_.totalContacts(); }
   long historyOverflow() const { return coupling_.historyOverflow(); }
 
@@ -102,73 +105,27 @@ class PyCoupling {
     couplingSeconds_ = mpmSeconds_ = 0;
   }
 
-  // ---- outputs: <dir>/coupled.h5 (append-only series) and <dir>/scene.pvd (particles, part 0,
-  // and block surfaces, part 1, in one ParaView time series)
+  // ---- outputs: <dir>/coupled.h5 and <dir>/scene.pvd (coupling::CoupledOutput, the layout the
+  // driver writes too)
   void openOutput(const std::string& dir, bool append) {
-    namespace fs = std::filesystem;
-    fs::create_directories(fs::path(dir) / "vtk");
-    h5_ = std::make_unique<io::Hdf5Writer>((fs::path(dir) / "coupled.h5").string(),
-                                           append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate);
-    std::ostringstream ids;
-    ids << "[";
-    for (int i = 0; i < sdem_.engine().numBodies(); ++i) ids << (i ? ", " : "") << sdem_.engine().externalId(i);
-    ids << "]";
-    h5_->setAttribute("ids", ids.str());
-    h5_->setAttribute("units",
-                      "SI: m, s, N, N m, J, rad. Per-block series are (records, 3 x blocks) in the order of the "
-                      "attribute ids: pos, vel, rotation (rotation vector from the first record's orientation), "
-                      "flow_force F_t, face_force F_f, edge_force F_e, flow_torque; contacts (records, blocks)");
-    pvd_ = std::make_unique<io::PvdCollection>((fs::path(dir) / "scene.pvd").string(), append);
-    dir_ = dir;
+    output_ = std::make_unique<coupling::CoupledOutput>(dir, append, sdem_.engine());
+    if (!ori0_.empty()) output_->setReferenceOrientations(ori0_);
   }
-  void record(double time, long step) {
+  // The blocks' state is read from YADE first: between two steps NewtonIntegrator has moved
+  // them past what the engine last read.
+  void record(const bp::object& bodies, double time, long step) {
     requireOutput();
-    const sdem::SdemEngine& e = sdem_.engine();
-    const int n = std::min(e.numBodies(), coupling_.numBlocks());
-    if (ori0_.size() < static_cast<std::size_t>(n))
-      for (int i = static_cast<int>(ori0_.size()); i < n; ++i) ori0_.push_back(e.orientation(i));
-    std::vector<double> pos(3 * n), vel(3 * n), rot(3 * n), ft(3 * n), ff(3 * n), fe(3 * n), tq(3 * n), cnt(n);
-    for (int i = 0; i < n; ++i) {
-      const Eigen::AngleAxis<double> aa(e.orientation(i) * ori0_[i].conjugate());
-      const Vec3 rv = aa.angle() * aa.axis();
-      const Vec3 f = coupling_.force(i), a = coupling_.faceForce(i), b = coupling_.edgeForce(i),
-                 t = coupling_.torque(i);
-      for (int k = 0; k < 3; ++k) {
-        pos[3 * i + k] = e.position(i)[k];
-        vel[3 * i + k] = e.velocity(i)[k];
-        rot[3 * i + k] = rv[k];
-        ft[3 * i + k] = f[k];
-        ff[3 * i + k] = a[k];
-        fe[3 * i + k] = b[k];
-        tq[3 * i + k] = t[k];
-      }
-      cnt[i] = coupling_.contactCount(i);
-    }
-    h5_->appendScalar("time", time);
-    h5_->appendScalar("step", static_cast<double>(step));
-    h5_->appendVector("pos", pos);
-    h5_->appendVector("vel", vel);
-    h5_->appendVector("rotation", rot);
-    h5_->appendVector("flow_force", ft);
-    h5_->appendVector("face_force", ff);
-    h5_->appendVector("edge_force", fe);
-    h5_->appendVector("flow_torque", tq);
-    h5_->appendVector("contacts", cnt);
+    sdem_.readStates(bodies);
+    output_->record(time, step, sdem_.engine(), coupling_);
   }
   void appendSeries(const std::string& name, double value) {
     requireOutput();
-    h5_->appendScalar(name, value);
+    output_->appendSeries(name, value);
   }
-  void writeVtk(double time) {
+  void writeVtk(const bp::object& bodies, double time) {
     requireOutput();
-    std::ostringstream p, b;
-    const std::size_t k = pvd_->size() / 2;
-    p << "vtk/scene_particles_" << std::setw(6) << std::setfill('0') << k << ".vtp";
-    b << "vtk/scene_bodies_" << std::setw(6) << std::setfill('0') << k << ".vtp";
-    mpm_.writeParticlesVtp((std::filesystem::path(dir_) / p.str()).string());
-    sdem_.writeBodiesVtp((std::filesystem::path(dir_) / b.str()).string());
-    pvd_->add(time, p.str(), 0);
-    pvd_->add(time, b.str(), 1);
+    sdem_.readStates(bodies);
+    output_->writeVtk(time, mpm_.particleSet(), sdem_.engine());
   }
 
   // ---- checkpoint: tangential histories as raw bytes (int64 keys, float64 xi; the restart
@@ -199,7 +156,8 @@ class PyCoupling {
   void setDissipation(double friction, double damping) { coupling_.setDissipation(friction, damping); }
   bp::list referenceOrientations() const {
     bp::list l;
-    for (const Quat& q : ori0_) l.append(bp::make_tuple(q.w(), q.x(), q.y(), q.z()));
+    for (const Quat& q : output_ ? output_->referenceOrientations() : ori0_)
+      l.append(bp::make_tuple(q.w(), q.x(), q.y(), q.z()));
     return l;
   }
   void setReferenceOrientations(const bp::list& l) {
@@ -209,6 +167,7 @@ class PyCoupling {
       ori0_.push_back(Quat(bp::extract<double>(q[0]), bp::extract<double>(q[1]), bp::extract<double>(q[2]),
                            bp::extract<double>(q[3])));
     }
+    if (output_) output_->setReferenceOrientations(ori0_);
   }
 
   bool strict() const { return strict_; }
@@ -216,8 +175,9 @@ class PyCoupling {
   long warnings() const { return warnings_; }
 
  private:
+  bool seen(int i) const { return !(i >= coupling_.numBlocks() && i < sdem_.engine().numBodies()); }
   void requireOutput() const {
-    if (!h5_) throw ParameterError("output: call openOutput(dir) before writing outputs");
+    if (!output_) throw ParameterError("output: call openOutput(dir) before writing outputs");
   }
   static bp::object bytes(const void* data, std::size_t n) {
     return bp::object(bp::handle<>(PyBytes_FromStringAndSize(static_cast<const char*>(data), static_cast<Py_ssize_t>(n))));
@@ -227,14 +187,12 @@ class PyCoupling {
   PyMpm& mpm_;
   coupling::MpSdemCoupling coupling_;
   std::vector<Vec3> force_, torque_;
-  std::vector<Quat> ori0_;
+  std::vector<Quat> ori0_;  // reference orientations set by a restore before the output opens
   bool strict_ = true;
   long warnings_ = 0;
   long steps_ = 0;
   double couplingSeconds_ = 0, mpmSeconds_ = 0;
-  std::unique_ptr<io::Hdf5Writer> h5_;
-  std::unique_ptr<io::PvdCollection> pvd_;
-  std::string dir_;
+  std::unique_ptr<coupling::CoupledOutput> output_;
 };
 
 }  // namespace

@@ -109,6 +109,11 @@ class PyMpm {
     sync();
     io::writeParticlesVtp(path, cache_);
   }
+  // The current particle state (downloaded once per step at most).
+  const mpm::ParticleSet& particleSet() {
+    sync();
+    return cache_;
+  }
   // A checkpoint: one HDF5 file with the scene and the full particle state at this time
   // (the same layout as mpm.h5, so any output file also works as a checkpoint).
   void saveCheckpoint(const std::string& path) {

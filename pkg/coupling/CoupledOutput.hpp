@@ -27,6 +27,7 @@ class CoupledOutput {
   // Orientation the "rotation" series is measured from, per block index (default: the
   // orientation at a block's first record).
   void setReferenceOrientations(const std::vector<Quat>& ori0) { ori0_ = ori0; }
+  const std::vector<Quat>& referenceOrientations() const { return ori0_; }
 
   void record(double time, long step, const sdem::SdemEngine& engine, const MpSdemCoupling& coupling);
   void appendSeries(const std::string& name, double value) { h5_.appendScalar(name, value); }

@@ -96,6 +96,7 @@ class CoupledEngine:
         self._started = False
         self._warned = 0
         self._nextRecord = self._nextVtk = None
+        self._lastRecord = self._lastVtk = -math.inf
         self._ori0 = {}
         self._appendOutput = False  # restore(): continue the files in `output`
         self._wall0 = self._lastReport = None
@@ -152,6 +153,11 @@ class CoupledEngine:
             if self.output is not None:
                 self._openOutput()
             self._wall0 = self._lastReport = _time.time()
+        # Records are taken here, before the step: NewtonIntegrator has moved the blocks to the
+        # flow's time, so blocks and particles are both at t (after the MPM step they would be a
+        # step apart). The forces recorded are those of the step that led to t; finish() records
+        # the state the run ends with.
+        self._recordDue(self.mpm.time)
         try:
             self._bridge.step(O.bodies, O.forces, O.dt)
         except Exception as e:
@@ -160,15 +166,6 @@ class CoupledEngine:
         self.sdem._afterStep()
         self.mpm._afterStep(O.dt)
         t = self.mpm.time
-        slack = 0.5 * O.dt  # t is a sum of steps: it may fall a rounding error short of a record time
-        if (self.output is not None or self.plot) and t >= self._nextRecord - slack:
-            self._record(t)
-            while self._nextRecord <= t + slack:
-                self._nextRecord += self.outputEvery
-        if self.vtkEvery and t >= self._nextVtk - slack:
-            self._bridge.writeVtk(t)
-            while self._nextVtk <= t + slack:
-                self._nextVtk += self.vtkEvery
         if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
             if self._warned == 0:
                 warnings.warn("mpmsdem.CoupledEngine: O.dt = %g s exceeds the contact critical step %g s at step %d"
@@ -180,6 +177,21 @@ class CoupledEngine:
                   ", %.1f ms/step" % (t, O.iter, self._bridge.totalContacts, self._bridge.contactStep, O.dt,
                                       1e3 * (now - self._wall0) / max(O.iter, 1)), file=sys.stderr, flush=True)
 
+    def _recordDue(self, t, final=False, files=False):
+        # t is a sum of steps: it may fall a rounding error short of a record time
+        slack = 0.5 * O.dt
+        if (self.output is not None or self.plot) and (t >= self._nextRecord - slack or
+                                                        (final and t > self._lastRecord + slack)):
+            self._record(t)
+            self._lastRecord = t
+            while self._nextRecord <= t + slack:
+                self._nextRecord += self.outputEvery
+        if self.vtkEvery and (t >= self._nextVtk - slack or (final and files and t > self._lastVtk + slack)):
+            self._bridge.writeVtk(O.bodies, t)
+            self._lastVtk = t
+            while self._nextVtk <= t + slack:
+                self._nextVtk += self.vtkEvery
+
     def _openOutput(self):
         import os
         t = O.time
@@ -190,8 +202,10 @@ class CoupledEngine:
             lastRecord, _, lastVtk = _mpmsdem.truncateOutputsAfter(
                 h5, os.path.join(str(self.output), "scene.pvd"), t + 1e-9 * self.outputEvery)
             if not math.isnan(lastRecord):
+                self._lastRecord = lastRecord
                 self._nextRecord = max(t, _nextOnGrid(lastRecord, self.outputEvery))
             if self.vtkEvery and not math.isnan(lastVtk):
+                self._lastVtk = lastVtk
                 self._nextVtk = max(t, lastVtk + self.vtkEvery)
         self._bridge.openOutput(str(self.output), append)
         self.sdem._outputsOpen = self.sdem._outputsOpen or h5
@@ -214,7 +228,7 @@ class CoupledEngine:
         import numpy as np
         ids = self.sdem.ids
         if self.output is not None:
-            self._bridge.record(t, O.iter)
+            self._bridge.record(O.bodies, t, O.iter)
             p = self.mpm.particles()
             g = np.array(self.mpm.gravity)
             self._bridge.appendSeries("flow_kinetic", 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum()))
@@ -328,9 +342,13 @@ class CoupledEngine:
         return eng
 
     def finish(self, files=True):
-        """The SDEM and MPM engines' final records (:meth:`SdemEngine.finish`,
-        :meth:`MpmEngine.finish`; ``files``: also the VTK file and the snapshot);
-        ``coupled.h5`` keeps its regular records."""
+        """Record the state the run has reached: a ``coupled.h5`` record at the current time
+        unless one was taken there, a ``scene.pvd`` entry when one is due (with ``files``: in
+        any case), and the SDEM and
+        MPM engines' final records (:meth:`SdemEngine.finish`, :meth:`MpmEngine.finish`).
+        ``mpmsdem.run`` calls it after each run."""
+        if self._started:
+            self._recordDue(self.mpm.time, final=True, files=files)
         self.sdem.finish(vtk=files)
         self.mpm.finish(snapshot=files)
 

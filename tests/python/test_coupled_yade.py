@@ -98,7 +98,8 @@ def test_outputs_h5py_paraview_and_yade_plot(tmp_path):
     with h5py.File(os.path.join(out, "coupled.h5"), "r", locking=False) as f:
         s = f["series"]
         n = s["time"].shape[0]
-        assert n == 16  # t = dt, then every 2 ms up to 0.03 s
+        assert n == 16  # t = 0, then every 2 ms up to 0.03 s (the state the run ended with)
+        assert s["time"][0] == 0 and s["time"][-1] == pytest.approx(0.03, abs=1e-12)
         for name in ("pos", "vel", "rotation", "flow_force", "face_force", "edge_force", "flow_torque"):
             assert s[name].shape == (n, 3), name
         assert s["contacts"].shape == (n, 1)
