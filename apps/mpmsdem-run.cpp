@@ -323,6 +323,13 @@ class OutputRun {
                  ? std::nullopt
                  : std::optional<io::PvdCollection>(std::in_place, (dir_ / "particles.pvd").string(), restart)) {
     if (pvd_) std::filesystem::create_directories(dir_ / "vtk");
+    if (restart) {
+      // A killed run wrote series rows and ParaView entries past its last snapshot, where this
+      // run continues from: drop them, or the series would go back in time and repeat.
+      const double t = solver_.time() * (1 + 1e-12);
+      h5_.truncateSeriesAfter("time", t);
+      if (pvd_) pvd_->dropAfter(t);
+    }
     if (stepper.coupled) {
       coupled_.emplace(dir_.string(), false, stepper.coupled->world.engine);
       coupled_->h5().setAttribute("parameters", scene.sourceJson);
