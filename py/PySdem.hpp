@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "PyConvert.hpp"
+#include "coupling/CoupledOutput.hpp"
 #include "io/Hdf5Writer.hpp"
 #include "io/VtkWriter.hpp"
 #include "sdem/SdemEngine.hpp"
@@ -305,20 +306,7 @@ class YadeSdemBridge {
     writeBodiesVtp((std::filesystem::path(dir_) / name.str()).string());
     pvd_->add(time, name.str());
   }
-  void writeBodiesVtp(const std::string& path) const {
-    std::vector<io::RigidSurface> bodies(engine_.numBodies());
-    for (int i = 0; i < engine_.numBodies(); ++i) {
-      const auto& shape = engine_.shape(i);
-      io::RigidSurface& b = bodies[i];
-      b.id = engine_.externalId(i);
-      for (const Vec3& v : shape.outerVertices) {
-        const Vec3 w = engine_.position(i) + engine_.orientation(i) * v;
-        b.vertices.push_back({w[0], w[1], w[2]});
-      }
-      b.triangles = shape.outerTriangles;
-    }
-    io::writeRigidSurfacesVtp(path, bodies);
-  }
+  void writeBodiesVtp(const std::string& path) const { io::writeRigidSurfacesVtp(path, coupling::bodySurfaces(engine_)); }
 
   Vec3 force(int i) const { return engine_.force(i); }
   Vec3 torque(int i) const { return engine_.torque(i); }
