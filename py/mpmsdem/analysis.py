@@ -115,6 +115,64 @@ def froudeDistance(v, L0, g=G):
     return v / math.sqrt(g * L0)
 
 
+def staticImpactForce(rho, h, area, k=1.0, g=G):
+    """Hydrostatic (static) impact force 0.5 k ρ g h A of a flow of depth ``h`` [m] and bulk
+    density ``rho`` [kg/m³] on an area ``area`` [m²]; ``k`` is the static pressure coefficient
+    (paper §5, after Ng et al. 2021; 1: no internal shear strength) [N]."""
+    return 0.5 * k * rho * g * h * area
+
+
+def impactForceRatio(Fr, k=1.6, alphaF=0.18):
+    """F_peak / F_static = 1 + 2 α_f Fr² / k, paper Eq 21 (Ng et al. 2021): the peak as the
+    hydrodynamic force of Eq 20 on top of the static one, the static force 0.5 k ρ g h_f A.
+    Defaults: the paper's fit to its §5 study (k = 1.6, α_f = 0.18); k = α_f = 1 is the
+    paper's theoretical bound. Accepts a number or a numpy array of Froude numbers."""
+    return 1.0 + 2.0 * alphaF * Fr ** 2 / k
+
+
+def fitImpactForceRatio(Fr, ratio, k=1.6):
+    """Least-squares fit of Eq 21 to measured F_peak/F_static against Fr. Only 2 α_f / k is
+    determined by such data, so α_f is returned for the given static coefficient ``k``
+    (default the paper's 1.6). Returns dict(alphaF, k, slope = 2 α_f / k, rms: root mean
+    square residual of the ratio, n)."""
+    import numpy as np
+    x = np.asarray(Fr, dtype=float) ** 2
+    y = np.asarray(ratio, dtype=float) - 1.0
+    if x.size < 1 or x.shape != y.shape or not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise ValueError("Fr, ratio: need one or more finite pairs of the same length (got %d and %d values)"
+                         % (np.size(Fr), np.size(ratio)))
+    if not np.any(x > 0):
+        raise ValueError("Fr: all zero; Eq 21 cannot be fitted")
+    slope = float((x * y).sum() / (x * x).sum())
+    rms = float(np.sqrt(np.mean((y - slope * x) ** 2)))
+    return {"alphaF": 0.5 * slope * k, "k": k, "slope": slope, "rms": rms, "n": int(x.size)}
+
+
+def linearFit(x, y):
+    """Least-squares line y = slope x + intercept with Pearson's correlation coefficient r,
+    as the paper's regressions of S_b/L0 against Fr and Fr1 (§5.5, Fig 19). Needs two or
+    more finite pairs and x not all equal. Returns dict(slope, intercept, r, n)."""
+    import numpy as np
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if x.shape != y.shape or x.size < 2 or not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise ValueError("x, y: need two or more finite pairs of the same length (got %d and %d values)"
+                         % (x.size, y.size))
+    dx, dy = x - x.mean(), y - y.mean()
+    sxx, syy = float((dx * dx).sum()), float((dy * dy).sum())
+    if sxx == 0:
+        raise ValueError("x: all values equal (%g); no line can be fitted" % x[0])
+    slope = float((dx * dy).sum() / sxx)
+    r = float((dx * dy).sum() / np.sqrt(sxx * syy)) if syy > 0 else 0.0
+    return {"slope": slope, "intercept": float(y.mean() - slope * x.mean()), "r": r, "n": int(x.size)}
+
+
+def submersion(hf, hb):
+    """The block's state in the paper's §5 classification: ``"complete"`` when the free-flow
+    depth at its station exceeds its height (h_f > h_b), else ``"partial"``."""
+    return "complete" if hf > hb else "partial"
+
+
 def flowAtStation(particles, x, halfWidth, bedZ=0.0, minPoints=4):
     """Depth and velocity of the flow at a station of a flume (coordinates along the flume:
     x downstream, z normal to the bed), from an MPM particle snapshot (``MpmEngine.particles()``).
