@@ -1,0 +1,142 @@
+#!/usr/bin/env python3
+"""Calibration of the §3.2 flume (paper Appendix C): fit the flow's basal friction and its
+maximum dynamic friction μ₂ — or any of the scene parameters listed below — so that the
+simulated copper cube travels as far as measured (or the flow runs out as far).
+
+    python3 examples/calibrate_flume.py --target travel=0.085
+    python3 examples/calibrate_flume.py --target travel=0.085 --param basalFriction=0.1:0.3 \\
+        --param mu_2=0.5:0.8 --fix dx=0.01 --workers 2
+    python3 examples/calibrate_flume.py --target travel=0.085 --scheduler tcp://HOST:8786
+
+Every candidate is one coupled run of examples/flume_block.py's scene (coarse: dx 0.02 m,
+12,000 material points, a few minutes on one core), run as its own process by
+mpmsdem.sweep; finished candidates are stored in ``--out``/runs.jsonl at once, so running
+the same command again after an interruption goes on where it stopped. Writes
+``calibration.png`` (loss per candidate and over the parameter plane) and
+``calibration.json`` (the best parameters and the search's record) to ``--out``.
+
+Parameters that can be fitted (``--param NAME=LOW:HIGH``) or fixed (``--fix NAME=VALUE``):
+see :func:`flumeRun`. Measured quantities (``--target NAME=VALUE``): ``travel`` (the cube's
+travel distance at the end of the run [m]) and ``runout`` (the flow front's distance
+beyond the column's initial front at the end [m]).
+"""
+import argparse
+import json
+import os
+import sys
+
+
+def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFriction=0.0, blockFriction=0.67,
+             flowFriction=0.21, inclineDeg=10.0, dx=0.02, ppc=8, duration=1.2, backend="cpu", precision="double"):
+    """One coupled run of the §3.2 flume with the copper cube; returns the measured quantities.
+
+    :param basalFriction: flow–bed friction [-] (Table 1: 0.21; Appendix C range 0.01–0.5).
+    :param mu_2: maximum dynamic friction μ₂ of the μ(I) model [-] (Table 1: 0.65; Appendix C
+        range 0.3–0.8; > mu_s).
+    :param mu_s: static friction μ_s of the flow [-] (Table 1: 0.24).
+    :param I0: inertial number scale I₀ of the μ(I) model [-] (0.279).
+    :param sideWallFriction: flow–side wall friction [-] (0: smooth walls).
+    :param blockFriction: cube–bed friction [-] (measured: 0.67).
+    :param flowFriction: flow–cube friction [-] (0.21).
+    :param inclineDeg: flume incline [deg] (10).
+    :param dx: grid spacing [m] (coarse 0.02; the paper 0.01); :param ppc: points per cell (8).
+    :param duration: simulated time [s] (1.2; the cube has stopped by then in the coarse scene).
+    :param backend, precision: MPM backend and precision.
+    :returns: dict(travel [m], runout [m], rotation_deg, peak_force [N], particles).
+    """
+    if not mu_2 > mu_s:
+        raise ValueError("mu_2 = %r: must be > mu_s = %r (the mu(I) model's friction rises from mu_s to mu_2)"
+                         % (mu_2, mu_s))
+    from mpmsdem.flume import GLASS_BEADS, Block, Flume
+    from flume_block import COLUMN, HB, L0
+    granular = dict(GLASS_BEADS, mu_s=mu_s, mu_2=mu_2, I0=I0)
+    cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=blockFriction, flowFriction=flowFriction)
+    scene = Flume(dx=dx, ppc=ppc, inclineDeg=inclineDeg, granular=granular, basalFriction=basalFriction,
+                  sideWallFriction=sideWallFriction, blocks=[cube], backend=backend, precision=precision,
+                  verbose=False)
+    scene.run(duration, sampleEvery=0.002)
+    peak, _ = scene.peakForce(0, smooth=0.01)
+    front = float(scene.mpm.particles()["x"][:, 0].max())
+    return {"travel": scene.travel(0), "runout": front - COLUMN, "rotation_deg": float(scene.series(0)["rotation"][-1]),
+            "peak_force": peak, "particles": scene.mpm.numParticles}
+
+
+def _pairs(items, what, form, convert):
+    out = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        try:
+            if not (sep and name):
+                raise ValueError
+            out[name] = convert(value)
+        except ValueError:
+            raise SystemExit("%s %r: must be %s" % (what, item, form)) from None
+    return out
+
+
+def _range(text):
+    lo, sep, hi = text.partition(":")
+    if not sep:
+        raise ValueError
+    return float(lo), float(hi)
+
+
+def parse(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--target", action="append", metavar="NAME=VALUE",
+                    help="measured value to fit: travel=S [m] or runout=L [m] (one or both; required)")
+    ap.add_argument("--param", action="append", metavar="NAME=LOW:HIGH",
+                    help="a fitted parameter and its range (default: basalFriction=0.01:0.5 and mu_2=0.3:0.8, "
+                         "Appendix C)")
+    ap.add_argument("--fix", action="append", metavar="NAME=VALUE", help="a parameter held at a value, e.g. dx=0.01")
+    ap.add_argument("--full", action="store_true", help="the paper's resolution (dx 0.01 m) for every candidate")
+    ap.add_argument("--popsize", type=int, default=8, help="candidates per generation per fitted parameter (8)")
+    ap.add_argument("--maxiter", type=int, default=20, help="generations after the first (20)")
+    ap.add_argument("--threshold", type=float, default=1e-4,
+                    help="stop at this loss, the sum of squared relative misfits (1e-4: 1 %%)")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the search; keep it to resume (1)")
+    ap.add_argument("--workers", type=int, default=1, help="local candidates at a time (1)")
+    ap.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="Dask scheduler address (tcp://host:8786): run the candidates on its workers instead")
+    ap.add_argument("--retries", type=int, default=2, help="extra attempts of a failed candidate (2)")
+    ap.add_argument("--timeout", type=float, default=None, help="limit of one candidate [s] (none)")
+    ap.add_argument("--threads", type=int, default=1, help="OMP_NUM_THREADS of each candidate (1)")
+    ap.add_argument("--out", default="results/calibrate_flume", help="results folder")
+    a = ap.parse_args(argv)
+    if not a.target:
+        ap.error("--target is required: the measured value to fit, e.g. --target travel=0.085 [m]")
+    a.targets = _pairs(a.target, "--target", "NAME=VALUE, e.g. travel=0.085", float)
+    from mpmsdem.calibrate import APPENDIX_C_BOUNDS
+    a.bounds = _pairs(a.param, "--param", "NAME=LOW:HIGH, e.g. mu_2=0.3:0.8", _range) or dict(APPENDIX_C_BOUNDS)
+    a.fixed = _pairs(a.fix, "--fix", "NAME=VALUE, e.g. dx=0.01", float)
+    if a.full:
+        a.fixed["dx"] = 0.01
+    if "ppc" in a.fixed:
+        a.fixed["ppc"] = int(a.fixed["ppc"])
+    if "mu_2" in a.bounds and not a.bounds["mu_2"][0] > a.fixed.get("mu_s", 0.24):
+        raise SystemExit("--param mu_2=%g:%g: the lower bound must be > mu_s = %g" % (
+            a.bounds["mu_2"] + (a.fixed.get("mu_s", 0.24),)))
+    return a
+
+
+def main(argv):
+    a = parse(argv)
+    from mpmsdem import calibrate
+    os.makedirs(a.out, exist_ok=True)
+    try:
+        fit = calibrate.calibrate("%s:flumeRun" % os.path.abspath(__file__), bounds=a.bounds, targets=a.targets,
+                                  store=os.path.join(a.out, "runs.jsonl"), fixed=a.fixed, popsize=a.popsize,
+                                  maxiter=a.maxiter, threshold=a.threshold, seed=a.seed, workers=a.workers,
+                                  scheduler=a.scheduler, retries=a.retries, timeout=a.timeout, threads=a.threads,
+                                  plot=os.path.join(a.out, "calibration.png"))
+    except (ValueError, ConnectionError) as e:  # bad arguments: the message names them, a traceback adds nothing
+        raise SystemExit("calibrate_flume.py: %s" % e) from None
+    with open(os.path.join(a.out, "calibration.json"), "w") as f:
+        json.dump(dict(fit, targets=a.targets, bounds=a.bounds, fixed=a.fixed), f, indent=1)
+    print("best: %s; outputs in %s (calibration.png, calibration.json, runs.jsonl)"
+          % (", ".join("%s = %.4g" % kv for kv in fit["params"].items()), a.out))
+    return fit
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
