@@ -7,7 +7,7 @@
 // The scene schema is documented in pkg/mpm/MpmScene.hpp (flow), pkg/coupling/CoupledScene.hpp
 // (blocks) and examples/scenes/README.md.
 // Options override the scene's "run" settings:
-//   --backend, --precision   solver backend and precision ("float" needs "cuda")
+//   --backend, --precision   solver backend and precision (either precision on either backend)
 //   --out DIR                output folder (run.output_dir)
 //   --steps N                run exactly N steps (N >= 1) instead of run.duration
 //   --restart                continue from the last snapshot of the output folder's mpm.h5
@@ -485,7 +485,6 @@ int main(int argc, char** argv) {
     if (opt.backend) scene.run.backend = *opt.backend;
     if (opt.precision) scene.run.precision = *opt.precision;
     if (opt.out) scene.run.outputDir = *opt.out;
-    validateBackend(scene.run.backend, scene.run.precision);
     const coupling::SceneBlocks blocks = coupling::parseBlocks(scene.sourceJson);
     auto solver = makeSolver(scene.params, scene.run.backend, scene.run.precision);
     long maxSteps = opt.steps;

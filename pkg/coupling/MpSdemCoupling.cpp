@@ -19,6 +19,30 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr long kChunk = 4096;
 // Upper bound of the number of bins: the bin edge grows until the grid box fits.
 constexpr double kMaxBins = 1 << 22;
+
+template <typename T>
+double largest(const void* values, std::size_t n) {
+  const T* a = static_cast<const T*>(values);
+  double m = 0;
+  for (std::size_t i = 0; i < n; ++i) m = std::max(m, static_cast<double>(a[i]));
+  return m;
+}
+
+BlockState<float> toFloat(const BlockState<double>& a) {
+  BlockState<float> b;
+  for (int d = 0; d < 3; ++d) {
+    b.pos[d] = static_cast<float>(a.pos[d]);
+    b.vel[d] = static_cast<float>(a.vel[d]);
+    b.angVel[d] = static_cast<float>(a.angVel[d]);
+  }
+  for (int k = 0; k < 9; ++k) b.rot[k] = static_cast<float>(a.rot[k]);
+  b.mass = static_cast<float>(a.mass);
+  b.reach = static_cast<float>(a.reach);
+  b.shape = a.shape;
+  b.phys = a.phys;
+  b.fixed = a.fixed;
+  return b;
+}
 }  // namespace
 
 #if !defined(MPMSDEM_WITH_CUDA)
@@ -46,7 +70,8 @@ void MpSdemCoupling::setHistorySlots(int slots) {
   if (slots != slots_) {
     slots_ = slots;
     key_.clear();
-    xi_.clear();
+    hostDouble_.xi.clear();
+    hostFloat_.xi.clear();
     if (device_) device_->resetHistories();
   }
 }
@@ -64,8 +89,14 @@ void MpSdemCoupling::setHistories(const std::vector<long long>& keys, const std:
   for (double v : xi)
     if (!std::isfinite(v)) throw ParameterError("history xi: must be finite");
   key_ = keys;
-  xi_ = xi;
+  hostDouble_.xi = xi;
+  hostFloat_.xi.assign(xi.begin(), xi.end());
   particleCount_ = keys.size() / slots_;
+}
+
+std::vector<double> MpSdemCoupling::historyXi() const {
+  if (hostFloatRun_) return std::vector<double>(hostFloat_.xi.begin(), hostFloat_.xi.end());
+  return hostDouble_.xi;
 }
 
 // Blocks in: shapes of new bodies join the table; pose and motion of every body.
@@ -164,22 +195,30 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     devicePrecision_ = view.precision;
     if (!device_) throw RuntimeFailure("MpSdemCoupling: the solver runs on CUDA but this build has no CUDA coupling");
   }
+  const bool hostFloat = !view.device && view.precision == mpm::Precision::Float;
   if (maxParticleRadius_ < 0) {
     double vmax = 0;
-    if (view.device) {
+    if (view.device)
       vmax = device_->maxVolume0(view);
-    } else {
-      const double* v0 = static_cast<const double*>(view.volume0);
-      for (std::size_t p = 0; p < view.n; ++p) vmax = std::max(vmax, v0[p]);
-    }
+    else
+      vmax = hostFloat ? largest<float>(view.volume0, view.n) : largest<double>(view.volume0, view.n);
     maxParticleRadius_ = std::cbrt(3 * vmax / (4 * kPi));
   }
-  if (view.n != particleCount_ || key_.size() != slots_ * view.n) {  // a new particle set: no history yet
+  const std::size_t xiSize = hostFloat ? hostFloat_.xi.size() : hostDouble_.xi.size();
+  if (view.n != particleCount_ || key_.size() != slots_ * view.n ||
+      (!view.device && xiSize != 3 * key_.size())) {  // a new particle set: no history yet
     particleCount_ = view.n;
     key_.assign(slots_ * view.n, -1);
-    xi_.assign(3 * slots_ * view.n, 0.0);
+    if (hostFloat) {
+      hostFloat_.xi.assign(3 * slots_ * view.n, 0.0f);
+      hostDouble_.xi.clear();
+    } else {
+      hostDouble_.xi.assign(3 * slots_ * view.n, 0.0);
+      hostFloat_.xi.clear();
+    }
     if (device_) device_->resetHistories();
   }
+  if (!view.device) hostFloatRun_ = hostFloat;
   buildBins(g);
   CouplingStepInput in;
   in.shapes = shapes_.view();
@@ -205,10 +244,20 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   out.overflow = 0;
   out.badParticle = -1;
   out.badBlock = -1;
-  if (view.device)
+  if (view.device) {
     device_->run(in, out);
-  else
-    runCpu(in, out);
+  } else if (hostFloat) {
+    syncFloatTables();
+    const sdem::ShapeTableView<double> d = shapes_.view();
+    const sdem::ShapeTableView<float> S{d.numShapes,        vertexF_.data(),      faceNormalF_.data(),
+                                        faceOffsetF_.data(), d.faceLoopStart,      d.loopVertex,
+                                        d.loopEdge,          d.shapeFaceStart,     d.shapeVertexStart,
+                                        d.shapeEdgeStart,    sweepRadiusF_.data(), boundingRadiusF_.data(),
+                                        d.convex};
+    runCpu(in, S, blocksF_.data(), physF_.data(), hostFloat_, out);
+  } else {
+    runCpu(in, shapes_.view(), blocks_.data(), phys_.data(), hostDouble_, out);
+  }
   shapesChanged_ = false;
   if (out.badParticle >= 0) {
     std::ostringstream os;
@@ -230,35 +279,55 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   }
 }
 
-void MpSdemCoupling::runCpu(const CouplingStepInput& in, CouplingStepOutput& out) {
-  const mpm::ParticleView& v = in.particles;
-  CouplingParticles<double> P;
-  for (int d = 0; d < 3; ++d) {
-    P.x[d] = static_cast<const double*>(v.x[d]);
-    P.v[d] = static_cast<const double*>(v.v[d]);
-    P.force[d] = static_cast<double*>(v.force[d]);
+// Float copies of what a float host step reads: the shape table when it grew, the blocks and
+// the pair physics every step (a few values per block).
+void MpSdemCoupling::syncFloatTables() {
+  if (shapesChanged_ || sweepRadiusF_.size() != shapes_.sweepRadius.size()) {
+    vertexF_.assign(shapes_.vertex.begin(), shapes_.vertex.end());
+    faceNormalF_.assign(shapes_.faceNormal.begin(), shapes_.faceNormal.end());
+    faceOffsetF_.assign(shapes_.faceOffset.begin(), shapes_.faceOffset.end());
+    sweepRadiusF_.assign(shapes_.sweepRadius.begin(), shapes_.sweepRadius.end());
+    boundingRadiusF_.assign(shapes_.boundingRadius.begin(), shapes_.boundingRadius.end());
   }
-  P.mass = static_cast<const double*>(v.mass);
-  P.vol0 = static_cast<const double*>(v.volume0);
-  const sdem::ShapeTableView<double> S = shapes_.view();
-  const HistoryView<double> H{key_.data(), xi_.data(), slots_};
+  blocksF_.resize(blocks_.size());
+  for (std::size_t i = 0; i < blocks_.size(); ++i) blocksF_[i] = toFloat(blocks_[i]);
+  physF_.resize(phys_.size());
+  for (std::size_t i = 0; i < phys_.size(); ++i) {
+    const auto& p = phys_[i];
+    physF_[i] = {static_cast<float>(p.kc), static_cast<float>(p.mu), static_cast<float>(p.nu),
+                 static_cast<float>(p.zetaN), static_cast<float>(p.zetaT)};
+  }
+}
+
+template <typename T>
+void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableView<T>& S, const BlockState<T>* B,
+                            const sdem::BarrierCoulombPhys<T>* phys, HostSide<T>& side, CouplingStepOutput& out) {
+  const mpm::ParticleView& v = in.particles;
+  CouplingParticles<T> P;
+  for (int d = 0; d < 3; ++d) {
+    P.x[d] = static_cast<const T*>(v.x[d]);
+    P.v[d] = static_cast<const T*>(v.v[d]);
+    P.force[d] = static_cast<T*>(v.force[d]);
+  }
+  P.mass = static_cast<const T*>(v.mass);
+  P.vol0 = static_cast<const T*>(v.volume0);
+  const HistoryView<T> H{key_.data(), side.xi.data(), slots_};
+  const T dt = static_cast<T>(in.dt);
   const long n = static_cast<long>(v.n);
   const long nChunks = (n + kChunk - 1) / kChunk;
-  chunkContacts_.resize(nChunks);
+  side.chunkContacts.resize(nChunks);
   long overflow = 0;
   long firstBad = n;
   int badBlock = -1;
-  const BlockState<double>* B = blocks_.data();
-  const sdem::BarrierCoulombPhys<double>* phys = phys_.data();
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : overflow)
   for (long c = 0; c < nChunks; ++c) {
-    std::vector<MpContact<double>>& list = chunkContacts_[c];
+    std::vector<MpContact<T>>& list = side.chunkContacts[c];
     list.clear();
-    auto sink = [&list](const MpContact<double>& ct) { list.push_back(ct); };
+    auto sink = [&list](const MpContact<T>& ct) { list.push_back(ct); };
     int over = 0;
     for (long p = c * kChunk; p < std::min(n, (c + 1) * kChunk); ++p) {
       int bad = -1;
-      if (coupleParticle(static_cast<int>(p), P, B, S, phys, in.bins, H, in.dt, sink, &bad, &over) != kCoupleOk) {
+      if (coupleParticle(static_cast<int>(p), P, B, S, phys, in.bins, H, dt, sink, &bad, &over) != kCoupleOk) {
 #pragma omp critical(mpsdem_bad)
         if (p < firstBad) {
           firstBad = p;
@@ -276,10 +345,10 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, CouplingStepOutput& out
     return;
   }
   auto add = [](double* slot, double value) { *slot += value; };
-  for (const auto& list : chunkContacts_)
-    for (const MpContact<double>& ct : list) {
+  for (const auto& list : side.chunkContacts)
+    for (const MpContact<T>& ct : list) {
       addBlockShare(ct, B[ct.block], out.sums.data(), add);
-      out.minParticleStep = std::min(out.minParticleStep, particleStepBound(ct));
+      out.minParticleStep = std::min(out.minParticleStep, static_cast<double>(particleStepBound(ct)));
     }
 }
 

@@ -1,6 +1,8 @@
 // MpSdemCoupling: contact between the material points of an MPM solver and the blocks of an
 // SdemEngine (paper §2.3, Eqs 12–18), on the backend the solver runs on (CPU, or CUDA with
-// no host round trip of particle data).
+// no host round trip of particle data), in the solver's precision: a float solver's particles
+// meet float copies of the shapes, blocks and pair physics (the CUDA float path's formulas,
+// also on the CPU), while the block sums accumulate in double on both.
 //
 // Each step (computeForces):
 //  1. blocks in: pose, velocity of every SDEM body (block index = SdemEngine body index);
@@ -79,9 +81,9 @@ class MpSdemCoupling {
   void setDissipation(double friction, double damping);  // continue counters after a restart
 
   // ---- checkpoint of the tangential histories (CPU backend): per particle `slots` keys and
-  // 3 x slots xi values.
+  // 3 x slots xi values (a float run's converted to double).
   const std::vector<long long>& historyKeys() const { return key_; }
-  const std::vector<double>& historyXi() const { return xi_; }
+  std::vector<double> historyXi() const;
   void setHistories(const std::vector<long long>& keys, const std::vector<double>& xi);
 
   // Bin edge of the broad phase [m] (set on the first step from the grid spacing).
@@ -90,7 +92,17 @@ class MpSdemCoupling {
  private:
   void syncBlocks();
   void buildBins(const mpm::MpmParams& grid);
-  void runCpu(const CouplingStepInput& in, CouplingStepOutput& out);
+  // What the CPU loop writes in precision T: the tangential xi of the histories (3 x slots
+  // per particle, keys in key_) and the contacts of each particle chunk.
+  template <typename T>
+  struct HostSide {
+    std::vector<T> xi;
+    std::vector<std::vector<MpContact<T>>> chunkContacts;
+  };
+  template <typename T>
+  void runCpu(const CouplingStepInput& in, const sdem::ShapeTableView<T>& shapes, const BlockState<T>* blocks,
+              const sdem::BarrierCoulombPhys<T>* phys, HostSide<T>& side, CouplingStepOutput& out);
+  void syncFloatTables();
   const double* sums(int block, int offset) const;
 
   const sdem::SdemEngine& sdem_;
@@ -112,8 +124,14 @@ class MpSdemCoupling {
   std::vector<int> binStart_, binBlocks_, binCount_;
 
   std::vector<long long> key_;  // CPU histories
-  std::vector<double> xi_;
-  std::vector<std::vector<MpContact<double>>> chunkContacts_;
+  HostSide<double> hostDouble_;
+  HostSide<float> hostFloat_;
+  bool hostFloatRun_ = false;  // the last host step ran in float (hostFloat_.xi is current)
+  // Float copies for a float host solver: the shape table's real arrays (its index arrays are
+  // shared), the blocks and the pair physics of the step.
+  std::vector<float> vertexF_, faceNormalF_, faceOffsetF_, sweepRadiusF_, boundingRadiusF_;
+  std::vector<BlockState<float>> blocksF_;
+  std::vector<sdem::BarrierCoulombPhys<float>> physF_;
   std::unique_ptr<CouplingDeviceBackend> device_;
   mpm::Precision devicePrecision_ = mpm::Precision::Double;
 

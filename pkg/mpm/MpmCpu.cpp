@@ -9,22 +9,24 @@
 namespace mpmsdem {
 namespace mpm {
 
-void MpmCpu::State::resize(std::size_t n) {
-  for (auto& a : x) a.assign(n, 0.0);
-  for (auto& a : v) a.assign(n, 0.0);
-  for (auto& a : s) a.assign(n, 0.0);
-  J.assign(n, 1.0);
-  gdp.assign(n, 0.0);
+template <typename T>
+void MpmCpu<T>::State::resize(std::size_t n) {
+  for (auto& a : x) a.assign(n, T(0));
+  for (auto& a : v) a.assign(n, T(0));
+  for (auto& a : s) a.assign(n, T(0));
+  J.assign(n, T(1));
+  gdp.assign(n, T(0));
   phase.assign(n, 0);
 }
 
-MpmCpu::MpmCpu(const MpmParams& params)
+template <typename T>
+MpmCpu<T>::MpmCpu(const MpmParams& params)
     : params_(params),
-      grid_(makeGridConst<double>(params, 0.0)),
-      mat_(makeConstitutiveConst<double>(params.material)),
+      grid_(makeGridConst<T>(params, 0.0)),
+      mat_(makeConstitutiveConst<T>(params.material)),
       maxSpeedAllowed_(blowUpSpeed(params)) {
   nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
-  nodes_.assign(static_cast<std::size_t>(kGridComponents) * nNodes_, 0.0);
+  nodes_.assign(static_cast<std::size_t>(kGridComponents) * nNodes_, T(0));
   for (int d = 0; d < 3; ++d) blocks_[d] = params.cells[d] / 3 + 1;
   for (int bx = 0; bx < blocks_[0]; ++bx)
     for (int by = 0; by < blocks_[1]; ++by)
@@ -33,43 +35,50 @@ MpmCpu::MpmCpu(const MpmParams& params)
   blockStart_.assign(static_cast<std::size_t>(blocks_[0]) * blocks_[1] * blocks_[2] + 1, 0);
 }
 
-void MpmCpu::setParticles(const ParticleSet& ps) {
+template <typename T>
+void MpmCpu<T>::setParticles(const ParticleSet& ps) {
   const double meanMass = validateParticles(params_, ps);
-  grid_.massEps = 1e-12 * meanMass;
+  grid_.massEps = static_cast<T>(1e-12 * meanMass);
   n_ = ps.size();
   for (auto& st : state_) st.resize(n_);
   cur_ = 0;
   State& s = state_[0];
-  mass_ = ps.mass;
-  vol0_ = ps.volume0;
+  mass_.assign(ps.mass.begin(), ps.mass.end());
+  vol0_.assign(ps.volume0.begin(), ps.volume0.end());
   maxSpeed_ = 0;
   for (std::size_t p = 0; p < n_; ++p) {
     for (int d = 0; d < 3; ++d) {
-      s.x[d][p] = ps.x[3 * p + d];
-      s.v[d][p] = ps.v[3 * p + d];
+      s.x[d][p] = static_cast<T>(ps.x[3 * p + d]);
+      s.v[d][p] = static_cast<T>(ps.v[3 * p + d]);
     }
-    for (int k = 0; k < 6; ++k) s.s[k][p] = ps.stress[6 * p + k];
-    s.J[p] = ps.J[p];
-    s.gdp[p] = ps.gammaDotP.empty() ? 0.0 : ps.gammaDotP[p];
+    for (int k = 0; k < 6; ++k) s.s[k][p] = static_cast<T>(ps.stress[6 * p + k]);
+    s.J[p] = static_cast<T>(ps.J[p]);
+    s.gdp[p] = ps.gammaDotP.empty() ? T(0) : static_cast<T>(ps.gammaDotP[p]);
     s.phase[p] = ps.phase.empty() ? static_cast<std::uint8_t>(kPhaseElastic) : ps.phase[p];
-    const double sp = std::sqrt(s.v[0][p] * s.v[0][p] + s.v[1][p] * s.v[1][p] + s.v[2][p] * s.v[2][p]);
-    maxSpeed_ = std::max(maxSpeed_, sp);
+    const double vx = s.v[0][p], vy = s.v[1][p], vz = s.v[2][p];
+    maxSpeed_ = std::max(maxSpeed_, std::sqrt(vx * vx + vy * vy + vz * vz));
   }
   hasFext_ = false;
-  if (!ps.fext.empty()) setExternalForces(ps.fext);
+  // All-zero forces (every seeded set has them) load as none: P2G adds the same +0 either way,
+  // and no force buffer is held until a coupling opens one.
+  if (std::any_of(ps.fext.begin(), ps.fext.end(), [](double f) { return f != 0; }))
+    setExternalForces(ps.fext);
+  else
+    for (auto& a : fext_) std::vector<T>().swap(a);
   order_.assign(n_, 0);
   blockOf_.assign(n_, 0);
 }
 
-void MpmCpu::getParticles(ParticleSet& out) {
+template <typename T>
+void MpmCpu<T>::getParticles(ParticleSet& out) {
   const State& s = state_[cur_];
   out.x.resize(3 * n_);
   out.v.resize(3 * n_);
   out.stress.resize(6 * n_);
-  out.mass = mass_;
-  out.volume0 = vol0_;
-  out.J = s.J;
-  out.gammaDotP = s.gdp;
+  out.mass.assign(mass_.begin(), mass_.end());
+  out.volume0.assign(vol0_.begin(), vol0_.end());
+  out.J.assign(s.J.begin(), s.J.end());
+  out.gammaDotP.assign(s.gdp.begin(), s.gdp.end());
   out.phase = s.phase;
   out.fext.assign(3 * n_, 0.0);
   for (std::size_t p = 0; p < n_; ++p) {
@@ -82,7 +91,8 @@ void MpmCpu::getParticles(ParticleSet& out) {
   }
 }
 
-void MpmCpu::setExternalForces(const std::vector<double>& f) {
+template <typename T>
+void MpmCpu<T>::setExternalForces(const std::vector<double>& f) {
   if (f.size() != 3 * n_) {
     std::ostringstream os;
     os << "3 x numParticles = " << 3 * n_ << " values";
@@ -92,20 +102,21 @@ void MpmCpu::setExternalForces(const std::vector<double>& f) {
   for (std::size_t p = 0; p < n_; ++p) {
     for (int d = 0; d < 3; ++d) {
       if (!std::isfinite(f[3 * p + d])) throwParameter("externalForces[" + std::to_string(3 * p + d) + "]", f[3 * p + d], "N", "finite");
-      fext_[d][p] = f[3 * p + d];
+      fext_[d][p] = static_cast<T>(f[3 * p + d]);
     }
   }
   hasFext_ = true;
 }
 
-ParticleView MpmCpu::openForceBuffer() {
+template <typename T>
+ParticleView MpmCpu<T>::openForceBuffer() {
   ParticleView v;
-  v.precision = Precision::Double;
+  v.precision = kPrecision;
   v.device = false;
   v.n = n_;
   const State& s = state_[cur_];
   for (int d = 0; d < 3; ++d) {
-    fext_[d].assign(n_, 0.0);
+    fext_[d].assign(n_, T(0));
     v.x[d] = s.x[d].data();
     v.v[d] = s.v[d].data();
     v.force[d] = fext_[d].data();
@@ -117,9 +128,11 @@ ParticleView MpmCpu::openForceBuffer() {
   return v;
 }
 
-double MpmCpu::stableTimeStep() { return params_.cfl * params_.dx / (pWaveSpeed(params_.material) + maxSpeed_); }
+template <typename T>
+double MpmCpu<T>::stableTimeStep() { return params_.cfl * params_.dx / (pWaveSpeed(params_.material) + maxSpeed_); }
 
-std::size_t MpmCpu::memoryBytes() const {
+template <typename T>
+std::size_t MpmCpu<T>::memoryBytes() const {
   std::size_t b = 0;
   auto add = [&b](const auto& v) { b += v.capacity() * sizeof(typename std::decay_t<decltype(v)>::value_type); };
   for (const auto& st : state_) {
@@ -141,9 +154,10 @@ std::size_t MpmCpu::memoryBytes() const {
   return b;
 }
 
-ParticleIn<double> MpmCpu::input() const {
+template <typename T>
+ParticleIn<T> MpmCpu<T>::input() const {
   const State& s = state_[cur_];
-  ParticleIn<double> in;
+  ParticleIn<T> in;
   for (int d = 0; d < 3; ++d) {
     in.x[d] = s.x[d].data();
     in.v[d] = s.v[d].data();
@@ -156,9 +170,10 @@ ParticleIn<double> MpmCpu::input() const {
   return in;
 }
 
-ParticleOut<double> MpmCpu::output() {
+template <typename T>
+ParticleOut<T> MpmCpu<T>::output() {
   State& s = state_[1 - cur_];
-  ParticleOut<double> out;
+  ParticleOut<T> out;
   for (int d = 0; d < 3; ++d) {
     out.x[d] = s.x[d].data();
     out.v[d] = s.v[d].data();
@@ -170,17 +185,18 @@ ParticleOut<double> MpmCpu::output() {
   return out;
 }
 
-void MpmCpu::scatter(double dt, const ParticleIn<double>& in) {
+template <typename T>
+void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
   const long n = static_cast<long>(n_);
   const std::size_t nBlocks = blockStart_.size() - 1;
-  // Bin the particles by the 3x3x3 block of their stencil base node.
+  // Bin the particles by the 3x3x3 block of their stencil base node, computed in T exactly as
+  // Stencil::compute does.
 #pragma omp parallel for schedule(static)
   for (long p = 0; p < n; ++p) {
+    T g[3];
+    gridCoordinate(in, static_cast<int>(p), grid_, g);
     int b[3];
-    for (int d = 0; d < 3; ++d) {
-      const double g = (in.x[d][p] - grid_.origin[d]) * grid_.invDx;
-      b[d] = static_cast<int>(std::floor(g - 0.5)) / 3;  // base >= 1 inside the admissible box
-    }
+    for (int d = 0; d < 3; ++d) b[d] = static_cast<int>(hdFloor(g[d] - T(0.5))) / 3;  // base >= 1 inside the admissible box
     blockOf_[p] = (b[0] * blocks_[1] + b[1]) * blocks_[2] + b[2];
   }
   std::fill(blockStart_.begin(), blockStart_.end(), 0);
@@ -190,9 +206,9 @@ void MpmCpu::scatter(double dt, const ParticleIn<double>& in) {
     std::vector<int> fill(blockStart_.begin(), blockStart_.end() - 1);
     for (long p = 0; p < n; ++p) order_[fill[blockOf_[p]]++] = static_cast<int>(p);
   }
-  double* gridData = nodes_.data();
+  T* gridData = nodes_.data();
   const int nN = nNodes_;
-  auto add = [gridData, nN](int node, double m, const Vec3T<double>& pOld, const Vec3T<double>& pNew) {
+  auto add = [gridData, nN](int node, T m, const Vec3T<T>& pOld, const Vec3T<T>& pNew) {
     gridData[node] += m;
     gridData[nN + node] += pOld.x;
     gridData[2 * nN + node] += pOld.y;
@@ -213,24 +229,26 @@ void MpmCpu::scatter(double dt, const ParticleIn<double>& in) {
   }
 }
 
-void MpmCpu::step(double dt) {
+template <typename T>
+void MpmCpu<T>::step(double dt) {
   if (steps_ % 100 == 0) checkTimeStep(dt);
-  const ParticleIn<double> in = input();
-  const ParticleOut<double> out = output();
+  const T dtT = static_cast<T>(dt);
+  const ParticleIn<T> in = input();
+  const ParticleOut<T> out = output();
   const long nN = nNodes_;
-  double* gridData = nodes_.data();
+  T* gridData = nodes_.data();
 #pragma omp parallel for schedule(static)
-  for (long i = 0; i < kGridComponents * nN; ++i) gridData[i] = 0.0;
-  scatter(dt, in);
-  const GridConst<double> g = grid_;
+  for (long i = 0; i < kGridComponents * nN; ++i) gridData[i] = T(0);
+  scatter(dtT, in);
+  const GridConst<T> g = grid_;
   if (hooks_.empty()) {
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < nN; ++i) gridNodeUpdate(static_cast<int>(i), gridData, nNodes_, g, dt);
+    for (long i = 0; i < nN; ++i) gridNodeUpdate(static_cast<int>(i), gridData, nNodes_, g, dtT);
   } else {
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < nN; ++i) gridNodeVelocity(static_cast<int>(i), gridData, nNodes_, g, dt);
+    for (long i = 0; i < nN; ++i) gridNodeVelocity(static_cast<int>(i), gridData, nNodes_, g, dtT);
     GridView view = gridViewFrame(dt);
-    view.precision = Precision::Double;
+    view.precision = kPrecision;
     view.device = false;
     view.mass = gridData;
     for (int d = 0; d < 3; ++d) view.v[d] = gridData + (4 + d) * nN;
@@ -239,24 +257,24 @@ void MpmCpu::step(double dt) {
     for (long i = 0; i < nN; ++i) gridNodeWalls(static_cast<int>(i), gridData, nNodes_, g);
   }
 
-  StepConst<double> sc;
-  sc.dt = dt;
-  sc.alpha = params_.flipAlpha;
-  sc.maxSpeed = maxSpeedAllowed_;
+  StepConst<T> sc;
+  sc.dt = dtT;
+  sc.alpha = static_cast<T>(params_.flipAlpha);
+  sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
   sc.mat = mat_;
   const long n = static_cast<long>(n_);
   long firstBad = n;
-  double vmax = 0;
+  T vmax = 0;
 #pragma omp parallel for schedule(static) reduction(min : firstBad) reduction(max : vmax)
   for (long p = 0; p < n; ++p) {
-    const G2PResult<double> r = g2pParticle(static_cast<int>(p), in, out, gridData, nNodes_, g, sc);
+    const G2PResult<T> r = g2pParticle(static_cast<int>(p), in, out, gridData, nNodes_, g, sc);
     if (!r.ok && p < firstBad) firstBad = p;
     if (r.speed > vmax) vmax = r.speed;
   }
   if (firstBad < n) {
     const long p = firstBad;
     std::ostringstream os;
-    os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s): particle " << p
+    os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name() << "): particle " << p
        << " has a non-finite state, a speed above " << maxSpeedAllowed_
        << " m/s (1e3 x P-wave speed) or a volume ratio J outside [" << kMinJ << ", " << kMaxJ
        << "] (crushed or torn apart: no granular material does that; a step too large for the loading?): x = ("
@@ -271,6 +289,9 @@ void MpmCpu::step(double dt) {
   time_ += dt;
   ++steps_;
 }
+
+template class MpmCpu<double>;
+template class MpmCpu<float>;
 
 }  // namespace mpm
 }  // namespace mpmsdem

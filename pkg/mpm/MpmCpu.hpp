@@ -1,4 +1,6 @@
-// CPU backend of the MPM solver: double precision, OpenMP.
+// CPU backend of the MPM solver, OpenMP, in double or float (T): "cpu-double", "cpu-float".
+// Both run the shared stage functions of MpmKernelsCommon.hpp, as CUDA does in the same
+// precisions, so the float formulas of the CUDA backend run and are tested here too.
 //
 // P2G without races: each step the particles are binned (counting sort, O(N)) into blocks
 // of 3x3x3 stencil-base cells. A particle whose stencil base lies in block b touches nodes
@@ -10,8 +12,23 @@
 // The mutable particle state is double-buffered: a step reads buffer `cur_` and writes the
 // other one, and only swaps when every particle passed the NaN/blow-up check. After a
 // RuntimeFailure, getParticles() returns the state at the start of the failed step.
+//
+// Precision: every particle and grid array is T. In float the grid sums (P2G node mass and
+// momentum) stay float too: a node sums the shares of the 27 ppc points around it, so its
+// round-off stays below 27 ppc eps/2 (1e-5 at 8 points per cell, ~1e-6 typically) and does not
+// grow with the run; momentum is conserved to that per step; the scatter order is fixed; and
+// a double grid would cost 19 B/particle more at 1e6 points, past the 150 B/particle of
+// float. The sums over a whole run accumulate in double: the clock (MpmSolver::time()), the
+// gate's impulse (Gate), the coupling's block sums (MpSdemCoupling); in float a step's
+// increment would be rounded to 1.2e-7 of the total every step.
+//
+// Memory per particle (memoryBytes()): the state x, v, stress, J, gammaDotP (14 T) and phase
+// (1 byte), twice, plus mass and volume0: 30 T + 2 bytes (242 B in double, 122 B in float);
+// the binning arrays (block id and sorted order, 8 B); external forces, 3 T, once set or
+// opened by a coupling; and the grid, 7 T per node.
 #pragma once
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "mpm/MpmKernelsCommon.hpp"
@@ -20,12 +37,17 @@
 namespace mpmsdem {
 namespace mpm {
 
+template <typename T>
 class MpmCpu : public MpmSolver {
+  static_assert(std::is_same_v<T, double> || std::is_same_v<T, float>, "MpmCpu runs in double or float");
+
  public:
+  static constexpr Precision kPrecision = std::is_same_v<T, float> ? Precision::Float : Precision::Double;
+
   // params must have been validated (makeSolver does it).
   explicit MpmCpu(const MpmParams& params);
 
-  std::string name() const override { return "cpu-double"; }
+  std::string name() const override { return kPrecision == Precision::Float ? "cpu-float" : "cpu-double"; }
   const MpmParams& params() const override { return params_; }
   void setParticles(const ParticleSet& particles) override;
   void getParticles(ParticleSet& out) override;
@@ -38,27 +60,27 @@ class MpmCpu : public MpmSolver {
 
  private:
   struct State {
-    std::vector<double> x[3], v[3], s[6], J, gdp;
+    std::vector<T> x[3], v[3], s[6], J, gdp;
     std::vector<std::uint8_t> phase;
     void resize(std::size_t n);
   };
-  ParticleIn<double> input() const;
-  ParticleOut<double> output();
-  void scatter(double dt, const ParticleIn<double>& in);
+  ParticleIn<T> input() const;
+  ParticleOut<T> output();
+  void scatter(T dt, const ParticleIn<T>& in);
 
   MpmParams params_;
-  GridConst<double> grid_{};
-  ConstitutiveConst<double> mat_{};
+  GridConst<T> grid_{};
+  ConstitutiveConst<T> mat_{};
   double maxSpeedAllowed_;
   std::size_t n_ = 0;
   int nNodes_;
   State state_[2];
   int cur_ = 0;
-  std::vector<double> mass_, vol0_;
-  std::vector<double> fext_[3];
+  std::vector<T> mass_, vol0_;
+  std::vector<T> fext_[3];
   bool hasFext_ = false;
-  std::vector<double> nodes_;  // kGridComponents * nNodes_
-  double maxSpeed_ = 0;        // largest particle speed of the current state [m/s]
+  std::vector<T> nodes_;  // kGridComponents * nNodes_
+  double maxSpeed_ = 0;   // largest particle speed of the current state [m/s]
   // P2G colouring
   int blocks_[3];
   std::vector<int> colourBlocks_[8];  // block ids of each colour
@@ -66,6 +88,9 @@ class MpmCpu : public MpmSolver {
   std::vector<int> order_;            // particle ids sorted by block
   std::vector<int> blockOf_;          // block id of each particle
 };
+
+extern template class MpmCpu<double>;
+extern template class MpmCpu<float>;
 
 }  // namespace mpm
 }  // namespace mpmsdem

@@ -69,8 +69,8 @@ std::unique_ptr<MpmSolver> withGate(std::unique_ptr<MpmSolver> solver, const Gat
 std::unique_ptr<MpmSolver> makeSolver(const MpmParams& params, Backend backend, Precision precision) {
   validate(params);
   if (backend == Backend::Cpu) {
-    if (precision != Precision::Double) throwParameter("precision", "Float", "", "Double for the CPU backend");
-    return withGate(std::make_unique<MpmCpu>(params), params.gate);
+    if (precision == Precision::Float) return withGate(std::make_unique<MpmCpu<float>>(params), params.gate);
+    return withGate(std::make_unique<MpmCpu<double>>(params), params.gate);
   }
 #ifdef MPMSDEM_WITH_CUDA
   if (!cudaAvailable()) throw RuntimeFailure("backend = Cuda: this build has the CUDA backend but no CUDA device was found");

@@ -314,11 +314,6 @@ std::array<double, 3> materialRegionHi(const MpmParams& p) {
   return hi;
 }
 
-void validateBackend(Backend backend, Precision precision) {
-  if (backend == Backend::Cpu && precision == Precision::Float)
-    throwParameter("run.precision", "float", "", "\"double\" with backend \"cpu\" (float runs on \"cuda\" only)");
-}
-
 MpmScene parseScene(const std::string& jsonText, const std::string& source, const std::string& baseDir) {
   json root;
   try {
@@ -347,7 +342,6 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   parseMaterial(root, s.params);
   parseParticles(root, s, baseDir);
   parseRun(root, s.run);
-  validateBackend(s.run.backend, s.run.precision);
   s.sourceJson = root.dump();
   return s;
 }

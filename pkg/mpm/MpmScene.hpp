@@ -77,7 +77,7 @@
 //     "output_dir": "out",          created when absent
 //     "vtk": "raw",                 VTK particle files: "raw" (appended binary), "ascii", "none"
 //     "backend": "cpu",             "cpu" or "cuda"
-//     "precision": "double"         "double" or "float" (float needs "cuda")
+//     "precision": "double"         "double" or "float", on either backend
 //   }
 // }
 //
@@ -149,9 +149,6 @@ MpmScene loadScene(const std::string& path);
 // Memory of the grid and the particles a scene needs, for an out-of-memory message that names
 // grid.cells and the particle count (the solver's own estimate of its arrays).
 std::string sceneSizeDescription(const MpmScene& scene);
-
-// Check a backend/precision pair (after command-line overrides): float needs CUDA.
-void validateBackend(Backend backend, Precision precision);
 
 // Lower and upper corners of the region open to material points (inside the wall layers).
 std::array<double, 3> materialRegionLo(const MpmParams& params);

@@ -1,5 +1,5 @@
 // The MPM solver interface. Two backends implement it with the same formulas
-// (shared __host__ __device__ functions): CPU (double, OpenMP) and CUDA (float or double).
+// (shared __host__ __device__ functions): CPU (OpenMP) and CUDA, each in float or double.
 #pragma once
 #include <memory>
 #include <sstream>

@@ -12,7 +12,7 @@ Main entry points (all SI units):
 * :class:`SdemEngine` — creates YADE bodies with sphero-polyhedral shapes and computes their
   contact forces every step (put ``engine.runner`` between ``ForceResetter`` and
   ``NewtonIntegrator`` in ``O.engines``).
-* :class:`MpmEngine` — the MPM granular-flow solver (CPU double, or CUDA float/double).
+* :class:`MpmEngine` — the MPM granular-flow solver (CPU or CUDA, float or double).
 * :class:`CoupledEngine` — the two coupled every step (paper §2.3): material points push the
   blocks and the blocks push back; ``coupled.runner`` goes between ``ForceResetter`` and
   ``NewtonIntegrator``.

@@ -49,8 +49,8 @@ class MpmEngine:
         given the flow [N s]. None (default): no gate.
     :param flipAlpha: FLIP/PIC blend α of Eq 4, in [0, 1] (default 0.99).
     :param cfl: CFL number of :meth:`stableTimeStep`, in (0, 1].
-    :param backend: ``"cpu"`` (double, OpenMP) or ``"cuda"``; :param precision: ``"double"``
-        or ``"float"`` (CUDA only).
+    :param backend: ``"cpu"`` (OpenMP) or ``"cuda"``; :param precision: ``"double"``
+        or ``"float"``, on either backend.
     :param output: folder for ``mpm.h5`` (append-only HDF5 series + snapshots) and VTK
         files (``particles.pvd`` for ParaView); None: no files.
     :param outputEvery: snapshot interval [s] (with ``output``).

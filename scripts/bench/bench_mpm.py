@@ -1,13 +1,15 @@
 #!/usr/bin/env python3
-"""MPM throughput benchmark: CPU (double, OpenMP) against CUDA (float and double).
+"""MPM throughput benchmark: CPU (OpenMP) and CUDA, each in double and float.
 
 Runs `mpmsdem-run --bench` on generated dam-break scenes (a block of glass beads, 8 material
 points per cell, twice as long as high and as wide as high, released in a box four block
 lengths long) at several particle counts and prints particle-updates per second
 (particles x steps / wall time of the step loop), bytes per particle (solver memory /
-particles) and the GPU/CPU ratio at the same size.
+particles), the float/double ratio of each backend and the GPU/CPU ratio (against
+cpu-double) at the same size.
 
     scripts/bench/bench_mpm.py                       # CPU 1e5, 1e6; CUDA 1e5..1e7 if a GPU is found
+    scripts/bench/bench_mpm.py --threads 1 --cpu-precisions double,float
     scripts/bench/bench_mpm.py --cuda --markdown docs/benchmarks.md
     scripts/bench/bench_mpm.py --cpu-sizes 1e5,1e6,1e7 --threads 2
 
@@ -102,19 +104,28 @@ def run_one(exe, scene_path, backend, precision, steps, threads, timeout):
     return json.loads(lines[-1])
 
 
+def parse_precisions(text):
+    """'double,float' -> ['double', 'float']"""
+    names = [s.strip() for s in text.split(",") if s.strip()]
+    if not names or any(n not in ("double", "float") for n in names):
+        raise argparse.ArgumentTypeError("precisions must be double and/or float, comma-separated")
+    return names
+
+
 def steps_for(particles, target_updates, min_steps, max_steps):
     return int(min(max_steps, max(min_steps, math.ceil(target_updates / particles))))
 
 
 def format_table(rows):
     head = ["size", "backend", "precision", "particles", "steps", "seconds",
-            "updates/s", "bytes/particle", "GPU/CPU"]
+            "updates/s", "bytes/particle", "float/double", "GPU/CPU"]
     body = []
     for r in rows:
         body.append([
             "%.0e" % r["size"], r["backend"], r["precision"], str(r["particles"]), str(r["steps"]),
             "%.3g" % r["seconds"], "%.3e" % r["particle_updates_per_s"],
             "%.0f" % r["bytes_per_particle"],
+            ("%.2f" % r["float_ratio"]) if r.get("float_ratio") is not None else "",
             ("%.1f" % r["ratio"]) if r.get("ratio") is not None else "n/a"])
     return render_table(head, body)
 
@@ -143,6 +154,8 @@ def main():
     gpu.add_argument("--cuda", action="store_true", help="run the CUDA backend (default: when nvidia-smi finds a GPU)")
     gpu.add_argument("--no-cuda", action="store_true", help="never run the CUDA backend")
     ap.add_argument("--no-cpu", action="store_true", help="skip the CPU runs (no GPU/CPU ratio then)")
+    ap.add_argument("--cpu-precisions", type=parse_precisions, default=parse_precisions("double,float"),
+                    help="precisions of the CPU runs (default double,float; the GPU/CPU ratio needs double)")
     ap.add_argument("--threads", type=int, default=2, help="OMP_NUM_THREADS for CPU runs (default 2)")
     ap.add_argument("--cpu-updates", type=float, default=3e7,
                     help="particle updates per CPU run; steps = this / particles (default 3e7)")
@@ -166,7 +179,7 @@ def main():
 
     plan = []  # (size, backend, precision)
     if not args.no_cpu:
-        plan += [(n, "cpu", "double") for n in args.cpu_sizes]
+        plan += [(n, "cpu", p) for n in args.cpu_sizes for p in args.cpu_precisions]
     if use_cuda:
         for n in args.sizes:
             plan += [(n, "cuda", "float"), (n, "cuda", "double")]
@@ -197,14 +210,17 @@ def main():
             r["size"] = size
             rows.append(r)
 
-    cpu_rate = {r["size"]: r["particle_updates_per_s"] for r in rows if r["backend"] == "cpu"}
+    rate = {(r["size"], r["backend"], r["precision"]): r["particle_updates_per_s"] for r in rows}
     for r in rows:
-        r["ratio"] = (r["particle_updates_per_s"] / cpu_rate[r["size"]]
-                      if r["backend"] == "cuda" and r["size"] in cpu_rate else None)
+        double = rate.get((r["size"], r["backend"], "double"))
+        r["float_ratio"] = r["particle_updates_per_s"] / double if r["precision"] == "float" and double else None
+        cpu = rate.get((r["size"], "cpu", "double"))
+        r["ratio"] = r["particle_updates_per_s"] / cpu if r["backend"] == "cuda" and cpu else None
     text, md = format_table(rows)
     print()
     print(text, end="")
-    print("(CPU runs: OMP_NUM_THREADS=%d; GPU/CPU: against cpu-double at the same size)" % args.threads)
+    print("(CPU runs: OMP_NUM_THREADS=%d; float/double: against the same backend in double; "
+          "GPU/CPU: against cpu-double at the same size)" % args.threads)
 
     if args.json:
         with open(args.json, "w") as f:

@@ -187,6 +187,26 @@ def test_cuda_backend_without_a_gpu_is_a_clear_error():
         mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [10, 10, 10]}, material=MATERIAL,
                           particles=[{"lo": [0.03, 0.03, 0.03], "hi": [0.05, 0.05, 0.05]}],
                           backend="cuda", precision="float")
-    with pytest.raises(ValueError, match="precision"):  # float is a CUDA-only precision
-        mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [10, 10, 10]}, material=MATERIAL,
-                          particles=[{"lo": [0.03, 0.03, 0.03], "hi": [0.05, 0.05, 0.05]}], precision="float")
+
+
+def test_float_on_the_cpu_backend_falls_freely_to_float_round_off():
+    mpm = blob(precision="float")
+    assert mpm.solver.name == "cpu-float"
+    O.engines = [mpm.runner]
+    O.dt = 0.5 * mpm.stableTimeStep()
+    p0 = mpm.particles()
+    assert np.array_equal(p0["x"].astype(np.float32), p0["x"])  # held in float
+    n_steps = 100
+    mpmsdem.run(n_steps, mpm)
+    p1 = mpm.particles()
+    M = p0["mass"].sum()
+    assert p1["mass"].sum() == M
+    t = n_steps * O.dt
+    dP = (p1["mass"][:, None] * p1["v"]).sum(axis=0) - (p0["mass"][:, None] * p0["v"]).sum(axis=0)
+    # float round-off: each step leaves every particle velocity with a rounding of at most about
+    # eps/2 of |v| <= 0.55 m/s, of the same sign for all in the worst case (the blob moves as one):
+    # |dP - M g t| <= steps (eps/2) M vmax, 6e-5 of M g t (measured 1.3e-6)
+    eps = float(np.finfo(np.float32).eps)
+    vmax = np.sqrt((p1["v"] ** 2).sum(axis=1)).max()
+    tol = n_steps * 0.5 * eps * M * vmax
+    assert np.allclose(dP, [0.0, 0.0, -9.81 * M * t], rtol=0, atol=tol)

@@ -11,13 +11,15 @@
 #include "mpm/MpmSolver.hpp"
 #include "mpm/Seeding.hpp"
 
+#include "AgreementHelpers.hpp"
+
 using namespace mpmsdem;
 using namespace mpmsdem::mpm;
 
 namespace {
 
 // A 6 cm cube of material resting on a no-slip floor under gravity g [m/s^2] (downward).
-std::unique_ptr<MpmSolver> cubeUnderGravity(double g) {
+std::unique_ptr<MpmSolver> cubeUnderGravity(double g, Precision precision) {
   MpmParams prm;
   prm.dx = 0.01;
   prm.cells = {12, 12, 14};
@@ -25,7 +27,7 @@ std::unique_ptr<MpmSolver> cubeUnderGravity(double g) {
   prm.walls[4].friction = -1;
   ParticleSet ps;
   seedBox(prm, {0.03, 0.03, 0.02}, {0.09, 0.09, 0.08}, 8, ps);
-  auto solver = makeSolver(prm, Backend::Cpu, Precision::Double);
+  auto solver = makeSolver(prm, Backend::Cpu, precision);
   solver->setParticles(ps);
   return solver;
 }
@@ -36,13 +38,18 @@ double minJ(MpmSolver& s) {
   return *std::min_element(ps.J.begin(), ps.J.end());
 }
 
+// On the CPU backend in both precisions.
+class MpmReliability : public ::testing::TestWithParam<Precision> {};
+INSTANTIATE_TEST_SUITE_P(CpuBothPrecisions, MpmReliability, ::testing::Values(Precision::Double, Precision::Float),
+                         agreement::paramName);
+
 }  // namespace
 
-TEST(MpmReliability, ParticlesCrushedByAHugeGravityStopTheRunNamingJ) {
+TEST_P(MpmReliability, ParticlesCrushedByAHugeGravityStopTheRunNamingJ) {
   // 1e5 m/s^2 on a 6 cm column of E = 1 MPa: the base would be compressed by rho g h / E ~ 10,
   // far beyond anything the material can take; the auto step follows the wave speed, not
   // this loading, and the particles flatten (J -> 1e-13 before the bound existed).
-  auto solver = cubeUnderGravity(1e5);
+  auto solver = cubeUnderGravity(1e5, GetParam());
   std::string message;
   long steps = 0;
   try {
@@ -60,9 +67,9 @@ TEST(MpmReliability, ParticlesCrushedByAHugeGravityStopTheRunNamingJ) {
   EXPECT_GE(minJ(*solver), kMinJ);
 }
 
-TEST(MpmReliability, OrdinaryGravityKeepsJNearOne) {
+TEST_P(MpmReliability, OrdinaryGravityKeepsJNearOne) {
   // The bound never stops a sound run: the same cube under 9.81 m/s^2 settles with J ~ 1.
-  auto solver = cubeUnderGravity(9.81);
+  auto solver = cubeUnderGravity(9.81, GetParam());
   for (int i = 0; i < 300; ++i) solver->step(0.9 * solver->stableTimeStep());
   EXPECT_GT(minJ(*solver), 0.9);
 }

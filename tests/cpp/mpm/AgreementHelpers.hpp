@@ -1,0 +1,79 @@
+// Agreement of two MPM runs of one scene (CPU against CUDA, float against double): the same
+// particles stepped by two solvers, compared field by field against the field's own scale.
+#pragma once
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <ostream>
+#include <string>
+
+#include "mpm/MpmSolver.hpp"
+
+namespace mpmsdem {
+namespace mpm {
+
+// GoogleTest prints a Precision parameter by its name.
+inline void PrintTo(Precision p, std::ostream* os) { *os << (p == Precision::Float ? "float" : "double"); }
+
+namespace agreement {
+
+// Unit round-off of a precision: the relative spacing of its numbers near 1.
+inline double roundOff(Precision p) {
+  return p == Precision::Float ? std::numeric_limits<float>::epsilon() : std::numeric_limits<double>::epsilon();
+}
+
+// Test name suffix of a precision parameter: "double", "float".
+inline std::string paramName(const ::testing::TestParamInfo<Precision>& info) { return ::testing::PrintToString(info.param); }
+
+// Largest differences between two states of the same particles (same order).
+struct Agreement {
+  double position = 0;     // max |x_a - x_b| [m]
+  double velocity = 0;     // max |v_a - v_b| [m/s]
+  double stress = 0;       // max |sigma_a - sigma_b| [Pa]
+  double stressScale = 0;  // max |sigma_a| [Pa]
+  double J = 0;            // max |J_a - J_b|
+};
+
+inline Agreement compare(const ParticleSet& a, const ParticleSet& b) {
+  Agreement r;
+  auto maxDiff = [](const std::vector<double>& u, const std::vector<double>& w) {
+    double m = u.size() == w.size() ? 0.0 : std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < std::min(u.size(), w.size()); ++i) m = std::max(m, std::abs(u[i] - w[i]));
+    return m;
+  };
+  r.position = maxDiff(a.x, b.x);
+  r.velocity = maxDiff(a.v, b.v);
+  r.stress = maxDiff(a.stress, b.stress);
+  r.J = maxDiff(a.J, b.J);
+  for (double s : a.stress) r.stressScale = std::max(r.stressScale, std::abs(s));
+  return r;
+}
+
+// Steps `a` and `b` from the same particles `steps` times with dt; their final states.
+inline void runPair(MpmSolver& a, MpmSolver& b, const ParticleSet& particles, double dt, int steps, ParticleSet& outA,
+                    ParticleSet& outB) {
+  a.setParticles(particles);
+  b.setParticles(particles);
+  for (int i = 0; i < steps; ++i) {
+    a.step(dt);
+    b.step(dt);
+  }
+  a.getParticles(outA);
+  b.getParticles(outB);
+}
+
+// Positions within tol times the length scale of the domain [m], stresses within tol times
+// the largest stress of the reference run `a` (which must carry stress: > minStress Pa).
+inline void expectAgree(const ParticleSet& a, const ParticleSet& b, double tol, double length, double minStress,
+                        const std::string& what) {
+  const Agreement r = compare(a, b);
+  EXPECT_LT(r.position, tol * length) << what << ": positions";
+  EXPECT_LT(r.stress, tol * r.stressScale) << what << ": stresses (scale " << r.stressScale << " Pa)";
+  EXPECT_GT(r.stressScale, minStress) << what << ": the reference run carries no stress";
+}
+
+}  // namespace agreement
+}  // namespace mpm
+}  // namespace mpmsdem
