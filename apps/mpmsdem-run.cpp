@@ -34,7 +34,9 @@
 //                   of the MPM step and the contact step (CoupledWorld::criticalTimeStep);
 //                   --restart is refused (block states and contact histories are not in
 //                   mpm.h5).
-// Progress lines go to stdout (stderr with --bench) every 5 % of the run.
+// Progress lines go to stdout (stderr with --bench) every 5 % of the run. A coupled run ends
+// with the split of the step loop's wall time (MPM step, MP-block coupling, blocks, the rest),
+// also in --bench's JSON as "stage_seconds".
 // Exit status: 0 done; 2 bad parameters or command line (a scene too large for the memory
 // included); 3 run failure (NaN, blow-up, step
 // above the stable one), after writing the last good state as a final snapshot; 1 other
@@ -230,6 +232,17 @@ double progressFraction(const MpmSolver& solver, const RunSettings& run, long ma
                       : solver.time() / run.duration;
 }
 
+// Where the step loop's wall time went in a coupled run: "MPM step 71.2 %, ...".
+std::string stageSplit(const coupling::CoupledWorld& world, double loopSeconds) {
+  const auto& s = world.stageSeconds();
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "MPM step %.1f %%, MP-block coupling %.1f %%, blocks %.1f %%, time-step control and outputs %.1f %%",
+                100 * s.mpm / loopSeconds, 100 * s.coupling / loopSeconds, 100 * s.blocks / loopSeconds,
+                100 * (loopSeconds - s.mpm - s.coupling - s.blocks) / loopSeconds);
+  return buf;
+}
+
 int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
   MpmSolver& solver = st.solver;
   const std::size_t n = solver.numParticles();
@@ -257,6 +270,10 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
                         {"bytes_per_particle", n ? double(solver.memoryBytes()) / n : 0.0},
                         {"threads", omp_get_max_threads()},
                         {"blocks", st.coupled ? st.coupled->world.engine.numBodies() : 0}};
+  if (st.coupled) {
+    const auto& s = st.coupled->stageSeconds();
+    out["stage_seconds"] = {{"mpm", s.mpm}, {"coupling", s.coupling}, {"blocks", s.blocks}};
+  }
   std::cout << out.dump() << std::endl;
   return 0;
 }
@@ -410,7 +427,9 @@ class OutputRun {
       solver_.getParticles(state_);
       writeSnapshot();
     }
-    std::printf("mpmsdem-run: done, t = %.6g s, %ld steps, %.3g s wall\n", solver_.time(), solver_.steps(), since(t0));
+    const double loop = since(t0);
+    std::printf("mpmsdem-run: done, t = %.6g s, %ld steps, %.3g s wall\n", solver_.time(), solver_.steps(), loop);
+    if (stepper_.coupled) std::printf("mpmsdem-run: step loop: %s\n", stageSplit(*stepper_.coupled, loop).c_str());
     return 0;
   }
 

@@ -4,6 +4,8 @@
     yade -n -x examples/flume_block.py [--full] [--out DIR] [--duration T] [--dx DX]
                                        [--backend cpu|cuda] [--precision double|float]
     /usr/bin/python3 examples/flume_block.py ...          (same, without YADE's GUI shell)
+    /usr/bin/python3 examples/flume_block.py --full --driver-scene flume.json   (scene for mpmsdem-run)
+    /usr/bin/python3 examples/flume_block.py --from-driver DIR   (plot a finished mpmsdem-run from DIR)
 
 Default: a coarse version (dx = 0.02 m, 12,000 material points, a few minutes on 2 cores).
 ``--full``: the paper's resolution (dx = 0.01 m, 8 points per cell, 96,000 material points).
@@ -17,7 +19,6 @@ model of Eq 20 using α_f = 10.8 Fr^−1.3; F_f/F_t; rotation) and ``summary.jso
 """
 import argparse
 import json
-import math
 import os
 import sys
 import time
@@ -44,6 +45,9 @@ def parse(argv):
     ap.add_argument("--driver-scene", metavar="JSON", default=None,
                     help="write the coupled scene (with the cube, same O.dt) for the C++ driver mpmsdem-run to "
                          "JSON and exit (e.g. to run it on a GPU machine: mpmsdem-run JSON --backend cuda)")
+    ap.add_argument("--from-driver", metavar="DIR", default=None,
+                    help="plot and summarise a finished mpmsdem-run of this scene from its output folder DIR "
+                         "(coupled.h5) instead of running; the Eq 20 line needs the free flow and is left out")
     return ap.parse_known_args(argv)[0]
 
 
@@ -79,12 +83,12 @@ def coupled(dx, duration, a, out, verbose=True):
     return scene
 
 
-def plot(scene, ff, path):
+def plot(s, title, ff, path):
+    """The four panels of Figs 8–9 from a block series ``s`` (keys of :meth:`Flume.series`)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
-    s = scene.series(0)
     t = s["t"]
     fig, ax = plt.subplots(2, 2, figsize=(11, 7))
     ax[0, 0].plot(t, s["travel"], label="travel distance S_b [m]")
@@ -114,8 +118,7 @@ def plot(scene, ff, path):
     ax[1, 1].plot(t, s["rotation"])
     ax[1, 1].set_xlabel("t [s]")
     ax[1, 1].set_ylabel("rotation [deg]")
-    fig.suptitle("Copper cube in a glass-bead flume (paper §3.2), dx = %g m, %d material points"
-                 % (scene.dx, scene.mpm.numParticles))
+    fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
 
@@ -131,8 +134,56 @@ def driverScene(dx, duration, a):
           "mpmsdem-run %s" % (dx, scene.mpm.numParticles, O.dt, duration, a.driver_scene, a.driver_scene))
 
 
+def driverSeries(folder):
+    """The cube's series from the coupled.h5 that ``mpmsdem-run`` wrote in ``folder`` (the
+    first block that moves; the bed is fixed), with the keys of :meth:`Flume.series`."""
+    import h5py
+    import numpy as np
+    path = os.path.join(folder, "coupled.h5")
+    if not os.path.exists(path):
+        raise ValueError("--from-driver %s: no coupled.h5 there (the output folder of mpmsdem-run)" % folder)
+    with h5py.File(path, "r") as f:
+        g = f["series"]
+        t = g["time"][:]
+        pos, vel = g["pos"][:], g["vel"][:]
+        moving = [k for k in range(pos.shape[1] // 3) if np.ptp(pos[:, 3 * k:3 * k + 3], axis=0).max() > 0]
+        if not moving:
+            raise ValueError("--from-driver %s: no block moved in coupled.h5" % folder)
+        c = slice(3 * moving[0], 3 * moving[0] + 3)
+        s = {"t": t, "travel": pos[:, c][:, 0] - pos[0, c][0], "vx": vel[:, c][:, 0],
+             "Ft": g["flow_force"][:, c][:, 0], "Ff": g["face_force"][:, c][:, 0], "Fe": g["edge_force"][:, c][:, 0],
+             "rotation": np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))}
+        scene = json.loads(f.attrs["parameters"])
+    return s, scene
+
+
+def fromDriver(a):
+    """Plot and summarise a driver run of this scene (e.g. one made on a GPU machine)."""
+    import numpy as np
+    s, scene = driverSeries(a.from_driver)
+    w = max(1, int(round(0.01 / np.median(np.diff(s["t"])))))
+    smooth = np.convolve(s["Ft"], np.ones(w) / w, mode="same")
+    j = int(np.argmax(smooth))
+    summary = {"dx": scene["grid"]["dx"], "duration": float(s["t"][-1]), "travel": float(s["travel"][-1]),
+               "peak_force": float(smooth[j]), "peak_time": float(s["t"][j]), "rotation_deg": float(s["rotation"][-1]),
+               "dt": scene["run"].get("dt"), "flip_alpha": scene.get("flip_alpha", 0.99),
+               "flip_reference_dt": scene.get("flip_reference_dt", 0)}
+    with open(os.path.join(a.from_driver, "summary.json"), "w") as f:
+        json.dump(summary, f, indent=1)
+    if not a.no_plots:
+        plot(s, "Copper cube in a glass-bead flume (paper §3.2), dx = %g m, mpmsdem-run" % summary["dx"], None,
+             os.path.join(a.from_driver, "flume_block.png"))
+    print("copper cube after %.2f s (driver run in %s): travel distance %.4f m, rotation %.1f deg; peak downstream "
+          "impact force %.3f N (10 ms mean) at %.3f s; summary.json and flume_block.png written there"
+          % (summary["duration"], a.from_driver, summary["travel"], summary["rotation_deg"], summary["peak_force"],
+             summary["peak_time"]))
+    return summary
+
+
 def main(argv):
     a = parse(argv)
+    if a.from_driver:
+        return fromDriver(a)
     dx, duration = settings(a)
     if a.driver_scene:
         return driverScene(dx, duration, a)
@@ -157,7 +208,8 @@ def main(argv):
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     if not a.no_plots:
-        plot(scene, ff, os.path.join(out, "flume_block.png"))
+        plot(scene.series(0), "Copper cube in a glass-bead flume (paper §3.2), dx = %g m, %d material points"
+             % (scene.dx, scene.mpm.numParticles), ff, os.path.join(out, "flume_block.png"))
     print("copper cube after %.2f s: travel distance %.4f m, rotation %.1f deg; peak downstream impact force "
           "%.3f N (10 ms mean) at %.3f s; Eq 20: %.3f N" % (duration, summary["travel"], summary["rotation_deg"],
                                                             peak, tPeak, summary["eq20_force"]))

@@ -1,6 +1,7 @@
 #include "coupling/CoupledWorld.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -13,7 +14,13 @@ CoupledWorld::CoupledWorld(std::unique_ptr<mpm::MpmSolver> solver) : solver_(std
   if (!solver_) throw ParameterError("CoupledWorld: solver = null: must be an MPM solver");
 }
 
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+}  // namespace
+
 void CoupledWorld::step(double dt) {
+  const auto t0 = Clock::now();
   coupling.computeForces(*solver_, dt);
   const int n = world.engine.numBodies();
   blockForce_.resize(n);
@@ -22,8 +29,14 @@ void CoupledWorld::step(double dt) {
     blockForce_[i] = coupling.force(i);
     blockTorque_[i] = coupling.torque(i);
   }
+  const auto t1 = Clock::now();
   world.step(dt, &blockForce_, &blockTorque_);
+  const auto t2 = Clock::now();
   solver_->step(dt);
+  const auto t3 = Clock::now();
+  stageSeconds_.coupling += seconds(t0, t1);
+  stageSeconds_.blocks += seconds(t1, t2);
+  stageSeconds_.mpm += seconds(t2, t3);
 }
 
 double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& coupling) {

@@ -35,9 +35,19 @@ class CoupledWorld {
   // and its rotational counterpart, times the SDEM time-step safety factor.
   double criticalTimeStep();
 
+  // Wall time spent in each stage of step() since construction [s], for benchmarks: the
+  // MP–block contacts, the blocks (block–block contacts and the rigid-body update), the MPM
+  // step. Both backends' steps return when their work is done (the CUDA step waits for its
+  // failure flags), so the stages do not absorb each other's device time.
+  struct StageSeconds {
+    double coupling = 0, blocks = 0, mpm = 0;
+  };
+  const StageSeconds& stageSeconds() const { return stageSeconds_; }
+
  private:
   std::unique_ptr<mpm::MpmSolver> solver_;
   std::vector<Vec3> blockForce_, blockTorque_;
+  StageSeconds stageSeconds_;
 };
 
 // The contact part of the coupled critical step (without the MPM CFL limit), shared with the

@@ -259,7 +259,7 @@ void MpmCpu<T>::step(double dt) {
 
   StepConst<T> sc;
   sc.dt = dtT;
-  sc.alpha = static_cast<T>(params_.flipAlpha);
+  sc.alpha = static_cast<T>(params_.flipAlphaFor(dt));
   sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
   sc.mat = mat_;
   const long n = static_cast<long>(n_);

@@ -326,7 +326,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   }
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
   // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
-  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "cfl", "walls", "gate", "material", "particles",
+  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "flip_reference_dt", "cfl", "walls", "gate", "material", "particles",
                        "run", "blocks", "block_materials"});
   if (root.contains("description") && !root.at("description").is_string())
     throwParameter("description", root.at("description").dump(), "", "a string");
@@ -335,6 +335,8 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   parseGravity(root, s.params);
   s.params.flipAlpha = optNumber(root, "", "flip_alpha", s.params.flipAlpha);
   checkRange("flip_alpha", s.params.flipAlpha, "", 0, false, 1, false);
+  s.params.flipReferenceDt = optNumber(root, "", "flip_reference_dt", s.params.flipReferenceDt);
+  checkRange("flip_reference_dt", s.params.flipReferenceDt, "s", 0, false, kInf, true);
   s.params.cfl = optNumber(root, "", "cfl", s.params.cfl);
   checkRange("cfl", s.params.cfl, "", 0, true, 1, false);
   parseWalls(root, s.params);

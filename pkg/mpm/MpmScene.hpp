@@ -16,6 +16,10 @@
 //                                   inclined by incline_deg in [0, 90) about y, descending
 //                                   toward +x: gravity = g (sin a, 0, -cos a); g >= 0.
 //   "flip_alpha": 0.99,             FLIP/PIC blend, in [0, 1]
+//   "flip_reference_dt": 0,         [s] >= 0: when > 0 a step of length dt blends with
+//                                   flip_alpha^(dt / flip_reference_dt), so the PIC damping per
+//                                   second does not depend on dt (MpmParams::flipReferenceDt);
+//                                   0 (default): flip_alpha per step, as in Eq 4
 //   "cfl": 0.3,                     CFL number of the stable-step estimate, in (0, 1]
 //   "walls": {"-x": "free", "+x": "free", "-y": "free", "+y": "free", "-z": "free", "+z": "free"},
 //                                   each wall: "free" (free slip, the default), "noslip",

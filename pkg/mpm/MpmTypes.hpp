@@ -3,6 +3,7 @@
 // backend may run in float and converts at upload/download.
 #pragma once
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <sstream>
 #include <string>
@@ -53,6 +54,16 @@ struct MpmParams {
   std::array<int, 3> cells{10, 10, 10};    // number of cells per axis (nodes = cells+1), >= 4
   std::array<double, 3> gravity{0, 0, -9.81};  // [m/s^2]; incline: rotate gravity, not the grid
   double flipAlpha = 0.99;                 // alpha, FLIP/PIC blend, Eq 4, in [0, 1]
+  // Reference step of the blend [s], >= 0 (default 0: alpha applies per step, as in Eq 4).
+  // Eq 4 blends once per step, so the PIC part, which damps the velocity field below the grid
+  // scale, acts (1 - alpha)/dt times per second: halving dt doubles that damping and slows a
+  // flow (measured on the paper's §3.2 flume: docs/physics.md). With flipReferenceDt > 0 the
+  // step uses alpha^(dt / flipReferenceDt), the same damping per second whatever dt is.
+  double flipReferenceDt = 0;
+  // The blend of a step of length dt [s] (see flipReferenceDt).
+  double flipAlphaFor(double dt) const {
+    return flipReferenceDt > 0 ? std::pow(flipAlpha, dt / flipReferenceDt) : flipAlpha;
+  }
   double cfl = 0.3;                        // CFL number for the time-step estimate, in (0, 1]
   std::array<WallSpec, 6> walls{};         // box walls of the grid domain
   GateSpec gate{};                         // release gate (default: none)

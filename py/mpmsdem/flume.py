@@ -74,6 +74,8 @@ class Flume:
         (default 0: smooth)}``. The column settles behind it until t_open; no material above
         the edge passes it (the grid resolves the edge: the opening the flow sees lags the
         edge by about 1.5 dx). None (default): no gate, the column starts free at t = 0.
+    :param flipReferenceDt: Δt_ref of the FLIP/PIC blend [s] (see :class:`MpmEngine`; 0: the
+        blend α per step, Eq 4);
     :param backend, precision: MPM backend; :param output: folder for all outputs (None: none),
         :param outputEvery: record interval [s]; :param vtkEvery: ParaView interval [s].
     """
@@ -81,7 +83,7 @@ class Flume:
     def __init__(self, length=1.8, width=0.2, inclineDeg=10.0, columnLength=0.3, columnHeight=0.2, dx=0.01, ppc=8,
                  granular=None, basalFriction=0.21, sideWallFriction=0.0, blocks=(), bedSweep=0.005,
                  bedBarrierStiffness=1e4, dtFactor=0.5, backend="cpu", precision="double", output=None,
-                 outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None):
+                 outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None, flipReferenceDt=0.0):
         if gate is not None and (not isinstance(gate, dict) or set(gate) - {"speed", "open_at", "friction"}):
             raise ValueError("gate = %r: must be None or a dict with keys among speed [m/s], open_at [s], friction"
                              % (gate,))
@@ -95,10 +97,11 @@ class Flume:
         if n ** 3 != ppc:
             raise ValueError("ppc = %r: must be a perfect cube (1, 8, 27, ...)" % (ppc,))
         rp = (3.0 * dx ** 3 / ppc / (4.0 * math.pi)) ** (1.0 / 3.0)  # Eq 13
-        # Grid aligned so that the lowest material points touch the bed's rounded surface; the
+        # The bed's outer surface is z = 0 (its core top at -bedSweep). Grid aligned so that the
+        # lowest material points, at zLow + dx/(2n), touch it (centre R_p0 above it); the
         # grid's own bottom wall lies two cells lower, under the bed, so that only the SDEM bed
         # (through the coupling pair) holds the flow and gives it its basal friction.
-        zLow = bedSweep + rp - dx / (2.0 * n)
+        zLow = rp - dx / (2.0 * n)
         height = columnHeight + max(b.z + 2 * b.half[2] for b in blocks) if blocks else columnHeight
         cells = [int(math.ceil(length / dx)) + 4, int(round(width / dx)) + 4,
                  int(math.ceil((max(height, columnHeight) + 0.05) / dx)) + 6]
@@ -129,7 +132,7 @@ class Flume:
             gravity={"g": 9.81, "incline_deg": inclineDeg},
             walls={"-x": "free", "+x": "free", "-y": sideWallFriction, "+y": sideWallFriction, "-z": "free",
                    "+z": "free"},
-            backend=backend, precision=precision, verbose=verbose,
+            backend=backend, precision=precision, verbose=verbose, flipReferenceDt=flipReferenceDt,
             gate=None if gate is None else dict(gate, x=columnLength, bottom=0.0),
             output=os.path.join(output, "mpm") if output else None, outputEvery=vtkEvery or outputEvery)
         self.coupled = CoupledEngine(self.sdem, self.mpm, pairs=pairs, output=output, outputEvery=outputEvery,

@@ -48,6 +48,9 @@ class MpmEngine:
         It acts on the grid before the walls; ``solver.gateImpulse()`` is the impulse it has
         given the flow [N s]. None (default): no gate.
     :param flipAlpha: FLIP/PIC blend α of Eq 4, in [0, 1] (default 0.99).
+    :param flipReferenceDt: Δt_ref [s] ≥ 0 (default 0: α per step, Eq 4 as written). With
+        Δt_ref > 0 a step of length Δt blends with α^(Δt/Δt_ref), so the PIC damping per
+        second, and with it the flow, does not change with the time step (docs/physics.md).
     :param cfl: CFL number of :meth:`stableTimeStep`, in (0, 1].
     :param backend: ``"cpu"`` (OpenMP) or ``"cuda"``; :param precision: ``"double"``
         or ``"float"``, on either backend.
@@ -59,10 +62,10 @@ class MpmEngine:
 
     def __init__(self, grid, material, particles, gravity=(0, 0, -9.81), walls=None, flipAlpha=0.99, cfl=0.3,
                  backend="cpu", precision="double", output=None, outputEvery=None, label="mpm", verbose=True,
-                 gate=None):
+                 gate=None, flipReferenceDt=0.0):
         scene = {"grid": grid, "material": material, "particles": list(particles),
                  "gravity": list(gravity) if not isinstance(gravity, dict) else gravity,
-                 "flip_alpha": flipAlpha, "cfl": cfl,
+                 "flip_alpha": flipAlpha, "flip_reference_dt": flipReferenceDt, "cfl": cfl,
                  "run": {"duration": 1.0, "backend": backend, "precision": precision}}
         if walls:
             scene["walls"] = walls

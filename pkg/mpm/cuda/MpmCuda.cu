@@ -261,7 +261,7 @@ void MpmCuda<T>::step(double dt) {
   }
   StepConst<T> sc;
   sc.dt = dtT;
-  sc.alpha = static_cast<T>(params_.flipAlpha);
+  sc.alpha = static_cast<T>(params_.flipAlphaFor(dt));
   sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
   sc.mat = mat_;
   if (n > 0) {
