@@ -43,7 +43,8 @@ struct BinGridView {
 };
 
 // Tangential history of a particle's contacts: `slots` entries per particle, each a key
-// (block << 32 | feature kind << 28 | feature index, or -1 when empty) and xi [m]. Indexed
+// (block << 32 | feature kind << 28 | feature index, or -1 when empty) and xi, the elastic
+// tangential force F_el [N] of sdem::barrierCoulomb (not a displacement). Indexed
 // by particle id, so it follows the particle as long as particles keep their ids.
 template <typename T>
 struct HistoryView {

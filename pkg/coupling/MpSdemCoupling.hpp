@@ -81,7 +81,7 @@ class MpSdemCoupling {
   void setDissipation(double friction, double damping);  // continue counters after a restart
 
   // ---- checkpoint of the tangential histories (CPU backend): per particle `slots` keys and
-  // 3 x slots xi values (a float run's converted to double).
+  // 3 x slots xi values, elastic tangential forces [N] (a float run's converted to double).
   const std::vector<long long>& historyKeys() const { return key_; }
   std::vector<double> historyXi() const;
   void setHistories(const std::vector<long long>& keys, const std::vector<double>& xi);
@@ -92,7 +92,7 @@ class MpSdemCoupling {
  private:
   void syncBlocks();
   void buildBins(const mpm::MpmParams& grid);
-  // What the CPU loop writes in precision T: the tangential xi of the histories (3 x slots
+  // What the CPU loop writes in precision T: the tangential forces xi of the histories (3 x slots
   // per particle, keys in key_) and the contacts of each particle chunk.
   template <typename T>
   struct HostSide {

@@ -7,12 +7,14 @@
 // ~ 3 k_c delta^2 / R near first touch and unbounded as delta -> R. Tangent stiffness
 // k_n = dF_n/ddelta. Optional normal dashpot c_n = 2 zeta_n sqrt(m_eff k_n); the total normal
 // force is clamped at >= 0 (no adhesion).
-// Tangential: incremental spring with history xi (Eq 9): each step xi is rotated into the
-// current tangent plane keeping its length, incremented by v_t dt, and
-//   F_t = -K_t xi - c_t v_t,  K_t = k_n / (2 (1 + nu)) (Eq 11),  c_t = 2 zeta_t sqrt(m_eff K_t).
-// If |K_t xi| > mu F_n the contact slips: xi is rescaled so that K_t |xi| = mu F_n and
-// F_t = -K_t xi (the dashpot is off while slipping); otherwise the damped force is capped at
-// mu F_n in magnitude. Forces are those exerted ON B (A receives the opposite).
+// Tangential: incremental (hypoelastic) spring whose history is the elastic tangential force
+// F_el (Eq 9): each step F_el is rotated into the current tangent plane keeping its length and
+// incremented by -K_t v_t dt, K_t = k_n / (2 (1 + nu)) (Eq 11), so a change of k_n with delta
+// alone leaves the force unchanged (storing a displacement instead would make it jump and create
+// energy). F_t = F_el - c_t v_t, c_t = 2 zeta_t sqrt(m_eff K_t). If |F_el| > mu F_n the contact
+// slips: F_el is rescaled to mu F_n and F_t = F_el (the dashpot is off while slipping);
+// otherwise the damped force is capped at mu F_n in magnitude. Spring energy |F_el|^2 / (2 K_t).
+// Forces are those exerted ON B (A receives the opposite).
 #pragma once
 #include "sdem/Ig2_SpheroPolyhedron_SpheroPolyhedron.hpp"
 #include "sdem/Ip2_SdemMat_SdemMat_BarrierPhys.hpp"
@@ -22,7 +24,7 @@ namespace sdem {
 
 // State kept by a contact across steps.
 struct ContactHistory {
-  Vec3 xi = Vec3::Zero();  // cumulative elastic tangential displacement [m] (Eq 9)
+  Vec3 xi = Vec3::Zero();  // elastic tangential force F_el on B [N] (Eq 9), not a displacement
 };
 
 // What the law produced for one contact in one step.
@@ -32,7 +34,7 @@ struct LawResult {
   Real normalStiffness = 0;         // k_n = dF_n/ddelta [N/m]
   Real tangentialStiffness = 0;     // K_t [N/m]
   Real barrierEnergy = 0;           // b(d) [J]
-  Real springEnergy = 0;            // K_t |xi|^2 / 2 after the step [J]
+  Real springEnergy = 0;            // |F_el|^2 / (2 K_t) after the step [J]
   Real frictionDissipation = 0;     // energy dissipated by slip in this step [J]
   Real dampingDissipation = 0;      // energy dissipated by the dashpots in this step [J]
   bool sliding = false;             // the Coulomb cap was reached
@@ -50,7 +52,8 @@ class Law2_SdemGeom_BarrierPhys_Coulomb {
   // Overlap delta at which F_n(delta) = force [m] (force >= 0), by safeguarded Newton.
   static Real overlapForForce(Real kc, Real R, Real force);
 
-  // Rotate xi into the plane perpendicular to the unit normal n, keeping |xi|.
+  // Rotate the history (elastic tangential force) into the plane perpendicular to the unit
+  // normal n, keeping its length.
   static void rotateHistory(Vec3& xi, const Vec3& n);
 
   // Apply the law to contact `g` between bodies with ids idA, idB (used in error messages).

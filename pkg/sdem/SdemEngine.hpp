@@ -61,7 +61,7 @@ struct ContactRecord {
 // Tangential history of one contact, for checkpoints.
 struct ContactHistoryEntry {
   ContactKey key;
-  Vec3 xi = Vec3::Zero();  // [m]
+  Vec3 xi = Vec3::Zero();  // elastic tangential force F_el [N]
 };
 
 class SdemEngine {
@@ -140,7 +140,7 @@ class SdemEngine {
 
   // ---- energies [J]
   Real barrierEnergy() const { return barrierEnergy_; }          // sum of b(d), current
-  Real tangentialEnergy() const { return springEnergy_; }        // sum of K_t |xi|^2 / 2, current
+  Real tangentialEnergy() const { return springEnergy_; }        // sum of |F_el|^2 / (2 K_t), current
   Real frictionDissipation() const { return frictionWork_; }     // cumulative slip work
   Real dampingDissipation() const { return dampingWork_; }       // cumulative dashpot work
 

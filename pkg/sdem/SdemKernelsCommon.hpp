@@ -192,36 +192,42 @@ struct BarrierCoulombResult {
   Vec3T<T> tangential;    // F_t [N], perpendicular to n
   T kn, kt;               // tangent normal stiffness, tangential stiffness [N/m]
   T barrierEnergy;        // b(d) [J]
-  T springEnergy;         // K_t |xi|^2 / 2 after the step [J]
+  T springEnergy;         // |F_el|^2 / (2 K_t) after the step [J]
   T frictionWork;         // slip work of this step [J]
   T dampingWork;          // dashpot work of this step [J]
   bool sliding;
 };
 
-// Rotate xi into the plane perpendicular to the unit normal n, keeping its length (Eq 9).
+// Rotate the tangential history h (the elastic tangential force) into the plane perpendicular
+// to the unit normal n, keeping its length (Eq 9).
 template <typename T>
-MPM_HD_INLINE void rotateTangentialHistory(T xi[3], const Vec3T<T>& n) {
-  const Vec3T<T> x{xi[0], xi[1], xi[2]};
+MPM_HD_INLINE void rotateTangentialHistory(T h[3], const Vec3T<T>& n) {
+  const Vec3T<T> x{h[0], h[1], h[2]};
   const T len = norm(x);
   if (len == T(0)) return;
   const Vec3T<T> proj = x - mpm::dot(x, n) * n;
   const T plen = norm(proj);
   const T scale = plen > T(1e-12) * len ? len / plen : T(0);
-  xi[0] = proj.x * scale;
-  xi[1] = proj.y * scale;
-  xi[2] = proj.z * scale;
+  h[0] = proj.x * scale;
+  h[1] = proj.y * scale;
+  h[2] = proj.z * scale;
 }
 
 // Barrier normal force (Eq 10) with an optional dashpot, clamped at >= 0, and the incremental
-// Coulomb tangential spring (Eqs 9, 11): xi rotated into the tangent plane, incremented by
-// v_t dt; F_t = -K_t xi - c_t v_t capped at mu F_n; while slipping xi is rescaled to the cap and
-// the dashpot is off. Forces act on the body whose velocity relative to the other is relVel
+// Coulomb tangential spring (Eqs 9, 11). The history is the elastic tangential force F_el [N],
+// not a displacement: K_t follows the steep barrier stiffness k_n(delta), so F_t = -K_t xi with
+// a stored xi would jump whenever delta changes under a held xi, a force change with no
+// tangential motion that creates energy (a block ratchets down an incline it should stick on).
+// Updating the force by K_t(delta) v_t dt (hypoelastic) leaves F_el untouched while nothing
+// slides. Each step F_el is rotated into the tangent plane, F_el -= K_t v_t dt; above mu F_n it
+// is rescaled to the cap (slip, dashpot off), else the dashpot -c_t v_t is added and the total
+// capped at mu F_n. Forces act on the body whose velocity relative to the other is relVel
 // (n points from the other body towards it). meff [kg] sets the dashpots. The caller checks
 // 0 < delta < R.
 template <typename T>
 MPM_HD_INLINE BarrierCoulombResult<T> barrierCoulomb(const BarrierCoulombPhys<T>& ph, T R, T delta,
                                                      const Vec3T<T>& n, const Vec3T<T>& relVel, T meff, T dt,
-                                                     T xi[3]) {
+                                                     T fEl[3]) {
   BarrierCoulombResult<T> r;
   r.kn = barrierStiffness(ph.kc, R, delta);
   r.kt = r.kn / (T(2) * (T(1) + ph.nu));
@@ -233,19 +239,21 @@ MPM_HD_INLINE BarrierCoulombResult<T> barrierCoulomb(const BarrierCoulombPhys<T>
   r.normalForce = fn > T(0) ? fn : T(0);
   r.dampingWork = (r.normalForce - fElastic) * -vn * dt;
   const Vec3T<T> vt = relVel - vn * n;
-  rotateTangentialHistory(xi, n);
-  for (int d = 0; d < 3; ++d) xi[d] += vt[d] * dt;
-  const Vec3T<T> x{xi[0], xi[1], xi[2]};
+  // Rotation keeps |F_el|: turning the contact plane does no work on the spring.
+  rotateTangentialHistory(fEl, n);
+  for (int d = 0; d < 3; ++d) fEl[d] -= r.kt * vt[d] * dt;
+  const Vec3T<T> fSpring{fEl[0], fEl[1], fEl[2]};
   const T cap = ph.mu * r.normalForce;
-  const Vec3T<T> fSpring = -r.kt * x;
   const T fSpringNorm = norm(fSpring);
   r.frictionWork = T(0);
   if (fSpringNorm > cap) {
     r.sliding = true;
     const T ratio = fSpringNorm > T(0) ? cap / fSpringNorm : T(0);
-    r.frictionWork = cap * norm(x) * (T(1) - ratio);
-    for (int d = 0; d < 3; ++d) xi[d] *= ratio;
-    r.tangential = Vec3T<T>{-r.kt * xi[0], -r.kt * xi[1], -r.kt * xi[2]};
+    // The part of the trial increment beyond the cap is slip: (|F_trial| - cap) / K_t of
+    // distance at the cap force.
+    r.frictionWork = r.kt > T(0) ? cap * (fSpringNorm - cap) / r.kt : T(0);
+    for (int d = 0; d < 3; ++d) fEl[d] *= ratio;
+    r.tangential = Vec3T<T>{fEl[0], fEl[1], fEl[2]};
   } else {
     r.sliding = false;
     const T ct = T(2) * ph.zetaT * mpm::hdSqrt(meff * r.kt);
@@ -255,7 +263,8 @@ MPM_HD_INLINE BarrierCoulombResult<T> barrierCoulomb(const BarrierCoulombPhys<T>
     r.tangential = ft;
     r.dampingWork += -mpm::dot(ft - fSpring, vt) * dt;
   }
-  r.springEnergy = T(0.5) * r.kt * (xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+  const T f2 = fEl[0] * fEl[0] + fEl[1] * fEl[1] + fEl[2] * fEl[2];
+  r.springEnergy = r.kt > T(0) ? f2 / (T(2) * r.kt) : T(0);
   return r;
 }
 

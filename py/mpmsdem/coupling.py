@@ -282,7 +282,7 @@ class CoupledEngine:
         self.sdem.save(prefix + ".sdem.json")
         self.mpm.save(prefix + ".mpm.h5")
         mats = {k: m for m, k in self.sdem._materials}
-        data = {"format": "mpmsdem-coupled-1", "time": O.time, "iter": O.iter, "mpmTime": self.mpm.time,
+        data = {"format": "mpmsdem-coupled-2", "time": O.time, "iter": O.iter, "mpmTime": self.mpm.time,
                 "mpmSteps": self.mpm.solver.steps, "dtCheck": self.dtCheck, "historySlots": slots,
                 "pairs": [{"material": _matDictOf(mats[k]), "pair": p} for k, p in sorted(self._pairs.items())],
                 "historyKeys": base64.b64encode(keys).decode(), "historyXi": base64.b64encode(xi).decode(),
@@ -310,7 +310,13 @@ class CoupledEngine:
         from .sdem import SdemEngine, _material
         with open(prefix + ".coupled.json") as f:
             data = json.load(f)
-        if data.get("format") != "mpmsdem-coupled-1":
+        if data.get("format") == "mpmsdem-coupled-1":
+            # Format 1 stored the tangential history as a displacement [m]; it is now the elastic
+            # tangential force [N], so the old values cannot be reinterpreted.
+            raise ValueError("prefix = %r: %s.coupled.json is an mpmsdem-coupled-1 checkpoint, whose tangential "
+                             "histories are displacements; this version stores elastic tangential forces and "
+                             "cannot restore it: run the scene again from the start" % (prefix, prefix))
+        if data.get("format") != "mpmsdem-coupled-2":
             raise ValueError("prefix = %r: %s.coupled.json is not an mpmsdem coupled checkpoint" % (prefix, prefix))
         with open(prefix + ".sdem.json") as f:
             sdemTime = json.load(f).get("time")

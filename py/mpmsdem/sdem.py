@@ -406,7 +406,7 @@ class SdemEngine:
         to go alongside ``O.save()``; restore with :meth:`SdemEngine.restore`."""
         hist = [[a, b, ka, kb, ia, ib, list(xi)] for (a, b, ka, kb, ia, ib, xi) in self._bridge.histories()]
         rolledBack = self._rolledBackAt is not None and self._rolledBackAt == O.iter
-        data = {"format": "mpmsdem-sdem-1", "dtCheck": self.dtCheck,
+        data = {"format": "mpmsdem-sdem-2", "dtCheck": self.dtCheck,
                 "timeStepSafety": self._bridge.timeStepSafety, "maxSpeed": self._bridge.maxSpeed,
                 "time": self._bridge.goodTime if rolledBack else O.time,
                 "frictionDissipation": self._bridge.frictionDissipation,
@@ -431,7 +431,13 @@ class SdemEngine:
         values."""
         with open(path) as f:
             data = json.load(f)
-        if data.get("format") != "mpmsdem-sdem-1":
+        if data.get("format") == "mpmsdem-sdem-1":
+            # Format 1 stored the tangential history as a displacement [m]; it is now the elastic
+            # tangential force [N], so the old values cannot be reinterpreted.
+            raise ValueError("path = %r: an mpmsdem-sdem-1 checkpoint, whose contact histories are tangential "
+                             "displacements; this version stores elastic tangential forces and cannot restore it: "
+                             "run the scene again from the start" % (path,))
+        if data.get("format") != "mpmsdem-sdem-2":
             raise ValueError("path = %r: not an mpmsdem SDEM checkpoint" % (path,))
         kw = {k: data[k] for k in ("dtCheck", "timeStepSafety", "maxSpeed") if k in data}
         kw.update(engineKw)

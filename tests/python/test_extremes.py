@@ -133,10 +133,6 @@ def test_cube_with_friction_one_sticks_on_a_30_degree_incline(ratio):
     assert xs <= x2 <= 3 * xs, (x2, xs)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "engine: at R = h/200 with the paper's elastic barrier (normalDamping 0) a cube with mu = 1 on a 30 degree "
-    "incline rocks with growing amplitude and walks 5.6 mm down the slope in 0.35 s, creating 0.08 J (2.8 % of "
-    "m g h); the same at dt 1e-5 s (not a time-step effect); with normalDamping 0.3 it sticks"))
 def test_cube_with_friction_one_sticks_with_the_elastic_barrier_at_small_radius():
     # The physics is that of the test above without normal damping: the total energy
     # (kinetic + gravity + barrier + tangential springs) plus the friction and damping work
