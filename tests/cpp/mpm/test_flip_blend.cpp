@@ -9,6 +9,8 @@
 #include "mpm/MpmSolver.hpp"
 #include "mpm/Seeding.hpp"
 
+#include "GranularColumn.hpp"
+
 using namespace mpmsdem;
 using namespace mpmsdem::mpm;
 
@@ -16,19 +18,7 @@ namespace {
 
 // A granular column collapsing on a rough base (quasi-2D, dx 1 cm, 4 points per cell).
 MpmParams collapse(double alpha, double referenceDt) {
-  MpmParams p;
-  p.dx = 0.01;
-  p.cells = {40, 5, 20};
-  p.material.youngModulus = 2e5;
-  p.material.poissonRatio = 0.3;
-  p.material.muS = 0.3819;
-  p.material.mu2 = 0.6435;
-  p.material.I0 = 0.278;
-  p.material.grainDiameter = 0.00053;
-  p.material.solidDensity = 2450;
-  p.material.density = 1550;
-  for (auto& w : p.walls) w.friction = 0;
-  p.walls[4].friction = 0.4;
+  MpmParams p = testing_scenes::granularColumnParams(0.01, {40, 5, 20}, 2e5);
   p.flipAlpha = alpha;
   p.flipReferenceDt = referenceDt;
   return p;

@@ -12,6 +12,7 @@
 #include "mpm/Seeding.hpp"
 
 #include "AgreementHelpers.hpp"
+#include "GranularColumn.hpp"
 
 using namespace mpmsdem;
 using namespace mpmsdem::mpm;
@@ -22,20 +23,8 @@ namespace {
 // the bulk density keeps it away from the discontinuous gasification switch, where two runs
 // that differ by round-off would part by a whole stress.
 MpmParams columnParams(std::array<int, 3> cells) {
-  MpmParams p;
-  p.dx = 0.01;
-  p.cells = cells;
-  p.material.youngModulus = 2e5;
-  p.material.poissonRatio = 0.3;
-  p.material.muS = 0.3819;
-  p.material.mu2 = 0.6435;
-  p.material.I0 = 0.278;
-  p.material.grainDiameter = 0.00053;
-  p.material.solidDensity = 2450;
-  p.material.density = 1550;
+  MpmParams p = testing_scenes::granularColumnParams(0.01, cells, 2e5);
   p.material.criticalDensity = 0.5 * p.material.density;
-  for (auto& w : p.walls) w.friction = 0;
-  p.walls[4].friction = 0.4;
   return p;
 }
 

@@ -12,6 +12,7 @@
 #include "mpm/Seeding.hpp"
 
 #include "AgreementHelpers.hpp"
+#include "GranularColumn.hpp"
 
 using namespace mpmsdem;
 using namespace mpmsdem::mpm;
@@ -27,24 +28,7 @@ std::array<double, 3> momentum(const ParticleSet& ps) {
   return m;
 }
 
-// Quasi-2D granular column (thin in y, one cell) on a frictional base, free-slip elsewhere.
-MpmParams columnParams(double dx, std::array<int, 3> cells, double E) {
-  MpmParams p;
-  p.dx = dx;
-  p.cells = cells;
-  p.material.youngModulus = E;
-  p.material.poissonRatio = 0.3;
-  // Dunatunga & Kamrin (2015) glass beads: mu_s = tan 20.9 deg, mu_2 = tan 32.76 deg.
-  p.material.muS = 0.3819;
-  p.material.mu2 = 0.6435;
-  p.material.I0 = 0.278;
-  p.material.grainDiameter = 0.00053;
-  p.material.solidDensity = 2450;
-  p.material.density = 1550;
-  for (auto& w : p.walls) w.friction = 0;
-  p.walls[4].friction = 0.4;  // base
-  return p;
-}
+using testing_scenes::granularColumnParams;
 
 }  // namespace
 
@@ -116,7 +100,7 @@ TEST_P(MpmSolverPhysics, HydrostaticColumnAtRest) {
   // 0.1 m wide, 0.2 m high column, one cell thick, dx = 0.02 m, 8 points per cell,
   // frictional base, free-slip sides: at rest sigma_zz = -rho_0 g (H - Z) at Lagrangian
   // height Z (weight of the material above; no side-wall friction so no Janssen effect).
-  MpmParams prm = columnParams(0.02, {9, 5, 16}, 1e6);
+  MpmParams prm = granularColumnParams(0.02, {9, 5, 16}, 1e6);
   prm.flipAlpha = 0.0;  // PIC damps the elastic oscillation of the settling column
   ParticleSet ps;
   const double z0 = 0.04, H = 0.2;
@@ -152,7 +136,7 @@ TEST_P(MpmSolverPhysics, ColumnCollapseRunout) {
   // 3.0, with a material-to-material spread of about +-20% around the fits in both papers.
   // Accepted band: [0.8 x 2.4, 1.2 x 3.0] = [1.92, 3.6].
   const double L = 0.08, H = 0.16, dx = 0.01;
-  MpmParams prm = columnParams(dx, {46, 5, 22}, 2e5);
+  MpmParams prm = granularColumnParams(dx, {46, 5, 22}, 2e5);
   ParticleSet ps;
   const double x0 = 2 * dx, z0 = 2 * dx;
   seedBox(prm, {x0, 0.02, z0}, {x0 + L, 0.03, z0 + H}, {2, 1, 2}, ps);
@@ -185,7 +169,7 @@ TEST_P(MpmSolverPhysics, ColumnCollapseRunout) {
 
 TEST(MpmSolver, CpuAndCudaAgree) {
   if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine: CPU-vs-CUDA check skipped";
-  MpmParams prm = columnParams(0.01, {20, 5, 22}, 2e5);
+  MpmParams prm = granularColumnParams(0.01, {20, 5, 22}, 2e5);
   prm.material.criticalDensity = 0.5 * prm.material.density;  // keep away from the (discontinuous) gasification switch
   ParticleSet ps;
   seedBox(prm, {0.02, 0.02, 0.02}, {0.10, 0.03, 0.18}, {2, 1, 2}, ps);
