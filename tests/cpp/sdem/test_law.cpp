@@ -8,6 +8,8 @@
 #include "sdem/Ip2_SdemMat_SdemMat_BarrierPhys.hpp"
 #include "sdem/Law2_SdemGeom_BarrierPhys_Coulomb.hpp"
 
+#include "LawGeometry.hpp"
+
 using namespace mpmsdem;
 using namespace mpmsdem::sdem;
 using Law = Law2_SdemGeom_BarrierPhys_Coulomb;
@@ -15,13 +17,7 @@ using Law = Law2_SdemGeom_BarrierPhys_Coulomb;
 namespace {
 const Real kc = 1e4, R = 0.01;  // paper's k_c; R = R_A + R_B for two 0.005 m sweep radii
 
-SdemGeom geomAlongZ(Real delta) {
-  SdemGeom g;
-  g.normal = Vec3::UnitZ();
-  g.overlap = delta;
-  g.distance = R - delta;
-  return g;
-}
+SdemGeom geomAlongZ(Real delta) { return testing_geometry::geomAlongZ(R, delta); }
 }  // namespace
 
 // F_n = -k_c delta [2 ln((R-delta)/R) - R/(R-delta) + 1], by hand with k_c = 1e4 N/m, R = 0.01 m:

@@ -7,6 +7,8 @@
 
 #include "sdem/Law2_SdemGeom_BarrierPhys_Coulomb.hpp"
 
+#include "LawGeometry.hpp"
+
 using namespace mpmsdem;
 using namespace mpmsdem::sdem;
 using Law = Law2_SdemGeom_BarrierPhys_Coulomb;
@@ -14,13 +16,7 @@ using Law = Law2_SdemGeom_BarrierPhys_Coulomb;
 namespace {
 const Real kc = 1e4, R = 0.01, nu = 0.25;
 
-SdemGeom geomAlongZ(Real delta) {
-  SdemGeom g;
-  g.normal = Vec3::UnitZ();
-  g.overlap = delta;
-  g.distance = R - delta;
-  return g;
-}
+SdemGeom geomAlongZ(Real delta) { return testing_geometry::geomAlongZ(R, delta); }
 
 Real tangentialStiffness(Real delta) { return Law::normalStiffness(kc, R, delta) / (2 * (1 + nu)); }
 
