@@ -27,12 +27,12 @@ MpmCpu<T>::MpmCpu(const MpmParams& params)
       maxSpeedAllowed_(blowUpSpeed(params)) {
   nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
   nodes_.assign(static_cast<std::size_t>(kGridComponents) * nNodes_, T(0));
-  for (int d = 0; d < 3; ++d) blocks_[d] = params.cells[d] / 3 + 1;
-  for (int bx = 0; bx < blocks_[0]; ++bx)
-    for (int by = 0; by < blocks_[1]; ++by)
-      for (int bz = 0; bz < blocks_[2]; ++bz)
-        colourBlocks_[(bx & 1) * 4 + (by & 1) * 2 + (bz & 1)].push_back((bx * blocks_[1] + by) * blocks_[2] + bz);
+  for (int d = 0; d < 3; ++d) {
+    blocks_[d] = params.cells[d] / 3 + 1;
+    tiles_[d] = (grid_.nodes[d] + 2) / 3;
+  }
   blockStart_.assign(static_cast<std::size_t>(blocks_[0]) * blocks_[1] * blocks_[2] + 1, 0);
+  tileMark_.assign(static_cast<std::size_t>(tiles_[0]) * tiles_[1] * tiles_[2], 0);
 }
 
 template <typename T>
@@ -151,6 +151,8 @@ std::size_t MpmCpu<T>::memoryBytes() const {
   add(order_);
   add(blockOf_);
   for (const auto& c : colourBlocks_) add(c);
+  add(activeTiles_);
+  add(tileMark_);
   return b;
 }
 
@@ -186,9 +188,9 @@ ParticleOut<T> MpmCpu<T>::output() {
 }
 
 template <typename T>
-void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
+void MpmCpu<T>::bin(const ParticleIn<T>& in) {
   const long n = static_cast<long>(n_);
-  const std::size_t nBlocks = blockStart_.size() - 1;
+  const int nBlocks = static_cast<int>(blockStart_.size()) - 1;
   // Bin the particles by the 3x3x3 block of their stencil base node, computed in T exactly as
   // Stencil::compute does.
 #pragma omp parallel for schedule(static)
@@ -201,11 +203,50 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
   }
   std::fill(blockStart_.begin(), blockStart_.end(), 0);
   for (long p = 0; p < n; ++p) ++blockStart_[blockOf_[p] + 1];
-  for (std::size_t b = 0; b < nBlocks; ++b) blockStart_[b + 1] += blockStart_[b];
+  for (int b = 0; b < nBlocks; ++b) blockStart_[b + 1] += blockStart_[b];
   {
     std::vector<int> fill(blockStart_.begin(), blockStart_.end() - 1);
     for (long p = 0; p < n; ++p) order_[fill[blockOf_[p]]++] = static_cast<int>(p);
   }
+  for (auto& c : colourBlocks_) c.clear();
+  for (int b = 0; b < nBlocks; ++b) {
+    if (blockStart_[b + 1] == blockStart_[b]) continue;
+    const int bz = b % blocks_[2];
+    const int by = (b / blocks_[2]) % blocks_[1];
+    const int bx = b / (blocks_[2] * blocks_[1]);
+    colourBlocks_[(bx & 1) * 4 + (by & 1) * 2 + (bz & 1)].push_back(b);
+    for (int tx = bx; tx <= std::min(bx + 1, tiles_[0] - 1); ++tx)
+      for (int ty = by; ty <= std::min(by + 1, tiles_[1] - 1); ++ty)
+        for (int tz = bz; tz <= std::min(bz + 1, tiles_[2] - 1); ++tz) tileMark_[(tx * tiles_[1] + ty) * tiles_[2] + tz] = 1;
+  }
+  activeTiles_.clear();
+  const int nTiles = static_cast<int>(tileMark_.size());
+  for (int t = 0; t < nTiles; ++t) {
+    if (!tileMark_[t]) continue;
+    activeTiles_.push_back(t);
+    tileMark_[t] = 0;
+  }
+}
+
+template <typename T>
+template <typename F>
+void MpmCpu<T>::forActiveNodes(F&& f) {
+  const long nt = static_cast<long>(activeTiles_.size());
+  const int* nodes = grid_.nodes;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < nt; ++i) {
+    const int t = activeTiles_[i];
+    const int tz = t % tiles_[2];
+    const int ty = (t / tiles_[2]) % tiles_[1];
+    const int tx = t / (tiles_[2] * tiles_[1]);
+    for (int a = 3 * tx; a < std::min(3 * tx + 3, nodes[0]); ++a)
+      for (int b = 3 * ty; b < std::min(3 * ty + 3, nodes[1]); ++b)
+        for (int c = 3 * tz; c < std::min(3 * tz + 3, nodes[2]); ++c) f((a * nodes[1] + b) * nodes[2] + c);
+  }
+}
+
+template <typename T>
+void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
   T* gridData = nodes_.data();
   const int nN = nNodes_;
   auto add = [gridData, nN](int node, T m, const Vec3T<T>& pOld, const Vec3T<T>& pNew) {
@@ -235,26 +276,26 @@ void MpmCpu<T>::step(double dt) {
   const T dtT = static_cast<T>(dt);
   const ParticleIn<T> in = input();
   const ParticleOut<T> out = output();
-  const long nN = nNodes_;
+  const int nN = nNodes_;
   T* gridData = nodes_.data();
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < kGridComponents * nN; ++i) gridData[i] = T(0);
+  // Only the previous step's active tiles hold non-zero values.
+  forActiveNodes([gridData, nN](int node) {
+    for (int c = 0; c < kGridComponents; ++c) gridData[c * nN + node] = T(0);
+  });
+  bin(in);
   scatter(dtT, in);
   const GridConst<T> g = grid_;
   if (hooks_.empty()) {
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < nN; ++i) gridNodeUpdate(static_cast<int>(i), gridData, nNodes_, g, dtT);
+    forActiveNodes([gridData, nN, &g, dtT](int node) { gridNodeUpdate(node, gridData, nN, g, dtT); });
   } else {
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < nN; ++i) gridNodeVelocity(static_cast<int>(i), gridData, nNodes_, g, dtT);
+    forActiveNodes([gridData, nN, &g, dtT](int node) { gridNodeVelocity(node, gridData, nN, g, dtT); });
     GridView view = gridViewFrame(dt);
     view.precision = kPrecision;
     view.device = false;
     view.mass = gridData;
     for (int d = 0; d < 3; ++d) view.v[d] = gridData + (4 + d) * nN;
     applyGridHooks(view);
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < nN; ++i) gridNodeWalls(static_cast<int>(i), gridData, nNodes_, g);
+    forActiveNodes([gridData, nN, &g](int node) { gridNodeWalls(node, gridData, nN, g); });
   }
 
   StepConst<T> sc;
