@@ -46,7 +46,10 @@ class PyCoupling {
     const auto t0 = Clock::now();
     coupling_.computeForces(mpm_.solver(), dt);
     const auto t1 = Clock::now();
-    mpm_.step(dt);
+    if (mpm_.numParticles() > 0)
+      mpm_.step(dt);  // PyMpm's step, which also marks its particle cache stale
+    else
+      coupling::advanceFlow(mpm_.solver(), dt);
     const auto t2 = Clock::now();
     const int n = coupling_.numBlocks();
     force_.resize(n);

@@ -82,6 +82,7 @@ void exportSdem() {
       .def("yadeId", &YadeSdemBridge::yadeId)
       .add_property("numBodies", &YadeSdemBridge::numBodies)
       .add_property("numContacts", &YadeSdemBridge::numContacts)
+      .add_property("narrowPhasePairs", &YadeSdemBridge::narrowPhasePairs)
       .add_property("criticalTimeStep", &YadeSdemBridge::criticalTimeStep)
       .add_property("timeStepSafety", &YadeSdemBridge::timeStepSafety, &YadeSdemBridge::setTimeStepSafety)
       .add_property("strict", &YadeSdemBridge::strict, &YadeSdemBridge::setStrict)

@@ -3,10 +3,13 @@
 //
 // The bridge exchanges body state and forces with YADE from C++: per step it reads
 // pos/ori/vel/angVel of the registered bodies through cached State objects, runs
-// SdemEngine::computeForces, and adds forces/torques with O.forces.addF/addT. Bodies that
-// cannot move (YADE `dynamic == False`) are read once and never again. The time spent in the
-// three phases (read, compute, write) is accumulated so benchmarks can report the bridge's
-// share of each step.
+// SdemEngine::computeForces, and adds forces/torques with O.forces.addF/addT. Bodies added
+// as fixed are read once and never again. Any other body whose six DOFs are blocked (YADE
+// `dynamic == False`, e.g. blockedDOFs "xyzXYZ") counts as fixed in the engine, so that its
+// pairs with fixed bodies skip the narrow phase; it is still read every step, since it may
+// move kinematically or be released (readStates says when YADE is asked). The time spent in
+// the three phases (read, compute, write) is accumulated so benchmarks can report the
+// bridge's share of each step.
 #pragma once
 #include <chrono>
 #include <cmath>
@@ -47,13 +50,16 @@ class YadeSdemBridge {
               int yadeId, bool fixed) {
     const int i = engine_.addBody(shape, material, mass, toVec3(inertia, "inertia"), yadeId);
     engine_.setFixed(i, fixed);
+    addedFixed_.push_back(fixed);
+    bodies_.push_back(bp::object());
     states_.push_back(bp::object());
     readOnce_.push_back(0);
     return i;
   }
 
-  // Forget the cached YADE State objects (call after O.bodies was rebuilt or O.load()).
+  // Forget the cached YADE Body and State objects (call after O.bodies was rebuilt or O.load()).
   void refresh() {
+    for (auto& b : bodies_) b = bp::object();
     for (auto& s : states_) s = bp::object();
     std::fill(readOnce_.begin(), readOnce_.end(), 0);
   }
@@ -80,7 +86,7 @@ class YadeSdemBridge {
     if (!good_.valid) return -1;
     const int n = engine_.numBodies();
     for (int i = 0; i < n; ++i) {
-      if (engine_.isFixed(i)) continue;
+      if (addedFixed_[i]) continue;
       bp::object st = bodies[engine_.externalId(i)].attr("state");
       st.attr("pos") = good_.pos[i];
       st.attr("ori") = good_.ori[i];
@@ -102,19 +108,30 @@ class YadeSdemBridge {
   double goodTime() const { return good_.valid ? good_.time : std::nan(""); }
 
   // The three stages of step(), also composed by the coupled engine.
-  // Body states from YADE (bodies that cannot move are read once).
+  // Body states from YADE (bodies added as fixed are read once).
   void readStates(const bp::object& bodies) {
     const auto t0 = Clock::now();
     const int n = engine_.numBodies();
     if (static_cast<int>(states_.size()) != n) throw RuntimeFailure("SDEM bridge: body list out of sync");
     for (int i = 0; i < n; ++i) {
-      if (engine_.isFixed(i) && readOnce_[i]) continue;
-      if (states_[i].is_none()) states_[i] = bodies[engine_.externalId(i)].attr("state");
+      if (addedFixed_[i] && readOnce_[i]) continue;
+      if (states_[i].is_none()) {
+        bodies_[i] = bodies[engine_.externalId(i)];
+        states_[i] = bodies_[i].attr("state");
+      }
       const bp::object& st = states_[i];
       const Vec3 pos = bp::extract<Vec3>(st.attr("pos"));
       const Quat ori = bp::extract<Quat>(st.attr("ori"));
       const Vec3 vel = bp::extract<Vec3>(st.attr("vel"));
       const Vec3 angVel = bp::extract<Vec3>(st.attr("angVel"));
+      // Whether YADE can move the body is asked at its first read, while it counts as fixed
+      // (to see its release) and while it is at rest (`dynamic = False` stops a body), not
+      // of every moving body every step: attribute reads are most of the bridge's cost. A
+      // body whose DOFs are blocked while it moves (YADE keeps its velocity) stays a moving
+      // one: its contacts are all computed, nothing is saved.
+      const bool atRest = vel == Vec3::Zero() && angVel == Vec3::Zero();
+      if (!addedFixed_[i] && (!readOnce_[i] || atRest || engine_.isFixed(i)))
+        engine_.setFixed(i, !bp::extract<bool>(bodies_[i].attr("dynamic")));
       checkState(i, pos, ori, vel, angVel);
       engine_.setState(i, pos, ori, vel, angVel);
       readOnce_[i] = 1;
@@ -136,7 +153,7 @@ class YadeSdemBridge {
       const Vec3 t = engine_.torque(i) + (extraT ? (*extraT)[i] : Vec3::Zero());
       if (f.squaredNorm() == 0 && t.squaredNorm() == 0) continue;
       addF(engine_.externalId(i), f);
-      if (!engine_.isFixed(i)) addT(engine_.externalId(i), t);
+      if (!addedFixed_[i]) addT(engine_.externalId(i), t);
     }
     writeSeconds_ += seconds(t0, Clock::now());
   }
@@ -332,6 +349,7 @@ class YadeSdemBridge {
     dampingOffset_ = damping - engine_.dampingDissipation();
   }
   int numContacts() const { return static_cast<int>(engine_.contacts().size()); }
+  long narrowPhasePairs() const { return engine_.narrowPhasePairs(); }
 
  private:
   struct KeptState {
@@ -363,7 +381,8 @@ class YadeSdemBridge {
   SdemEngine engine_;
   KeptState good_, pending_;
   double frictionOffset_ = 0, dampingOffset_ = 0;
-  std::vector<bp::object> states_;
+  std::vector<char> addedFixed_;  // added with fixed = true: read once, never rolled back
+  std::vector<bp::object> bodies_, states_;
   std::vector<char> readOnce_;
   std::unique_ptr<io::Hdf5Writer> h5_;
   std::unique_ptr<io::PvdCollection> pvd_;

@@ -32,11 +32,18 @@ void CoupledWorld::step(double dt) {
   const auto t1 = Clock::now();
   world.step(dt, &blockForce_, &blockTorque_);
   const auto t2 = Clock::now();
-  solver_->step(dt);
+  advanceFlow(*solver_, dt);
   const auto t3 = Clock::now();
   stageSeconds_.coupling += seconds(t0, t1);
   stageSeconds_.blocks += seconds(t1, t2);
   stageSeconds_.mpm += seconds(t2, t3);
+}
+
+void advanceFlow(mpm::MpmSolver& solver, double dt) {
+  if (solver.numParticles() > 0)
+    solver.step(dt);
+  else
+    solver.setClock(solver.time() + dt, solver.steps() + 1);
 }
 
 double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& coupling) {

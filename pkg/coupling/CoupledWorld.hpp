@@ -50,6 +50,11 @@ class CoupledWorld {
   StageSeconds stageSeconds_;
 };
 
+// The flow's part of a coupled step: the MPM step, or for a solver without material points
+// only its clock (time + dt, one more step). An empty grid stays empty whatever the step does
+// to it, so a coupled scene without particles costs what its blocks cost.
+void advanceFlow(mpm::MpmSolver& solver, double dt);
+
 // The contact part of the coupled critical step (without the MPM CFL limit), shared with the
 // YADE bridge: per block sqrt(m / (k_SDEM + k_MP)) and sqrt(I_min / (k_r,SDEM + k_r,MP)) over
 // moving blocks, and the MP side, times the SDEM safety factor [s].

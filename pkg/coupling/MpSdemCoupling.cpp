@@ -189,6 +189,14 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
   const mpm::MpmParams& g = solver.params();
   syncBlocks();
+  if (blocks_.empty() || solver.numParticles() == 0) {
+    // Nothing can touch: no bins, no particle loop, and the force buffer stays closed (the MPM
+    // step then adds no external force, as it would add an open buffer's zeros).
+    last_.sums.assign(static_cast<std::size_t>(kBlockSums) * blocks_.size(), 0.0);
+    minParticleStep_ = std::numeric_limits<double>::infinity();
+    barrierEnergy_ = springEnergy_ = 0;
+    return;
+  }
   mpm::ParticleView view = solver.openForceBuffer();
   if (view.device && !device_) {
     device_ = makeCouplingDeviceBackend(view.precision);

@@ -53,7 +53,9 @@ class MpSdemCoupling {
   int historySlots() const { return slots_; }
 
   // One coupling step at the current SDEM state and the solver's current particles: adds the
-  // particles' forces into solver.openForceBuffer() and computes the blocks' share. Throws
+  // particles' forces into solver.openForceBuffer() and computes the blocks' share. Without
+  // blocks or without particles it only zeroes the results (the solver's force buffer is not
+  // opened: a flow alone costs what the MPM step costs). Throws
   // RuntimeFailure when a particle centre reaches a block core (names both; at the first step
   // this means particles were seeded inside a block), ParameterError for a missing pair.
   void computeForces(mpm::MpmSolver& solver, double dt);

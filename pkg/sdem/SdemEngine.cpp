@@ -162,6 +162,7 @@ void SdemEngine::computeForces(Real dt) {
   barrierEnergy_ = 0;
   springEnergy_ = 0;
   const int nm = numMaterials();
+  narrowPhasePairs_ += static_cast<long>(pairs_.size());
   for (const auto& [a, b] : pairs_) {
     geoms_.clear();
     if (!Ig2_SpheroPolyhedron_SpheroPolyhedron::go(posed_[a], posed_[b], geoms_)) {
@@ -260,6 +261,7 @@ void SdemEngine::setContactHistories(const std::vector<ContactHistoryEntry>& ent
 namespace {
 constexpr char kDofLetters[] = "xyzXYZ";
 constexpr unsigned kRotationDofs = 070;
+constexpr unsigned kAllDofs = 077;
 
 // Turn q by the rotation vector omega dt (YADE's rotation of spherical and DOF-blocked bodies).
 Quat advance(const Quat& q, const Vec3& omega, Real dt) {
@@ -284,7 +286,17 @@ void SdemWorld::setBlockedDofs(int i, const std::string& dofs) {
     mask |= 1u << (at - kDofLetters);
   }
   blocked_.resize(engine.numBodies(), 0);
+  fixedByDofs_.resize(engine.numBodies(), 0);
   blocked_[i] = mask;
+  // A body that nothing can move is fixed: the broad phase then skips its pairs with other
+  // fixed bodies. Its motion is the same either way (kinematic, with its set velocities).
+  if (mask == kAllDofs && !engine.isFixed(i)) {
+    engine.setFixed(i, true);
+    fixedByDofs_[i] = 1;
+  } else if (mask != kAllDofs && fixedByDofs_[i]) {
+    engine.setFixed(i, false);
+    fixedByDofs_[i] = 0;
+  }
 }
 
 std::string SdemWorld::blockedDofs(int i) const {

@@ -81,7 +81,10 @@ class SdemEngine {
   int numBodies() const { return static_cast<int>(shapes_.size()); }
 
   // A fixed body takes no forces into account for its motion (SdemWorld moves it
-  // kinematically with its set velocities) and fixed–fixed pairs are never tested.
+  // kinematically with its set velocities) and fixed–fixed pairs are never tested. A body
+  // whose six degrees of freedom are blocked is one (SdemWorld::setBlockedDofs, the YADE
+  // bridge); its contacts with moving bodies then use the moving body's mass as the
+  // effective mass, and it does not limit criticalTimeStep().
   void setFixed(int i, bool fixed);
   bool isFixed(int i) const;
 
@@ -115,6 +118,10 @@ class SdemEngine {
   const std::vector<Vec3>& torques() const { return torque_; }
 
   const std::vector<ContactRecord>& contacts() const { return records_; }
+
+  // Body pairs whose contact geometry the narrow phase has computed, summed over every
+  // computeForces() so far: what the broad phase let through (fixed–fixed pairs never are).
+  long narrowPhasePairs() const { return narrowPhasePairs_; }
 
   // ---- time step control
   // c * min over non-fixed bodies of sqrt(m_i / sum k_i) and sqrt(I_min,i / sum k_r,i) [s], with
@@ -178,6 +185,7 @@ class SdemEngine {
   Real safety_ = 1.0;
   bool strict_ = false;
   long warnings_ = 0;
+  long narrowPhasePairs_ = 0;
   Real barrierEnergy_ = 0, springEnergy_ = 0, frictionWork_ = 0, dampingWork_ = 0;
 };
 
@@ -206,6 +214,8 @@ class SdemWorld {
   Real time() const { return time_; }
   // Degrees of freedom of body i that forces do not change, YADE's blockedDOFs: a string of
   // letters among x y z (translations) and X Y Z (rotations about world axes), "" for none.
+  // All six make the body fixed in the engine (as YADE's `dynamic = False`) until a later call
+  // unblocks one of them; a body fixed with SdemEngine::setFixed stays fixed either way.
   void setBlockedDofs(int i, const std::string& dofs);
   std::string blockedDofs(int i) const;
   // Translational + rotational kinetic energy of the non-fixed bodies [J].
@@ -216,6 +226,7 @@ class SdemWorld {
  private:
   std::vector<Vec3> angMom_, lastAngVel_;
   std::vector<unsigned> blocked_;  // bit k: DOF "xyzXYZ"[k] blocked
+  std::vector<char> fixedByDofs_;  // made fixed by setBlockedDofs (all six), not by setFixed
   Real time_ = 0;
 };
 

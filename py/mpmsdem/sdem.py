@@ -125,6 +125,8 @@ class SdemEngine:
         :param material: an :class:`SdemMat`.
         :param pos: centroid position [m]. :param ori: orientation (Quaternion), default identity.
         :param fixed: a fixed body (YADE ``dynamic = False``): a slab, a flume bed, a wall.
+            A body given ``blockedDOFs = "xyzXYZ"`` before the first step or while at rest
+            counts as fixed too, until released.
         """
         shape = _mpmsdem.SpheroPolyhedron.box(_vec(halfExtents, "halfExtents"), float(sweepRadius))
         recipe = {"kind": "box", "halfExtents": list(_vec(halfExtents, "halfExtents")), "sweepRadius": sweepRadius}
@@ -360,6 +362,13 @@ class SdemEngine:
     def criticalTimeStep(self):
         """c · min sqrt(m / Σ k_n) over bodies for the current contacts [s] (inf: no contact)."""
         return self._bridge.criticalTimeStep
+
+    @property
+    def narrowPhasePairs(self):
+        """Body pairs whose contact geometry the narrow phase computed, summed over the steps
+        so far. Pairs of two fixed bodies never are; a body whose six DOFs are blocked counts
+        as fixed."""
+        return self._bridge.narrowPhasePairs
 
     @property
     def timeStepWarnings(self):
