@@ -1,0 +1,99 @@
+"""Which settings give which error at which cost: the measured trade-offs of docs/tradeoffs.md.
+
+    from mpmsdem import tradeoffs
+    p = tradeoffs.propose(0.05, output="runout")   # cheapest measured setting within 5 %
+    print(p)                                        # its settings, measured error and cost
+    for row in tradeoffs.table("runout"):           # every measured setting for that output
+        print(row)
+
+The numbers are measurements, shipped with the package in ``tradeoffs.json`` and written by the
+benchmark scripts that made them (``scripts/bench/tradeoff_mpm.py --package-data``): each study
+ran one scene at many settings, took the finest setting as the converged reference and
+recorded every output's relative error against it and the run's cost relative to the default
+setting (the work, points x steps, and the CPU time of one thread, all runs in one command).
+Proposals come from the resolution settings (grid spacing, points per cell, precision); rows
+that change a model choice such as the FLIP/PIC alpha are listed by :func:`table` with
+``sensitivity`` set, and not proposed. A proposal is therefore an empirical
+guide for scenes like the measured one (their scene, commit and command come with it), not a
+bound: check a proposal on your own scene once against a finer run.
+"""
+import json
+import os
+
+_DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "tradeoffs.json")
+
+
+class Proposal:
+    """A measured setting: ``settings`` (dict), ``error`` (signed relative error of ``output``
+    against the study's reference), ``cost`` (work relative to the study's default setting;
+    ``cpuCost``: CPU time relative to it), ``reference`` / ``sensitivity`` flags, and where it
+    was measured (``study``: name, scene, commit, machine, command, reference settings)."""
+
+    def __init__(self, output, row, study):
+        self.output = output
+        self.settings = dict(row["settings"])
+        self.error = row["errors"][output]
+        self.cost = row["cost"]
+        self.cpuCost = row.get("cpu_cost")
+        self.reference = bool(row.get("reference", False))
+        self.sensitivity = bool(row.get("sensitivity", False))
+        self.study = {k: study[k] for k in ("name", "scene", "commit", "machine", "command", "reference")}
+
+    def __repr__(self):
+        return "Proposal(%s: %s, error %+.2f %%, cost %.3g x default; measured on %s, commit %s)" % (
+            self.output, ", ".join("%s=%s" % kv for kv in sorted(self.settings.items())), 100 * self.error,
+            self.cost, self.study["scene"], self.study["commit"])
+
+
+def _studies(path=None):
+    with open(path or _DATA) as f:
+        data = json.load(f)
+    return data["studies"]
+
+
+def outputs(path=None):
+    """The outputs with measured errors, e.g. ``['deposit_height', 'runout']``."""
+    return sorted({o for s in _studies(path) for r in s["rows"] for o in r["errors"]})
+
+
+def table(output, path=None):
+    """Every measured setting for ``output``, cheapest first: a list of :class:`Proposal`."""
+    known = outputs(path)
+    if output not in known:
+        raise ValueError("output = %r: not measured; one of %s" % (output, ", ".join(known)))
+    rows = [Proposal(output, r, s) for s in _studies(path) for r in s["rows"] if output in r["errors"]]
+    return sorted(rows, key=lambda p: (p.cost, p.cpuCost if p.cpuCost is not None else p.cost, abs(p.error)))
+
+
+def propose(error, output="runout", maxCost=None, path=None):
+    """The cheapest measured setting whose |relative error| in ``output`` is at most ``error``.
+
+    :param error: target relative error, > 0 (0.05: within 5 % of the converged reference).
+    :param output: a measured output (see :func:`outputs`).
+    :param maxCost: optional cost limit relative to the default setting, > 0.
+    :raises ValueError: bad arguments, or no measured setting meets the target (the message
+        gives the smallest error measured and at what cost).
+    """
+    if not (isinstance(error, (int, float)) and error > 0):
+        raise ValueError("error = %r: must be a relative error > 0 (e.g. 0.05 for 5 %%)" % (error,))
+    if maxCost is not None and not (isinstance(maxCost, (int, float)) and maxCost > 0):
+        raise ValueError("maxCost = %r: must be > 0 (cost relative to the default setting) or None" % (maxCost,))
+    rows = table(output, path)
+    # a reference's error is 0 by construction, not measured; a sensitivity row changes a model
+    # choice (e.g. the FLIP/PIC alpha), whose agreement with the reference can be a coincidence
+    # of two errors: neither is proposed
+    rows = [p for p in rows if not (p.reference or p.sensitivity)]
+    fit = [p for p in rows if abs(p.error) <= error and (maxCost is None or p.cost <= maxCost)]
+    if fit:
+        return fit[0]
+    best = min(rows, key=lambda p: abs(p.error))
+    within = [p for p in rows if maxCost is None or p.cost <= maxCost]
+    msg = "error = %g: no measured setting of %s is within it" % (error, output)
+    if maxCost is not None and within:
+        closest = min(within, key=lambda p: abs(p.error))
+        msg += " at cost <= %g (closest there: %+.2f %% at %.3g x, %s)" % (
+            maxCost, 100 * closest.error, closest.cost, closest.settings)
+    msg += ("; the smallest measured error is %+.2f %% at %.3g x the default cost (%s); below that only the "
+            "study's reference (%s) is left, whose own error was not measured") % (
+        100 * best.error, best.cost, best.settings, best.study["reference"])
+    raise ValueError(msg)

@@ -1,0 +1,80 @@
+"""mpmsdem.tradeoffs: the settings proposal over measured trade-off tables.
+
+On a hand-made table the answers are known: the cheapest setting within the target, never the
+reference (its zero error is a definition, not a measurement), a cost cap honoured, and a
+target nobody meets refused with the smallest error measured. On the shipped table: every
+study has exactly one reference with zero error, its default costs 1, and every proposal is
+within its target with no cheaper row that also is."""
+import json
+
+import pytest
+
+from mpmsdem import tradeoffs
+
+
+def study(rows, name="s"):
+    return {"name": name, "scene": "scene", "commit": "abc", "machine": "m", "command": "c",
+            "reference": {"dx": 0.005}, "rows": rows}
+
+
+def row(dx, err, cost, ref=False, alpha=None, cpu=None):
+    r = {"settings": {"dx": dx}, "errors": {"runout": err}, "cost": cost, "reference": ref}
+    if alpha is not None:
+        r["settings"]["alpha"] = alpha
+        r["sensitivity"] = True
+    if cpu is not None:
+        r["cpu_cost"] = cpu
+    return r
+
+
+@pytest.fixture
+def table(tmp_path):
+    path = tmp_path / "tradeoffs.json"
+    path.write_text(json.dumps({"studies": [study([
+        row(0.005, 0.0, 8.0, ref=True), row(0.00625, -0.01, 3.5), row(0.01, 0.04, 1.0),
+        row(0.0125, -0.08, 0.5), row(0.025, 0.30, 0.06), row(0.01, 0.001, 1.0, alpha=1.0),
+        row(0.01, 0.04, 1.0, cpu=0.7)])]}))
+    return str(path)
+
+
+def test_cheapest_within_target(table):
+    p = tradeoffs.propose(0.05, path=table)
+    assert p.settings == {"dx": 0.01} and p.cpuCost == 0.7   # equal work: the one cheaper in CPU time
+    assert tradeoffs.propose(0.08, path=table).settings == {"dx": 0.0125}   # |-8 %| counts as 8 %
+    assert tradeoffs.propose(0.5, path=table).settings == {"dx": 0.025}
+    p = tradeoffs.propose(0.02, path=table)
+    assert (p.settings, p.error, p.cost) == ({"dx": 0.00625}, -0.01, 3.5)
+
+
+def test_cost_cap_and_unreachable_targets(table):
+    assert tradeoffs.propose(0.5, maxCost=0.4, path=table).settings == {"dx": 0.025}
+    with pytest.raises(ValueError, match=r"at cost <= 0.4 \(closest there: \+30.00 %"):
+        tradeoffs.propose(0.1, maxCost=0.4, path=table)
+    # neither the reference (error 0 by definition) nor the alpha row (0.1 %, a model choice) is proposed
+    with pytest.raises(ValueError, match=r"smallest measured error is -1.00 %.*reference"):
+        tradeoffs.propose(0.005, path=table)
+
+
+@pytest.mark.parametrize("kwargs, name", [({"error": 0}, "error"), ({"error": -0.1}, "error"),
+                                          ({"error": "5%"}, "error"), ({"error": 0.1, "maxCost": 0}, "maxCost"),
+                                          ({"error": 0.1, "output": "peak"}, "output")])
+def test_bad_arguments_name_the_parameter(table, kwargs, name):
+    with pytest.raises(ValueError, match="^%s = " % name):
+        tradeoffs.propose(path=table, **kwargs)
+
+
+def test_shipped_studies_are_consistent():
+    studies = tradeoffs._studies()
+    assert studies, "tradeoffs.json holds no study"
+    for s in studies:
+        refs = [r for r in s["rows"] if r.get("reference")]
+        assert len(refs) == 1, s["name"]
+        assert all(e == 0 for e in refs[0]["errors"].values()), s["name"]
+        assert refs[0]["settings"] == s["reference"], s["name"]
+        assert any(r["cost"] == pytest.approx(1.0, rel=1e-12) for r in s["rows"]), s["name"]
+    for out in tradeoffs.outputs():
+        rows = [p for p in tradeoffs.table(out) if not (p.reference or p.sensitivity)]
+        for target in sorted({abs(p.error) for p in rows}):
+            p = tradeoffs.propose(target * (1 + 1e-9), output=out)
+            assert abs(p.error) <= target * (1 + 1e-9)
+            assert not [q for q in rows if q.cost < p.cost and abs(q.error) <= target * (1 + 1e-9)]
