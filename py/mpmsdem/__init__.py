@@ -17,6 +17,7 @@ Main entry points (all SI units):
   blocks and the blocks push back; ``coupled.runner`` goes between ``ForceResetter`` and
   ``NewtonIntegrator``.
 * :mod:`mpmsdem.analysis` — analytic references (paper Eq 19, runout fits, Froude numbers).
+* :mod:`mpmsdem.tradeoffs` — measured settings against error and cost; ``propose(error)``.
 """
 import os
 import sys
