@@ -8,7 +8,7 @@ YADE_PY  := $(shell ls -d /usr/lib/x86_64-linux-gnu/yade-double/py 2>/dev/null |
 export PYTHONPATH := $(CURDIR)/$(BUILD)/python:$(YADE_PY)$(if $(PYTHONPATH),:$(PYTHONPATH))
 export OMP_NUM_THREADS ?= $(JOBS)
 
-.PHONY: all deps configure build install demo test test-cpp test-py checks bench bench-peers clean
+.PHONY: all deps configure build install demo test test-cpp test-py checks bench bench-peers bench-scene-needs clean
 
 all: build
 
@@ -51,6 +51,12 @@ bench: install
 # once, for .venv-peers/). Minutes of runs; not part of `make test`.
 bench-peers: build
 	$(PY) scripts/bench/bench_mpm_peers.py --build $(BUILD) --threads $(JOBS)
+
+# Opt-in: each saving of "model only what the scene needs" (no flow, no blocks, fixed pairs,
+# outputs) against the run it should cost the same as, in YADE and the driver, one thread
+# (a few minutes); docs/benchmarks.md. Not part of `make test`.
+bench-scene-needs: build
+	OMP_NUM_THREADS=1 $(PY) scripts/bench/bench_scene_needs.py --build $(BUILD)
 
 clean:
 	rm -rf $(BUILD)
