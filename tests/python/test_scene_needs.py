@@ -11,8 +11,6 @@ from mpmsdem import analysis
 from yade import O
 from yade.wrapper import ForceResetter, NewtonIntegrator
 
-h5py = pytest.importorskip("h5py")
-
 GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
 G = (0, 0, -9.81)
 H, R, RHO, KC = 0.02, 0.003, 2000.0, 1e4
@@ -109,6 +107,7 @@ def test_a_released_glued_block_moves_as_a_free_one():
 def emptyFlow(tmp_path):
     """An MpmEngine whose particle set is empty: the scene format needs particles, so the
     solver loads a snapshot without any (layout of docs/outputs.md)."""
+    h5py = pytest.importorskip("h5py")
     mpm = mpmsdem.MpmEngine(grid={"dx": 0.02, "cells": [30, 20, 10], "origin": [-0.3, -0.2, -0.06]},
                             material=GLASS, particles=[{"lo": [0, 0, 0], "hi": [0.04, 0.04, 0.04], "ppc": 1}],
                             gravity=G, verbose=False)
