@@ -299,6 +299,14 @@ def runDriver(a, h, ratio, folder):
                     "particles": int(sc.mpm.numParticles), "cube_mass": mass, "end_time": float(done.group(1))}
 
 
+def firstTurn(series, deg=45.0):
+    """Time of the first record with the cube turned by ``deg`` or more (None: never)."""
+    for t, r in zip(series["t"], series["rotation"]):
+        if r >= deg:
+            return float(t)
+    return None
+
+
 def summarise(series, window):
     import numpy as np
     t = np.asarray(series["t"])
@@ -315,7 +323,8 @@ def summarise(series, window):
            "mean_force_window_sampled": float(ft[inWin].mean()) if covered and inWin.any() else None,
            "first_touch": float(t[touched[0]]) if touched.size else None,
            "max_rotation_deg": float(rot.max()), "rotation_end_deg": float(rot[-1]),
-           "max_rise": float(np.max(series["rise"])), "force_measure": "2 ms records"}
+           "max_rise": float(np.max(series["rise"])), "force_measure": "2 ms records",
+           "rotation45_time": firstTurn(series)}
     out["peak_force"], out["peak_time"] = out["peak_force_sampled"], out["peak_time_sampled"]
     out["mean_force_window"] = out["mean_force_window_sampled"]
     if "step_impulse" in series:
@@ -432,6 +441,10 @@ def collect(out, sizes=None, ratios=None):
             continue
         if ratios is not None and not any(abs(r["ratio"] - v) < 1e-12 for v in ratios):
             continue
+        seriesPath = os.path.join(os.path.dirname(path), "series.json")
+        if "rotation45_time" not in r and os.path.exists(seriesPath):  # results of an older version
+            with open(seriesPath) as f:
+                r["rotation45_time"] = firstTurn(json.load(f))
         results.append(r)
     results.sort(key=lambda r: (r["h_mm"], r["ratio"]))
     for r in results:
@@ -448,8 +461,9 @@ def fmt(v, f, missing="–"):
 
 def table(results):
     head = ("| h_b [mm] | R/h_b | R [mm] | travel at end [m] | peak F_t, 10 ms mean [N] at [s] | mean F_t %s s [N] | "
-            "max rotation [deg] | highest rise [mm] | first touch [s] | dt [s] | min contact step [s] at [s] | steps | "
-            "loop wall [s] | loop CPU [s] | cost / (R = h_b/20): wall, CPU, steps |")
+            "max rotation [deg] (45° at [s]) | highest rise [mm] | first touch [s] | dt [s] | "
+            "min contact step [s] at [s] | steps | loop wall [s] | loop CPU [s] | "
+            "cost / (R = h_b/20): wall, CPU, steps |")
     win = results[0]["window"] if results else [0, 0]
     lines = [head % ("%g–%g" % tuple(win)), "|" + "---:|" * 15]
     ratio = lambda r, k: fmt(r.get(k), "%.3f")  # noqa: E731
@@ -459,10 +473,11 @@ def table(results):
         cs = ("%.3g at %.3f" % (r["contact_step_min"], r["contact_step_min_time"])
               if r["contact_step_min"] is not None else "≥ dt (driver check)")
         cells = (r["h_mm"], r["ratio_label"], 1000 * r["sweep_radius"], r["travel"], r["peak_force"], r["peak_time"],
-                 fmt(r["mean_force_window"], "%.3f"), r["max_rotation_deg"], 1000 * r["max_rise"],
+                 fmt(r["mean_force_window"], "%.3f"), "%.1f (%s)" % (r["max_rotation_deg"], fmt(
+                     r.get("rotation45_time"), "%.3f", "never")), 1000 * r["max_rise"],
                  fmt(r["first_touch"], "%.3f"), dt, cs, r["steps"], r["wall_s"], fmt(r.get("cpu_s"), "%.0f"),
                  ratio(r, "wall_ratio"), ratio(r, "cpu_ratio"), ratio(r, "steps_ratio"))
-        lines.append("| %g | %s | %.3g | %.4f | %.3f at %.3f | %s | %.1f | %.1f | %s | %s | %s | %d | %.0f | %s | "
+        lines.append("| %g | %s | %.3g | %.4f | %.3f at %.3f | %s | %s | %.1f | %s | %s | %s | %d | %.0f | %s | "
                      "%s, %s, %s |" % cells)
     return "\n".join(lines)
 
@@ -501,21 +516,26 @@ def plot(results, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 3, figsize=(12, 3.6))
-    for hmm in sorted({r["h_mm"] for r in results}):
+    ratios = sorted({r["ratio"] for r in results})
+    for c, hmm in enumerate(sorted({r["h_mm"] for r in results})):
         rs = [r for r in results if r["h_mm"] == hmm]
         x = [r["ratio"] for r in rs]
-        lab = "h_b = %g mm" % hmm
-        ax[0].plot(x, [r["travel"] for r in rs], "o-", label=lab)
-        ax[1].plot(x, [r["peak_force"] for r in rs], "o-", label=lab)
+        lab, col = "h_b = %g mm" % hmm, "C%d" % c
+        ax[0].plot(x, [r["travel"] for r in rs], "o-", color=col, label=lab)
+        ax[1].plot(x, [r["peak_force"] for r in rs], "o-", color=col, label=lab)
         if all(r["wall_ratio"] is not None for r in rs):
-            ax[2].plot(x, [r["wall_ratio"] for r in rs], "o-", label=lab + ", wall")
-            ax[2].plot(x, [r["steps_ratio"] for r in rs], "x--", label=lab + ", steps")
+            ax[2].plot(x, [r["wall_ratio"] for r in rs], "o-", color=col, label=lab + ", wall")
+            ax[2].plot(x, [r["steps_ratio"] for r in rs], "x--", color=col, label=lab + ", steps")
         if all(r.get("cpu_ratio") is not None for r in rs):
-            ax[2].plot(x, [r["cpu_ratio"] for r in rs], "s:", ms=3, label=lab + ", CPU")
+            ax[2].plot(x, [r["cpu_ratio"] for r in rs], "s:", ms=3, color=col, label=lab + ", CPU")
+    ax[0].axvspan(1 / 50, 1 / 10, color="0.92", zorder=0, label="paper's window 1/50–1/10")
     titles = ("travel distance at the end [m]", "peak F_t, 10 ms mean [N]", "cost relative to R = h_b/20")
     for a_, ttl in zip(ax, titles):
         a_.set_xscale("log")
-        a_.set_xlabel("R / h_b")
+        a_.set_xticks(ratios)
+        a_.set_xticklabels([ratioLabel(v) for v in ratios], fontsize=7)
+        a_.minorticks_off()
+        a_.set_xlabel("R / h_b (log)")
         a_.set_title(ttl, fontsize=10)
         a_.axvline(REFERENCE_RATIO, color="0.7", lw=0.8, zorder=0)
         a_.legend(fontsize=7)
