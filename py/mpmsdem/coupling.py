@@ -49,7 +49,8 @@ class CoupledEngine:
         block (paper Table 1: basal friction of the flow 0.21 on the bed).
     :param dtCheck: ``"raise"`` stops the run when ``O.dt`` exceeds the critical step of the
         MP–block and block–block contacts (tangent barrier stiffness with the MP and block
-        masses); ``"warn"`` warns once and counts (``timeStepWarnings``).
+        masses, :attr:`contactTimeStep`); ``"warn"`` warns once and counts
+        (``timeStepWarnings``). May be changed between steps.
     :param historySlots: simultaneous block contacts per material point that keep their
         tangential history, in [1, 4] (default 2: a point between a block and the bed).
     :param output: folder for ``coupled.h5`` (per block every ``outputEvery`` s: ``pos``,
@@ -73,15 +74,12 @@ class CoupledEngine:
             raise ValueError("sdem = %r: must be an mpmsdem.SdemEngine" % (sdem,))
         if not isinstance(mpm, MpmEngine):
             raise ValueError("mpm = %r: must be an mpmsdem.MpmEngine" % (mpm,))
-        if dtCheck not in DT_CHECKS:
-            raise ValueError("dtCheck = %r: must be one of %s" % (dtCheck, ", ".join(DT_CHECKS)))
         if (output is not None or plot) and not (outputEvery and outputEvery > 0):
             raise ValueError("outputEvery = %r s: must be > 0 when output or plot is set" % (outputEvery,))
         if vtkEvery is not None and not (output is not None and vtkEvery > 0):
             raise ValueError("vtkEvery = %r s: must be > 0, with output set" % (vtkEvery,))
         self.sdem, self.mpm = sdem, mpm
         self._bridge = _mpmsdem.CouplingBridge(sdem._bridge, mpm.solver)
-        self._bridge.strict = dtCheck == "raise"
         self._bridge.historySlots = int(historySlots)
         self.dtCheck = dtCheck
         self._pairs = {}
@@ -118,6 +116,26 @@ class CoupledEngine:
         self._bridge.setPair(k, p["barrierStiffness"], p["friction"], p["poisson"], p["normalDamping"],
                              p["tangentialDamping"])
         self._pairs[k] = p
+
+    @property
+    def dtCheck(self):
+        """``"raise"`` or ``"warn"``: what a step above :attr:`contactTimeStep` does."""
+        return self._dtCheck
+
+    @dtCheck.setter
+    def dtCheck(self, value):
+        if value not in DT_CHECKS:
+            raise ValueError("dtCheck = %r: must be one of %s" % (value, ", ".join(DT_CHECKS)))
+        self._bridge.strict = value == "raise"
+        self._dtCheck = value
+
+    @property
+    def contactTimeStep(self):
+        """The contact part of :meth:`criticalTimeStep` [s], from the contacts of the last step:
+        sqrt(m_p/k) per MP–block contact and sqrt(m/Σk) (and its rotational analogue) per moving
+        block, k the tangent barrier stiffness, times the SDEM safety factor; ``inf`` before the
+        first step and while nothing touches. A step above it is what ``dtCheck`` acts on."""
+        return self._bridge.contactStep
 
     # ------------------------------------------------------------------ stepping
     def criticalTimeStep(self):

@@ -184,11 +184,8 @@ def runYade(a, h, ratio, folder):
     if abs(O.dt - base) > 1e-15 * base:
         raise RuntimeError("O.dt changed between two builds of the same flume (%r, %r)" % (base, O.dt))
     coupled = sc.coupled
-    # The contact part of the critical step has no public read-out (criticalTimeStep() is
-    # min(MPM CFL, contact)); "warn" lets a step that outgrows it finish and be counted.
-    bridge = coupled._bridge
+    # "warn" lets a step that outgrows the contact step finish and be counted.
     coupled.dtCheck = "warn"
-    bridge.strict = False
     cid = sc.blockIds[0]
     body = O.bodies[cid]
     ori0 = body.state.ori
@@ -221,7 +218,7 @@ def runYade(a, h, ratio, folder):
         account()
         dt = base
         if O.iter > 0:
-            c = bridge.contactStep
+            c = coupled.contactTimeStep
             if c < st["minContact"]:
                 st["minContact"], st["tMinContact"] = c, sc.mpm.time
             dt = min(base, 0.9 * c)
@@ -242,15 +239,15 @@ def runYade(a, h, ratio, folder):
         n = max(1, min(500, int(math.ceil((a.duration - sc.mpm.time) / base - 1e-9))))
         mpmsdem.run(n, coupled)
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
-    if bridge.contactStep < st["minContact"]:
-        st["minContact"], st["tMinContact"] = bridge.contactStep, sc.mpm.time
+    if coupled.contactTimeStep < st["minContact"]:
+        st["minContact"], st["tMinContact"] = coupled.contactTimeStep, sc.mpm.time
     st["next"] = min(st["next"], sc.mpm.time)  # the end state is always recorded
     account()
     t, travel, rise, ft, rot = (list(c) for c in zip(*st["rows"]))
     return {"t": t, "travel": travel, "rise": rise, "Ft": ft, "rotation": rot, "step_t": st["stepT"],
             "step_impulse": st["stepI"]}, {
         "engine": "yade", "dt_flume": base, "dt_min": st["minDt"], "contact_limited_steps": st["limited"],
-        "dt_warnings": int(bridge.timeStepWarnings), "contact_step_min": st["minContact"],
+        "dt_warnings": int(coupled.timeStepWarnings), "contact_step_min": st["minContact"],
         "contact_step_min_time": st["tMinContact"], "steps": int(O.iter), "wall_s": wall, "cpu_s": cpu,
         "particles": int(sc.mpm.numParticles), "cube_mass": float(body.state.mass), "end_time": float(sc.mpm.time),
         "max_rotation_step_deg": st["maxRot"], "max_rise_step": st["maxRise"]}

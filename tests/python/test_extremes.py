@@ -228,6 +228,47 @@ def test_time_step_at_0_9_and_2_times_the_reported_critical_step(ratio, v):
     assert all(_finite(O.bodies[i].state.pos, O.bodies[i].state.vel) for i in (a, b))
 
 
+def test_coupled_contact_step_read_out_and_dt_check_switched_mid_run():
+    # contactTimeStep is inf until a point touches the block and finite after, and
+    # criticalTimeStep() is the smaller of it and the MPM CFL step. A step 1.5x above it, with
+    # dtCheck switched to "warn" between steps, warns, counts and stays finite; switched to
+    # "raise" instead, the same step stops the run with dt and the contact step named. (A
+    # stiffer flow-block barrier, k_c 1e6, puts the contact step below the MPM one; the blob
+    # rebounds within that step, so each switch gets its own approach.)
+    def approach(dtCheck):
+        O.reset()
+        mpm, coupled, cube = _blobAndBlock(pairStiffness=1e6)
+        O.dt = 1e-5
+        mpmsdem.run(1, coupled)
+        assert coupled.contactTimeStep == math.inf
+        assert coupled.criticalTimeStep() == mpm.stableTimeStep()
+        for _ in range(200):
+            if coupled.contactCount(cube) >= 4:
+                break
+            mpmsdem.run(10, coupled)
+        mpmsdem.run(20, coupled)
+        dtc = coupled.contactTimeStep
+        assert 0 < dtc < math.inf and 1.5 * dtc < 0.9 * mpm.stableTimeStep()
+        assert coupled.criticalTimeStep() == min(mpm.stableTimeStep(), dtc)
+        O.dt = 1.5 * dtc
+        coupled.dtCheck = dtCheck
+        return coupled, cube, dtc
+
+    coupled, cube, dtc = approach("warn")
+    with pytest.warns(RuntimeWarning, match="exceeds the contact critical step"):
+        mpmsdem.run(1, coupled)
+    assert coupled.timeStepWarnings == 1
+    assert _finite(O.bodies[cube].state.pos, O.bodies[cube].state.vel, coupled.force(cube))
+
+    coupled, cube, dtc = approach("raise")
+    with pytest.raises(RuntimeError, match="must be <= the coupled contact critical step") as err:
+        mpmsdem.run(1, coupled)
+    m = re.search(r"dt = ([0-9.e+-]+) s: must be <= the coupled contact critical step ([0-9.e+-]+) s", str(err.value))
+    assert m and float(m.group(1)) == pytest.approx(1.5 * dtc, rel=1e-5) and float(m.group(2)) < float(m.group(1))
+    with pytest.raises(ValueError, match="^dtCheck = 'stop': must be one of raise, warn"):
+        coupled.dtCheck = "stop"
+
+
 # ====================================================================== near core contact
 def test_blocks_pressed_to_near_core_contact():
     # A load on the cube drives the overlap to 0.9, 0.99 and 0.999 of R_i + R_j (R = h/20):
@@ -305,9 +346,10 @@ def test_cube_rotated_45_degrees_hits_a_cube_edge_first():
         assert math.hypot(s.vel[1], s.vel[2]) < 1e-9 and s.angVel.norm() < 1e-9
 
 
-def _blobAndBlock(yawDeg=0.0, criticalDensity=None, ppc=8, speed=2.0, precision="double"):
+def _blobAndBlock(yawDeg=0.0, criticalDensity=None, ppc=8, speed=2.0, precision="double", pairStiffness=None):
     """A 4 cm granular cube at `speed` toward a free 4 cm block (R 3 mm, rho 2000, mu 0.3),
-    zero gravity, away from every wall."""
+    zero gravity, away from every wall; `pairStiffness`: the flow-block k_c [N/m] (None: the
+    block's 1e4)."""
     sdem = mpmsdem.SdemEngine(verbose=False)
     mat = mpmsdem.material(density=2000, friction=0.3)
     cube = sdem.box((0.02,) * 3, 0.003, mat, pos=(0.125, 0.07, 0.07), ori=Quaternion(Vector3(0, 0, 1),
@@ -319,7 +361,8 @@ def _blobAndBlock(yawDeg=0.0, criticalDensity=None, ppc=8, speed=2.0, precision=
                             particles=[{"lo": [0.04, 0.05, 0.05], "hi": [0.08, 0.09, 0.09], "ppc": ppc,
                                         "velocity": [speed, 0, 0]}], gravity=(0, 0, 0), verbose=False,
                             precision=precision, backend="cpu")
-    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.3}, verbose=False)
+    pair = 0.3 if pairStiffness is None else {"friction": 0.3, "barrierStiffness": pairStiffness}
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: pair}, verbose=False)
     O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
     return mpm, coupled, cube
 
