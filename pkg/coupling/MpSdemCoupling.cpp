@@ -8,6 +8,7 @@
 
 #include "common/Error.hpp"
 #include "sdem/Bo1_SpheroPolyhedron_Aabb.hpp"
+#include "sdem/Law2_SdemGeom_BarrierPhys_Coulomb.hpp"
 
 namespace mpmsdem {
 namespace coupling {
@@ -271,8 +272,8 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     std::ostringstream os;
     os << "MP-SDEM coupling: the centre of material point " << out.badParticle << " reached the core of block "
        << sdem_.externalId(out.badBlock)
-       << " (overlap >= R_p0 + R); at the first step the particles were seeded inside the block, later the time "
-          "step is too large for the barrier stiffness";
+       << " (overlap >= R_p0 + R); at the first step the particles were seeded inside the block, later "
+       << sdem::coreContactRemedy();
     throw RuntimeFailure(os.str());
   }
   minParticleStep_ = out.minParticleStep;

@@ -52,8 +52,8 @@ LawResult Law2_SdemGeom_BarrierPhys_Coulomb::go(const SdemGeom& g, Real R, const
   if (!(delta < R)) {
     std::ostringstream os;
     os << "SDEM contact between bodies " << idA << " and " << idB << ": overlap " << delta
-       << " m reached the barrier limit R_A + R_B = " << R
-       << " m (cores touching); the time step is too large for the barrier stiffness";
+       << " m reached the barrier limit R_A + R_B = " << R << " m (cores touching) at a normal approach speed of "
+       << std::abs(relVel.dot(g.normal)) << " m/s (dt = " << dt << " s); " << coreContactRemedy();
     throw RuntimeFailure(os.str());
   }
   const BarrierCoulombPhys<Real> ph{phys.barrierStiffness, phys.friction, phys.poisson, phys.normalDamping,

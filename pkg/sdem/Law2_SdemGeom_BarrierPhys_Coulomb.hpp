@@ -62,10 +62,22 @@ class Law2_SdemGeom_BarrierPhys_Coulomb {
   //  meff:    effective mass of the pair [kg] (m_A m_B / (m_A + m_B), or the moving body's
   //           mass against a fixed one), used only by the dashpots
   //  dt:      time step [s] (> 0)
-  // Throws RuntimeFailure naming the bodies when delta >= R (cores touching: step too large).
+  // Throws RuntimeFailure naming the bodies and coreContactRemedy() when delta >= R (cores touching).
   static LawResult go(const SdemGeom& g, Real R, const BarrierPhys& phys, const Vec3& relVel, Real meff, Real dt,
                       ContactHistory& history, int idA, int idB);
 };
+
+// What to change when a contact reaches its cores, for every path that detects it (block-block
+// law and narrow phase, MP-block coupling). The barrier's force is unbounded only as the gap
+// closes continuously; a step carries the cores across the last of the gap when the approach is
+// fast for dt, or when a load does more work than the barrier stores at any gap a double can
+// hold, and then no smaller step helps: only a stiffer or thicker barrier or a gentler load do.
+inline const char* coreContactRemedy() {
+  return "a step carried the cores across the barrier gap. Remedies: a smaller time step if the approach was "
+         "fast (keep v dt well below the gap; the critical step shrinks as the gap closes), a stiffer barrier "
+         "(larger k_c) or thicker one (larger sweep radius R), or a gentler load (a load that does more work "
+         "than the barrier can store is stopped by no step)";
+}
 
 }  // namespace sdem
 }  // namespace mpmsdem

@@ -168,7 +168,7 @@ void SdemEngine::computeForces(Real dt) {
     if (!Ig2_SpheroPolyhedron_SpheroPolyhedron::go(posed_[a], posed_[b], geoms_)) {
       std::ostringstream os;
       os << "SDEM bodies " << external_[a] << " and " << external_[b]
-         << ": cores interpenetrate; the time step is too large for the barrier stiffness";
+         << ": cores interpenetrate; " << coreContactRemedy();
       throw RuntimeFailure(os.str());
     }
     if (geoms_.empty()) continue;

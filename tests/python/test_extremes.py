@@ -532,12 +532,7 @@ def test_single_precision_coupled_impact_agrees_with_double():
     # state is float, so momentum holds to float round-off (1e-5) and the block's final
     # velocity agrees with the double run to 1e-4 (positions drift by 1.2e-7 x per step at
     # most, docs/physics.md).
-    try:
-        mpm, coupled, cube = _blobAndBlock(yawDeg=45.0, precision="float")
-    except ValueError as e:
-        if "float" in str(e) and "cuda" in str(e):
-            pytest.skip("pending the CPU float path (MpmEngine refuses precision='float' with backend='cpu': %s)" % e)
-        raise
+    mpm, coupled, cube = _blobAndBlock(yawDeg=45.0, precision="float")
     assert mpm.solver.name == "cpu-float"
     O.dt = 2e-5
     p0, rise, contacts = _impact(mpm, coupled, cube, 25)
