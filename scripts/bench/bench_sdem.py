@@ -1,15 +1,23 @@
 #!/usr/bin/env python3
-"""SDEM benchmark: mpmsdem's sphero-polyhedra against YADE's own LevelSet and Polyhedra.
+"""SDEM benchmark: mpmsdem's sphero-polyhedra against YADE's own LevelSet, Polyhedra and sphere clumps.
 
-Scenes (all three methods run in this one process, so their ratios are comparable):
+Scenes (all four methods run in this one process, so their ratios are comparable):
 
 1. Head-on collision of two equal cubes (paper §4.2): side h = 0.1 m and 0.3 m, centroids
    0.4 m apart, +-1 m/s, frictionless, dt = 5e-6 s, run through impact and separation.
    Reports µs/step, speed after impact (exact answer 1 m/s), transverse and angular
    velocity (exact answer 0) and the relative change of kinetic energy (exact answer 0).
-2. A pile of 50 cubes (h = 0.1 m, four staggered layers, random tilts) dropped into a fixed box (floor + 4 walls) under
-   gravity. Reports µs/step, number of contacts, final kinetic energy, mean and top
-   centroid height.
+2. Three equal cubes (h = 0.1 m) stacked on a fixed floor under gravity, settled with
+   NewtonIntegrator damping. Reports µs/step and the errors against the static answer:
+   floor force against the total weight, each contact's force against the weight above it,
+   centroid heights against the start heights minus the equilibrium overlaps, lateral drift
+   and tilt (exact answer 0).
+3. A pile of cubes (h = 0.1 m, --pile-count, default 100; staggered layers, random tilts)
+   dropped into a fixed box (floor + 4 walls) under gravity. Reports µs/step, number of
+   contacts, final kinetic energy, mean and top centroid height.
+
+Sphere clumps: a cube is n^3 touching spheres of radius h/2n (--clump-n, default 4) in one
+YADE clump, with YADE's sphere contact (ScGeom, FrictPhys, CundallStrack).
 
 For mpmsdem the per-step cost is split into: YADE's own loop (ForceResetter + Newton, run
 without any contact engine), the PyRunner call (an empty ``PyRunner(command='pass')``
@@ -19,7 +27,8 @@ minus YADE's loop), the bridge (read state, compute contacts, write forces, from
 Run with Debian's python and one thread::
 
     OMP_NUM_THREADS=1 PYTHONPATH=build/python:/usr/lib/x86_64-linux-gnu/yade-double/py \\
-        /usr/bin/python3 scripts/bench/bench_sdem.py [--quick] [--repeat N] [--markdown FILE]
+        /usr/bin/python3 scripts/bench/bench_sdem.py [--quick] [--repeat N] [--markdown FILE] \\
+        [--pile-count N] [--clump-n N] [--only collision,stack,pile]
 
 Timings are the minimum over --repeat runs of the same scene (the accuracy figures are
 deterministic and come from the last run).
@@ -35,12 +44,14 @@ import time
 import warnings
 
 import mpmsdem  # imports yade first
+import mpmsdem.analysis
 from yade import O, utils
 from yade import polyhedra_utils
 from yade.minieigenHP import Quaternion, Vector3
-from yade.wrapper import (Bo1_LevelSet_Aabb, Bo1_Polyhedra_Aabb, Bo1_Wall_Aabb, ForceResetter, FrictMat,
-                          Ig2_LevelSet_LevelSet_ScGeom, Ig2_Polyhedra_Polyhedra_PolyhedraGeom,
-                          Ig2_Wall_LevelSet_ScGeom, Ig2_Wall_Polyhedra_PolyhedraGeom, InsertionSortCollider,
+from yade.wrapper import (Bo1_LevelSet_Aabb, Bo1_Polyhedra_Aabb, Bo1_Sphere_Aabb, Bo1_Wall_Aabb, ForceResetter,
+                          FrictMat, Ig2_LevelSet_LevelSet_ScGeom, Ig2_Polyhedra_Polyhedra_PolyhedraGeom,
+                          Ig2_Sphere_Sphere_ScGeom, Ig2_Wall_LevelSet_ScGeom, Ig2_Wall_Polyhedra_PolyhedraGeom,
+                          Ig2_Wall_Sphere_ScGeom, InsertionSortCollider,
                           InteractionLoop, Ip2_FrictMat_FrictMat_FrictPhys,
                           Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys, Law2_PolyhedraGeom_PolyhedraPhys_Volumetric,
                           Law2_ScGeom_FrictPhys_CundallStrack, MatchMaker, NewtonIntegrator, PolyhedraMat,
@@ -172,6 +183,58 @@ def build_collision_polyhedra(h, kv, contactOnly=False):
     return ids, None
 
 
+# sphere clumps -------------------------------------------------------------------------
+
+CLUMP_N = 4             # spheres per cube edge (--clump-n); 4 gives r = h/8
+
+
+def clump_cube(h, n, matId, pos, ori=None):
+    """Append a cube of side h as a clump of n^3 equal, touching spheres (r = h/2n) whose outer
+    tips lie on the cube's faces; returns the clump id. The spheres fill pi/6 of the cube, so
+    their material is denser by 6/pi to give the clump the cube's mass."""
+    r = h / (2 * n)
+    q = ori if ori is not None else Quaternion.Identity
+    c = Vector3(*pos)
+    spheres = []
+    for i in range(n):
+        for j in range(n):
+            for k in range(n):
+                local = Vector3(-h / 2 + r * (2 * i + 1), -h / 2 + r * (2 * j + 1), -h / 2 + r * (2 * k + 1))
+                spheres.append(utils.sphere(c + q * local, r, material=matId))
+    cid, _ = O.bodies.appendClumped(spheres)
+    return cid
+
+
+def clump_material(kn, friction, n):
+    """Sphere material and the sphere-sphere law, stiffness per sphere contact kn / n^2: a flat
+    face of a clump touches a face-aligned neighbour (or a wall) with n^2 spheres at once, so the
+    face contact has the peers' stiffness kn."""
+    mat = O.materials.append(FrictMat(density=DENSITY * 6 / math.pi, frictionAngle=math.atan(friction),
+                                      young=1e6, poisson=POISSON))
+    ksph = kn / n ** 2
+    law = InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
+                          [Ip2_FrictMat_FrictMat_FrictPhys(kn=MatchMaker(algo="val", val=ksph),
+                                                           ks=MatchMaker(algo="val", val=ksph * POISSON))],
+                          [Law2_ScGeom_FrictPhys_CundallStrack()])
+    return mat, law
+
+
+def build_collision_clumps(h, kn, contactOnly=False, n=None):
+    n = n or CLUMP_N
+    O.reset()
+    mat, law = clump_material(kn, 0.0, n)
+    ids = []
+    x0 = start_x(h, contactOnly)
+    for x, v in ((-x0, 1.0), (x0, -1.0)):
+        i = clump_cube(h, n, mat, (x, 0, 0))
+        O.bodies[i].state.vel = Vector3(v, 0, 0)
+        ids.append(i)
+    # YADE's default verletDist (a fraction of the smallest sphere radius), the usual sphere setup
+    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]), law, newton((0, 0, 0), 0.0)]
+    O.dt = 5e-6
+    return ids, None
+
+
 def collision_figures(ids, e0):
     speeds = [O.bodies[i].state.vel.norm() for i in ids]
     trans = max(math.hypot(O.bodies[i].state.vel[1], O.bodies[i].state.vel[2]) for i in ids)
@@ -179,6 +242,150 @@ def collision_figures(ids, e0):
     vx = [O.bodies[i].state.vel[0] for i in ids]
     return {"speed": sum(speeds) / len(speeds), "transverse": trans, "angular": ang,
             "dE": kinetic(ids) / e0 - 1.0, "separated": vx[0] < 0 < vx[1]}
+
+
+# stack -------------------------------------------------------------------------------
+
+STACK_COUNT = 3         # equal cubes, one on the other
+STACK_H = 0.1           # cube side [m]
+STACK_FLOOR = 0.2       # half-width of the SDEM floor box [m] (peers: a YADE Wall)
+STACK_DAMPING = 0.5     # NewtonIntegrator damping, the same for all methods
+STACK_DT = 1e-4
+
+
+_ORI0 = {}
+
+
+def remember_orientations(ids):
+    """Tilts are measured from the start: a clump's orientation is that of its principal axes,
+    which for a cube of spheres need not be the world frame."""
+    _ORI0.clear()
+    for i in ids:
+        _ORI0[i] = Quaternion(O.bodies[i].state.ori)
+
+
+def stack_start(k):
+    """Centroid height of cube k (0 = bottom): the outer surfaces just touch, nothing overlaps."""
+    return STACK_H / 2 + k * STACK_H
+
+
+def build_stack_sdem(engineMode="sdem"):
+    O.reset()
+    sdem = mpmsdem.SdemEngine(dtCheck="warn")
+    mat = mpmsdem.material(density=DENSITY, friction=PILE_FRICTION, poisson=POISSON, barrierStiffness=KC,
+                           normalDamping=0.0, tangentialDamping=0.1)
+    R = STACK_H / 20.0
+    t = PILE_WALL / 2
+    floor = sdem.box((STACK_FLOOR, STACK_FLOOR, t), R, mat, pos=(0, 0, -t), fixed=True)
+    ids = [sdem.box((STACK_H / 2,) * 3, R, mat, pos=(0, 0, stack_start(k))) for k in range(STACK_COUNT)]
+    middle = {"sdem": [sdem.runner], "pass": [PyRunner(command="pass", iterPeriod=1)], "none": []}[engineMode]
+    O.engines = [ForceResetter()] + middle + [newton((0, 0, -9.81), STACK_DAMPING)]
+    O.dt = STACK_DT
+    remember_orientations(ids)
+    sdem.floorId = floor
+    return ids, sdem
+
+
+def build_stack_levelset(kn):
+    O.reset()
+    mat = O.materials.append(FrictMat(density=DENSITY, frictionAngle=math.atan(PILE_FRICTION), young=1e6,
+                                      poisson=POISSON))
+    O.bodies.append(utils.wall(0.0, axis=2, sense=1, material=mat))
+    ids = [O.bodies.append(utils.levelSetBody("box", center=(0, 0, stack_start(k)), extents=(STACK_H / 2,) * 3,
+                                              spacing=STACK_H / 20.0, nSurfNodes=602, nodesPath=2, material=mat))
+           for k in range(STACK_COUNT)]
+    O.engines = [ForceResetter(),
+                 InsertionSortCollider([Bo1_LevelSet_Aabb(), Bo1_Wall_Aabb()], verletDist=0),
+                 InteractionLoop([Ig2_LevelSet_LevelSet_ScGeom(), Ig2_Wall_LevelSet_ScGeom()],
+                                 [Ip2_FrictMat_FrictMat_FrictPhys(kn=MatchMaker(algo="val", val=kn),
+                                                                  ks=MatchMaker(algo="val", val=kn * POISSON))],
+                                 [Law2_ScGeom_FrictPhys_CundallStrack(sphericalBodies=False)]),
+                 newton((0, 0, -9.81), STACK_DAMPING)]
+    O.dt = STACK_DT
+    remember_orientations(ids)
+    return ids, None
+
+
+def build_stack_polyhedra(kv):
+    O.reset()
+    mat = O.materials.append(PolyhedraMat(density=DENSITY, young=2 * kv, poisson=POISSON,
+                                          frictionAngle=math.atan(PILE_FRICTION)))
+    O.bodies.append(utils.wall(0.0, axis=2, sense=1, material=mat))
+    ids = []
+    for k in range(STACK_COUNT):
+        bd = polyhedra_utils.polyhedra(O.materials[mat], v=cube_vertices(STACK_H / 2))
+        bd.state.pos = Vector3(0, 0, stack_start(k))
+        ids.append(O.bodies.append(bd))
+    O.engines = [ForceResetter(),
+                 InsertionSortCollider([Bo1_Polyhedra_Aabb(), Bo1_Wall_Aabb()], verletDist=0),
+                 InteractionLoop([Ig2_Polyhedra_Polyhedra_PolyhedraGeom(), Ig2_Wall_Polyhedra_PolyhedraGeom()],
+                                 [Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()],
+                                 [Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()]),
+                 newton((0, 0, -9.81), STACK_DAMPING)]
+    O.dt = STACK_DT
+    remember_orientations(ids)
+    return ids, None
+
+
+def build_stack_clumps(kn, n=None):
+    n = n or CLUMP_N
+    O.reset()
+    mat, law = clump_material(kn, PILE_FRICTION, n)
+    O.bodies.append(utils.wall(0.0, axis=2, sense=1, material=mat))
+    ids = [clump_cube(STACK_H, n, mat, (0, 0, stack_start(k))) for k in range(STACK_COUNT)]
+    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()]), law,
+                 newton((0, 0, -9.81), STACK_DAMPING)]
+    O.dt = STACK_DT
+    remember_orientations(ids)
+    return ids, None
+
+
+def stack_pair_forces_yade():
+    """Vertical force carried across each body pair {lower, upper} [N], summed over the pair's
+    interactions (clump members counted for their clump); the floor Wall is body 0."""
+    out = {}
+    for i in O.interactions:
+        if not i.isReal:
+            continue
+        a, b = owner(i.id1), owner(i.id2)
+        key = tuple(sorted((a, b)))
+        out[key] = out.get(key, 0.0) + abs(i.phys.normalForce[2])
+    return out, {}
+
+
+def stack_pair_forces_sdem(sdem):
+    c = sdem.contacts()
+    out, points = {}, {}
+    for a, b, f, nrm in zip(list(c["id1"]), list(c["id2"]), list(c["normalForce"]), list(c["normal"])):
+        key = tuple(sorted((int(a), int(b))))
+        out[key] = out.get(key, 0.0) + abs(float(f) * float(nrm[2]))
+        points[key] = points.get(key, 0) + 1
+    return out, points
+
+
+def stack_figures(ids, floorId, pairForces, overlapOf):
+    """Errors against the static answer: contact k (0 = floor) carries the weight of the cubes
+    from k up; the stack stays on the axis, untilted; centroid k sits at its start height minus
+    the equilibrium overlaps of the contacts below it (overlapOf(load, key) [m])."""
+    g = 9.81
+    masses = [O.bodies[i].state.mass for i in ids]
+    below = [floorId] + ids[:-1]
+    fErr, zErr, zExact = 0.0, 0.0, 0.0
+    for k, i in enumerate(ids):
+        load = g * sum(masses[k:])
+        key = tuple(sorted((below[k], i)))
+        fErr = max(fErr, abs(pairForces.get(key, 0.0) / load - 1.0))
+        zExact += overlapOf(load, key)
+        zErr = max(zErr, abs(O.bodies[i].state.pos[2] - (stack_start(k) - zExact)))
+    W = g * sum(masses)
+    floor = abs(O.forces.f(floorId)[2]) / W - 1.0
+    drift = max(math.hypot(O.bodies[i].state.pos[0], O.bodies[i].state.pos[1]) for i in ids)
+    tilt = 0.0
+    for i in ids:
+        ang = abs(float((O.bodies[i].state.ori * _ORI0[i].conjugate()).toAxisAngle()[1])) % (2 * math.pi)
+        tilt = max(tilt, math.degrees(min(ang, 2 * math.pi - ang)))
+    return {"floor": floor, "fErr": fErr, "zErr": zErr, "drift": drift, "tilt": tilt, "Ek": kinetic(ids),
+            "dFloor": overlapOf(W, tuple(sorted((floorId, ids[0]))))}
 
 
 # pile --------------------------------------------------------------------------------
@@ -195,13 +402,16 @@ PILE_DAMPING = 0.2      # NewtonIntegrator damping, the same for all methods
 PILE_DT = 1e-4
 
 
-def pile_layout():
-    """Centroids and orientations of the pile's 50 cubes: four layers, 4x4 and 3x3 alternately,
-    the 3x3 layers shifted by half a pitch so that cubes land on edges and corners of the layer
-    below; seeded random tilts."""
+def pile_layout(count=50):
+    """Centroids and orientations of the pile's cubes: layers of 4x4 and 3x3 alternately (50 cubes
+    fill four layers, 100 eight), the 3x3 layers shifted by half a pitch so that cubes land on
+    edges and corners of the layer below; the last layer is filled row by row; seeded random
+    tilts (the first 50 cubes are the same whatever the count)."""
     rnd = random.Random(12345)
     out = []
-    for k, n in enumerate((4, 3, 4, 3)):
+    k = 0
+    while len(out) < count:
+        n = 4 if k % 2 == 0 else 3
         for j in range(n):
             for i in range(n):
                 p = Vector3((i - (n - 1) / 2) * PILE_PITCH, (j - (n - 1) / 2) * PILE_PITCH,
@@ -210,22 +420,30 @@ def pile_layout():
                 axis.normalize()
                 q = Quaternion(axis, math.radians(rnd.uniform(-PILE_TILT, PILE_TILT)))
                 out.append((p, q))
-    return out
+        k += 1
+    return out[:count]
 
 
-def build_pile_sdem(engineMode="sdem"):
+def pile_wall_height(count):
+    """PILE_HEIGHT, or higher when the top layer starts above it (SDEM's walls are finite boxes;
+    the peers' Wall bodies are unbounded planes)."""
+    top = max(p[2] for p, _ in pile_layout(count)) + PILE_H
+    return max(PILE_HEIGHT, top)
+
+
+def build_pile_sdem(engineMode="sdem", count=50):
     O.reset()
     sdem = mpmsdem.SdemEngine(dtCheck="warn")
     mat = mpmsdem.material(density=DENSITY, friction=PILE_FRICTION, poisson=POISSON, barrierStiffness=KC,
                            normalDamping=0.0, tangentialDamping=0.1)
     R = PILE_H / 20.0
-    a, t, hh = PILE_INNER / 2, PILE_WALL / 2, PILE_HEIGHT / 2
+    a, t, hh = PILE_INNER / 2, PILE_WALL / 2, pile_wall_height(count) / 2
     sdem.box((a + 2 * t, a + 2 * t, t), R, mat, pos=(0, 0, -t), fixed=True)            # floor
     sdem.box((t, a, hh), R, mat, pos=(-a - t, 0, hh), fixed=True)                       # -x wall
     sdem.box((t, a, hh), R, mat, pos=(a + t, 0, hh), fixed=True)                        # +x wall
     sdem.box((a + 2 * t, t, hh), R, mat, pos=(0, -a - t, hh), fixed=True)               # -y wall
     sdem.box((a + 2 * t, t, hh), R, mat, pos=(0, a + t, hh), fixed=True)                # +y wall
-    ids = [sdem.box((PILE_H / 2,) * 3, R, mat, pos=p, ori=q) for p, q in pile_layout()]
+    ids = [sdem.box((PILE_H / 2,) * 3, R, mat, pos=p, ori=q) for p, q in pile_layout(count)]
     middle = {"sdem": [sdem.runner], "pass": [PyRunner(command="pass", iterPeriod=1)], "none": []}[engineMode]
     O.engines = [ForceResetter()] + middle + [newton((0, 0, -9.81), PILE_DAMPING)]
     O.dt = PILE_DT
@@ -238,13 +456,13 @@ def add_walls(matId):
         O.bodies.append(utils.wall(pos, axis=axis, sense=sense, material=matId))
 
 
-def build_pile_levelset(kn):
+def build_pile_levelset(kn, count=50):
     O.reset()
     mat = O.materials.append(FrictMat(density=DENSITY, frictionAngle=math.atan(PILE_FRICTION), young=1e6,
                                       poisson=POISSON))
     add_walls(mat)
     ids = []
-    for p, q in pile_layout():
+    for p, q in pile_layout(count):
         bd = utils.levelSetBody("box", center=p, extents=(PILE_H / 2,) * 3, spacing=PILE_H / 20.0,
                                 nSurfNodes=602, nodesPath=2, material=mat, orientation=q)
         ids.append(O.bodies.append(bd))
@@ -259,13 +477,13 @@ def build_pile_levelset(kn):
     return ids, None
 
 
-def build_pile_polyhedra(kv):
+def build_pile_polyhedra(kv, count=50):
     O.reset()
     mat = O.materials.append(PolyhedraMat(density=DENSITY, young=2 * kv, poisson=POISSON,
                                           frictionAngle=math.atan(PILE_FRICTION)))
     add_walls(mat)
     ids = []
-    for p, q in pile_layout():
+    for p, q in pile_layout(count):
         bd = polyhedra_utils.polyhedra(O.materials[mat], v=cube_vertices(PILE_H / 2))
         bd.state.pos = p
         bd.state.ori = q
@@ -275,6 +493,18 @@ def build_pile_polyhedra(kv):
                  InteractionLoop([Ig2_Polyhedra_Polyhedra_PolyhedraGeom(), Ig2_Wall_Polyhedra_PolyhedraGeom()],
                                  [Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()],
                                  [Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()]),
+                 newton((0, 0, -9.81), PILE_DAMPING)]
+    O.dt = PILE_DT
+    return ids, None
+
+
+def build_pile_clumps(kn, count=50, n=None):
+    n = n or CLUMP_N
+    O.reset()
+    mat, law = clump_material(kn, PILE_FRICTION, n)
+    add_walls(mat)
+    ids = [clump_cube(PILE_H, n, mat, p, q) for p, q in pile_layout(count)]
+    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()]), law,
                  newton((0, 0, -9.81), PILE_DAMPING)]
     O.dt = PILE_DT
     return ids, None
@@ -292,8 +522,15 @@ def sdem_pairs(sdem):
     return len(set(zip(list(c["id1"]), list(c["id2"])))) if len(c["id1"]) else 0
 
 
+def owner(i):
+    """The body a force acts on: the clump for a clump member, else the body itself."""
+    b = O.bodies[i]
+    return b.clumpId if b.isClumpMember else i
+
+
 def yade_contacts():
-    return sum(1 for i in O.interactions if i.isReal)
+    """Body pairs in contact (pairs of clumps for clumps, not sphere pairs)."""
+    return len(set(tuple(sorted((owner(i.id1), owner(i.id2)))) for i in O.interactions if i.isReal))
 
 
 # ---------------------------------------------------------------------------- measuring
@@ -359,12 +596,23 @@ def delta_max_sdem(h, steps):
 
 
 def main(argv=None):
+    global CLUMP_N
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="short runs (~30 s in all)")
     ap.add_argument("--repeat", type=int, default=None, help="timed runs per case, minimum taken (default 3, quick 1)")
     ap.add_argument("--markdown", metavar="FILE", help="append the tables and the command to FILE")
     ap.add_argument("--no-polyhedra", action="store_true", help="skip YADE Polyhedra (the slowest peer)")
+    ap.add_argument("--no-clumps", action="store_true", help="skip the sphere-clump cubes")
+    ap.add_argument("--clump-n", type=int, default=CLUMP_N,
+                    help="spheres per cube edge of a clump, n^3 in all, radius h/2n (default %d)" % CLUMP_N)
+    ap.add_argument("--pile-count", type=int, default=None, help="cubes in the pile (default 100, quick 30)")
+    ap.add_argument("--pile-steps", type=int, default=None, help="steps of the pile (default 8000, quick 1500)")
+    ap.add_argument("--stack-steps", type=int, default=None, help="steps of the stack (default 10000, quick 3000)")
+    ap.add_argument("--only", default="collision,stack,pile", help="comma-separated scenes to run")
     args = ap.parse_args(argv)
+    CLUMP_N = args.clump_n
+    scenes = set(args.only.split(","))
+    pileCount = args.pile_count or (30 if args.quick else 100)
     repeat = args.repeat or (1 if args.quick else 3)
     if os.environ.get("OMP_NUM_THREADS") != "1":
         print("warning: OMP_NUM_THREADS is not 1; YADE's loops may use several threads", file=sys.stderr)
@@ -379,6 +627,8 @@ def main(argv=None):
     collisions = [(0.1, 60000), (0.3, 60000)]
     if args.quick:
         collisions = [(0.1, 60000), (0.3, 30000)]
+    if "collision" not in scenes:
+        collisions = []
     for h, steps in collisions:
         scene = "collision h=%.1f m (%d steps)" % (h, steps)
         dmax, ncontact = delta_max_sdem(h, steps)
@@ -389,7 +639,8 @@ def main(argv=None):
         kv = kn / h ** 2                          # volumetric [N/m^3]: face overlap volume = h^2 * delta
         stiff[h] = kn
         notes.append("h=%.1f m: SDEM peak overlap %.3g mm, in contact for about %d steps -> peers kn = %.3g N/m "
-                     "(LevelSet), kv = %.3g N/m^3 (Polyhedra)" % (h, dmax * 1e3, ncontact, kn, kv))
+                     "(LevelSet), kv = %.3g N/m^3 (Polyhedra), %.3g N/m per sphere pair (clumps, %d^2 pairs "
+                     "per face)" % (h, dmax * 1e3, ncontact, kn, kv, kn / CLUMP_N ** 2, CLUMP_N))
 
         def after_col(ids, extra, e0):
             return collision_figures(ids, e0)
@@ -401,6 +652,9 @@ def main(argv=None):
         if not args.no_polyhedra:
             t, d = measure(lambda: build_collision_polyhedra(h, kv), steps, repeat, after_col)
             rows.append((scene, "YADE Polyhedra", t, d))
+        if not args.no_clumps:
+            t, d = measure(lambda: build_collision_clumps(h, kn), steps, repeat, after_col)
+            rows.append((scene, "YADE clump %d^3" % CLUMP_N, t, d))
         # the contact phase alone (the free flight above is mostly overhead): start 0.1 mm apart and
         # run as long as the longer of the SDEM contact and the peers' linear contact (pi sqrt(mu/kn)), +20 %;
         # short runs, so 3x as many repeats
@@ -416,30 +670,70 @@ def main(argv=None):
         if not args.no_polyhedra:
             t, d = measure(lambda: build_collision_polyhedra(h, kv, True), csteps, 3 * repeat, after_col)
             rows.append((cscene, "YADE Polyhedra", t, d))
+        if not args.no_clumps:
+            t, d = measure(lambda: build_collision_clumps(h, kn, True), csteps, 3 * repeat, after_col)
+            rows.append((cscene, "YADE clump %d^3" % CLUMP_N, t, d))
 
-    # ---- scene 2: pile
-    psteps = 1500 if args.quick else 5000
-    scene = "pile 50 cubes (%d steps)" % psteps
-    # peers' stiffness: that matched to SDEM in the collision of cubes of the same size
+    # peers' stiffness for the stack and the pile: that matched to SDEM in the collision of cubes of
+    # the same size
     knPile = stiff.get(PILE_H) or 2 * (0.5 * (DENSITY * PILE_H ** 3 / 2) * 4.0) / delta_max_sdem(PILE_H, 60000)[0] ** 2
-    notes.append("pile: peers' kn = %.3g N/m (LevelSet), kv = %.3g N/m^3 (Polyhedra), as for h = %.1f m; "
-                 "YADE Wall bodies for the peers' floor and walls; NewtonIntegrator damping %.1f for all; "
-                 "dt %g s" % (knPile, knPile / PILE_H ** 2, PILE_H, PILE_DAMPING, PILE_DT))
 
-    def after_sdem_pile(ids, extra, e0):
-        return pile_figures(ids, sdem_pairs(extra))
+    # ---- scene 2: three stacked cubes
+    if "stack" in scenes:
+        ssteps = args.stack_steps or (3000 if args.quick else 10000)
+        scene = "stack of %d cubes (%d steps)" % (STACK_COUNT, ssteps)
+        R2 = 2 * STACK_H / 20.0
 
-    def after_peer_pile(ids, extra, e0):
-        return pile_figures(ids, yade_contacts())
-    t, d, parts = sdem_breakdown(build_pile_sdem, psteps, repeat, after_sdem_pile)
-    rows.append((scene, "mpmsdem SDEM", t, d))
-    parts_rows.append((scene, t, parts, d.get("warnings", 0)))
-    t, d = measure(lambda: build_pile_levelset(knPile), psteps, repeat, after_peer_pile)
-    rows.append((scene, "YADE LevelSet", t, d))
-    if not args.no_polyhedra:
-        # one run only: Polyhedra is by far the slowest here, its noise does not matter
-        t, d = measure(lambda: build_pile_polyhedra(knPile / PILE_H ** 2), psteps, 1, after_peer_pile)
-        rows.append((scene, "YADE Polyhedra", t, d))
+        def after_sdem_stack(ids, extra, e0):
+            forces, points = stack_pair_forces_sdem(extra)
+            # a face-face patch carries the load on its corner points, equally by symmetry
+            return stack_figures(ids, extra.floorId, forces,
+                                 lambda load, key: mpmsdem.analysis.equilibriumOverlap(load, R2, KC, points.get(key, 4)))
+
+        def after_peer_stack(ids, extra, e0):
+            forces, _ = stack_pair_forces_yade()
+            return stack_figures(ids, 0, forces, lambda load, key: load / knPile)
+        t, d, parts = sdem_breakdown(build_stack_sdem, ssteps, repeat, after_sdem_stack)
+        rows.append((scene, "mpmsdem SDEM", t, d))
+        parts_rows.append((scene, t, parts, d.get("warnings", 0)))
+        t, d = measure(lambda: build_stack_levelset(knPile), ssteps, repeat, after_peer_stack)
+        rows.append((scene, "YADE LevelSet", t, d))
+        if not args.no_polyhedra:
+            t, d = measure(lambda: build_stack_polyhedra(knPile / STACK_H ** 2), ssteps, repeat, after_peer_stack)
+            rows.append((scene, "YADE Polyhedra", t, d))
+        if not args.no_clumps:
+            t, d = measure(lambda: build_stack_clumps(knPile), ssteps, repeat, after_peer_stack)
+            rows.append((scene, "YADE clump %d^3" % CLUMP_N, t, d))
+        notes.append("stack: %d cubes h = %.1f m on a floor (SDEM: a fixed box; peers: a YADE Wall), outer "
+                     "surfaces touching at the start, gravity 9.81, NewtonIntegrator damping %.1f for all, dt %g s; "
+                     "peers' kn as in the pile; exact overlaps: SDEM equilibriumOverlap over the patch's contact "
+                     "points, peers load/kn" % (STACK_COUNT, STACK_H, STACK_DAMPING, STACK_DT))
+
+    # ---- scene 3: pile
+    if "pile" in scenes:
+        psteps = args.pile_steps or (1500 if args.quick else 8000)
+        scene = "pile %d cubes (%d steps)" % (pileCount, psteps)
+        notes.append("pile: peers' kn = %.3g N/m (LevelSet), kv = %.3g N/m^3 (Polyhedra), as for h = %.1f m; "
+                     "YADE Wall bodies for the peers' floor and walls; NewtonIntegrator damping %.1f for all; "
+                     "dt %g s" % (knPile, knPile / PILE_H ** 2, PILE_H, PILE_DAMPING, PILE_DT))
+
+        def after_sdem_pile(ids, extra, e0):
+            return pile_figures(ids, sdem_pairs(extra))
+
+        def after_peer_pile(ids, extra, e0):
+            return pile_figures(ids, yade_contacts())
+        t, d, parts = sdem_breakdown(lambda mode: build_pile_sdem(mode, pileCount), psteps, repeat, after_sdem_pile)
+        rows.append((scene, "mpmsdem SDEM", t, d))
+        parts_rows.append((scene, t, parts, d.get("warnings", 0)))
+        t, d = measure(lambda: build_pile_levelset(knPile, pileCount), psteps, repeat, after_peer_pile)
+        rows.append((scene, "YADE LevelSet", t, d))
+        if not args.no_polyhedra:
+            # one run only: Polyhedra is by far the slowest here, its noise does not matter
+            t, d = measure(lambda: build_pile_polyhedra(knPile / PILE_H ** 2, pileCount), psteps, 1, after_peer_pile)
+            rows.append((scene, "YADE Polyhedra", t, d))
+        if not args.no_clumps:
+            t, d = measure(lambda: build_pile_clumps(knPile, pileCount), psteps, repeat, after_peer_pile)
+            rows.append((scene, "YADE clump %d^3" % CLUMP_N, t, d))
 
     # ---- report
     out = format_report(rows, parts_rows, notes, repeat, args)
@@ -459,6 +753,10 @@ def fmt_fig(d):
         if not d["separated"]:
             s += " (NOT separated)"
         return s
+    if "floor" in d:
+        return ("floor force %+.1e, pair forces %.1e, heights %.2g mm (floor overlap %.3g mm), drift %.2g mm, "
+                "tilt %.2g°, Ek %.2g J" % (d["floor"], d["fErr"], d["zErr"] * 1e3, d["dFloor"] * 1e3,
+                                          d["drift"] * 1e3, d["tilt"], d["Ek"]))
     s = "contacts %d, Ek %.3g J, z mean %.4f m, z top %.4f m" % (d["contacts"], d["Ek"], d["zmean"], d["ztop"])
     if d["escaped"]:
         s += ", %d cubes outside the box" % d["escaped"]
