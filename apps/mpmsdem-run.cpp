@@ -35,8 +35,9 @@
 //                   --restart is refused (block states and contact histories are not in
 //                   mpm.h5).
 // Progress lines go to stdout (stderr with --bench) every 5 % of the run. A coupled run ends
-// with the split of the step loop's wall time (MPM step, MP-block coupling, blocks, the rest),
-// also in --bench's JSON as "stage_seconds".
+// with the split of the step loop's wall time (MPM step, MP-block coupling, blocks, the rest)
+// and the smallest contact step of the run and when it occurred, also in --bench's JSON as
+// "stage_seconds" and "contact_step_min" / "contact_step_min_time" (null while nothing touched).
 // Exit status: 0 done; 2 bad parameters or command line (a scene too large for the memory
 // included); 3 run failure (NaN, blow-up, step
 // above the stable one), after writing the last good state as a final snapshot; 1 other
@@ -273,6 +274,9 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
   if (st.coupled) {
     const auto& s = st.coupled->stageSeconds();
     out["stage_seconds"] = {{"mpm", s.mpm}, {"coupling", s.coupling}, {"blocks", s.blocks}};
+    const auto& low = st.coupled->contactStepLow();
+    out["contact_step_min"] = std::isfinite(low.step) ? nlohmann::json(low.step) : nlohmann::json();
+    out["contact_step_min_time"] = std::isfinite(low.step) ? nlohmann::json(low.time) : nlohmann::json();
   }
   std::cout << out.dump() << std::endl;
   return 0;
@@ -429,7 +433,15 @@ class OutputRun {
     }
     const double loop = since(t0);
     std::printf("mpmsdem-run: done, t = %.6g s, %ld steps, %.3g s wall\n", solver_.time(), solver_.steps(), loop);
-    if (stepper_.coupled) std::printf("mpmsdem-run: step loop: %s\n", stageSplit(*stepper_.coupled, loop).c_str());
+    if (stepper_.coupled) {
+      std::printf("mpmsdem-run: step loop: %s\n", stageSplit(*stepper_.coupled, loop).c_str());
+      const auto& low = stepper_.coupled->contactStepLow();
+      if (std::isfinite(low.step))
+        std::printf("mpmsdem-run: smallest contact step %.4g s at t = %.6g s (a fixed run.dt must stay below it)\n",
+                    low.step, low.time);
+      else
+        std::printf("mpmsdem-run: no contact in this run\n");
+    }
     return 0;
   }
 

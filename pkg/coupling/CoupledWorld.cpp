@@ -37,6 +37,8 @@ void CoupledWorld::step(double dt) {
   stageSeconds_.coupling += seconds(t0, t1);
   stageSeconds_.blocks += seconds(t1, t2);
   stageSeconds_.mpm += seconds(t2, t3);
+  const double c = coupledContactStep(world.engine, coupling);
+  if (c < contactStepLow_.step) contactStepLow_ = {c, solver_->time()};
 }
 
 void advanceFlow(mpm::MpmSolver& solver, double dt) {

@@ -8,6 +8,7 @@
 // Inside YADE the same order is kept by mpmsdem.CoupledEngine, with NewtonIntegrator in place
 // of step 2's integration.
 #pragma once
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -44,10 +45,20 @@ class CoupledWorld {
   };
   const StageSeconds& stageSeconds() const { return stageSeconds_; }
 
+  // The smallest contact step (coupledContactStep) after any step since construction [s], and
+  // the time it was reached [s]: how close a run came to its contact limit, which a fixed step
+  // must stay under (inf and NaN while nothing has touched).
+  struct ContactStepLow {
+    double step = std::numeric_limits<double>::infinity();
+    double time = std::numeric_limits<double>::quiet_NaN();
+  };
+  const ContactStepLow& contactStepLow() const { return contactStepLow_; }
+
  private:
   std::unique_ptr<mpm::MpmSolver> solver_;
   std::vector<Vec3> blockForce_, blockTorque_;
   StageSeconds stageSeconds_;
+  ContactStepLow contactStepLow_;
 };
 
 // The flow's part of a coupled step: the MPM step, or for a solver without material points

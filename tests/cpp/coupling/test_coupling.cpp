@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <random>
 
 #include "common/Error.hpp"
@@ -139,6 +140,36 @@ INSTANTIATE_TEST_SUITE_P(CpuBothPrecisions, MpSdemCouplingInPrecision,
                          mpm::agreement::paramName);
 
 }  // namespace
+
+// The run's lowest contact step is the smallest coupledContactStep after any step, with the
+// time it was reached: inf before the blob reaches the cube, then finite and never above the
+// step of the first contact.
+TEST(CoupledWorld, RecordsTheLowestContactStepOfTheRun) {
+  auto world = blobWorld(24, 1.0);
+  CoupledWorld& w = *world;
+  const int cube = addCube(w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000);
+  w.coupling.setPair(0, pair(0.3));
+  double low = std::numeric_limits<double>::infinity(), lowTime = 0, first = 0;
+  for (int s = 0; s < 1500; ++s) {
+    w.step(1e-5);
+    const double c = coupledContactStep(w.world.engine, w.coupling);
+    if (w.coupling.contactCount(cube) == 0 && low == std::numeric_limits<double>::infinity()) {
+      ASSERT_EQ(w.contactStepLow().step, std::numeric_limits<double>::infinity()) << "step " << s;
+      ASSERT_TRUE(std::isnan(w.contactStepLow().time));
+    }
+    if (c < low) {
+      if (!std::isfinite(low)) first = c;
+      low = c;
+      lowTime = w.mpm().time();
+    }
+  }
+  ASSERT_TRUE(std::isfinite(low));
+  EXPECT_EQ(w.contactStepLow().step, low);
+  EXPECT_EQ(w.contactStepLow().time, lowTime);
+  EXPECT_LE(low, first);
+  EXPECT_GT(lowTime, 0.0);
+  EXPECT_LT(lowTime, 1500 * 1e-5);
+}
 
 #ifdef MPMSDEM_WITH_CGAL
 // The stored table that builds without CGAL use is the hull CGAL builds today, and fromCore
