@@ -32,10 +32,12 @@ Our readings where the paper leaves room:
   8e-5 s (rotation of the thin blocks), below the MPM step of the flow, and material points
   driven deep into the stiffening barrier at the impact lower it further (below 4e-5 s at
   dx = 0.01 m). The run starts at the smaller of half the MPM step and ``CONTACT_DT`` (the
-  contact step is unknown before the first step) and resets O.dt to half the coupled critical
-  step (``CoupledEngine.criticalTimeStep``) every ``ADAPT_EVERY`` steps (every 5 ms in the free
-  flow): at dx = 0.01 m with 8 points per cell the step halves within 50 steps of the impact.
-  The coupled engine stops the run if a step ever exceeds the critical step.
+  contact step is unknown before the first step), and the coupled engine then sets O.dt to half
+  the coupled critical step at every step (``CoupledEngine(dtAuto=0.5)``), bounded by
+  ``DT_MAX``: the glued bottom block is a fixed body and no longer limits the step, and at the
+  flow's step the middle block falling onto the bed went deep into the barrier in one step
+  (critical step 2.5e-4 s after a step of 3.2e-4 s at dx = 0.02 m). The coupled engine stops
+  the run if a step ever exceeds the critical step.
 
 Two runs: the free flow without blocks (h_f, v_f at the blocks' station when the front arrives,
 for Eq 20), then the coupled run. Writes to ``--out`` (default ``results/liu2018_blocks``):
@@ -65,7 +67,8 @@ KC = 1e4                                  # barrier stiffness [N/m]
 SWEEP = HALF[2] / 10.0                    # R = h/20 of the smallest side, as Block's default
 BED_SWEEP = 0.005                         # Flume's default bed R [m]
 CONTACT_DT = 4e-5                         # [s], see the docstring
-ADAPT_EVERY = 10                          # steps between O.dt updates in the coupled run
+DT_MAX = 1e-4                             # [s], largest O.dt the step control sets
+CHUNK = 10                                # steps between sample checks in the coupled run
 SMOOTH = 0.01                             # force averaging window [s]
 FALL_DROP = HALF[2]                       # "fallen": centre half a block height below its start [m]
 GRANULAR = {"density": RHO_FLOW, "young_modulus": 5e4, "poisson_ratio": 0.40,
@@ -116,12 +119,8 @@ def scene(dx, ppc, a, blocks=(), output=None, verbose=True):
               verbose=verbose)
     from yade import O
     O.dt = min(O.dt, CONTACT_DT)
+    s.coupled.dtAuto, s.coupled.dtMax = 0.5, DT_MAX
     return s
-
-
-def adaptDt(s):
-    from yade import O
-    O.dt = 0.5 * s.coupled.criticalTimeStep()
 
 
 def freeFlow(dx, ppc, a, verbose=True):
@@ -131,7 +130,6 @@ def freeFlow(dx, ppc, a, verbose=True):
     probe = analysis.FlowProbe(X_BLOCKS, halfWidth=dx, bedZ=0.0, L0=X_BLOCKS - COLUMN_L, window=0.05)
     while True:
         mpmsdem.run(max(1, int(round(0.005 / O.dt))), s.coupled)
-        adaptDt(s)
         probe.sample(O.time, s.mpm.particles())
         if probe.arrival is not None and O.time > probe.arrival + probe.window:
             break
@@ -148,8 +146,7 @@ def runCoupled(s, duration, sampleEvery=0.002):
     end = O.time + duration
     nextSample = O.time + sampleEvery
     while O.time < end - 1e-12:
-        mpmsdem.run(max(1, min(ADAPT_EVERY, int(math.ceil((end - O.time) / O.dt - 1e-9)))), s.coupled)
-        adaptDt(s)
+        mpmsdem.run(max(1, min(CHUNK, int(math.ceil((end - O.time) / O.dt - 1e-9)))), s.coupled)
         s.extra["dtMin"] = min(s.extra["dtMin"], O.dt)
         if O.time < nextSample - 1e-12 and O.time < end - 1e-12:
             continue

@@ -51,6 +51,17 @@ class CoupledEngine:
         MP–block and block–block contacts (tangent barrier stiffness with the MP and block
         masses, :attr:`contactTimeStep`); ``"warn"`` warns once and counts
         (``timeStepWarnings``). May be changed between steps.
+    :param dtAuto: time-step control, like YADE's time steppers: None (default) leaves
+        ``O.dt`` to the script; a factor f in (0, 1] sets ``O.dt = f × criticalTimeStep()``
+        at the start of every step, from the contacts of the step before (at the first step,
+        when the contacts are not known yet, ``O.dt`` is only capped at f × the MPM step). A
+        block landing on another stiffens its contact within a few steps, so a step re-read
+        every step stays safe where one fixed for 10 steps may not. May be changed between
+        steps.
+    :param dtMax: with ``dtAuto``, the largest ``O.dt`` it may set [s] (None: no bound). The
+        critical step measures the stiffness of the contacts there are; a block about to land
+        has none, and a step the flow alone allows can carry it deep into the barrier at once.
+        Bound the step where blocks fall onto others (v dt well below the sweep radius).
     :param historySlots: simultaneous block contacts per material point that keep their
         tangential history, in [1, 4] (default 2: a point between a block and the bed).
     :param output: folder for ``coupled.h5`` (per block every ``outputEvery`` s: ``pos``,
@@ -67,7 +78,7 @@ class CoupledEngine:
     """
 
     def __init__(self, sdem, mpm, pairs, dtCheck="raise", historySlots=2, output=None, outputEvery=None,
-                 vtkEvery=None, plot=False, label="coupled", verbose=True):
+                 vtkEvery=None, plot=False, label="coupled", verbose=True, dtAuto=None, dtMax=None):
         from .mpm import MpmEngine
         from .sdem import SdemEngine
         if not isinstance(sdem, SdemEngine):
@@ -82,6 +93,8 @@ class CoupledEngine:
         self._bridge = _mpmsdem.CouplingBridge(sdem._bridge, mpm.solver)
         self._bridge.historySlots = int(historySlots)
         self.dtCheck = dtCheck
+        self.dtAuto = dtAuto
+        self.dtMax = dtMax
         self._pairs = {}
         if not isinstance(pairs, dict) or not pairs:
             raise ValueError("pairs = %r: must be a non-empty dict {SdemMat: {...}} of flow-block contact "
@@ -92,6 +105,7 @@ class CoupledEngine:
         self.verbose = verbose
         self.error = None
         self._started = False
+        self._contactsKnown = False  # criticalTimeStep() holds the contact step only after a step
         self._warned = 0
         self._nextRecord = self._nextVtk = None
         self._lastRecord = self._lastVtk = -math.inf
@@ -128,6 +142,28 @@ class CoupledEngine:
             raise ValueError("dtCheck = %r: must be one of %s" % (value, ", ".join(DT_CHECKS)))
         self._bridge.strict = value == "raise"
         self._dtCheck = value
+
+    @property
+    def dtAuto(self):
+        """None, or the factor f of ``O.dt = f × criticalTimeStep()`` set every step."""
+        return self._dtAuto
+
+    @dtAuto.setter
+    def dtAuto(self, value):
+        if value is not None and not (isinstance(value, (int, float)) and 0 < value <= 1):
+            raise ValueError("dtAuto = %r: must be None or a factor in (0, 1] of the critical step" % (value,))
+        self._dtAuto = value
+
+    @property
+    def dtMax(self):
+        """None, or the largest ``O.dt`` that ``dtAuto`` sets [s]."""
+        return self._dtMax
+
+    @dtMax.setter
+    def dtMax(self, value):
+        if value is not None and not (isinstance(value, (int, float)) and value > 0):
+            raise ValueError("dtMax = %r s: must be None or > 0" % (value,))
+        self._dtMax = value
 
     @property
     def contactTimeStep(self):
@@ -176,11 +212,19 @@ class CoupledEngine:
         # step apart). The forces recorded are those of the step that led to t; finish() records
         # the state the run ends with.
         self._recordDue(self.mpm.time)
+        if self._dtAuto is not None:
+            # Set before this step's forces, so that the coupling, NewtonIntegrator and O.time
+            # all advance by the same dt.
+            step = self._dtAuto * self.criticalTimeStep()
+            if self._dtMax is not None:
+                step = min(step, self._dtMax)
+            O.dt = step if self._contactsKnown else min(O.dt, step)
         try:
             self._bridge.step(O.bodies, O.forces, O.dt)
         except Exception as e:
             self._fail(e)
             raise
+        self._contactsKnown = True
         self.sdem._afterStep()
         self.mpm._afterStep(O.dt)
         t = self.mpm.time

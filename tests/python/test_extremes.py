@@ -269,6 +269,34 @@ def test_coupled_contact_step_read_out_and_dt_check_switched_mid_run():
         coupled.dtCheck = "stop"
 
 
+def test_coupled_dt_auto_follows_the_critical_step_of_the_step_before():
+    # dtAuto = f: each step runs with O.dt = f x criticalTimeStep() as it stood after the step
+    # before (the first step only caps the script's O.dt), dtMax bounds it; through the impact
+    # the contact part falls below the MPM step and O.dt follows it down; no step ever exceeds
+    # the check. Bad values are refused by name.
+    mpm, coupled, cube = _blobAndBlock(pairStiffness=1e6)
+    coupled.dtAuto = 0.5
+    O.dt = 1e-6
+    mpmsdem.run(1, coupled)
+    assert O.dt == 1e-6  # the first step: below 0.5 x the MPM step, kept
+    seen = []  # (O.dt of the step, criticalTimeStep() after it)
+    O.engines = O.engines + [_every_step(lambda: seen.append((O.dt, coupled.criticalTimeStep())))]
+    mpmsdem.run(600, coupled)
+    for (dt, _), (_, crit) in zip(seen[1:], seen[:-1]):
+        assert dt == 0.5 * crit
+    dts = [d for d, _ in seen]
+    assert max(dts) == pytest.approx(0.5 * mpm.stableTimeStep(), rel=0.05)
+    assert min(dts[1:]) < 0.4 * max(dts)  # the impact lowered it
+    coupled.dtMax = 2e-5
+    mpmsdem.run(20, coupled)
+    assert all(d <= 2e-5 for d, _ in seen[-20:])
+    for name, bad in (("dtAuto", 0.0), ("dtAuto", 1.5), ("dtAuto", "0.5")):
+        with pytest.raises(ValueError, match="^%s = " % name):
+            coupled.dtAuto = bad
+    with pytest.raises(ValueError, match="^dtMax = "):
+        coupled.dtMax = 0
+
+
 # ====================================================================== near core contact
 def test_blocks_pressed_to_near_core_contact():
     # A load on the cube drives the overlap to 0.9, 0.99 and 0.999 of R_i + R_j (R = h/20):
