@@ -137,6 +137,20 @@ def build_collision_sdem(h, engineMode="sdem", contactOnly=False):
     return [a, b], sdem
 
 
+def levelset_engines(kn, gravity, damping, walls):
+    """YADE's LevelSet loop: linear springs kn (shear kn * POISSON), Cundall-Strack friction,
+    with wall contacts when ``walls``."""
+    bounds = [Bo1_LevelSet_Aabb()] + ([Bo1_Wall_Aabb()] if walls else [])
+    geoms = [Ig2_LevelSet_LevelSet_ScGeom()] + ([Ig2_Wall_LevelSet_ScGeom()] if walls else [])
+    return [ForceResetter(),
+            InsertionSortCollider(bounds, verletDist=0),
+            InteractionLoop(geoms,
+                            [Ip2_FrictMat_FrictMat_FrictPhys(kn=MatchMaker(algo="val", val=kn),
+                                                             ks=MatchMaker(algo="val", val=kn * POISSON))],
+                            [Law2_ScGeom_FrictPhys_CundallStrack(sphericalBodies=False)]),
+            newton(gravity, damping)]
+
+
 def build_collision_levelset(h, kn, contactOnly=False):
     O.reset()
     mat = O.materials.append(FrictMat(density=DENSITY, frictionAngle=0.0, young=1e6, poisson=POISSON))
@@ -149,13 +163,7 @@ def build_collision_levelset(h, kn, contactOnly=False):
         i = O.bodies.append(bd)
         O.bodies[i].state.vel = Vector3(v, 0, 0)
         ids.append(i)
-    O.engines = [ForceResetter(),
-                 InsertionSortCollider([Bo1_LevelSet_Aabb()], verletDist=0),
-                 InteractionLoop([Ig2_LevelSet_LevelSet_ScGeom()],
-                                 [Ip2_FrictMat_FrictMat_FrictPhys(kn=MatchMaker(algo="val", val=kn),
-                                                                  ks=MatchMaker(algo="val", val=kn * POISSON))],
-                                 [Law2_ScGeom_FrictPhys_CundallStrack(sphericalBodies=False)]),
-                 newton((0, 0, 0), 0.0)]
+    O.engines = levelset_engines(kn, (0, 0, 0), 0.0, walls=False)
     O.dt = 5e-6
     return ids, None
 
@@ -294,13 +302,7 @@ def build_stack_levelset(kn):
     ids = [O.bodies.append(utils.levelSetBody("box", center=(0, 0, stack_start(k)), extents=(STACK_H / 2,) * 3,
                                               spacing=STACK_H / 20.0, nSurfNodes=602, nodesPath=2, material=mat))
            for k in range(STACK_COUNT)]
-    O.engines = [ForceResetter(),
-                 InsertionSortCollider([Bo1_LevelSet_Aabb(), Bo1_Wall_Aabb()], verletDist=0),
-                 InteractionLoop([Ig2_LevelSet_LevelSet_ScGeom(), Ig2_Wall_LevelSet_ScGeom()],
-                                 [Ip2_FrictMat_FrictMat_FrictPhys(kn=MatchMaker(algo="val", val=kn),
-                                                                  ks=MatchMaker(algo="val", val=kn * POISSON))],
-                                 [Law2_ScGeom_FrictPhys_CundallStrack(sphericalBodies=False)]),
-                 newton((0, 0, -9.81), STACK_DAMPING)]
+    O.engines = levelset_engines(kn, (0, 0, -9.81), STACK_DAMPING, walls=True)
     O.dt = STACK_DT
     remember_orientations(ids)
     return ids, None
@@ -466,13 +468,7 @@ def build_pile_levelset(kn, count=50):
         bd = utils.levelSetBody("box", center=p, extents=(PILE_H / 2,) * 3, spacing=PILE_H / 20.0,
                                 nSurfNodes=602, nodesPath=2, material=mat, orientation=q)
         ids.append(O.bodies.append(bd))
-    O.engines = [ForceResetter(),
-                 InsertionSortCollider([Bo1_LevelSet_Aabb(), Bo1_Wall_Aabb()], verletDist=0),
-                 InteractionLoop([Ig2_LevelSet_LevelSet_ScGeom(), Ig2_Wall_LevelSet_ScGeom()],
-                                 [Ip2_FrictMat_FrictMat_FrictPhys(kn=MatchMaker(algo="val", val=kn),
-                                                                  ks=MatchMaker(algo="val", val=kn * POISSON))],
-                                 [Law2_ScGeom_FrictPhys_CundallStrack(sphericalBodies=False)]),
-                 newton((0, 0, -9.81), PILE_DAMPING)]
+    O.engines = levelset_engines(kn, (0, 0, -9.81), PILE_DAMPING, walls=True)
     O.dt = PILE_DT
     return ids, None
 
