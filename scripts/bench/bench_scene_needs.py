@@ -89,6 +89,17 @@ def usPerStep(steps):
     return {"total": (s[-1] - s[0]) / steps * 1e6}
 
 
+def usPerStepSplit(steps, key, stages):
+    """usPerStep of the coupled engine in _ENGINES[0], plus r[key]: the µs per step of its
+    ``stages`` (keys of its timings(), wall time: the engine's own split)."""
+    c = _ENGINES[0]
+    c.resetTimings()
+    r = usPerStep(steps)
+    t = c.timings()
+    r[key] = 1e6 * sum(t[k] for k in stages) / t["steps"]
+    return r
+
+
 def interleaved(cases, repeat):
     """cases: {name: (build, measure)}, build() setting up a fresh scene and returning its
     engines, measure() a dict of numbers. Every repeat runs each case once, in turn, so that
@@ -200,14 +211,8 @@ def yadeA(repeat, steps, tmp):
         O.dt = 1e-5
         return [c]
 
-    def measureCoupled():
-        c = _ENGINES[0]
-        c.resetTimings()
-        r = usPerStep(steps)
-        t = c.timings()
-        r["flow"] = 1e6 * (t["coupling"] + t["mpm"]) / t["steps"]  # wall time: the engine's own split
-        return r
-    return interleaved({"coupled": (coupled, measureCoupled), "alone": (alone, lambda: usPerStep(steps))}, repeat)
+    return interleaved({"coupled": (coupled, lambda: usPerStepSplit(steps, "flow", ("coupling", "mpm"))),
+                        "alone": (alone, lambda: usPerStep(steps))}, repeat)
 
 
 def yadeB(repeat, steps):
@@ -225,14 +230,8 @@ def yadeB(repeat, steps):
         O.dt = 0.5 * mpm.stableTimeStep()
         return [c]
 
-    def measureCoupled():
-        c = _ENGINES[0]
-        c.resetTimings()
-        r = usPerStep(steps)
-        t = c.timings()
-        r["coupling"] = 1e6 * t["coupling"] / t["steps"]  # wall time: the engine's own split
-        return r
-    return interleaved({"coupled": (coupled, measureCoupled), "alone": (alone, lambda: usPerStep(steps))}, repeat)
+    return interleaved({"coupled": (coupled, lambda: usPerStepSplit(steps, "coupling", ("coupling",))),
+                        "alone": (alone, lambda: usPerStep(steps))}, repeat)
 
 
 def yadeC(repeat, steps):
