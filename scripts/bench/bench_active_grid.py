@@ -21,7 +21,6 @@ import argparse
 import datetime
 import json
 import os
-import platform
 import resource
 import subprocess
 import sys
@@ -156,7 +155,7 @@ def main():
     if args.markdown:
         commit = subprocess.run(["git", "-C", bench_mpm.REPO, "rev-parse", "--short", "HEAD"],
                                 capture_output=True, text=True).stdout.strip()
-        machine = "%s, %d CPU cores" % (platform.processor() or platform.machine(), os.cpu_count() or 0)
+        machine = bench_mpm.machine()
         with open(args.markdown, "a") as f:
             f.write("\n### Cost against grid fill, %s (commit %s)\n\n" %
                     (datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), commit or "unknown"))

@@ -60,6 +60,20 @@ def dam_break_scene(particles, dx=0.01):
     }, 8 * block[0] * block[1] * block[2]
 
 
+def machine():
+    """'<CPU model>, <n> cores (nproc), <arch>' for the benchmark records."""
+    model = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    model = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return "%s, %d cores (nproc), %s" % (model, os.cpu_count() or 0, platform.machine())
+
+
 def find_exe(args):
     if args.exe:
         return args.exe
@@ -231,16 +245,16 @@ def main():
                                     capture_output=True, text=True).stdout.strip()
         except OSError:
             commit = ""
-        machine = "%s, %d CPU cores" % (platform.processor() or platform.machine(), os.cpu_count() or 0)
+        machine_text = machine()
         if use_cuda:
-            machine += ", GPU: %s" % (gpu_name() or "unknown")
+            machine_text += ", GPU: %s" % (gpu_name() or "unknown")
         os.makedirs(os.path.dirname(os.path.abspath(args.markdown)), exist_ok=True)
         with open(args.markdown, "a") as f:
             f.write("\n### MPM throughput, %s (commit %s)\n\n" %
                     (datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), commit or "unknown"))
             f.write("Machine: %s. CPU runs with OMP_NUM_THREADS=%d. Dam-break block, 8 MPs/cell, "
                     "dt auto. updates/s = particles x steps / wall time of the step loop.\n\n"
-                    % (machine, args.threads))
+                    % (machine_text, args.threads))
             f.write(md)
     return 1 if failed else 0
 

@@ -25,13 +25,12 @@ import argparse
 import json
 import math
 import os
-import platform
 import subprocess
 import sys
 import tempfile
 import threading
 
-from bench_mpm import render_table  # same folder: one table renderer for both benchmarks
+from bench_mpm import machine, render_table  # same folder: shared with the other benchmarks
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PEER = os.path.join(REPO, "scripts", "bench", "peers", "taichi_mpm.py")
@@ -148,19 +147,6 @@ def ensure_peer_env(venv, python, spec):
         subprocess.run([py, "-m", "pip", "install", "-q", "--upgrade", "pip"], check=True)
         subprocess.run([py, "-m", "pip", "install", "-q", spec], check=True)
     return py
-
-
-def machine():
-    model = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    model = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return "%s, nproc %d" % (model, os.cpu_count() or 0)
 
 
 def table(rows):

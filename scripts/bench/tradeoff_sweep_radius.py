@@ -49,12 +49,13 @@ import importlib.util
 import json
 import math
 import os
-import platform
 import re
 import shutil
 import subprocess
 import sys
 import time
+
+from bench_mpm import machine  # same folder: shared with the other benchmarks
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 DX = 0.02
@@ -364,19 +365,6 @@ def commit():
         return subprocess.check_output(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True).strip()
     except (OSError, subprocess.CalledProcessError):
         return "?"
-
-
-def machine():
-    model = "?"
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    model = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return "%d cores (nproc), %s, %s" % (os.cpu_count() or 0, model, platform.machine())
 
 
 def childCommand(a, hmm, ratio):
