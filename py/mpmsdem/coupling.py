@@ -106,6 +106,7 @@ class CoupledEngine:
         self.error = None
         self._started = False
         self._contactsKnown = False  # criticalTimeStep() holds the contact step only after a step
+        self._restoredContactStep = None  # restore(): the contact step saved, until the first step
         self._warned = 0
         self._nextRecord = self._nextVtk = None
         self._lastRecord = self._lastVtk = -math.inf
@@ -215,7 +216,10 @@ class CoupledEngine:
         if self._dtAuto is not None:
             # Set before this step's forces, so that the coupling, NewtonIntegrator and O.time
             # all advance by the same dt.
-            step = self._dtAuto * self.criticalTimeStep()
+            crit = self.criticalTimeStep()
+            if self._restoredContactStep is not None:
+                crit = min(crit, self._restoredContactStep)
+            step = self._dtAuto * crit
             if self._dtMax is not None:
                 step = min(step, self._dtMax)
             O.dt = step if self._contactsKnown else min(O.dt, step)
@@ -225,6 +229,7 @@ class CoupledEngine:
             self._fail(e)
             raise
         self._contactsKnown = True
+        self._restoredContactStep = None
         self.sdem._afterStep()
         self.mpm._afterStep(O.dt)
         t = self.mpm.time
@@ -346,6 +351,9 @@ class CoupledEngine:
         mats = {k: m for m, k in self.sdem._materials}
         data = {"format": "mpmsdem-coupled-2", "time": O.time, "iter": O.iter, "mpmTime": self.mpm.time,
                 "mpmSteps": self.mpm.solver.steps, "dtCheck": self.dtCheck, "historySlots": slots,
+                "dtAuto": self.dtAuto, "dtMax": self.dtMax,
+                # what dtAuto's next step reads (None: not known yet; a string keeps inf JSON-clean)
+                "contactStep": repr(self._bridge.contactStep) if self._contactsKnown else None,
                 "pairs": [{"material": _matDictOf(mats[k]), "pair": p} for k, p in sorted(self._pairs.items())],
                 "historyKeys": base64.b64encode(keys).decode(), "historyXi": base64.b64encode(xi).decode(),
                 "dissipation": [self._bridge.energies()["friction"], self._bridge.energies()["damping"]],
@@ -400,8 +408,12 @@ class CoupledEngine:
             mat = mats.get(key) or mats.setdefault(key, _material(entry["material"]))
             pairs[mat] = entry["pair"]
         eng = cls(sdem, mpm, pairs, dtCheck=kw.pop("dtCheck", data["dtCheck"]),
+                  dtAuto=kw.pop("dtAuto", data.get("dtAuto")), dtMax=kw.pop("dtMax", data.get("dtMax")),
                   historySlots=data["historySlots"], output=output, outputEvery=outputEvery, vtkEvery=vtkEvery,
                   plot=plot, **kw)
+        if data.get("contactStep") is not None:  # the first step's dtAuto sees what it would have seen
+            eng._contactsKnown = True
+            eng._restoredContactStep = float(data["contactStep"])
         eng._bridge.setHistories(base64.b64decode(data["historyKeys"]), base64.b64decode(data["historyXi"]))
         eng._bridge.setDissipation(*data["dissipation"])
         eng._bridge.setReferenceOrientations(data["referenceOrientations"])

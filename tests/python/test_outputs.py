@@ -80,30 +80,40 @@ def test_mpm_h5_has_the_driver_series_and_snapshot_0_before_step_1(tmp_path):
         np.testing.assert_allclose(com, (p["mass"][:, None] * p["x"]).sum(0) / p["mass"].sum(), rtol=0, atol=1e-12)
 
 
-def _coupledScene(out=None):
+def _coupledScene(out=None, dtAuto=None, barrierStiffness=1e4):
     sdem = mpmsdem.SdemEngine(verbose=False)
     mat = mpmsdem.material(density=2000, friction=0.3)
     cube = sdem.box((0.02,) * 3, 0.003, mat, pos=(0.125, 0.07, 0.07))
     mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [24, 14, 14], "origin": [0, 0, 0]}, material=GLASS,
                             particles=[{"lo": [0.08, 0.05, 0.05], "hi": [0.10, 0.09, 0.09], "ppc": 8,
                                         "velocity": [3, 0, 0]}], gravity=(0, 0, -9.81), verbose=False)
-    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: {"friction": 0.3, "tangentialDamping": 0.2}},
-                                    output=out, outputEvery=1e-4 if out else None, verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: {"friction": 0.3, "tangentialDamping": 0.2,
+                                                              "barrierStiffness": barrierStiffness}},
+                                    output=out, outputEvery=1e-4 if out else None, verbose=False, dtAuto=dtAuto)
     O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
     O.dt = 1e-5
     return coupled, cube
 
 
-def test_coupled_checkpoint_continues_bit_for_bit(tmp_path):
+@pytest.mark.parametrize("dtAuto, kc, before", [(None, 1e4, 250), (0.2, 1e6, 100)], ids=["fixed dt", "dtAuto"])
+def test_coupled_checkpoint_continues_bit_for_bit(tmp_path, dtAuto, kc, before):
+    # With dtAuto (and a flow-block barrier stiff enough for the contact step to set O.dt) the
+    # restored engine keeps the control, and its first step takes the O.dt the unbroken run
+    # took, from the contact step saved with the checkpoint (at step 100 the blob is on the
+    # block and the contact step sets O.dt).
     out = str(tmp_path / "out")
-    coupled, cube = _coupledScene(out)
-    mpmsdem.run(250, coupled)                       # the blob is on the block: histories matter
-    assert coupled.contactCount(cube) > 10 and coupled.energies()["friction"] > 0
+    coupled, cube = _coupledScene(out, dtAuto, kc)
+    mpmsdem.run(before, coupled)                    # the blob is on the block: histories matter
+    assert coupled.contactCount(cube) > 10
+    if dtAuto is None:
+        assert coupled.energies()["friction"] > 0
+    else:  # the contact step, not the MPM one, sets the next step
+        assert coupled.contactTimeStep < coupled.mpm.stableTimeStep()
     ck = mpmsdem.saveCheckpoint(str(tmp_path / "ck"), coupled)
     mpmsdem.run(150, coupled)
     ref = {"x": coupled.mpm.particles()["x"].copy(), "v": coupled.mpm.particles()["v"].copy(),
            "body": [*O.bodies[cube].state.pos, *O.bodies[cube].state.ori, *O.bodies[cube].state.angVel],
-           "friction": coupled.energies()["friction"]}
+           "friction": coupled.energies()["friction"], "time": O.time}
     with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:
         refSeries = {k: f["series/" + k][:] for k in f["series"]}
     _forget(coupled, coupled.sdem, coupled.mpm)
@@ -114,6 +124,7 @@ def test_coupled_checkpoint_continues_bit_for_bit(tmp_path):
     np.testing.assert_array_equal(coupled2.mpm.particles()["v"], ref["v"])
     assert [*O.bodies[cube].state.pos, *O.bodies[cube].state.ori, *O.bodies[cube].state.angVel] == ref["body"]
     assert coupled2.energies()["friction"] == ref["friction"]
+    assert coupled2.dtAuto == dtAuto and O.time == ref["time"]
     with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:  # records after the checkpoint replaced, once
         for k, v in refSeries.items():
             np.testing.assert_array_equal(f["series/" + k][:], v, err_msg=k)
