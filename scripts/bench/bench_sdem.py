@@ -168,6 +168,17 @@ def build_collision_levelset(h, kn, contactOnly=False):
     return ids, None
 
 
+def polyhedra_engines(gravity, damping, walls):
+    """YADE's Polyhedra loop (volumetric law), with wall contacts when ``walls``."""
+    bounds = [Bo1_Polyhedra_Aabb()] + ([Bo1_Wall_Aabb()] if walls else [])
+    geoms = [Ig2_Polyhedra_Polyhedra_PolyhedraGeom()] + ([Ig2_Wall_Polyhedra_PolyhedraGeom()] if walls else [])
+    return [ForceResetter(),
+            InsertionSortCollider(bounds, verletDist=0),
+            InteractionLoop(geoms, [Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()],
+                            [Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()]),
+            newton(gravity, damping)]
+
+
 def build_collision_polyhedra(h, kv, contactOnly=False):
     """kv: volumetric stiffness [N/m^3] (force = kv * overlap volume)."""
     O.reset()
@@ -181,12 +192,7 @@ def build_collision_polyhedra(h, kv, contactOnly=False):
         i = O.bodies.append(bd)
         O.bodies[i].state.vel = Vector3(v, 0, 0)
         ids.append(i)
-    O.engines = [ForceResetter(),
-                 InsertionSortCollider([Bo1_Polyhedra_Aabb()], verletDist=0),
-                 InteractionLoop([Ig2_Polyhedra_Polyhedra_PolyhedraGeom()],
-                                 [Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()],
-                                 [Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()]),
-                 newton((0, 0, 0), 0.0)]
+    O.engines = polyhedra_engines((0, 0, 0), 0.0, walls=False)
     O.dt = 5e-6
     return ids, None
 
@@ -318,12 +324,7 @@ def build_stack_polyhedra(kv):
         bd = polyhedra_utils.polyhedra(O.materials[mat], v=cube_vertices(STACK_H / 2))
         bd.state.pos = Vector3(0, 0, stack_start(k))
         ids.append(O.bodies.append(bd))
-    O.engines = [ForceResetter(),
-                 InsertionSortCollider([Bo1_Polyhedra_Aabb(), Bo1_Wall_Aabb()], verletDist=0),
-                 InteractionLoop([Ig2_Polyhedra_Polyhedra_PolyhedraGeom(), Ig2_Wall_Polyhedra_PolyhedraGeom()],
-                                 [Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()],
-                                 [Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()]),
-                 newton((0, 0, -9.81), STACK_DAMPING)]
+    O.engines = polyhedra_engines((0, 0, -9.81), STACK_DAMPING, walls=True)
     O.dt = STACK_DT
     remember_orientations(ids)
     return ids, None
@@ -484,12 +485,7 @@ def build_pile_polyhedra(kv, count=50):
         bd.state.pos = p
         bd.state.ori = q
         ids.append(O.bodies.append(bd))
-    O.engines = [ForceResetter(),
-                 InsertionSortCollider([Bo1_Polyhedra_Aabb(), Bo1_Wall_Aabb()], verletDist=0),
-                 InteractionLoop([Ig2_Polyhedra_Polyhedra_PolyhedraGeom(), Ig2_Wall_Polyhedra_PolyhedraGeom()],
-                                 [Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()],
-                                 [Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()]),
-                 newton((0, 0, -9.81), PILE_DAMPING)]
+    O.engines = polyhedra_engines((0, 0, -9.81), PILE_DAMPING, walls=True)
     O.dt = PILE_DT
     return ids, None
 
