@@ -37,8 +37,8 @@ void CoupledWorld::step(double dt) {
   stageSeconds_.coupling += seconds(t0, t1);
   stageSeconds_.blocks += seconds(t1, t2);
   stageSeconds_.mpm += seconds(t2, t3);
-  const double c = coupledContactStep(world.engine, coupling);
-  if (c < contactStepLow_.step) contactStepLow_ = {c, solver_->time()};
+  contactStep_ = coupledContactStep(world.engine, coupling);
+  if (contactStep_ < contactStepLow_.step) contactStepLow_ = {contactStep_, solver_->time()};
 }
 
 void advanceFlow(mpm::MpmSolver& solver, double dt) {
@@ -61,9 +61,7 @@ double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& co
   return sdem.timeStepSafety() * dt;
 }
 
-double CoupledWorld::criticalTimeStep() {
-  return std::min(solver_->stableTimeStep(), coupledContactStep(world.engine, coupling));
-}
+double CoupledWorld::criticalTimeStep() { return std::min(solver_->stableTimeStep(), contactStep_); }
 
 }  // namespace coupling
 }  // namespace mpmsdem

@@ -33,7 +33,8 @@ class CoupledWorld {
 
   // Largest stable step of the coupled scene [s]: the smallest of the MPM CFL step, the MP
   // side of MP–block contacts sqrt(m_p / k) and, per block, sqrt(m / (sum k_SDEM + sum k_MP))
-  // and its rotational counterpart, times the SDEM time-step safety factor.
+  // and its rotational counterpart, times the SDEM time-step safety factor; the contact part
+  // as the last step left it (inf before the first).
   double criticalTimeStep();
 
   // Wall time spent in each stage of step() since construction [s], for benchmarks: the
@@ -58,6 +59,7 @@ class CoupledWorld {
   std::unique_ptr<mpm::MpmSolver> solver_;
   std::vector<Vec3> blockForce_, blockTorque_;
   StageSeconds stageSeconds_;
+  double contactStep_ = std::numeric_limits<double>::infinity();  // coupledContactStep after the last step
   ContactStepLow contactStepLow_;
 };
 
