@@ -51,17 +51,22 @@ def _studies(path=None):
     return data["studies"]
 
 
+def _outputsOf(studies):
+    return sorted({o for s in studies for r in s["rows"] for o in r["errors"]})
+
+
 def outputs(path=None):
     """The outputs with measured errors, e.g. ``['deposit_height', 'runout']``."""
-    return sorted({o for s in _studies(path) for r in s["rows"] for o in r["errors"]})
+    return _outputsOf(_studies(path))
 
 
 def table(output, path=None):
     """Every measured setting for ``output``, cheapest first: a list of :class:`Proposal`."""
-    known = outputs(path)
+    studies = _studies(path)
+    known = _outputsOf(studies)
     if output not in known:
         raise ValueError("output = %r: not measured; one of %s" % (output, ", ".join(known)))
-    rows = [Proposal(output, r, s) for s in _studies(path) for r in s["rows"] if output in r["errors"]]
+    rows = [Proposal(output, r, s) for s in studies for r in s["rows"] if output in r["errors"]]
     return sorted(rows, key=lambda p: (p.cost, p.cpuCost if p.cpuCost is not None else p.cost, abs(p.error)))
 
 
