@@ -33,7 +33,8 @@
 // Memory per particle (memoryBytes()): the state x, v, stress, J, gammaDotP (14 T) and phase
 // (1 byte), twice, plus mass and volume0: 30 T + 2 bytes (242 B in double, 122 B in float);
 // the binning arrays (block id and sorted order, 8 B); external forces, 3 T, once set or
-// opened by a coupling; and the grid, 7 T per node.
+// opened by a coupling; and the grid, 7 T per node (plus a byte and at most an int per tile of
+// 27 nodes for the active tiles).
 #pragma once
 #include <cstdint>
 #include <type_traits>
