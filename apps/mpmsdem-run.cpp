@@ -184,9 +184,15 @@ std::string formatDuration(double s) {
 struct Stepper {
   MpmSolver& solver;
   coupling::CoupledWorld* coupled = nullptr;
-  void step(double dt) { coupled ? coupled->step(dt) : solver.step(dt); }
+  double lastDt = 0;  // the step taken last [s]
+  void step(double dt) {
+    coupled ? coupled->step(dt) : solver.step(dt);
+    lastDt = dt;
+  }
   // MPM CFL step, and with blocks the contact step of the last step's contacts [s]
   double stableStep() { return coupled ? coupled->criticalTimeStep() : solver.stableTimeStep(); }
+  // The step in which a moving block travels its sweep radius (SdemEngine::approachTimeStep) [s]
+  double approachStep() { return coupled->world.engine.approachTimeStep(); }
 };
 
 using Clock = std::chrono::steady_clock;
@@ -215,7 +221,20 @@ double nextStep(Stepper& st, const RunSettings& run, bool byTime) {
     }
     dt = run.dt;
   } else {
-    dt = run.dtFactor * st.stableStep();
+    // The automatic step was chosen from the contacts of the step before it, so a contact that
+    // started within it may have a smaller critical step; up to twice that (the leapfrog's own
+    // limit) the step was stable and the next one shrinks, beyond it the run stops.
+    if (st.coupled && st.lastDt > 2 * st.coupled->contactStep()) {
+      char msg[400];
+      std::snprintf(msg, sizeof msg,
+                    "the step to t = %.6g s (step %ld) was dt = %.6g s, above twice the contact step %.6g s it "
+                    "ended with (the stability limit): a contact started or stiffened within it faster than \"dt\": "
+                    "\"auto\" follows; use a smaller run.dt_factor (now %g)",
+                    solver.time(), solver.steps(), st.lastDt, st.coupled->contactStep(), run.dtFactor);
+      throw RuntimeFailure(msg);
+    }
+    dt = st.coupled ? sdem::autoTimeStep(run.dtFactor, st.stableStep(), st.approachStep(), st.lastDt)
+                    : run.dtFactor * st.stableStep();
   }
   if (byTime) dt = std::min(dt, run.duration - solver.time());
   return dt;

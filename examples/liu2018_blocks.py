@@ -32,12 +32,11 @@ Our readings where the paper leaves room:
   8e-5 s (rotation of the thin blocks), below the MPM step of the flow, and material points
   driven deep into the stiffening barrier at the impact lower it further (below 4e-5 s at
   dx = 0.01 m). The run starts at the smaller of half the MPM step and ``CONTACT_DT`` (the
-  contact step is unknown before the first step), and the coupled engine then sets O.dt to half
-  the coupled critical step at every step (``CoupledEngine(dtAuto=0.5)``), bounded by
-  ``DT_MAX``: the glued bottom block is a fixed body and no longer limits the step, and at the
-  flow's step the middle block falling onto the bed went deep into the barrier in one step
-  (critical step 2.5e-4 s after a step of 3.2e-4 s at dx = 0.02 m). The coupled engine stops
-  the run if a step ever exceeds the critical step.
+  contact step is unknown before the first step), and the coupled engine then sets O.dt every
+  step (``CoupledEngine(dtAuto=0.5)``): half the coupled critical step, and no more than lets a
+  block move a tenth of its sweep radius, so that the middle block falling onto the bed enters
+  the barrier over several steps (the glued bottom block is a fixed body and does not limit the
+  step). The coupled engine stops the run if a step ever exceeds twice the critical step.
 
 Two runs: the free flow without blocks (h_f, v_f at the blocks' station when the front arrives,
 for Eq 20), then the coupled run. Writes to ``--out`` (default ``results/liu2018_blocks``):
@@ -67,7 +66,6 @@ KC = 1e4                                  # barrier stiffness [N/m]
 SWEEP = HALF[2] / 10.0                    # R = h/20 of the smallest side, as Block's default
 BED_SWEEP = 0.005                         # Flume's default bed R [m]
 CONTACT_DT = 4e-5                         # [s], see the docstring
-DT_MAX = 1e-4                             # [s], largest O.dt the step control sets
 CHUNK = 10                                # steps between sample checks in the coupled run
 SMOOTH = 0.01                             # force averaging window [s]
 FALL_DROP = HALF[2]                       # "fallen": centre half a block height below its start [m]
@@ -119,7 +117,7 @@ def scene(dx, ppc, a, blocks=(), output=None, verbose=True):
               verbose=verbose)
     from yade import O
     O.dt = min(O.dt, CONTACT_DT)
-    s.coupled.dtAuto, s.coupled.dtMax = 0.5, DT_MAX
+    s.coupled.dtAuto = 0.5
     return s
 
 

@@ -64,10 +64,12 @@ class PyCoupling {
     mpmSeconds_ += std::chrono::duration<double>(t2 - t1).count();
     ++steps_;
     const double limit = contactStep();
-    if (dt > limit) {
+    if (dt > checkFactor_ * limit) {
       if (strict_) {
         std::ostringstream os;
-        os << "dt = " << dt << " s: must be <= the coupled contact critical step " << limit
+        os << "dt = " << dt << " s: must be <= ";
+        if (checkFactor_ != 1) os << checkFactor_ << " x ";
+        os << "the coupled contact critical step " << limit
            << " s (MP-block and block-block contacts: sqrt(m / k) with the tangent barrier stiffness)";
         throw RuntimeFailure(os.str());
       }
@@ -176,6 +178,23 @@ class PyCoupling {
   bool strict() const { return strict_; }
   void setStrict(bool s) { strict_ = s; }
   long warnings() const { return warnings_; }
+  // Both checks of a step (the SDEM engine's and the coupled one) allow dt up to this factor
+  // times their critical step (SdemEngine::setTimeStepCheckFactor).
+  double checkFactor() const { return checkFactor_; }
+  void setCheckFactor(double f) {
+    sdem_.engine().setTimeStepCheckFactor(f);
+    checkFactor_ = f;
+  }
+  // Reads the blocks' velocities from YADE first: a restored run must see the state it continues.
+  double approachStep(const bp::object& bodies) {
+    sdem_.readStates(bodies);
+    return sdem_.engine().approachTimeStep();
+  }
+  // sdem::autoTimeStep with this scene's approach step (critical: the caller's, which may hold a
+  // restored contact step).
+  double autoStep(const bp::object& bodies, double factor, double critical, double lastDt) {
+    return sdem::autoTimeStep(factor, critical, approachStep(bodies), lastDt);
+  }
 
  private:
   bool seen(int i) const { return !(i >= coupling_.numBlocks() && i < sdem_.engine().numBodies()); }
@@ -192,6 +211,7 @@ class PyCoupling {
   std::vector<Vec3> force_, torque_;
   std::vector<Quat> ori0_;  // reference orientations set by a restore before the output opens
   bool strict_ = true;
+  double checkFactor_ = 1;
   long warnings_ = 0;
   long steps_ = 0;
   double couplingSeconds_ = 0, mpmSeconds_ = 0;
@@ -232,6 +252,9 @@ void exportCoupling() {
       .add_property("historyOverflow", &PyCoupling::historyOverflow)
       .add_property("historySlots", &PyCoupling::historySlots, &PyCoupling::setHistorySlots)
       .add_property("strict", &PyCoupling::strict, &PyCoupling::setStrict)
+      .add_property("checkFactor", &PyCoupling::checkFactor, &PyCoupling::setCheckFactor)
+      .def("approachStep", &PyCoupling::approachStep)
+      .def("autoStep", &PyCoupling::autoStep)
       .add_property("timeStepWarnings", &PyCoupling::warnings);
 }
 

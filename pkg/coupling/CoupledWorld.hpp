@@ -36,6 +36,8 @@ class CoupledWorld {
   // and its rotational counterpart, times the SDEM time-step safety factor; the contact part
   // as the last step left it (inf before the first).
   double criticalTimeStep();
+  // The contact part of criticalTimeStep() (coupledContactStep) at the start of the last step [s].
+  double contactStep() const { return contactStep_; }
 
   // Wall time spent in each stage of step() since construction [s], for benchmarks: the
   // MP–block contacts, the blocks (block–block contacts and the rigid-body update), the MPM

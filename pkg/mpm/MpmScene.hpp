@@ -73,8 +73,10 @@
 //                                   pkg/coupling/CoupledScene.hpp (a scene without them is MPM only)
 //   "run": {                        (req)
 //     "duration": 1.0,              (req) simulated time [s], > 0
-//     "dt": "auto",                 fixed step [s] > 0, or "auto": dt_factor * stable step,
-//                                   re-evaluated every step
+//     "dt": "auto",                 fixed step [s] > 0, or "auto": dt_factor * the stable step,
+//                                   re-evaluated every step (with blocks: sdem::autoTimeStep,
+//                                   which also bounds how far a block moves in a step and how
+//                                   fast the step grows)
 //     "dt_factor": 0.9,             in (0, 1]; only with "dt": "auto"
 //     "output_every": duration/20,  snapshot interval [s], > 0 (HDF5 snapshot + VTK file)
 //     "series_every": output_every/10,  time-series interval [s], > 0

@@ -118,6 +118,27 @@ void SdemEngine::setTimeStepSafety(Real c) {
   safety_ = c;
 }
 
+void SdemEngine::setTimeStepCheckFactor(Real f) {
+  if (!(f >= 1 && f <= 2)) throwParameter("timeStepCheckFactor", f, "", "in [1, 2]");
+  checkFactor_ = f;
+}
+
+Real SdemEngine::approachTimeStep() const {
+  Real dt = std::numeric_limits<Real>::infinity();
+  for (int i = 0; i < numBodies(); ++i) {
+    const Real speed = vel_[i].norm() + angVel_[i].norm() * shapes_[i]->boundingRadius;
+    if (speed > 0) dt = std::min(dt, shapes_[i]->sweepRadius / speed);
+  }
+  return dt;
+}
+
+Real autoTimeStep(Real factor, Real critical, Real approach, Real lastDt) {
+  if (!(factor > 0 && factor <= 1)) throwParameter("dt factor", factor, "", "in (0, 1]");
+  Real dt = std::min(factor * critical, kApproachFraction * approach);
+  if (lastDt > 0) dt = std::min(dt, kAutoStepGrowth * lastDt);
+  return dt;
+}
+
 // ------------------------------------------------------------------ step
 
 void SdemEngine::broadPhase() {
@@ -214,10 +235,12 @@ void SdemEngine::computeForces(Real dt) {
     }
   }
   history_.swap(nextHistory_);
-  if (dt > criticalTimeStep()) {
+  if (dt > checkFactor_ * criticalTimeStep()) {
     if (strict_) {
       std::ostringstream os;
-      os << "dt = " << dt << " s: must be <= the SDEM critical time step " << criticalTimeStep() << " s";
+      os << "dt = " << dt << " s: must be <= ";
+      if (checkFactor_ != 1) os << checkFactor_ << " x ";
+      os << "the SDEM critical time step " << criticalTimeStep() << " s";
       throw RuntimeFailure(os.str());
     }
     ++warnings_;

@@ -52,16 +52,20 @@ class CoupledEngine:
         masses, :attr:`contactTimeStep`); ``"warn"`` warns once and counts
         (``timeStepWarnings``). May be changed between steps.
     :param dtAuto: time-step control, like YADE's time steppers: None (default) leaves
-        ``O.dt`` to the script; a factor f in (0, 1] sets ``O.dt = f × criticalTimeStep()``
-        at the start of every step, from the contacts of the step before (at the first step,
-        when the contacts are not known yet, ``O.dt`` is only capped at f × the MPM step). A
-        block landing on another stiffens its contact within a few steps, so a step re-read
-        every step stays safe where one fixed for 10 steps may not. May be changed between
-        steps.
-    :param dtMax: with ``dtAuto``, the largest ``O.dt`` it may set [s] (None: no bound). The
-        critical step measures the stiffness of the contacts there are; a block about to land
-        has none, and a step the flow alone allows can carry it deep into the barrier at once.
-        Bound the step where blocks fall onto others (v dt well below the sweep radius).
+        ``O.dt`` to the script; a factor f in (0, 1] sets, at the start of every step,
+        ``O.dt = min(f × criticalTimeStep(), 0.1 × approachTimeStep)`` from the contacts of the
+        step before and the blocks' current velocities, growing by at most 1 % a step (at the
+        first step, when the contacts are not known yet, ``O.dt`` is only capped at that). No
+        block then moves by more than a tenth of its sweep radius in a step, so a block about
+        to land, which has no contact yet, enters the barrier gradually and none passes through
+        another. A contact that starts within a step was not known when its ``O.dt`` was chosen:
+        with ``dtAuto`` the step checks (``dtCheck``) allow up to twice the critical step, the
+        leapfrog's own stability limit, and the next step shrinks. A changing step costs a
+        little energy in elastic impacts (YADE's integrator kicks with the new step): -0.24 %
+        for a cube landing face-down, -2.5 % edge-first while spinning; a fixed step keeps them
+        to 1e-6. May be changed between steps.
+    :param dtMax: with ``dtAuto``, the largest ``O.dt`` it may set [s] (None: no bound), e.g.
+        to sample a fast transient finely.
     :param historySlots: simultaneous block contacts per material point that keep their
         tangential history, in [1, 4] (default 2: a point between a block and the bed).
     :param output: folder for ``coupled.h5`` (per block every ``outputEvery`` s: ``pos``,
@@ -153,6 +157,7 @@ class CoupledEngine:
     def dtAuto(self, value):
         if value is not None and not (isinstance(value, (int, float)) and 0 < value <= 1):
             raise ValueError("dtAuto = %r: must be None or a factor in (0, 1] of the critical step" % (value,))
+        self._bridge.checkFactor = 1.0 if value is None else 2.0
         self._dtAuto = value
 
     @property
@@ -173,6 +178,14 @@ class CoupledEngine:
         block, k the tangent barrier stiffness, times the SDEM safety factor; ``inf`` before the
         first step and while nothing touches. A step above it is what ``dtCheck`` acts on."""
         return self._bridge.contactStep
+
+    @property
+    def approachTimeStep(self):
+        """The step in which a point of a moving block travels its own sweep radius [s]: min over
+        moving blocks of R / (|v| + |ω| ρ), ρ the radius of a sphere about the centroid that
+        holds the block, at the blocks' current velocities; ``inf`` when none moves.
+        ``dtAuto`` keeps ``O.dt`` below a tenth of it."""
+        return self._bridge.approachStep(O.bodies)
 
     # ------------------------------------------------------------------ stepping
     def criticalTimeStep(self):
@@ -219,7 +232,7 @@ class CoupledEngine:
             crit = self.criticalTimeStep()
             if self._restoredContactStep is not None:
                 crit = min(crit, self._restoredContactStep)
-            step = self._dtAuto * crit
+            step = self._bridge.autoStep(O.bodies, self._dtAuto, crit, O.dt if self._contactsKnown else 0.0)
             if self._dtMax is not None:
                 step = min(step, self._dtMax)
             O.dt = step if self._contactsKnown else min(O.dt, step)

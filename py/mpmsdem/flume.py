@@ -67,6 +67,10 @@ class Flume:
     :param blocks: list of :class:`Block`; :param bedSweep: R of the bed slab [m];
     :param dtFactor: O.dt = dtFactor × the MPM CFL step at the start (the contact step is
         checked every step by the coupled engine);
+    :param dtAuto: None (default: O.dt stays as set), or f in (0, 1]: the coupled engine sets
+        O.dt every step (see :class:`CoupledEngine`'s ``dtAuto``);
+    :param dtCheck: ``"raise"`` (default) or ``"warn"``: what a step above the critical step
+        of the contacts does, in the SDEM and the coupled engine;
     :param gate: release gate on the column's downstream face (x = columnLength), its lower
         edge on the bed until ``open_at`` and then lifted normal to the bed:
         ``{"speed": lift speed [m/s] ≥ 0 (0 or math.inf: removed at once; default 0),
@@ -83,7 +87,8 @@ class Flume:
     def __init__(self, length=1.8, width=0.2, inclineDeg=10.0, columnLength=0.3, columnHeight=0.2, dx=0.01, ppc=8,
                  granular=None, basalFriction=0.21, sideWallFriction=0.0, blocks=(), bedSweep=0.005,
                  bedBarrierStiffness=1e4, dtFactor=0.5, backend="cpu", precision="double", output=None,
-                 outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None, flipReferenceDt=0.0):
+                 outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None, flipReferenceDt=0.0,
+                 dtAuto=None, dtCheck="raise"):
         if gate is not None and (not isinstance(gate, dict) or set(gate) - {"speed", "open_at", "friction"}):
             raise ValueError("gate = %r: must be None or a dict with keys among speed [m/s], open_at [s], friction"
                              % (gate,))
@@ -105,7 +110,7 @@ class Flume:
         height = columnHeight + max(b.z + 2 * b.half[2] for b in blocks) if blocks else columnHeight
         cells = [int(math.ceil(length / dx)) + 4, int(round(width / dx)) + 4,
                  int(math.ceil((max(height, columnHeight) + 0.05) / dx)) + 6]
-        self.sdem = SdemEngine(dtCheck="raise", verbose=verbose,
+        self.sdem = SdemEngine(dtCheck=dtCheck, verbose=verbose,
                                output=output, outputEvery=outputEvery if output else None)
         bedMat = _material(density=2500, friction=1.0, barrierStiffness=bedBarrierStiffness)
         self.bedId = self.sdem.box((length / 2 + 2 * dx, width / 2 + 2 * dx, 0.02), bedSweep, bedMat,
@@ -136,7 +141,8 @@ class Flume:
             gate=None if gate is None else dict(gate, x=columnLength, bottom=0.0),
             output=os.path.join(output, "mpm") if output else None, outputEvery=vtkEvery or outputEvery)
         self.coupled = CoupledEngine(self.sdem, self.mpm, pairs=pairs, output=output, outputEvery=outputEvery,
-                                     vtkEvery=vtkEvery, plot=plot, verbose=verbose)
+                                     vtkEvery=vtkEvery, plot=plot, verbose=verbose, dtAuto=dtAuto,
+                                     dtCheck=dtCheck)
         O.engines = [ForceResetter(), self.coupled.runner, NewtonIntegrator(gravity=Vector3(*self.gravity), damping=0)]
         O.dt = dtFactor * self.mpm.stableTimeStep()
         self.x0 = [O.bodies[i].state.pos[0] for i in self.blockIds]

@@ -270,31 +270,80 @@ def test_coupled_contact_step_read_out_and_dt_check_switched_mid_run():
 
 
 def test_coupled_dt_auto_follows_the_critical_step_of_the_step_before():
-    # dtAuto = f: each step runs with O.dt = f x criticalTimeStep() as it stood after the step
-    # before (the first step only caps the script's O.dt), dtMax bounds it; through the impact
-    # the contact part falls below the MPM step and O.dt follows it down; no step ever exceeds
-    # the check. Bad values are refused by name.
+    # dtAuto = f: each step runs with O.dt = min(f x criticalTimeStep(), 0.1 x approachTimeStep)
+    # as they stood after the step before, grown by at most 1 % over that step's O.dt (the first
+    # step only caps the script's O.dt); dtMax bounds it; through the impact the contact part
+    # falls below the MPM step and O.dt follows it down; no step ever exceeds the check. Bad
+    # values are refused by name.
     mpm, coupled, cube = _blobAndBlock(pairStiffness=1e6)
     coupled.dtAuto = 0.5
     O.dt = 1e-6
     mpmsdem.run(1, coupled)
     assert O.dt == 1e-6  # the first step: below 0.5 x the MPM step, kept
-    seen = []  # (O.dt of the step, criticalTimeStep() after it)
-    O.engines = O.engines + [_every_step(lambda: seen.append((O.dt, coupled.criticalTimeStep())))]
-    mpmsdem.run(600, coupled)
-    for (dt, _), (_, crit) in zip(seen[1:], seen[:-1]):
-        assert dt == 0.5 * crit
-    dts = [d for d, _ in seen]
+    seen = []  # (O.dt of the step, criticalTimeStep() and approachTimeStep after it)
+    O.engines = O.engines + [_every_step(lambda: seen.append((O.dt, coupled.criticalTimeStep(),
+                                                              coupled.approachTimeStep)))]
+    mpmsdem.run(1500, coupled)
+    capped = byContacts = 0
+    for (dt, _, _), (prev, crit, app) in zip(seen[1:], seen[:-1]):
+        assert dt == min(0.5 * crit, 0.1 * app, 1.01 * prev)
+        capped += dt == 1.01 * prev
+        byContacts += dt == 0.5 * crit and crit < mpm.stableTimeStep()
+    assert 300 < capped < 1499  # grew from 1e-6 at 1 % a step, then followed the contacts
+    assert byContacts > 20  # the impact's contact step set it
+    dts = [d for d, _, _ in seen]
     assert max(dts) == pytest.approx(0.5 * mpm.stableTimeStep(), rel=0.05)
-    assert min(dts[1:]) < 0.4 * max(dts)  # the impact lowered it
+    assert min(dts[400:]) < 0.6 * max(dts)
+    assert any(app < math.inf for _, _, app in seen)
     coupled.dtMax = 2e-5
     mpmsdem.run(20, coupled)
-    assert all(d <= 2e-5 for d, _ in seen[-20:])
+    assert all(d <= 2e-5 for d, _, _ in seen[-20:])
     for name, bad in (("dtAuto", 0.0), ("dtAuto", 1.5), ("dtAuto", "0.5")):
         with pytest.raises(ValueError, match="^%s = " % name):
             coupled.dtAuto = bad
     with pytest.raises(ValueError, match="^dtMax = "):
         coupled.dtMax = 0
+
+
+def test_coupled_dt_auto_lands_a_falling_block_without_a_refused_step():
+    # A 2 cm copper cube (R 1 mm) dropped 15 cm onto the bed of a coarse flume, dtAuto = 0.5 and
+    # dtCheck "raise" passed through Flume. No contact announces the landing, so the step that
+    # lands it is chosen without one: the approach step keeps the cube from moving more than a
+    # tenth of its sweep radius in a step (it sets the step over the last part of the fall, at
+    # 1.7 m/s), so it enters the barrier so gently that no step exceeds even the critical step
+    # of the new contact. The cores never meet, and the elastic barrier sends the cube back up,
+    # never above its start.
+    from mpmsdem.flume import Block, Flume
+    R = 0.001
+    scene = Flume(length=0.6, width=0.1, columnLength=0.1, columnHeight=0.06, dx=0.02, ppc=1, inclineDeg=0.0,
+                  blocks=[Block(half=(0.01, 0.01, 0.01), x=0.45, z=0.15, sweepRadius=R)], dtAuto=0.5,
+                  verbose=False)
+    cube = scene.blockIds[0]
+    steps = []  # (O.dt, displacement of the step, contact step after it, cube-bed contacts, z)
+    last = [Vector3(O.bodies[cube].state.pos)]
+
+    def probe():
+        p = Vector3(O.bodies[cube].state.pos)
+        steps.append((O.dt, (p - last[0]).norm(), scene.coupled.contactTimeStep, len(scene.sdem.contacts()["id1"]),
+                      p[2]))
+        last[0] = p
+
+    O.engines = O.engines + [_every_step(probe)]
+    while O.time < 0.25:
+        mpmsdem.run(50, scene.coupled)
+    st = O.bodies[cube].state
+    assert _finite(st.pos, st.vel, st.angVel)
+    landed = [i for i, step in enumerate(steps) if step[3] > 0]
+    assert landed, "the cube never touched the bed"
+    free = steps[:landed[0]]
+    g = 9.81
+    assert all(d <= 0.1 * R * (1 + g * dt / 0.05) for dt, d, _, _, _ in free[10:])  # v > 0.05 m/s there
+    assert max(d for _, d, _, _, _ in free) == pytest.approx(0.1 * R, rel=0.02)  # the approach step bound it
+    assert all(dt <= c for dt, _, c, _, _ in steps)
+    bedCoreTop = -0.005
+    assert st.pos[2] - 0.01 > bedCoreTop  # the cores never met
+    rebound = max(z for *_, z in steps[landed[0]:])
+    assert 0.11 < rebound < 0.16  # back up on the elastic barrier, never above its start
 
 
 # ====================================================================== near core contact
