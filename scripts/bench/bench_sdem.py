@@ -615,6 +615,18 @@ def main(argv=None):
     notes = []
     stiff = {}     # h -> peers' linear stiffness kn [N/m]
 
+    def compare(scene, steps, reps, sdem_build, after_sdem, levelset, polyhedra, clumps, after_peer, poly_reps=None):
+        # SDEM with its cost breakdown, then the peers (builders without arguments) on the same scene
+        t, d, parts = sdem_breakdown(sdem_build, steps, reps, after_sdem)
+        rows.append((scene, "mpmsdem SDEM", t, d))
+        parts_rows.append((scene, t, parts, d.get("warnings", 0)))
+        for method, build, n, skip in (("YADE LevelSet", levelset, reps, False),
+                                       ("YADE Polyhedra", polyhedra, poly_reps or reps, args.no_polyhedra),
+                                       ("YADE clump %d^3" % CLUMP_N, clumps, reps, args.no_clumps)):
+            if not skip:
+                t, d = measure(build, steps, n, after_peer)
+                rows.append((scene, method, t, d))
+
     # ---- scene 1: head-on collisions
     collisions = [(0.1, 60000), (0.3, 60000)]
     if args.quick:
@@ -636,35 +648,18 @@ def main(argv=None):
 
         def after_col(ids, extra, e0):
             return collision_figures(ids, e0)
-        t, d, parts = sdem_breakdown(lambda mode: build_collision_sdem(h, mode), steps, repeat, after_col)
-        rows.append((scene, "mpmsdem SDEM", t, d))
-        parts_rows.append((scene, t, parts, d.get("warnings", 0)))
-        t, d = measure(lambda: build_collision_levelset(h, kn), steps, repeat, after_col)
-        rows.append((scene, "YADE LevelSet", t, d))
-        if not args.no_polyhedra:
-            t, d = measure(lambda: build_collision_polyhedra(h, kv), steps, repeat, after_col)
-            rows.append((scene, "YADE Polyhedra", t, d))
-        if not args.no_clumps:
-            t, d = measure(lambda: build_collision_clumps(h, kn), steps, repeat, after_col)
-            rows.append((scene, "YADE clump %d^3" % CLUMP_N, t, d))
+        compare(scene, steps, repeat, lambda mode: build_collision_sdem(h, mode), after_col,
+                lambda: build_collision_levelset(h, kn), lambda: build_collision_polyhedra(h, kv),
+                lambda: build_collision_clumps(h, kn), after_col)
         # the contact phase alone (the free flight above is mostly overhead): start 0.1 mm apart and
         # run as long as the longer of the SDEM contact and the peers' linear contact (pi sqrt(mu/kn)), +20 %;
         # short runs, so 3x as many repeats
         linear = math.pi * math.sqrt(m / 2 / kn) / 5e-6
         csteps = int(1.2 * max(ncontact, linear))
         cscene = "contact phase h=%.1f m (%d steps)" % (h, csteps)
-        t, d, parts = sdem_breakdown(lambda mode: build_collision_sdem(h, mode, True), csteps, 3 * repeat,
-                                     after_col)
-        rows.append((cscene, "mpmsdem SDEM", t, d))
-        parts_rows.append((cscene, t, parts, d.get("warnings", 0)))
-        t, d = measure(lambda: build_collision_levelset(h, kn, True), csteps, 3 * repeat, after_col)
-        rows.append((cscene, "YADE LevelSet", t, d))
-        if not args.no_polyhedra:
-            t, d = measure(lambda: build_collision_polyhedra(h, kv, True), csteps, 3 * repeat, after_col)
-            rows.append((cscene, "YADE Polyhedra", t, d))
-        if not args.no_clumps:
-            t, d = measure(lambda: build_collision_clumps(h, kn, True), csteps, 3 * repeat, after_col)
-            rows.append((cscene, "YADE clump %d^3" % CLUMP_N, t, d))
+        compare(cscene, csteps, 3 * repeat, lambda mode: build_collision_sdem(h, mode, True), after_col,
+                lambda: build_collision_levelset(h, kn, True), lambda: build_collision_polyhedra(h, kv, True),
+                lambda: build_collision_clumps(h, kn, True), after_col)
 
     # peers' stiffness for the stack and the pile: that matched to SDEM in the collision of cubes of
     # the same size
@@ -685,17 +680,9 @@ def main(argv=None):
         def after_peer_stack(ids, extra, e0):
             forces, _ = stack_pair_forces_yade()
             return stack_figures(ids, 0, forces, lambda load, key: load / knPile)
-        t, d, parts = sdem_breakdown(build_stack_sdem, ssteps, repeat, after_sdem_stack)
-        rows.append((scene, "mpmsdem SDEM", t, d))
-        parts_rows.append((scene, t, parts, d.get("warnings", 0)))
-        t, d = measure(lambda: build_stack_levelset(knPile), ssteps, repeat, after_peer_stack)
-        rows.append((scene, "YADE LevelSet", t, d))
-        if not args.no_polyhedra:
-            t, d = measure(lambda: build_stack_polyhedra(knPile / STACK_H ** 2), ssteps, repeat, after_peer_stack)
-            rows.append((scene, "YADE Polyhedra", t, d))
-        if not args.no_clumps:
-            t, d = measure(lambda: build_stack_clumps(knPile), ssteps, repeat, after_peer_stack)
-            rows.append((scene, "YADE clump %d^3" % CLUMP_N, t, d))
+        compare(scene, ssteps, repeat, build_stack_sdem, after_sdem_stack, lambda: build_stack_levelset(knPile),
+                lambda: build_stack_polyhedra(knPile / STACK_H ** 2), lambda: build_stack_clumps(knPile),
+                after_peer_stack)
         notes.append("stack: %d cubes h = %.1f m on a floor (SDEM: a fixed box; peers: a YADE Wall), outer "
                      "surfaces touching at the start, gravity 9.81, NewtonIntegrator damping %.1f for all, dt %g s; "
                      "peers' kn as in the pile; exact overlaps: SDEM equilibriumOverlap over the patch's contact "
@@ -714,18 +701,11 @@ def main(argv=None):
 
         def after_peer_pile(ids, extra, e0):
             return pile_figures(ids, yade_contacts())
-        t, d, parts = sdem_breakdown(lambda mode: build_pile_sdem(mode, pileCount), psteps, repeat, after_sdem_pile)
-        rows.append((scene, "mpmsdem SDEM", t, d))
-        parts_rows.append((scene, t, parts, d.get("warnings", 0)))
-        t, d = measure(lambda: build_pile_levelset(knPile, pileCount), psteps, repeat, after_peer_pile)
-        rows.append((scene, "YADE LevelSet", t, d))
-        if not args.no_polyhedra:
-            # one run only: Polyhedra is by far the slowest here, its noise does not matter
-            t, d = measure(lambda: build_pile_polyhedra(knPile / PILE_H ** 2, pileCount), psteps, 1, after_peer_pile)
-            rows.append((scene, "YADE Polyhedra", t, d))
-        if not args.no_clumps:
-            t, d = measure(lambda: build_pile_clumps(knPile, pileCount), psteps, repeat, after_peer_pile)
-            rows.append((scene, "YADE clump %d^3" % CLUMP_N, t, d))
+        # Polyhedra one run only: it is by far the slowest here, its noise does not matter
+        compare(scene, psteps, repeat, lambda mode: build_pile_sdem(mode, pileCount), after_sdem_pile,
+                lambda: build_pile_levelset(knPile, pileCount),
+                lambda: build_pile_polyhedra(knPile / PILE_H ** 2, pileCount),
+                lambda: build_pile_clumps(knPile, pileCount), after_peer_pile, poly_reps=1)
 
     # ---- report
     out = format_report(rows, parts_rows, notes, repeat, args)
