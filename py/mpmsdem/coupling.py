@@ -150,7 +150,7 @@ class CoupledEngine:
 
     @property
     def dtAuto(self):
-        """None, or the factor f of ``O.dt = f × criticalTimeStep()`` set every step."""
+        """None, or the factor f of the step set every step (``dtAuto`` of the constructor)."""
         return self._dtAuto
 
     @dtAuto.setter
