@@ -79,18 +79,19 @@ MPM_HD_INLINE int gateBandNode(int t, const GateBand& b) {
   return (i * b.nodes[1] + j) * b.nodes[2] + k;
 }
 
-// The gate on one node of the band: a wall facing -x (the velocity component into the gate,
+// The gate on one node of the band, whose values are element `element` of the grid view's arrays
+// (its index times GridView::stride): a wall facing -x (the velocity component into the gate,
 // +x, removed; Coulomb friction mu as for the walls). Returns the impulse the gate gives the
 // node's material this step, m (v_after - v_before) [N s].
 template <typename T>
-MPM_HD_INLINE Vec3T<T> applyGateNode(int node, const T* mass, T* vx, T* vy, T* vz, T mu) {
-  const Vec3T<T> before{vx[node], vy[node], vz[node]};
+MPM_HD_INLINE Vec3T<T> applyGateNode(int element, const T* mass, T* vx, T* vy, T* vz, T mu) {
+  const Vec3T<T> before{vx[element], vy[element], vz[element]};
   Vec3T<T> v = before;
   applyWall(v, 0, T(1), mu);
-  vx[node] = v.x;
-  vy[node] = v.y;
-  vz[node] = v.z;
-  return mass[node] * (v - before);
+  vx[element] = v.x;
+  vy[element] = v.y;
+  vz[element] = v.z;
+  return mass[element] * (v - before);
 }
 
 }  // namespace mpm

@@ -13,6 +13,14 @@
 #define MPM_HD_INLINE inline
 #endif
 
+// Loops over the components of a value of several lanes (P2G shares, G2P sums): one SIMD
+// instruction per register on the CPU; plain loops in device code.
+#if defined(_OPENMP) && !defined(__CUDA_ARCH__)
+#define MPM_SIMD _Pragma("omp simd")
+#else
+#define MPM_SIMD
+#endif
+
 namespace mpmsdem {
 namespace mpm {
 

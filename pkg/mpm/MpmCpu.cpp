@@ -9,6 +9,10 @@
 namespace mpmsdem {
 namespace mpm {
 
+namespace {
+constexpr int kBlockNodes = 5;  // nodes per axis reached from one 3x3x3 block of stencil bases
+}
+
 template <typename T>
 void MpmCpu<T>::State::resize(std::size_t n) {
   for (auto& a : x) a.assign(n, T(0));
@@ -26,7 +30,7 @@ MpmCpu<T>::MpmCpu(const MpmParams& params)
       mat_(makeConstitutiveConst<T>(params.material)),
       maxSpeedAllowed_(blowUpSpeed(params)) {
   nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
-  nodes_.assign(static_cast<std::size_t>(kGridComponents) * nNodes_, T(0));
+  nodes_.assign(static_cast<std::size_t>(kNodeValues) * nNodes_, T(0));
   for (int d = 0; d < 3; ++d) {
     blocks_[d] = params.cells[d] / 3 + 1;
     tiles_[d] = (grid_.nodes[d] + 2) / 3;
@@ -248,24 +252,40 @@ void MpmCpu<T>::forActiveNodes(F&& f) {
 template <typename T>
 void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
   T* gridData = nodes_.data();
-  const int nN = nNodes_;
-  auto add = [gridData, nN](int node, T m, const Vec3T<T>& pOld, const Vec3T<T>& pNew) {
-    gridData[node] += m;
-    gridData[nN + node] += pOld.x;
-    gridData[2 * nN + node] += pOld.y;
-    gridData[3 * nN + node] += pOld.z;
-    gridData[4 * nN + node] += pNew.x;
-    gridData[5 * nN + node] += pNew.y;
-    gridData[6 * nN + node] += pNew.z;
-  };
+  const GridConst<T>& g = grid_;
   for (int c = 0; c < 8; ++c) {
     const std::vector<int>& list = colourBlocks_[c];
     const long nb = static_cast<long>(list.size());
 #pragma omp parallel for schedule(dynamic, 4)
     for (long i = 0; i < nb; ++i) {
       const int b = list[i];
-      auto addLocal = add;
-      for (int q = blockStart_[b]; q < blockStart_[b + 1]; ++q) p2gParticle(order_[q], in, grid_, dt, addLocal);
+      const int b0[3] = {3 * (b / (blocks_[2] * blocks_[1])), 3 * ((b / blocks_[2]) % blocks_[1]), 3 * (b % blocks_[2])};
+      // The block's particles add into a private copy of the nodes they reach (in L1), which
+      // is then added to the grid once: the grid is touched once per block, not per particle.
+      T loc[kBlockNodes][kBlockNodes][kBlockNodes][kNodeValues] = {};
+      for (int q = blockStart_[b]; q < blockStart_[b + 1]; ++q) {
+        const int p = order_[q];
+        T gc[3];
+        gridCoordinate(in, p, g, gc);
+        Stencil<T> st;
+        st.compute(gc);
+        const int o0 = st.base[0] - b0[0], o1 = st.base[1] - b0[1], o2 = st.base[2] - b0[2];
+        auto add = [&loc, o0, o1, o2](int a, int bb, int cc, const T* r) {
+          T* l = loc[o0 + a][o1 + bb][o2 + cc];
+          MPM_SIMD
+          for (int v = 0; v < kNodeValues; ++v) l[v] += r[v];
+        };
+        p2gStencil(p, in, st, g.invDx, dt, add);
+      }
+      const int e0 = std::min(kBlockNodes, g.nodes[0] - b0[0]), e1 = std::min(kBlockNodes, g.nodes[1] - b0[1]),
+                e2 = std::min(kBlockNodes, g.nodes[2] - b0[2]);
+      for (int a = 0; a < e0; ++a)
+        for (int bb = 0; bb < e1; ++bb) {
+          T* r = gridData + kNodeValues * (((b0[0] + a) * g.nodes[1] + (b0[1] + bb)) * g.nodes[2] + b0[2]);
+          const T* l = loc[a][bb][0];
+          MPM_SIMD
+          for (int v = 0; v < kNodeValues * e2; ++v) r[v] += l[v];
+        }
     }
   }
 }
@@ -276,26 +296,27 @@ void MpmCpu<T>::step(double dt) {
   const T dtT = static_cast<T>(dt);
   const ParticleIn<T> in = input();
   const ParticleOut<T> out = output();
-  const int nN = nNodes_;
   T* gridData = nodes_.data();
   // Only the previous step's active tiles hold non-zero values.
-  forActiveNodes([gridData, nN](int node) {
-    for (int c = 0; c < kGridComponents; ++c) gridData[c * nN + node] = T(0);
+  forActiveNodes([gridData](int node) {
+    T* r = gridData + kNodeValues * node;
+    for (int c = 0; c < kNodeValues; ++c) r[c] = T(0);
   });
   bin(in);
   scatter(dtT, in);
   const GridConst<T> g = grid_;
   if (hooks_.empty()) {
-    forActiveNodes([gridData, nN, &g, dtT](int node) { gridNodeUpdate(node, gridData, nN, g, dtT); });
+    forActiveNodes([gridData, &g, dtT](int node) { gridNodeUpdate(node, gridData, g, dtT); });
   } else {
-    forActiveNodes([gridData, nN, &g, dtT](int node) { gridNodeVelocity(node, gridData, nN, g, dtT); });
+    forActiveNodes([gridData, &g, dtT](int node) { gridNodeVelocity(node, gridData, g, dtT); });
     GridView view = gridViewFrame(dt);
     view.precision = kPrecision;
     view.device = false;
-    view.mass = gridData;
-    for (int d = 0; d < 3; ++d) view.v[d] = gridData + (4 + d) * nN;
+    view.stride = kNodeValues;
+    view.mass = gridData + kNodeMass;
+    for (int d = 0; d < 3; ++d) view.v[d] = gridData + kNodeVNew + d;
     applyGridHooks(view);
-    forActiveNodes([gridData, nN, &g](int node) { gridNodeWalls(node, gridData, nN, g); });
+    forActiveNodes([gridData, &g](int node) { gridNodeWalls(node, gridData, g); });
   }
 
   StepConst<T> sc;
@@ -308,7 +329,7 @@ void MpmCpu<T>::step(double dt) {
   T vmax = 0;
 #pragma omp parallel for schedule(static) reduction(min : firstBad) reduction(max : vmax)
   for (long p = 0; p < n; ++p) {
-    const G2PResult<T> r = g2pParticle(static_cast<int>(p), in, out, gridData, nNodes_, g, sc);
+    const G2PResult<T> r = g2pParticle(static_cast<int>(p), in, out, gridData, g, sc);
     if (!r.ok && p < firstBad) firstBad = p;
     if (r.speed > vmax) vmax = r.speed;
   }

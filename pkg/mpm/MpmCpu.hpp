@@ -6,8 +6,9 @@
 // of 3x3x3 stencil-base cells. A particle whose stencil base lies in block b touches nodes
 // 3b .. 3b+4 per axis, so two blocks whose indices differ by 2 or more along some axis share
 // no node. The blocks are split into 8 colours by index parity; the blocks of one colour are
-// scattered in parallel, the colours one after another. The summation order is fixed, so
-// the result does not depend on the thread count.
+// scattered in parallel, the colours one after another. A block's particles add into a private
+// 5x5x5-node copy (in L1 cache), added to the grid once per block. The summation order is
+// fixed, so the result does not depend on the thread count.
 //
 // Grid work follows the particles, not the box: the nodes are grouped in tiles of 3x3x3, and
 // the stencil of a particle in block b lies in tiles b and b + 1 per axis. A step zeroes,
@@ -25,7 +26,7 @@
 // momentum) stay float too: a node sums the shares of the 27 ppc points around it, so its
 // round-off stays below 27 ppc eps/2 (1e-5 at 8 points per cell, ~1e-6 typically) and does not
 // grow with the run; momentum is conserved to that per step; the scatter order is fixed; and
-// a double grid would cost 19 B/particle more at 1e6 points, past the 150 B/particle of
+// a double grid would cost 21 B/particle more at 1e6 points, past the 150 B/particle of
 // float. The sums over a whole run accumulate in double: the clock (MpmSolver::time()), the
 // gate's impulse (Gate), the coupling's block sums (MpSdemCoupling); in float a step's
 // increment would be rounded to 1.2e-7 of the total every step.
@@ -33,8 +34,9 @@
 // Memory per particle (memoryBytes()): the state x, v, stress, J, gammaDotP (14 T) and phase
 // (1 byte), twice, plus mass and volume0: 30 T + 2 bytes (242 B in double, 122 B in float);
 // the binning arrays (block id and sorted order, 8 B); external forces, 3 T, once set or
-// opened by a coupling; and the grid, 7 T per node (plus a byte and at most an int per tile of
-// 27 nodes for the active tiles).
+// opened by a coupling; and the grid, 8 T per node (7 values and a pad that makes a node two
+// whole SIMD registers in double; plus a byte and at most an int per tile of 27 nodes for the
+// active tiles).
 #pragma once
 #include <cstdint>
 #include <type_traits>
@@ -92,7 +94,7 @@ class MpmCpu : public MpmSolver {
   std::vector<T> mass_, vol0_;
   std::vector<T> fext_[3];
   bool hasFext_ = false;
-  std::vector<T> nodes_;  // kGridComponents * nNodes_
+  std::vector<T> nodes_;  // kNodeValues * nNodes_
   double maxSpeed_ = 0;   // largest particle speed of the current state [m/s]
   // P2G colouring and the active grid
   int blocks_[3];

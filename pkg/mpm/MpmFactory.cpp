@@ -32,9 +32,9 @@ void validate(const MpmParams& p) {
     if (!std::isfinite(p.gravity[d])) throwParameter(std::string("gravity[") + axis[d] + "]", p.gravity[d], "m/s^2", "finite");
   }
   const double nodes = double(p.cells[0] + 1) * (p.cells[1] + 1) * (p.cells[2] + 1);
-  if (nodes * kGridComponents > 2147483647.0)
+  if (nodes * kNodeValues > 2147483647.0)
     throwParameter("cells", std::to_string(p.cells[0]) + "x" + std::to_string(p.cells[1]) + "x" + std::to_string(p.cells[2]),
-                   "", "small enough that 7 x number of nodes < 2^31");
+                   "", "small enough that " + std::to_string(kNodeValues) + " x number of nodes < 2^31");
   if (!(p.flipAlpha >= 0 && p.flipAlpha <= 1)) throwParameter("flipAlpha", p.flipAlpha, "", "in [0, 1]");
   if (!(p.flipReferenceDt >= 0 && std::isfinite(p.flipReferenceDt)))
     throwParameter("flipReferenceDt", p.flipReferenceDt, "s", ">= 0 and finite (0: alpha per step, Eq 4)");

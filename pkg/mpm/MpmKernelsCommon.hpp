@@ -2,12 +2,14 @@
 // __host__ __device__ functions: the CPU loops (MpmCpu.cpp) and the CUDA kernels
 // (cuda/MpmCudaKernels.cuh) call exactly these, in double or float.
 //
-// Grid layout: one flat array of kGridComponents * nNodes values, component c of node n at
-// c * nNodes + n, node (i, j, k) at n = (i * nodes[1] + j) * nodes[2] + k.
-// After P2G: c = 0 mass, 1..3 momentum of the particle velocities (sum w m v),
-// 4..6 that momentum plus dt times the internal and external particle forces.
-// After the grid update: 1..3 old velocity, 4..6 new velocity (gravity, grid hooks and walls
-// applied).
+// Grid layout: one record of kNodeValues values per node, node (i, j, k) at
+// n = (i * nodes[1] + j) * nodes[2] + k, its value c at grid[kNodeValues * n + c]. A node's
+// values share a cache line and two SIMD registers (double; one in float), so P2G adds and G2P
+// reads a node with whole-register operations.
+// After P2G: c = 0..2 momentum of the particle velocities (sum w m v), 3 mass, 4..6 that
+// momentum plus dt times the internal and external particle forces, 7 zero.
+// After the grid update: 0..2 old velocity, 3 mass, 4..6 new velocity (gravity, grid hooks and
+// walls applied), 7 zero.
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -25,7 +27,9 @@
 namespace mpmsdem {
 namespace mpm {
 
-constexpr int kGridComponents = 7;
+constexpr int kNodeValues = 8;
+constexpr int kNodeMass = 3;   // the mass in a node's record
+constexpr int kNodeVNew = 4;   // the new velocity (3 values) in a node's record
 
 // Grid geometry and per-run constants.
 template <typename T>
@@ -77,73 +81,103 @@ MPM_HD_INLINE void gridCoordinate(const ParticleIn<T>& P, int p, const GridConst
   for (int d = 0; d < 3; ++d) out[d] = (P.x[d][p] - g.origin[d]) * g.invDx;
 }
 
-// P2G of particle p: calls add(node, m, momentum, momentum + dt * force) for its 27 nodes.
-// Internal force -V_p sigma grad(w) with V_p = J V0; external force w f_ext (Eq 14).
+// P2G of particle p over its stencil st: calls add(i, j, k, r) for the 27 nodes st.base + (i, j, k)
+// with r[c] the particle's share of node value c (r[7] = 0): mass w m, momentum w m v, and
+// momentum plus the impulse dt (w f_ext - V_p sigma grad w), V_p = J V0 (Eq 14). Written as
+// r = w C_w + (grad w) . (C_x, C_y, C_z) with per-particle coefficients and the separable
+// weights factored per (i, j) row, so that a row of 3 nodes costs two multiply-adds per value.
+template <typename T, typename Scatter>
+MPM_HD_INLINE void p2gStencil(int p, const ParticleIn<T>& P, const Stencil<T>& st, T invDx, T dt, Scatter& add) {
+  const T m = P.mass[p];
+  const T vol = P.J[p] * P.vol0[p];
+  T s[6];
+  for (int k = 0; k < 6; ++k) s[k] = -dt * vol * invDx * P.s[k][p];  // -dt V sigma / dx
+  T cw[kNodeValues], cx[kNodeValues], cy[kNodeValues], cz[kNodeValues];
+  for (int d = 0; d < 3; ++d) {
+    cw[d] = m * P.v[d][p];
+    cw[kNodeVNew + d] = cw[d] + (P.fext[0] ? dt * P.fext[d][p] : T(0));
+  }
+  cw[kNodeMass] = m;
+  cw[7] = T(0);
+  for (int c = 0; c < kNodeValues; ++c) cx[c] = cy[c] = cz[c] = T(0);
+  // (-dt V sigma) . grad w, sigma symmetric in Voigt order xx yy zz yz xz xy
+  T* ix = cx + kNodeVNew;
+  T* iy = cy + kNodeVNew;
+  T* iz = cz + kNodeVNew;
+  ix[0] = s[0], iy[0] = s[5], iz[0] = s[4];
+  ix[1] = s[5], iy[1] = s[1], iz[1] = s[3];
+  ix[2] = s[4], iy[2] = s[3], iz[2] = s[2];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const T wij = st.w[0][i] * st.w[1][j];
+      const T xij = st.dw[0][i] * st.w[1][j];
+      const T yij = st.w[0][i] * st.dw[1][j];
+      T row[kNodeValues], rowZ[kNodeValues];
+      MPM_SIMD
+      for (int c = 0; c < kNodeValues; ++c) {
+        row[c] = wij * cw[c] + xij * cx[c] + yij * cy[c];
+        rowZ[c] = wij * cz[c];
+      }
+      for (int k = 0; k < 3; ++k) {
+        T r[kNodeValues];
+        MPM_SIMD
+        for (int c = 0; c < kNodeValues; ++c) r[c] = st.w[2][k] * row[c] + st.dw[2][k] * rowZ[c];
+        add(i, j, k, r);
+      }
+    }
+}
+
+// P2G of particle p into the flat grid: calls add(node, r) for its 27 nodes (see p2gStencil).
 template <typename T, typename Scatter>
 MPM_HD_INLINE void p2gParticle(int p, const ParticleIn<T>& P, const GridConst<T>& g, T dt, Scatter& add) {
   T gc[3];
   gridCoordinate(P, p, g, gc);
   Stencil<T> st;
   st.compute(gc);
-  const T m = P.mass[p];
-  const T vol = P.J[p] * P.vol0[p];
-  const Vec3T<T> v{P.v[0][p], P.v[1][p], P.v[2][p]};
-  T s[6];
-  for (int k = 0; k < 6; ++k) s[k] = -dt * vol * P.s[k][p];  // -dt V sigma
-  Vec3T<T> fe{T(0), T(0), T(0)};
-  if (P.fext[0]) fe = Vec3T<T>{dt * P.fext[0][p], dt * P.fext[1][p], dt * P.fext[2][p]};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k) {
-        const T w = st.weight(i, j, k);
-        const Vec3T<T> gw = st.gradient(i, j, k, g.invDx);
-        const T wm = w * m;
-        const Vec3T<T> mom{wm * v.x, wm * v.y, wm * v.z};
-        // (-dt V sigma) . grad w, sigma symmetric in Voigt order xx yy zz yz xz xy
-        const Vec3T<T> imp{s[0] * gw.x + s[5] * gw.y + s[4] * gw.z + w * fe.x,
-                           s[5] * gw.x + s[1] * gw.y + s[3] * gw.z + w * fe.y,
-                           s[4] * gw.x + s[3] * gw.y + s[2] * gw.z + w * fe.z};
-        const int node = ((st.base[0] + i) * g.nodes[1] + (st.base[1] + j)) * g.nodes[2] + (st.base[2] + k);
-        add(node, wm, mom, mom + imp);
-      }
+  auto toNode = [&](int i, int j, int k, const T* r) {
+    add(((st.base[0] + i) * g.nodes[1] + (st.base[1] + j)) * g.nodes[2] + (st.base[2] + k), r);
+  };
+  p2gStencil(p, P, st, g.invDx, dt, toNode);
 }
 
 // Grid velocities of one node (Eq 3): v_old = p/m, v_new = (p + dt f)/m + dt g; an empty node
 // is zeroed (mass included, so grid hooks see it at rest).
 template <typename T>
-MPM_HD_INLINE void gridNodeVelocity(int node, T* grid, int nNodes, const GridConst<T>& g, T dt) {
-  const T m = grid[node];
+MPM_HD_INLINE void gridNodeVelocity(int node, T* grid, const GridConst<T>& g, T dt) {
+  T* r = grid + kNodeValues * node;
+  const T m = r[kNodeMass];
   if (!(m > g.massEps)) {
-    for (int c = 0; c < kGridComponents; ++c) grid[c * nNodes + node] = T(0);
+    for (int c = 0; c < kNodeValues; ++c) r[c] = T(0);
     return;
   }
   const T inv = T(1) / m;
   for (int d = 0; d < 3; ++d) {
-    grid[(1 + d) * nNodes + node] *= inv;
-    grid[(4 + d) * nNodes + node] = grid[(4 + d) * nNodes + node] * inv + dt * g.gravity[d];
+    r[d] *= inv;
+    r[kNodeVNew + d] = r[kNodeVNew + d] * inv + dt * g.gravity[d];
   }
 }
 
 // The walls on the new velocity of one node.
 template <typename T>
-MPM_HD_INLINE void gridNodeWalls(int node, T* grid, int nNodes, const GridConst<T>& g) {
+MPM_HD_INLINE void gridNodeWalls(int node, T* grid, const GridConst<T>& g) {
   int idx[3];
   idx[2] = node % g.nodes[2];
-  const int r = node / g.nodes[2];
-  idx[1] = r % g.nodes[1];
-  idx[0] = r / g.nodes[1];
-  Vec3T<T> vn{grid[4 * nNodes + node], grid[5 * nNodes + node], grid[6 * nNodes + node]};
+  const int q = node / g.nodes[2];
+  idx[1] = q % g.nodes[1];
+  idx[0] = q / g.nodes[1];
+  T* r = grid + kNodeValues * node + kNodeVNew;
+  Vec3T<T> vn{r[0], r[1], r[2]};
   applyWalls(vn, idx, g.cells, g.wallFriction);
-  for (int d = 0; d < 3; ++d) grid[(4 + d) * nNodes + node] = vn[d];
+  for (int d = 0; d < 3; ++d) r[d] = vn[d];
 }
 
 // Grid update of one node without grid hooks: velocities, then walls. A solver with hooks
 // runs the two halves as separate passes with the hooks between them; the values are the
 // same (each half stores and reloads T).
 template <typename T>
-MPM_HD_INLINE void gridNodeUpdate(int node, T* grid, int nNodes, const GridConst<T>& g, T dt) {
-  gridNodeVelocity(node, grid, nNodes, g, dt);
-  gridNodeWalls(node, grid, nNodes, g);
+MPM_HD_INLINE void gridNodeUpdate(int node, T* grid, const GridConst<T>& g, T dt) {
+  gridNodeVelocity(node, grid, g, dt);
+  gridNodeWalls(node, grid, g);
 }
 
 // Admissible volume ratio J = V/V0 of a material point. A granular material changes its
@@ -169,29 +203,54 @@ struct G2PResult {
 // L = sum v_new (x) grad w; J *= det(I + dt L); rho = m / (J V0).
 template <typename T>
 MPM_HD_INLINE G2PResult<T> g2pParticle(int p, const ParticleIn<T>& P, const ParticleOut<T>& Q, const T* grid,
-                                       int nNodes, const GridConst<T>& g, const StepConst<T>& sc) {
+                                       const GridConst<T>& g, const StepConst<T>& sc) {
   T gc[3];
   gridCoordinate(P, p, g, gc);
   Stencil<T> st;
   st.compute(gc);
-  Vec3T<T> vPic{T(0), T(0), T(0)}, dv{T(0), T(0), T(0)};
-  Mat3T<T> L = Mat3T<T>::zero();
+  // Sums over the stencil of w (v_new - v_old), w v_new and the gradient components times
+  // v_new, factored per (i, j) row like P2G. Lanes 0..2 carry the vectors; lane 3 (the
+  // difference's lane holds minus the mass) is not used.
+  constexpr int kL = 4;
+  T sd[kL], sw[kL], sx[kL], sy[kL], sz[kL];
+  MPM_SIMD
+  for (int c = 0; c < kL; ++c) sd[c] = sw[c] = sx[c] = sy[c] = sz[c] = T(0);
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
+    for (int j = 0; j < 3; ++j) {
+      const T* row = grid + kNodeValues * (((st.base[0] + i) * g.nodes[1] + (st.base[1] + j)) * g.nodes[2] + st.base[2]);
+      T ad[kL], an[kL], bn[kL];
+      MPM_SIMD
+      for (int c = 0; c < kL; ++c) ad[c] = an[c] = bn[c] = T(0);
       for (int k = 0; k < 3; ++k) {
-        const int node = ((st.base[0] + i) * g.nodes[1] + (st.base[1] + j)) * g.nodes[2] + (st.base[2] + k);
-        const T w = st.weight(i, j, k);
-        const Vec3T<T> gw = st.gradient(i, j, k, g.invDx);
-        const Vec3T<T> vo{grid[nNodes + node], grid[2 * nNodes + node], grid[3 * nNodes + node]};
-        const Vec3T<T> vn{grid[4 * nNodes + node], grid[5 * nNodes + node], grid[6 * nNodes + node]};
-        vPic = vPic + w * vn;
-        dv = dv + w * (vn - vo);
-        for (int a = 0; a < 3; ++a) {
-          L.m[a][0] += vn[a] * gw.x;
-          L.m[a][1] += vn[a] * gw.y;
-          L.m[a][2] += vn[a] * gw.z;
+        const T* r = row + kNodeValues * k;
+        const T w = st.w[2][k], dw = st.dw[2][k];
+        MPM_SIMD
+        for (int c = 0; c < kL; ++c) {
+          const T vn = r[kNodeVNew + c];
+          ad[c] += w * (vn - r[c]);
+          an[c] += w * vn;
+          bn[c] += dw * vn;
         }
       }
+      const T wij = st.w[0][i] * st.w[1][j];
+      const T xij = st.dw[0][i] * st.w[1][j];
+      const T yij = st.w[0][i] * st.dw[1][j];
+      MPM_SIMD
+      for (int c = 0; c < kL; ++c) {
+        sd[c] += wij * ad[c];
+        sw[c] += wij * an[c];
+        sx[c] += xij * an[c];
+        sy[c] += yij * an[c];
+        sz[c] += wij * bn[c];
+      }
+    }
+  const Vec3T<T> dv{sd[0], sd[1], sd[2]}, vPic{sw[0], sw[1], sw[2]};
+  Mat3T<T> L;
+  for (int a = 0; a < 3; ++a) {
+    L.m[a][0] = g.invDx * sx[a];
+    L.m[a][1] = g.invDx * sy[a];
+    L.m[a][2] = g.invDx * sz[a];
+  }
   const T dt = sc.dt;
   Vec3T<T> v{T(0), T(0), T(0)};
   bool ok = true;

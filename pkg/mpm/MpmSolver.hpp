@@ -37,7 +37,8 @@ struct ParticleView {
 // The grid as a grid-node hook sees it (GridHook::apply), in the backend's own memory (host
 // for the CPU backend, device for CUDA) and precision: the element type of the arrays is
 // double or float as `precision` says. Node (i, j, k), at origin + (i, j, k) dx, is element
-// (i * nodes[1] + j) * nodes[2] + k of every array. The velocities are those the step ends
+// stride * ((i * nodes[1] + j) * nodes[2] + k) of every array (the arrays interleave: a node's
+// values are stored together). The velocities are those the step ends
 // with: momentum over mass with gravity and the internal and external forces of this step
 // applied, the walls not yet. A hook may change them in place (the mass is read-only); empty
 // nodes have mass 0 and velocity 0 and must stay at rest. Valid only inside apply().
@@ -47,6 +48,7 @@ struct GridView {
   int nodes[3] = {};        // nodes per axis (cells + 1)
   double origin[3] = {};    // position of node (0, 0, 0) [m]
   double dx = 0;            // node spacing [m]
+  int stride = 1;           // elements from one node to the next in mass and v
   const void* mass = nullptr;  // node mass [kg]
   void* v[3] = {};          // node velocity at the end of the step [m/s]
   double time = 0;          // time at the start of the step [s] (the velocities are those of time + dt)

@@ -49,7 +49,7 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
       mat_(makeConstitutiveConst<T>(params.material)),
       maxSpeedAllowed_(blowUpSpeed(params)) {
   nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
-  deviceAlloc(&nodes_, static_cast<std::size_t>(kGridComponents) * nNodes_, bytes_);
+  deviceAlloc(&nodes_, static_cast<std::size_t>(kNodeValues) * nNodes_, bytes_);
   deviceAlloc(&flags_, 1, bytes_);
 }
 
@@ -78,7 +78,7 @@ void MpmCuda<T>::freeParticles() {
   deviceFree(mass_);
   deviceFree(vol0_);
   for (auto& a : fext_) deviceFree(a);
-  bytes_ = (static_cast<std::size_t>(kGridComponents) * nNodes_) * sizeof(T) + sizeof(StepFlags);
+  bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags);
   hasFext_ = false;
 }
 
@@ -235,13 +235,13 @@ void MpmCuda<T>::step(double dt) {
   if (steps_ % 100 == 0) checkTimeStep(dt);
   const int n = static_cast<int>(n_);
   const T dtT = static_cast<T>(dt);
-  CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kGridComponents) * nNodes_ * sizeof(T)));
+  CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
   const StepFlags init{n, 0u};
   CUDA_CHECK(cudaMemcpy(flags_, &init, sizeof(StepFlags), cudaMemcpyHostToDevice));
   const ParticleIn<T> in = input();
   const ParticleOut<T> out = output();
   if (n > 0) {
-    cudak::p2gKernel<T><<<blocksFor(n_), kThreads>>>(n, in, grid_, dtT, nodes_, nNodes_);
+    cudak::p2gKernel<T><<<blocksFor(n_), kThreads>>>(n, in, grid_, dtT, nodes_);
     CUDA_CHECK(cudaGetLastError());
   }
   if (hooks_.empty()) {
@@ -253,8 +253,9 @@ void MpmCuda<T>::step(double dt) {
     GridView view = gridViewFrame(dt);
     view.precision = sizeof(T) == sizeof(float) ? Precision::Float : Precision::Double;
     view.device = true;
-    view.mass = nodes_;
-    for (int d = 0; d < 3; ++d) view.v[d] = nodes_ + static_cast<std::size_t>(4 + d) * nNodes_;
+    view.stride = kNodeValues;
+    view.mass = nodes_ + kNodeMass;
+    for (int d = 0; d < 3; ++d) view.v[d] = nodes_ + kNodeVNew + d;
     applyGridHooks(view);
     cudak::gridWallsKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_);
     CUDA_CHECK(cudaGetLastError());
@@ -265,7 +266,7 @@ void MpmCuda<T>::step(double dt) {
   sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
   sc.mat = mat_;
   if (n > 0) {
-    cudak::g2pKernel<T><<<blocksFor(n_), kThreads>>>(n, in, out, nodes_, nNodes_, grid_, sc, &flags_->firstBad,
+    cudak::g2pKernel<T><<<blocksFor(n_), kThreads>>>(n, in, out, nodes_, grid_, sc, &flags_->firstBad,
                                                      &flags_->maxSpeedBits);
     CUDA_CHECK(cudaGetLastError());
   }

@@ -6,27 +6,21 @@ namespace mpmsdem {
 namespace mpm {
 namespace cudak {
 
-// P2G scatter into the flat grid with atomics.
+// P2G scatter into the grid with atomics (the zero eighth value is skipped).
 template <typename T>
 struct AtomicScatter {
   T* grid;
-  int nNodes;
-  __device__ __forceinline__ void operator()(int node, T m, const Vec3T<T>& pOld, const Vec3T<T>& pNew) const {
-    atomicAdd(grid + node, m);
-    atomicAdd(grid + nNodes + node, pOld.x);
-    atomicAdd(grid + 2 * nNodes + node, pOld.y);
-    atomicAdd(grid + 3 * nNodes + node, pOld.z);
-    atomicAdd(grid + 4 * nNodes + node, pNew.x);
-    atomicAdd(grid + 5 * nNodes + node, pNew.y);
-    atomicAdd(grid + 6 * nNodes + node, pNew.z);
+  __device__ __forceinline__ void operator()(int node, const T* r) const {
+    T* n = grid + kNodeValues * node;
+    for (int c = 0; c < kNodeValues - 1; ++c) atomicAdd(n + c, r[c]);
   }
 };
 
 template <typename T>
-__global__ void p2gKernel(int n, ParticleIn<T> in, GridConst<T> g, T dt, T* grid, int nNodes) {
+__global__ void p2gKernel(int n, ParticleIn<T> in, GridConst<T> g, T dt, T* grid) {
   const int p = blockIdx.x * blockDim.x + threadIdx.x;
   if (p >= n) return;
-  AtomicScatter<T> add{grid, nNodes};
+  AtomicScatter<T> add{grid};
   p2gParticle(p, in, g, dt, add);
 }
 
@@ -34,7 +28,7 @@ template <typename T>
 __global__ void gridKernel(int nNodes, T* grid, GridConst<T> g, T dt) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= nNodes) return;
-  gridNodeUpdate(i, grid, nNodes, g, dt);
+  gridNodeUpdate(i, grid, g, dt);
 }
 
 // The grid update in two halves, with the grid hooks launched between them.
@@ -42,14 +36,14 @@ template <typename T>
 __global__ void gridVelocityKernel(int nNodes, T* grid, GridConst<T> g, T dt) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= nNodes) return;
-  gridNodeVelocity(i, grid, nNodes, g, dt);
+  gridNodeVelocity(i, grid, g, dt);
 }
 
 template <typename T>
 __global__ void gridWallsKernel(int nNodes, T* grid, GridConst<T> g) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= nNodes) return;
-  gridNodeWalls(i, grid, nNodes, g);
+  gridNodeWalls(i, grid, g);
 }
 
 // flags[0]: smallest failing particle index (atomicMin); flags[1]: float bits of the largest
@@ -73,11 +67,11 @@ __device__ __forceinline__ double warpSum(double v) {
 // The gate on the `count` nodes of its band; one thread per node, the impulse summed per warp
 // and added to impulse[0..2] (blockDim is a multiple of 32, so whole warps reach the sums).
 template <typename T>
-__global__ void gateKernel(GateBand b, int count, const T* mass, T* vx, T* vy, T* vz, T mu, double* impulse) {
+__global__ void gateKernel(GateBand b, int count, int stride, const T* mass, T* vx, T* vy, T* vz, T mu, double* impulse) {
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   double p[3] = {0.0, 0.0, 0.0};
   if (t < count) {
-    const Vec3T<T> d = applyGateNode(gateBandNode(t, b), mass, vx, vy, vz, mu);
+    const Vec3T<T> d = applyGateNode(stride * gateBandNode(t, b), mass, vx, vy, vz, mu);
     for (int c = 0; c < 3; ++c) p[c] = static_cast<double>(d[c]);
   }
   for (int c = 0; c < 3; ++c) {
@@ -87,12 +81,12 @@ __global__ void gateKernel(GateBand b, int count, const T* mass, T* vx, T* vy, T
 }
 
 template <typename T>
-__global__ void g2pKernel(int n, ParticleIn<T> in, ParticleOut<T> out, const T* grid, int nNodes, GridConst<T> g,
+__global__ void g2pKernel(int n, ParticleIn<T> in, ParticleOut<T> out, const T* grid, GridConst<T> g,
                           StepConst<T> sc, int* firstBad, unsigned int* maxSpeedBits) {
   const int p = blockIdx.x * blockDim.x + threadIdx.x;
   unsigned int bits = 0u;
   if (p < n) {
-    const G2PResult<T> r = g2pParticle(p, in, out, grid, nNodes, g, sc);
+    const G2PResult<T> r = g2pParticle(p, in, out, grid, g, sc);
     if (!r.ok) atomicMin(firstBad, p);
     const float s = static_cast<float>(r.speed);
     bits = s == s ? __float_as_uint(s) : 0u;  // NaN speeds are reported via firstBad

@@ -26,9 +26,10 @@ struct WholeGridProbe : GridHook {
     mass = 0;
     movingEmpty = 0;
     for (int i = 0; i < g.nodes[0] * g.nodes[1] * g.nodes[2]; ++i) {
-      mass += m[i];
+      const int e = i * g.stride;
+      mass += m[e];
       for (int d = 0; d < 3; ++d)
-        if (m[i] == 0 && static_cast<const double*>(g.v[d])[i] != 0) ++movingEmpty;
+        if (m[e] == 0 && static_cast<const double*>(g.v[d])[e] != 0) ++movingEmpty;
     }
   }
 };

@@ -83,8 +83,9 @@ struct PushingHook : GridHook {
     double* vx = static_cast<double*>(g.v[0]);
     massSum = 0;
     for (int i = 0; i < g.nodes[0] * g.nodes[1] * g.nodes[2]; ++i) {
-      massSum += m[i];
-      if (m[i] > 0) vx[i] = 1.0;
+      const int e = i * g.stride;
+      massSum += m[e];
+      if (m[e] > 0) vx[e] = 1.0;
     }
   }
 };
