@@ -215,9 +215,9 @@ void MpmCpu<T>::bin(const ParticleIn<T>& in) {
   for (auto& c : colourBlocks_) c.clear();
   for (int b = 0; b < nBlocks; ++b) {
     if (blockStart_[b + 1] == blockStart_[b]) continue;
-    const int bz = b % blocks_[2];
-    const int by = (b / blocks_[2]) % blocks_[1];
-    const int bx = b / (blocks_[2] * blocks_[1]);
+    int bc[3];
+    blockCoords(b, bc);
+    const int bx = bc[0], by = bc[1], bz = bc[2];
     colourBlocks_[(bx & 1) * 4 + (by & 1) * 2 + (bz & 1)].push_back(b);
     for (int tx = bx; tx <= std::min(bx + 1, tiles_[0] - 1); ++tx)
       for (int ty = by; ty <= std::min(by + 1, tiles_[1] - 1); ++ty)
@@ -259,7 +259,9 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
 #pragma omp parallel for schedule(dynamic, 4)
     for (long i = 0; i < nb; ++i) {
       const int b = list[i];
-      const int b0[3] = {3 * (b / (blocks_[2] * blocks_[1])), 3 * ((b / blocks_[2]) % blocks_[1]), 3 * (b % blocks_[2])};
+      int b0[3];
+      blockCoords(b, b0);
+      for (int& x : b0) x *= 3;  // the block's first stencil-base node
       // The block's particles add into a private copy of the nodes they reach (in L1), which
       // is then added to the grid once: the grid is touched once per block, not per particle.
       T loc[kBlockNodes][kBlockNodes][kBlockNodes][kNodeValues] = {};

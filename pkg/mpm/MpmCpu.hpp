@@ -82,6 +82,12 @@ class MpmCpu : public MpmSolver {
   void bin(const ParticleIn<T>& in);
   template <typename F>
   void forActiveNodes(F&& f);
+  // Block indices (bx, by, bz) of block id b.
+  void blockCoords(int b, int c[3]) const {
+    c[2] = b % blocks_[2];
+    c[1] = (b / blocks_[2]) % blocks_[1];
+    c[0] = b / (blocks_[2] * blocks_[1]);
+  }
 
   MpmParams params_;
   GridConst<T> grid_{};
