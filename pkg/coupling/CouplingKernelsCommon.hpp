@@ -56,7 +56,7 @@ struct HistoryView {
 // One MP–block contact, handed to the caller's sink.
 template <typename T>
 struct MpContact {
-  int particle, block, featureKind, featureIndex;
+  int particle, block, featureKind, featureIndex;  // particle: its number (CouplingParticles::id)
   Vec3T<T> force;     // on the particle [N] (the block takes -force at `point`)
   Vec3T<T> point;     // contact point, midway between the two sphere surfaces [m]
   Vec3T<T> normal;    // unit, from the block towards the particle
@@ -69,6 +69,8 @@ struct MpContact {
 constexpr int kCoupleOk = 0;
 constexpr int kCoupleCoreReached = 1;  // the particle centre reached a block core (delta >= R)
 
+// The solver's particles (mpm::ParticleView): x, v and force per storage slot; mass, vol0 and the
+// histories per particle number id[slot] (id null: slot and number are the same).
 template <typename T>
 struct CouplingParticles {
   const T* x[3];
@@ -76,10 +78,16 @@ struct CouplingParticles {
   const T* mass;
   const T* vol0;
   T* force[3];  // accumulate-into external force of the next MPM step [N]
+  const int* id;
 };
 
-// Couple particle p with the blocks listed in its bin. Calls sink(const MpContact<T>&) for each
-// contact, adds the particle's forces into P.force, rewrites its history slots. Returns
+template <typename T>
+MPM_HD_INLINE int particleNumber(const CouplingParticles<T>& P, int p) {
+  return P.id ? P.id[p] : p;
+}
+
+// Couple the particle in slot p with the blocks listed in its bin. Calls sink(const MpContact<T>&)
+// for each contact, adds the particle's forces into P.force, rewrites its history slots. Returns
 // kCoupleOk, or kCoupleCoreReached with *badBlock set (the step is then invalid: the barrier
 // cannot act once the centre is at the core, which means the time step was too large or the
 // particle started inside the block). `overflow` counts contacts that found no free history
@@ -96,10 +104,11 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     bc[d] = c < 0 ? 0 : (c >= bins.dims[d] ? bins.dims[d] - 1 : c);
   }
   const int bin = (bc[0] * bins.dims[1] + bc[1]) * bins.dims[2] + bc[2];
+  const int h = particleNumber(P, p);
   const int b0 = bins.start[bin], b1 = bins.start[bin + 1];
   if (b0 == b1) {
     // no block near: forget stale histories so a later contact starts from rest
-    for (int k = 0; k < H.slots; ++k) H.key[H.slots * p + k] = -1;
+    for (int k = 0; k < H.slots; ++k) H.key[H.slots * h + k] = -1;
     return kCoupleOk;
   }
   constexpr int kMaxSlots = 4;
@@ -107,13 +116,13 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
   T oldXi[3 * kMaxSlots];
   const int slots = H.slots < kMaxSlots ? H.slots : kMaxSlots;
   for (int k = 0; k < slots; ++k) {
-    oldKey[k] = H.key[H.slots * p + k];
-    for (int d = 0; d < 3; ++d) oldXi[3 * k + d] = H.xi[3 * (H.slots * p + k) + d];
-    H.key[H.slots * p + k] = -1;
+    oldKey[k] = H.key[H.slots * h + k];
+    for (int d = 0; d < 3; ++d) oldXi[3 * k + d] = H.xi[3 * (H.slots * h + k) + d];
+    H.key[H.slots * h + k] = -1;
   }
   int used = 0;
-  const T rp = mpm::hdCbrt(T(3) * P.vol0[p] / T(4 * 3.14159265358979323846));
-  const T mp = P.mass[p];
+  const T rp = mpm::hdCbrt(T(3) * P.vol0[h] / T(4 * 3.14159265358979323846));
+  const T mp = P.mass[h];
   const Vec3T<T> vp{P.v[0][p], P.v[1][p], P.v[2][p]};
   Vec3T<T> fsum{T(0), T(0), T(0)};
   for (int i = b0; i < b1; ++i) {
@@ -153,13 +162,13 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     MpContact<T> ct;
     ct.law = sdem::barrierCoulomb(phys[blk.phys], cutoff, delta, n, vp - vb, meff, dt, xi);
     if (used < slots) {
-      H.key[H.slots * p + used] = key;
-      for (int d = 0; d < 3; ++d) H.xi[3 * (H.slots * p + used) + d] = xi[d];
+      H.key[H.slots * h + used] = key;
+      for (int d = 0; d < 3; ++d) H.xi[3 * (H.slots * h + used) + d] = xi[d];
       ++used;
     } else {
       ++*overflow;
     }
-    ct.particle = p;
+    ct.particle = h;
     ct.block = b;
     ct.featureKind = q.featureKind;
     ct.featureIndex = q.featureIndex;

@@ -320,6 +320,7 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
   }
   P.mass = static_cast<const T*>(v.mass);
   P.vol0 = static_cast<const T*>(v.volume0);
+  P.id = v.id;
   const HistoryView<T> H{key_.data(), side.xi.data(), slots_};
   const T dt = static_cast<T>(in.dt);
   const long n = static_cast<long>(v.n);
@@ -337,9 +338,10 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
     for (long p = c * kChunk; p < std::min(n, (c + 1) * kChunk); ++p) {
       int bad = -1;
       if (coupleParticle(static_cast<int>(p), P, B, S, phys, in.bins, H, dt, sink, &bad, &over) != kCoupleOk) {
+        const long number = particleNumber(P, static_cast<int>(p));
 #pragma omp critical(mpsdem_bad)
-        if (p < firstBad) {
-          firstBad = p;
+        if (number < firstBad) {
+          firstBad = number;
           badBlock = bad;
         }
         break;
@@ -354,11 +356,24 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
     return;
   }
   auto add = [](double* slot, double value) { *slot += value; };
+  auto addContact = [&](const MpContact<T>& ct) {
+    addBlockShare(ct, B[ct.block], out.sums.data(), add);
+    out.minParticleStep = std::min(out.minParticleStep, static_cast<double>(particleStepBound(ct)));
+  };
+  if (!v.id) {
+    for (const auto& list : side.chunkContacts)
+      for (const MpContact<T>& ct : list) addContact(ct);
+    return;
+  }
+  // The solver stores its particles in an order of its own: the block sums go by particle
+  // number, so they do not depend on that order (a restart continues bit for bit).
+  std::vector<const MpContact<T>*>& all = side.sorted;
+  all.clear();
   for (const auto& list : side.chunkContacts)
-    for (const MpContact<T>& ct : list) {
-      addBlockShare(ct, B[ct.block], out.sums.data(), add);
-      out.minParticleStep = std::min(out.minParticleStep, static_cast<double>(particleStepBound(ct)));
-    }
+    for (const MpContact<T>& ct : list) all.push_back(&ct);
+  std::stable_sort(all.begin(), all.end(),
+                   [](const MpContact<T>* a, const MpContact<T>* b) { return a->particle < b->particle; });
+  for (const MpContact<T>* ct : all) addContact(*ct);
 }
 
 // ------------------------------------------------------------------ results

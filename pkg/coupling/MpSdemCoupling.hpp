@@ -100,6 +100,7 @@ class MpSdemCoupling {
   struct HostSide {
     std::vector<T> xi;
     std::vector<std::vector<MpContact<T>>> chunkContacts;
+    std::vector<const MpContact<T>*> sorted;  // the contacts by particle number
   };
   template <typename T>
   void runCpu(const CouplingStepInput& in, const sdem::ShapeTableView<T>& shapes, const BlockState<T>* blocks,

@@ -11,7 +11,27 @@ namespace mpm {
 
 namespace {
 constexpr int kBlockNodes = 5;  // nodes per axis reached from one 3x3x3 block of stencil bases
+
+// Sort the m slots a[] by particle number id[a[i]]. The slots of a block come from the previous
+// step's order, in which they were sorted, so only the few particles that changed block are out
+// of place: insertion sort then costs O(m) per misplaced particle; a block with many (the first
+// step after setParticles in an unsorted order) is sorted in O(m log m).
+void sortByNumber(int* a, int m, const int* id) {
+  int descents = 0;
+  for (int i = 1; i < m; ++i) descents += id[a[i]] < id[a[i - 1]];
+  if (descents == 0) return;
+  if (descents > 8) {
+    std::sort(a, a + m, [id](int x, int y) { return id[x] < id[y]; });
+    return;
+  }
+  for (int i = 1; i < m; ++i) {
+    const int v = a[i], key = id[v];
+    int j = i;
+    for (; j > 0 && id[a[j - 1]] > key; --j) a[j] = a[j - 1];
+    a[j] = v;
+  }
 }
+}  // namespace
 
 template <typename T>
 void MpmCpu<T>::State::resize(std::size_t n) {
@@ -21,6 +41,7 @@ void MpmCpu<T>::State::resize(std::size_t n) {
   J.assign(n, T(1));
   gdp.assign(n, T(0));
   phase.assign(n, 0);
+  id.assign(n, 0);
 }
 
 template <typename T>
@@ -59,6 +80,7 @@ void MpmCpu<T>::setParticles(const ParticleSet& ps) {
     s.J[p] = static_cast<T>(ps.J[p]);
     s.gdp[p] = ps.gammaDotP.empty() ? T(0) : static_cast<T>(ps.gammaDotP[p]);
     s.phase[p] = ps.phase.empty() ? static_cast<std::uint8_t>(kPhaseElastic) : ps.phase[p];
+    s.id[p] = static_cast<int>(p);
     const double vx = s.v[0][p], vy = s.v[1][p], vz = s.v[2][p];
     maxSpeed_ = std::max(maxSpeed_, std::sqrt(vx * vx + vy * vy + vz * vz));
   }
@@ -81,17 +103,21 @@ void MpmCpu<T>::getParticles(ParticleSet& out) {
   out.stress.resize(6 * n_);
   out.mass.assign(mass_.begin(), mass_.end());
   out.volume0.assign(vol0_.begin(), vol0_.end());
-  out.J.assign(s.J.begin(), s.J.end());
-  out.gammaDotP.assign(s.gdp.begin(), s.gdp.end());
-  out.phase = s.phase;
+  out.J.resize(n_);
+  out.gammaDotP.resize(n_);
+  out.phase.resize(n_);
   out.fext.assign(3 * n_, 0.0);
-  for (std::size_t p = 0; p < n_; ++p) {
+  for (std::size_t q = 0; q < n_; ++q) {
+    const std::size_t p = s.id[q];
     for (int d = 0; d < 3; ++d) {
-      out.x[3 * p + d] = s.x[d][p];
-      out.v[3 * p + d] = s.v[d][p];
-      if (hasFext_) out.fext[3 * p + d] = fext_[d][p];
+      out.x[3 * p + d] = s.x[d][q];
+      out.v[3 * p + d] = s.v[d][q];
+      if (hasFext_) out.fext[3 * p + d] = fext_[d][q];
     }
-    for (int k = 0; k < 6; ++k) out.stress[6 * p + k] = s.s[k][p];
+    for (int k = 0; k < 6; ++k) out.stress[6 * p + k] = s.s[k][q];
+    out.J[p] = s.J[q];
+    out.gammaDotP[p] = s.gdp[q];
+    out.phase[p] = s.phase[q];
   }
 }
 
@@ -102,13 +128,12 @@ void MpmCpu<T>::setExternalForces(const std::vector<double>& f) {
     os << "3 x numParticles = " << 3 * n_ << " values";
     throwParameter("externalForces.size()", f.size(), "", os.str());
   }
+  for (std::size_t i = 0; i < f.size(); ++i)
+    if (!std::isfinite(f[i])) throwParameter("externalForces[" + std::to_string(i) + "]", f[i], "N", "finite");
   for (int d = 0; d < 3; ++d) fext_[d].resize(n_);
-  for (std::size_t p = 0; p < n_; ++p) {
-    for (int d = 0; d < 3; ++d) {
-      if (!std::isfinite(f[3 * p + d])) throwParameter("externalForces[" + std::to_string(3 * p + d) + "]", f[3 * p + d], "N", "finite");
-      fext_[d][p] = static_cast<T>(f[3 * p + d]);
-    }
-  }
+  const std::vector<int>& id = state_[cur_].id;
+  for (std::size_t q = 0; q < n_; ++q)
+    for (int d = 0; d < 3; ++d) fext_[d][q] = static_cast<T>(f[3 * id[q] + d]);
   hasFext_ = true;
 }
 
@@ -119,6 +144,7 @@ ParticleView MpmCpu<T>::openForceBuffer() {
   v.device = false;
   v.n = n_;
   const State& s = state_[cur_];
+  v.id = s.id.data();
   for (int d = 0; d < 3; ++d) {
     fext_[d].assign(n_, T(0));
     v.x[d] = s.x[d].data();
@@ -146,6 +172,7 @@ std::size_t MpmCpu<T>::memoryBytes() const {
     add(st.J);
     add(st.gdp);
     add(st.phase);
+    add(st.id);
   }
   add(mass_);
   add(vol0_);
@@ -173,6 +200,7 @@ ParticleIn<T> MpmCpu<T>::input() const {
   in.J = s.J.data();
   in.mass = mass_.data();
   in.vol0 = vol0_.data();
+  in.id = s.id.data();
   return in;
 }
 
@@ -212,6 +240,11 @@ void MpmCpu<T>::bin(const ParticleIn<T>& in) {
     std::vector<int> fill(blockStart_.begin(), blockStart_.end() - 1);
     for (long p = 0; p < n; ++p) order_[fill[blockOf_[p]]++] = static_cast<int>(p);
   }
+  // Within a block the particles go by number, as they did before any reordering, so that the
+  // P2G sums and hence the results do not depend on the storage order (a restart from a
+  // snapshot, which holds the particles by number, continues bit for bit).
+#pragma omp parallel for schedule(dynamic, 64)
+  for (int b = 0; b < nBlocks; ++b) sortByNumber(order_.data() + blockStart_[b], blockStart_[b + 1] - blockStart_[b], in.id);
   for (auto& c : colourBlocks_) c.clear();
   for (int b = 0; b < nBlocks; ++b) {
     if (blockStart_[b + 1] == blockStart_[b]) continue;
@@ -329,16 +362,21 @@ void MpmCpu<T>::step(double dt) {
   const long n = static_cast<long>(n_);
   long firstBad = n;
   T vmax = 0;
+  // G2P writes the particles in their block order: the next step reads them (nearly) in turn.
+  const int* order = order_.data();
+  int* outId = state_[1 - cur_].id.data();
 #pragma omp parallel for schedule(static) reduction(min : firstBad) reduction(max : vmax)
-  for (long p = 0; p < n; ++p) {
-    const G2PResult<T> r = g2pParticle(static_cast<int>(p), in, out, gridData, g, sc);
-    if (!r.ok && p < firstBad) firstBad = p;
+  for (long q = 0; q < n; ++q) {
+    const int p = order[q];
+    const G2PResult<T> r = g2pParticle(p, in, static_cast<int>(q), out, gridData, g, sc);
+    outId[q] = in.id[p];
+    if (!r.ok && in.id[p] < firstBad) firstBad = in.id[p];
     if (r.speed > vmax) vmax = r.speed;
   }
   if (firstBad < n) {
-    const long p = firstBad;
+    const long p = std::find(outId, outId + n, static_cast<int>(firstBad)) - outId;  // its slot
     std::ostringstream os;
-    os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name() << "): particle " << p
+    os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name() << "): particle " << firstBad
        << " has a non-finite state, a speed above " << maxSpeedAllowed_
        << " m/s (1e3 x P-wave speed) or a volume ratio J outside [" << kMinJ << ", " << kMaxJ
        << "] (crushed or torn apart: no granular material does that; a step too large for the loading?): x = ("

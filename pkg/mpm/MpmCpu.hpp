@@ -3,12 +3,19 @@
 // precisions, so the float formulas of the CUDA backend run and are tested here too.
 //
 // P2G without races: each step the particles are binned (counting sort, O(N)) into blocks
-// of 3x3x3 stencil-base cells. A particle whose stencil base lies in block b touches nodes
+// of 3x3x3 stencil-base cells, by particle number within a block. A particle whose stencil base lies in block b touches nodes
 // 3b .. 3b+4 per axis, so two blocks whose indices differ by 2 or more along some axis share
 // no node. The blocks are split into 8 colours by index parity; the blocks of one colour are
 // scattered in parallel, the colours one after another. A block's particles add into a private
 // 5x5x5-node copy (in L1 cache), added to the grid once per block. The summation order is
 // fixed, so the result does not depend on the thread count.
+//
+// Storage order: G2P writes each particle into the slot of its place in that binning, so the
+// particles are stored sorted by block and the next step's P2G and G2P read them nearly in turn
+// (not through an index scattered over a set that outgrows the caches). A particle keeps its
+// number (its index in setParticles/getParticles, id[slot]); mass and volume0 never move and
+// are indexed by number. Blocks are filled by number, so the sums are those of number order:
+// results, snapshots and restarts do not depend on the storage order.
 //
 // Grid work follows the particles, not the box: the nodes are grouped in tiles of 3x3x3, and
 // the stencil of a particle in block b lies in tiles b and b + 1 per axis. A step zeroes,
@@ -31,8 +38,9 @@
 // gate's impulse (Gate), the coupling's block sums (MpSdemCoupling); in float a step's
 // increment would be rounded to 1.2e-7 of the total every step.
 //
-// Memory per particle (memoryBytes()): the state x, v, stress, J, gammaDotP (14 T) and phase
-// (1 byte), twice, plus mass and volume0: 30 T + 2 bytes (242 B in double, 122 B in float);
+// Memory per particle (memoryBytes()): the state x, v, stress, J, gammaDotP (14 T), phase
+// (1 byte) and number (int), twice, plus mass and volume0: 30 T + 10 bytes (250 B in double,
+// 130 B in float);
 // the binning arrays (block id and sorted order, 8 B); external forces, 3 T, once set or
 // opened by a coupling; and the grid, 8 T per node (7 values and a pad that makes a node two
 // whole SIMD registers in double; plus a byte and at most an int per tile of 27 nodes for the
@@ -73,6 +81,7 @@ class MpmCpu : public MpmSolver {
   struct State {
     std::vector<T> x[3], v[3], s[6], J, gdp;
     std::vector<std::uint8_t> phase;
+    std::vector<int> id;  // particle number of each slot
     void resize(std::size_t n);
   };
   ParticleIn<T> input() const;
@@ -97,7 +106,7 @@ class MpmCpu : public MpmSolver {
   int nNodes_;
   State state_[2];
   int cur_ = 0;
-  std::vector<T> mass_, vol0_;
+  std::vector<T> mass_, vol0_;  // by particle number
   std::vector<T> fext_[3];
   bool hasFext_ = false;
   std::vector<T> nodes_;  // kNodeValues * nNodes_
@@ -107,7 +116,7 @@ class MpmCpu : public MpmSolver {
   int tiles_[3];
   std::vector<int> colourBlocks_[8];   // occupied block ids of each colour, this step
   std::vector<int> blockStart_;        // counting-sort offsets, size nBlocks + 1
-  std::vector<int> order_;             // particle ids sorted by block
+  std::vector<int> order_;             // slots sorted by block, by number within a block
   std::vector<int> blockOf_;           // block id of each particle
   std::vector<int> activeTiles_;       // tiles that may hold non-zero grid values
   std::vector<std::uint8_t> tileMark_; // scratch, all zero between steps

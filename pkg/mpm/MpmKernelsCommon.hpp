@@ -53,7 +53,9 @@ struct StepConst {
   ConstitutiveConst<T> mat;
 };
 
-// Particle state read by a step (SoA, one array per component).
+// Particle state read by a step (SoA, one array per component). The state arrays are indexed by
+// storage slot; mass and vol0 by particle number, id[slot] (a backend that keeps the particles
+// in their own order has id null: slot and number are the same).
 template <typename T>
 struct ParticleIn {
   const T* x[3];
@@ -63,7 +65,13 @@ struct ParticleIn {
   const T* mass;
   const T* vol0;
   const T* fext[3];  // all null when no external forces are set for this step
+  const int* id;
 };
+
+template <typename T>
+MPM_HD_INLINE int particleNumber(const ParticleIn<T>& P, int p) {
+  return P.id ? P.id[p] : p;
+}
 
 // Particle state written by a step.
 template <typename T>
@@ -88,8 +96,9 @@ MPM_HD_INLINE void gridCoordinate(const ParticleIn<T>& P, int p, const GridConst
 // weights factored per (i, j) row, so that a row of 3 nodes costs two multiply-adds per value.
 template <typename T, typename Scatter>
 MPM_HD_INLINE void p2gStencil(int p, const ParticleIn<T>& P, const Stencil<T>& st, T invDx, T dt, Scatter& add) {
-  const T m = P.mass[p];
-  const T vol = P.J[p] * P.vol0[p];
+  const int k0 = particleNumber(P, p);
+  const T m = P.mass[k0];
+  const T vol = P.J[p] * P.vol0[k0];
   T s[6];
   for (int k = 0; k < 6; ++k) s[k] = -dt * vol * invDx * P.s[k][p];  // -dt V sigma / dx
   T cw[kNodeValues], cx[kNodeValues], cy[kNodeValues], cz[kNodeValues];
@@ -197,13 +206,14 @@ struct G2PResult {
   T speed;    // |v_p| after the step [m/s]
 };
 
-// G2P and stress update of particle p (Eq 4 and Appendix B): reads P (start of step) and the
-// updated grid, writes the new state to Q. Velocity v = alpha (v + sum w dv) + (1 - alpha)
+// G2P and stress update of the particle in slot p of P (Eq 4 and Appendix B): reads P (start of
+// step) and the updated grid, writes the new state to slot q of Q (a CPU step that keeps the
+// particles sorted by grid block writes them in their new order, elsewhere q = p). Velocity v = alpha (v + sum w dv) + (1 - alpha)
 // sum w v_new; position x += dt sum w v_new (clamped to the admissible box);
 // L = sum v_new (x) grad w; J *= det(I + dt L); rho = m / (J V0).
 template <typename T>
-MPM_HD_INLINE G2PResult<T> g2pParticle(int p, const ParticleIn<T>& P, const ParticleOut<T>& Q, const T* grid,
-                                       const GridConst<T>& g, const StepConst<T>& sc) {
+MPM_HD_INLINE G2PResult<T> g2pParticle(int p, const ParticleIn<T>& P, int q, const ParticleOut<T>& Q,
+                                       const T* grid, const GridConst<T>& g, const StepConst<T>& sc) {
   T gc[3];
   gridCoordinate(P, p, g, gc);
   Stencil<T> st;
@@ -259,30 +269,31 @@ MPM_HD_INLINE G2PResult<T> g2pParticle(int p, const ParticleIn<T>& P, const Part
     T x = P.x[d][p] + dt * vPic[d];
     ok = ok && hdIsFinite(x) && hdIsFinite(v[d]);
     x = x < g.lo[d] ? g.lo[d] : (x > g.hi[d] ? g.hi[d] : x);
-    Q.x[d][p] = x;
-    Q.v[d][p] = v[d];
+    Q.x[d][q] = x;
+    Q.v[d][q] = v[d];
   }
   Mat3T<T> F;
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) F.m[a][b] = (a == b ? T(1) : T(0)) + dt * L.m[a][b];
   const T J = P.J[p] * F.det();
-  Q.J[p] = J;
+  Q.J[q] = J;
   Sym6T<T> sig;
   for (int k = 0; k < 6; ++k) sig.s[k] = P.s[k][p];
   T gdp = T(0);
   std::uint8_t phase = kPhaseGasified;
   if (J > T(0)) {
-    const T rho = P.mass[p] / (J * P.vol0[p]);
+    const int k0 = particleNumber(P, p);
+    const T rho = P.mass[k0] / (J * P.vol0[k0]);
     phase = updateStress(sig, L, dt, rho, sc.mat, gdp);
   } else {
     ok = false;  // inverted material point
   }
   for (int k = 0; k < 6; ++k) {
-    Q.s[k][p] = sig.s[k];
+    Q.s[k][q] = sig.s[k];
     ok = ok && hdIsFinite(sig.s[k]);
   }
-  Q.gdp[p] = gdp;
-  Q.phase[p] = phase;
+  Q.gdp[q] = gdp;
+  Q.phase[q] = phase;
   const T speed = hdSqrt(dot(v, v));
   ok = ok && hdIsFinite(J) && J >= T(kMinJ) && J <= T(kMaxJ) && speed <= sc.maxSpeed;
   return {ok, speed};

@@ -20,18 +20,23 @@ enum class Precision { Float, Double };
 // the current particle state in the backend's own memory (host for the CPU backend, device
 // for CUDA) and precision, and the external-force buffer of the next step. Arrays are
 // structure-of-arrays, one per component, numParticles() long; their element type is double
-// or float as `precision` says. The views stay valid until the next step(), setParticles()
-// or openForceBuffer().
+// or float as `precision` says. A backend may store the particles in an order of its own (the
+// CPU backend keeps them sorted by grid block): x, v, J and force are indexed by storage slot,
+// id[slot] is the number of the particle in that slot (its index in setParticles() and
+// getParticles(), which stays with it for the whole run), and mass and volume0 are indexed by
+// that number. id is null when slots and numbers are the same. The views stay valid until the
+// next step(), setParticles() or openForceBuffer().
 struct ParticleView {
   Precision precision = Precision::Double;
   bool device = false;             // true: CUDA device pointers
   std::size_t n = 0;               // particle count
-  const void* x[3] = {};           // position [m]
-  const void* v[3] = {};           // velocity [m/s]
-  const void* mass = nullptr;      // [kg]
-  const void* volume0 = nullptr;   // initial volume [m^3] (sets the contact radius, Eq 13)
-  const void* J = nullptr;         // det F: current volume = J volume0
-  void* force[3] = {};             // external force of the next step [N], accumulate into it (Eq 14)
+  const int* id = nullptr;         // particle number of each slot (null: the slot itself)
+  const void* x[3] = {};           // position [m], per slot
+  const void* v[3] = {};           // velocity [m/s], per slot
+  const void* mass = nullptr;      // [kg], per particle number
+  const void* volume0 = nullptr;   // initial volume [m^3] (sets the contact radius, Eq 13), per number
+  const void* J = nullptr;         // det F, per slot: current volume = J volume0
+  void* force[3] = {};             // external force of the next step [N], per slot: accumulate into it (Eq 14)
 };
 
 // The grid as a grid-node hook sees it (GridHook::apply), in the backend's own memory (host

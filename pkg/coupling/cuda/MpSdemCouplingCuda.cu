@@ -130,6 +130,7 @@ class CouplingCuda : public CouplingDeviceBackend {
     }
     P.mass = static_cast<const T*>(v.mass);
     P.vol0 = static_cast<const T*>(v.volume0);
+    P.id = v.id;
     const sdem::ShapeTableView<T> S{numShapes_,          vertex_.ptr,         faceNormal_.ptr,
                                     faceOffset_.ptr,     faceLoopStart_.ptr,  loopVertex_.ptr,
                                     loopEdge_.ptr,       shapeFaceStart_.ptr, shapeVertexStart_.ptr,

@@ -39,7 +39,8 @@ __global__ void coupleKernel(int n, CouplingParticles<T> P, const BlockState<T>*
   DeviceSink<T> sink{blocks, sums, flags};
   int badBlock = -1, overflow = 0;
   if (coupleParticle(p, P, blocks, shapes, phys, bins, hist, dt, sink, &badBlock, &overflow) != kCoupleOk)
-    atomicMin(&flags->bad, (static_cast<unsigned long long>(p) << 32) | static_cast<unsigned int>(badBlock));
+    atomicMin(&flags->bad,
+              (static_cast<unsigned long long>(particleNumber(P, p)) << 32) | static_cast<unsigned int>(badBlock));
   if (overflow) atomicAdd(&flags->overflow, static_cast<unsigned long long>(overflow));
 }
 

@@ -212,6 +212,7 @@ ParticleIn<T> MpmCuda<T>::input() const {
   in.J = s.J;
   in.mass = mass_;
   in.vol0 = vol0_;
+  in.id = nullptr;  // the particles stay in their own order
   return in;
 }
 

@@ -86,7 +86,7 @@ __global__ void g2pKernel(int n, ParticleIn<T> in, ParticleOut<T> out, const T* 
   const int p = blockIdx.x * blockDim.x + threadIdx.x;
   unsigned int bits = 0u;
   if (p < n) {
-    const G2PResult<T> r = g2pParticle(p, in, out, grid, g, sc);
+    const G2PResult<T> r = g2pParticle(p, in, p, out, grid, g, sc);
     if (!r.ok) atomicMin(firstBad, p);
     const float s = static_cast<float>(r.speed);
     bits = s == s ? __float_as_uint(s) : 0u;  // NaN speeds are reported via firstBad

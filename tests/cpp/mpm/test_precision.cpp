@@ -102,9 +102,10 @@ TEST(CpuFloat, HoldsFloatArraysBehindItsViews) {
 }
 
 TEST(CpuFloat, HalvesEveryArrayOfT) {
-  // Every particle and grid array is T, the binning arrays int: the double solver holds
-  // exactly 4 bytes more per value, 30 values per particle (14 twice, mass, volume0) and
-  // 8 per grid node (7 and a pad), and 3 per particle more once a force buffer is opened.
+  // Every particle and grid array is T, the particle numbers and the binning arrays int: the
+  // double solver holds exactly 4 bytes more per value, 30 values per particle (14 twice, mass,
+  // volume0) and 8 per grid node (7 and a pad), and 3 per particle more once a force buffer is
+  // opened.
   MpmParams prm = columnParams({20, 5, 22});
   ParticleSet ps;
   seedBox(prm, {0.02, 0.02, 0.02}, {0.10, 0.03, 0.18}, {2, 1, 2}, ps);
@@ -117,13 +118,14 @@ TEST(CpuFloat, HalvesEveryArrayOfT) {
   f->openForceBuffer();
   d->openForceBuffer();
   EXPECT_EQ(d->memoryBytes() - f->memoryBytes(), 4 * (33 * n + 8 * nodes));
-  // and what float holds per particle: 30 floats, 2 phase bytes, 8 binning bytes and 3 forces,
+  // and what float holds per particle: 30 floats, 2 phase bytes, 8 number bytes, 8 binning bytes
+  // and 3 forces,
   // besides the grid's 8 floats per node and the block lists of the P2G colouring (an int or
   // two per block of 3 x 3 x 3 cells)
   const double blocks = (20 / 3 + 1) * (5 / 3 + 1) * (22 / 3 + 1);
   const double perParticle = (f->memoryBytes() - 8.0 * 4 * nodes) / n;
-  EXPECT_GE(perParticle, 30 * 4 + 2 + 8 + 12);
-  EXPECT_LE(perParticle, 30 * 4 + 2 + 8 + 12 + 4 * 4 * blocks / n);
+  EXPECT_GE(perParticle, 30 * 4 + 2 + 8 + 8 + 12);
+  EXPECT_LE(perParticle, 30 * 4 + 2 + 8 + 8 + 12 + 4 * 4 * blocks / n);
 }
 
 TEST(CpuFloat, AgreesWithDoubleOnACollapsingColumn) {
