@@ -221,14 +221,9 @@ class CoupledEngine:
             if self.output is not None:
                 self._openOutput()
             self._wall0 = self._lastReport = _time.time()
-        # Records are taken here, before the step: NewtonIntegrator has moved the blocks to the
-        # flow's time, so blocks and particles are both at t (after the MPM step they would be a
-        # step apart). The forces recorded are those of the step that led to t; finish() records
-        # the state the run ends with.
-        self._recordDue(self.mpm.time)
         if self._dtAuto is not None:
             # Set before this step's forces, so that the coupling, NewtonIntegrator and O.time
-            # all advance by the same dt.
+            # all advance by the same dt, and before the records, whose time slack is half of it.
             crit = self.criticalTimeStep()
             if self._restoredContactStep is not None:
                 crit = min(crit, self._restoredContactStep)
@@ -236,6 +231,11 @@ class CoupledEngine:
             if self._dtMax is not None:
                 step = min(step, self._dtMax)
             O.dt = step if self._contactsKnown else min(O.dt, step)
+        # Records are taken here, before the step: NewtonIntegrator has moved the blocks to the
+        # flow's time, so blocks and particles are both at t (after the MPM step they would be a
+        # step apart). The forces recorded are those of the step that led to t; finish() records
+        # the state the run ends with.
+        self._recordDue(self.mpm.time)
         try:
             self._bridge.step(O.bodies, O.forces, O.dt)
         except Exception as e:
