@@ -84,6 +84,8 @@ void exportSdem() {
       .add_property("numContacts", &YadeSdemBridge::numContacts)
       .add_property("narrowPhasePairs", &YadeSdemBridge::narrowPhasePairs)
       .add_property("criticalTimeStep", &YadeSdemBridge::criticalTimeStep)
+      .def("autoStep", &YadeSdemBridge::autoStep)
+      .add_property("checkFactor", &YadeSdemBridge::checkFactor, &YadeSdemBridge::setCheckFactor)
       .add_property("timeStepSafety", &YadeSdemBridge::timeStepSafety, &YadeSdemBridge::setTimeStepSafety)
       .add_property("strict", &YadeSdemBridge::strict, &YadeSdemBridge::setStrict)
       .add_property("maxSpeed", &YadeSdemBridge::maxSpeed, &YadeSdemBridge::setMaxSpeed)

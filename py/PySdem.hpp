@@ -11,6 +11,7 @@
 // the three phases (read, compute, write) is accumulated so benchmarks can report the
 // bridge's share of each step.
 #pragma once
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "coupling/CoupledOutput.hpp"
 #include "io/Hdf5Writer.hpp"
 #include "io/VtkWriter.hpp"
+#include "sdem/SdemEngine.hpp"
 #include "sdem/SdemEngine.hpp"
 
 namespace mpmsdem {
@@ -333,6 +335,17 @@ class YadeSdemBridge {
   int numBodies() const { return engine_.numBodies(); }
   int yadeId(int i) const { return engine_.externalId(i); }
   double criticalTimeStep() const { return engine_.criticalTimeStep(); }
+  // sdem::autoTimeStep from the critical step of the last step's contacts (or `critical` when
+  // smaller: a restored run's) and the approach step of the bodies' velocities, read from YADE
+  // first (a restored run must see the state it continues).
+  double autoStep(const bp::object& bodies, double factor, double critical, double lastDt) {
+    readStates(bodies);
+    return sdem::autoTimeStep(factor, std::min(critical, engine_.criticalTimeStep()), engine_.approachTimeStep(),
+                              lastDt);
+  }
+  // The step check allows dt up to this factor times the critical step (2 under dtAuto).
+  double checkFactor() const { return engine_.timeStepCheckFactor(); }
+  void setCheckFactor(double f) { engine_.setTimeStepCheckFactor(f); }
   double timeStepSafety() const { return engine_.timeStepSafety(); }
   void setTimeStepSafety(double c) { engine_.setTimeStepSafety(c); }
   bool strict() const { return engine_.strictTimeStep(); }

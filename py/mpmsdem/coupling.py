@@ -30,7 +30,7 @@ from yade.minieigenHP import Quaternion, Vector3
 from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
 
 from . import _mpmsdem
-from .sdem import _bindStep, _nextOnGrid
+from .sdem import _bindStep, _checkDtAuto, _checkDtMax, _nextOnGrid
 
 DT_CHECKS = ("raise", "warn")
 PAIR_KEYS = ("friction", "barrierStiffness", "poisson", "normalDamping", "tangentialDamping")
@@ -155,8 +155,7 @@ class CoupledEngine:
 
     @dtAuto.setter
     def dtAuto(self, value):
-        if value is not None and not (isinstance(value, (int, float)) and 0 < value <= 1):
-            raise ValueError("dtAuto = %r: must be None or a factor in (0, 1] of the critical step" % (value,))
+        _checkDtAuto(value)
         self._bridge.checkFactor = 1.0 if value is None else 2.0
         self._dtAuto = value
 
@@ -167,8 +166,7 @@ class CoupledEngine:
 
     @dtMax.setter
     def dtMax(self, value):
-        if value is not None and not (isinstance(value, (int, float)) and value > 0):
-            raise ValueError("dtMax = %r s: must be None or > 0" % (value,))
+        _checkDtMax(value)
         self._dtMax = value
 
     @property

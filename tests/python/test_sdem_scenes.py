@@ -378,3 +378,41 @@ def test_outputs_record_the_sliding_block_for_h5py_and_paraview(tmp_path):
         assert f["series/ori"].shape == (8, 8)
     files = [d.get("file") for d in ET.parse(out / "bodies.pvd").getroot().iter("DataSet")]
     assert len(files) == 4 and all((out / fn).exists() for fn in files)  # t = 0, 0.1, 0.2, 0.3
+
+
+def test_dtAuto_bounces_a_cube_back_to_its_height_and_restarts_bit_for_bit(tmp_path):
+    # An elastic, frictionless cube dropped 2 cm onto the slab with O.dt left to dtAuto (the
+    # script's 1e-5 s serves the first step only): O.dt grows in the fall, is held to a tenth of
+    # the sweep radius per step by the approach step and to the contacts' critical step, and the
+    # cube must bounce back to the height it fell from (measured: 4e-4 of the drop lower; a fixed
+    # step of 2e-5 s gives 2e-7). A checkpoint taken before the impact must continue bit for bit
+    # (the saved critical step feeds the restored run's first dtAuto step).
+    import __main__
+    eng, cube, slab, m = cubeOnSlab(gap=0.02, dtAuto=0.5)
+    rows = []
+    __main__._mpmsdem_row = lambda: rows.append((O.dt, O.bodies[cube].state.pos[2], O.bodies[cube].state.vel[2]))
+    O.engines = O.engines + [PyRunner(command="_mpmsdem_row()", iterPeriod=1, initRun=True)]
+    O.dt = 1e-5
+    run(eng, 300)
+    eng.save(str(tmp_path / "sdem.json"))
+    O.save(str(tmp_path / "scene.yade.gz"))
+    run(eng, 400)
+    ref = (Vector3(O.bodies[cube].state.pos), Vector3(O.bodies[cube].state.vel), O.time)
+    dt, z, vz = (np.array(c) for c in zip(*rows))
+    impact = int(np.argmax(vz > 0))             # first step moving up
+    apex = impact + int(np.argmax(vz[impact:] < 0))
+    assert 300 < impact < apex < 700            # the checkpoint came before the impact, the apex within the run
+    assert abs(z[apex - 1:apex + 1].max() - z[0]) <= 2e-3 * 0.02
+    assert dt[0] == 1e-5 and dt.max() > 20 * dt[0]       # grew in the fall, from the script's first step
+    assert (dt[1:] / dt[:-1]).max() <= 1.01 * (1 + 1e-12)  # by at most 1 % a step
+    assert dt[impact - 1] <= 0.1 * R / abs(vz[impact - 2]) * (1 + 1e-9)  # approach step before the impact
+    assert eng.timeStepWarnings == 0 and eng.error is None
+
+    O.reset()
+    O.load(str(tmp_path / "scene.yade.gz"))
+    eng2 = mpmsdem.SdemEngine.restore(str(tmp_path / "sdem.json"))
+    assert eng2.dtAuto == 0.5
+    O.engines = [ForceResetter(), eng2.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    run(eng2, 400)
+    st = O.bodies[cube].state
+    assert st.pos == ref[0] and st.vel == ref[1] and O.time == ref[2]
