@@ -30,13 +30,13 @@ from yade.minieigenHP import Quaternion, Vector3
 from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
 
 from . import _mpmsdem
-from .sdem import _bindStep, _checkDtAuto, _checkDtMax, _nextOnGrid
+from .sdem import _AutoStep, _bindStep, _nextOnGrid
 
 DT_CHECKS = ("raise", "warn")
 PAIR_KEYS = ("friction", "barrierStiffness", "poisson", "normalDamping", "tangentialDamping")
 
 
-class CoupledEngine:
+class CoupledEngine(_AutoStep):
     """Couples an :class:`SdemEngine` (blocks) and an :class:`MpmEngine` (flow).
 
     :param sdem: the SDEM engine whose bodies are the blocks (all of them are coupled).
@@ -149,27 +149,6 @@ class CoupledEngine:
         self._dtCheck = value
 
     @property
-    def dtAuto(self):
-        """None, or the factor f of the step set every step (``dtAuto`` of the constructor)."""
-        return self._dtAuto
-
-    @dtAuto.setter
-    def dtAuto(self, value):
-        _checkDtAuto(value)
-        self._bridge.checkFactor = 1.0 if value is None else 2.0
-        self._dtAuto = value
-
-    @property
-    def dtMax(self):
-        """None, or the largest ``O.dt`` that ``dtAuto`` sets [s]."""
-        return self._dtMax
-
-    @dtMax.setter
-    def dtMax(self, value):
-        _checkDtMax(value)
-        self._dtMax = value
-
-    @property
     def contactTimeStep(self):
         """The contact part of :meth:`criticalTimeStep` [s], from the contacts of the last step:
         sqrt(m_p/k) per MP–block contact and sqrt(m/Σk) (and its rotational analogue) per moving
@@ -225,10 +204,7 @@ class CoupledEngine:
             crit = self.criticalTimeStep()
             if self._restoredContactStep is not None:
                 crit = min(crit, self._restoredContactStep)
-            step = self._bridge.autoStep(O.bodies, self._dtAuto, crit, O.dt if self._contactsKnown else 0.0)
-            if self._dtMax is not None:
-                step = min(step, self._dtMax)
-            O.dt = step if self._contactsKnown else min(O.dt, step)
+            self._setAutoStep(crit, self._contactsKnown)
         # Records are taken here, before the step: NewtonIntegrator has moved the blocks to the
         # flow's time, so blocks and particles are both at t (after the MPM step they would be a
         # step apart). The forces recorded are those of the step that led to t; finish() records

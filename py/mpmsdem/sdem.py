@@ -60,7 +60,46 @@ def _dispatch(name):
     step()
 
 
-class SdemEngine:
+class _AutoStep:
+    """``dtAuto`` and ``dtMax`` of an engine whose bridge has ``checkFactor`` and
+    ``autoStep(bodies, factor, critical, lastDt)`` (SdemEngine, CoupledEngine)."""
+
+    @property
+    def dtAuto(self):
+        """None, or the factor f of the step set every step (``dtAuto`` of the constructor)."""
+        return self._dtAuto
+
+    @dtAuto.setter
+    def dtAuto(self, value):
+        if value is not None and not (isinstance(value, (int, float)) and 0 < value <= 1):
+            raise ValueError("dtAuto = %r: must be None or a factor in (0, 1] of the critical step" % (value,))
+        self._bridge.checkFactor = 1.0 if value is None else 2.0
+        self._dtAuto = value
+
+    @property
+    def dtMax(self):
+        """None, or the largest ``O.dt`` that ``dtAuto`` sets [s]."""
+        return self._dtMax
+
+    @dtMax.setter
+    def dtMax(self, value):
+        if value is not None and not (isinstance(value, (int, float)) and value > 0):
+            raise ValueError("dtMax = %r s: must be None or > 0" % (value,))
+        self._dtMax = value
+
+    def _setAutoStep(self, critical, contactsKnown):
+        """With dtAuto, set O.dt for the step about to run; critical: a bound on the critical
+        step besides the bridge's own [s] (inf: none). Before the contacts are known (first
+        step) O.dt is only capped."""
+        if self._dtAuto is None:
+            return
+        step = self._bridge.autoStep(O.bodies, self._dtAuto, critical, O.dt if contactsKnown else 0.0)
+        if self._dtMax is not None:
+            step = min(step, self._dtMax)
+        O.dt = step if contactsKnown else min(O.dt, step)
+
+
+class SdemEngine(_AutoStep):
     """Contact forces between sphero-polyhedral blocks, run inside YADE's loop.
 
     :param dtCheck: ``"raise"`` (default): stop the run with an error when ``O.dt`` exceeds
@@ -240,27 +279,6 @@ class SdemEngine:
         return [r["yadeId"] for r in self._recipes]
 
     # ------------------------------------------------------------------ stepping
-    @property
-    def dtAuto(self):
-        """None, or the factor f of the step set every step (``dtAuto`` of the constructor)."""
-        return self._dtAuto
-
-    @dtAuto.setter
-    def dtAuto(self, value):
-        _checkDtAuto(value)
-        self._bridge.checkFactor = 1.0 if value is None else 2.0
-        self._dtAuto = value
-
-    @property
-    def dtMax(self):
-        """None, or the largest ``O.dt`` that ``dtAuto`` sets [s]."""
-        return self._dtMax
-
-    @dtMax.setter
-    def dtMax(self, value):
-        _checkDtMax(value)
-        self._dtMax = value
-
     def _checkEngines(self):
         """ValueError unless O.engines runs ForceResetter, this runner, NewtonIntegrator in this
         order: forces reset before the contacts add theirs, bodies moved after. Any other order
@@ -287,13 +305,8 @@ class SdemEngine:
                 raise
         self._beforeFirstStep()
         try:
-            if self._dtAuto is not None:
-                # set before this step's forces, so that NewtonIntegrator and O.time advance by it
-                step = self._bridge.autoStep(O.bodies, self._dtAuto, self._restoredCritical,
-                                             O.dt if self._contactsKnown else 0.0)
-                if self._dtMax is not None:
-                    step = min(step, self._dtMax)
-                O.dt = step if self._contactsKnown else min(O.dt, step)
+            # set before this step's forces, so that NewtonIntegrator and O.time advance by it
+            self._setAutoStep(self._restoredCritical, self._contactsKnown)
             self._bridge.setStepClock(O.iter, O.time)
             self._bridge.step(O.bodies, O.forces, O.dt)
         except Exception as e:
@@ -525,16 +538,6 @@ class SdemEngine:
         eng._bridge.setDissipation(float(data.get("frictionDissipation", 0.0)),
                                    float(data.get("dampingDissipation", 0.0)))
         return eng
-
-
-def _checkDtAuto(value):
-    if value is not None and not (isinstance(value, (int, float)) and 0 < value <= 1):
-        raise ValueError("dtAuto = %r: must be None or a factor in (0, 1] of the critical step" % (value,))
-
-
-def _checkDtMax(value):
-    if value is not None and not (isinstance(value, (int, float)) and value > 0):
-        raise ValueError("dtMax = %r s: must be None or > 0" % (value,))
 
 
 def _nextOnGrid(last, every):
