@@ -355,17 +355,7 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
     out.badBlock = badBlock;
     return;
   }
-  auto add = [](double* slot, double value) { *slot += value; };
-  auto addContact = [&](const MpContact<T>& ct) {
-    addBlockShare(ct, B[ct.block], out.sums.data(), add);
-    out.minParticleStep = std::min(out.minParticleStep, static_cast<double>(particleStepBound(ct)));
-  };
-  if (!v.id) {
-    for (const auto& list : side.chunkContacts)
-      for (const MpContact<T>& ct : list) addContact(ct);
-    return;
-  }
-  // The solver stores its particles in an order of its own: the block sums go by particle
+  // The solver may store its particles in an order of its own: the block sums go by particle
   // number, so they do not depend on that order (a restart continues bit for bit).
   std::vector<const MpContact<T>*>& all = side.sorted;
   all.clear();
@@ -373,7 +363,11 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
     for (const MpContact<T>& ct : list) all.push_back(&ct);
   std::stable_sort(all.begin(), all.end(),
                    [](const MpContact<T>* a, const MpContact<T>* b) { return a->particle < b->particle; });
-  for (const MpContact<T>* ct : all) addContact(*ct);
+  auto add = [](double* slot, double value) { *slot += value; };
+  for (const MpContact<T>* ct : all) {
+    addBlockShare(*ct, B[ct->block], out.sums.data(), add);
+    out.minParticleStep = std::min(out.minParticleStep, static_cast<double>(particleStepBound(*ct)));
+  }
 }
 
 // ------------------------------------------------------------------ results

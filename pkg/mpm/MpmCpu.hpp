@@ -2,13 +2,13 @@
 // Both run the shared stage functions of MpmKernelsCommon.hpp, as CUDA does in the same
 // precisions, so the float formulas of the CUDA backend run and are tested here too.
 //
-// P2G without races: each step the particles are binned (counting sort, O(N)) into blocks
-// of 3x3x3 stencil-base cells, by particle number within a block. A particle whose stencil base lies in block b touches nodes
-// 3b .. 3b+4 per axis, so two blocks whose indices differ by 2 or more along some axis share
-// no node. The blocks are split into 8 colours by index parity; the blocks of one colour are
-// scattered in parallel, the colours one after another. A block's particles add into a private
-// 5x5x5-node copy (in L1 cache), added to the grid once per block. The summation order is
-// fixed, so the result does not depend on the thread count.
+// P2G without races: each step the particles are binned (counting sort, O(N)) into blocks of
+// 3x3x3 stencil-base cells, by particle number within a block. A particle whose stencil base
+// lies in block b touches nodes 3b .. 3b+4 per axis, so two blocks whose indices differ by 2 or
+// more along some axis share no node. The blocks are split into 8 colours by index parity; the
+// blocks of one colour are scattered in parallel, the colours one after another. A block's
+// particles add into a private 5x5x5-node copy (in L1 cache), added to the grid once per block.
+// The summation order is fixed, so the result does not depend on the thread count.
 //
 // Storage order: G2P writes each particle into the slot of its place in that binning, so the
 // particles are stored sorted by block and the next step's P2G and G2P read them nearly in turn
