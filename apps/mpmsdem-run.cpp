@@ -193,6 +193,9 @@ struct Stepper {
   double stableStep() { return coupled ? coupled->criticalTimeStep() : solver.stableTimeStep(); }
   // The step in which a moving block travels its sweep radius (SdemEngine::approachTimeStep) [s]
   double approachStep() { return coupled->world.engine.approachTimeStep(); }
+  // The step within which no particle closing on a block ends past its contact step
+  // (MpSdemCoupling::particleApproachStep) [s]
+  double particleApproachStep() { return coupled->coupling.particleApproachStep(); }
 };
 
 using Clock = std::chrono::steady_clock;
@@ -233,7 +236,8 @@ double nextStep(Stepper& st, const RunSettings& run, bool byTime) {
                     solver.time(), solver.steps(), st.lastDt, st.coupled->contactStep(), run.dtFactor);
       throw RuntimeFailure(msg);
     }
-    dt = st.coupled ? sdem::autoTimeStep(run.dtFactor, st.stableStep(), st.approachStep(), st.lastDt)
+    dt = st.coupled ? coupling::coupledAutoStep(run.dtFactor, st.stableStep(), st.approachStep(),
+                                                st.particleApproachStep(), st.lastDt)
                     : run.dtFactor * st.stableStep();
   }
   if (byTime) dt = std::min(dt, run.duration - solver.time());

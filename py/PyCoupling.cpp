@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 #include "PyMpm.hpp"
@@ -45,6 +46,7 @@ class PyCoupling {
     sdem_.computeForces(dt);
     const auto t0 = Clock::now();
     coupling_.computeForces(mpm_.solver(), dt);
+    restoredApproach_ = std::numeric_limits<double>::quiet_NaN();
     const auto t1 = Clock::now();
     if (mpm_.numParticles() > 0)
       mpm_.step(dt);  // PyMpm's step, which also marks its particle cache stale
@@ -190,10 +192,19 @@ class PyCoupling {
     sdem_.readStates(bodies);
     return sdem_.engine().approachTimeStep();
   }
-  // sdem::autoTimeStep with this scene's approach step (critical: the caller's, which may hold a
-  // restored contact step).
+  // coupling::coupledAutoStep with this scene's approach steps (critical: the caller's, which may
+  // hold a restored contact step).
   double autoStep(const bp::object& bodies, double factor, double critical, double lastDt) {
-    return sdem::autoTimeStep(factor, critical, approachStep(bodies), lastDt);
+    return coupling::coupledAutoStep(factor, critical, approachStep(bodies), particleApproachStep(), lastDt);
+  }
+  // MpSdemCoupling::particleApproachStep of the last step, or the value a checkpoint restored
+  // until the next step computes its own.
+  double particleApproachStep() const {
+    return std::isnan(restoredApproach_) ? coupling_.particleApproachStep() : restoredApproach_;
+  }
+  void setParticleApproachStep(double s) {
+    if (!(s > 0)) throwParameter("particleApproachStep", s, "s", "> 0 (inf: no particle closing on a block)");
+    restoredApproach_ = s;
   }
 
  private:
@@ -212,6 +223,7 @@ class PyCoupling {
   std::vector<Quat> ori0_;  // reference orientations set by a restore before the output opens
   bool strict_ = true;
   double checkFactor_ = 1;
+  double restoredApproach_ = std::numeric_limits<double>::quiet_NaN();
   long warnings_ = 0;
   long steps_ = 0;
   double couplingSeconds_ = 0, mpmSeconds_ = 0;
@@ -255,6 +267,7 @@ void exportCoupling() {
       .add_property("checkFactor", &PyCoupling::checkFactor, &PyCoupling::setCheckFactor)
       .def("approachStep", &PyCoupling::approachStep)
       .def("autoStep", &PyCoupling::autoStep)
+      .add_property("particleApproachStep", &PyCoupling::particleApproachStep, &PyCoupling::setParticleApproachStep)
       .add_property("timeStepWarnings", &PyCoupling::warnings);
 }
 

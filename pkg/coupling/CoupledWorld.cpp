@@ -61,6 +61,10 @@ double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& co
   return sdem.timeStepSafety() * dt;
 }
 
+double coupledAutoStep(double factor, double critical, double blockApproach, double particleApproach, double lastDt) {
+  return std::min(sdem::autoTimeStep(factor, critical, blockApproach, lastDt), particleApproach);
+}
+
 double CoupledWorld::criticalTimeStep() { return std::min(solver_->stableTimeStep(), contactStep_); }
 
 }  // namespace coupling

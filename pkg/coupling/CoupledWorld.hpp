@@ -75,5 +75,13 @@ void advanceFlow(mpm::MpmSolver& solver, double dt);
 // moving blocks, and the MP side, times the SDEM safety factor [s].
 double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& coupling);
 
+// The next step of automatic time stepping in a coupled scene [s], for the driver's "dt": "auto"
+// and CoupledEngine.dtAuto alike: sdem::autoTimeStep (factor times the coupled critical step,
+// a tenth of the blocks' approach step, the growth cap), and at most the particles' approach
+// step (MpSdemCoupling::particleApproachStep), which is not scaled by the factor: it is the
+// contact step of contacts that are known only once the step has begun, and the step check
+// allows twice it.
+double coupledAutoStep(double factor, double critical, double blockApproach, double particleApproach, double lastDt);
+
 }  // namespace coupling
 }  // namespace mpmsdem

@@ -20,12 +20,14 @@ struct CouplingStepInput {
   int numBins, numBinEntries;
   mpm::ParticleView particles;
   double dt;
+  double stepSafety;                    // the SDEM time-step safety factor (approachStepBound)
   int historySlots;
 };
 
 struct CouplingStepOutput {
   std::vector<double> sums;   // kBlockSums per block
   double minParticleStep;     // min over contacts of sqrt(m_p / max(k_n, K_t)) [s] (inf: none)
+  double minApproachStep;     // min of approachStepBound over closing pairs not in contact [s] (inf: none)
   long overflow;              // contacts without a free history slot
   int badParticle;            // -1, or a particle whose centre reached block badBlock's core
   int badBlock;

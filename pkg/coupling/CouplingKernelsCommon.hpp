@@ -33,14 +33,47 @@ struct BlockState {
 };
 
 // Uniform bins over the MPM grid box listing the blocks whose rounded-body box, grown by the
-// largest particle radius, touches them (compressed rows).
+// largest particle radius and by `watch`, touches them (compressed rows).
 struct BinGridView {
   double origin[3];   // lower corner [m]
   double invSize;     // 1 / bin edge [1/m]
   int dims[3];        // bins per axis
   const int* start;   // dims[0] dims[1] dims[2] + 1 offsets into blocks
   const int* blocks;  // block indices
+  double watch;       // how far beyond the largest particle radius the block boxes were grown [m]
 };
+
+// Stable-step bound for the step after this one, from a particle that does not touch a block
+// yet but closes on it [s]: gap g = d - R_p0 - R_b > 0 at normal speed vn > 0, R = R_p0 + R_b
+// the barrier's reach. The next step's forces come from the contacts at its start, which the
+// automatic step does not know when it chooses the step: it sees the contacts of this step,
+// and a point that first touches at the end of this step may then start the next one deep in
+// a stiff barrier (k_c 1e7 N/m: the step exceeded twice its contact step). This step (dt)
+// brings the point to delta = vn dt - g; near first touch the barrier's tangent stiffness is
+// k_n = 6 k_c delta / R to leading order (Eq 10 expanded) and K_t = k_n / (2 (1 + nu)), so the
+// next step is within the point's contact step when it is at most
+// safety sqrt(m R / (6 k_c delta max(1, 1 / (2 (1 + nu))))); +inf when the point does not
+// reach the barrier within dt.
+template <typename T>
+MPM_HD_INLINE T approachStepBound(T gap, T vn, T dt, T mass, T reach, const sdem::BarrierCoulombPhys<T>& phys,
+                                  T safety) {
+  const T delta = vn * dt - gap;
+  if (!(delta > T(0))) return T(INFINITY);
+  const T tangential = T(1) / (T(2) * (T(1) + phys.nu));
+  return safety * mpm::hdSqrt(mass * reach / (T(6) * phys.kc * delta * (tangential > T(1) ? tangential : T(1))));
+}
+
+// An upper bound of how far a particle at velocity vp and a block close on each other within
+// dt [m]: dt (|vp - v_b|_1 + |w_b|_1 reach), reach the block's bounding radius plus the particle
+// radius; at most `limit` (NaN too). The 1-norms bound the speeds at no more than sqrt(3)
+// above without a root: this runs for every pair near a block.
+template <typename T>
+MPM_HD_INLINE T closingDistance(const Vec3T<T>& vp, const BlockState<T>& blk, T reach, T dt, T limit) {
+  const T v = mpm::hdAbs(vp.x - blk.vel[0]) + mpm::hdAbs(vp.y - blk.vel[1]) + mpm::hdAbs(vp.z - blk.vel[2]);
+  const T w = mpm::hdAbs(blk.angVel[0]) + mpm::hdAbs(blk.angVel[1]) + mpm::hdAbs(blk.angVel[2]);
+  const T d = dt * (v + w * reach);
+  return d <= limit ? d : limit;
+}
 
 // Tangential history of a particle's contacts: `slots` entries per particle, each a key
 // (block << 32 | feature kind << 28 | feature index, or -1 when empty) and xi, the elastic
@@ -87,7 +120,10 @@ MPM_HD_INLINE int particleNumber(const CouplingParticles<T>& P, int p) {
 }
 
 // Couple the particle in slot p with the blocks listed in its bin. Calls sink(const MpContact<T>&)
-// for each contact, adds the particle's forces into P.force, rewrites its history slots. Returns
+// for each contact, adds the particle's forces into P.force, rewrites its history slots, and
+// lowers *approach to the approachStepBound of each block it reaches within dt without
+// touching it now (with the SDEM time-step safety `safety`; pairs further apart than
+// bins.watch are not examined). Returns
 // kCoupleOk, or kCoupleCoreReached with *badBlock set (the step is then invalid: the barrier
 // cannot act once the centre is at the core, which means the time step was too large or the
 // particle started inside the block). `overflow` counts contacts that found no free history
@@ -95,8 +131,8 @@ MPM_HD_INLINE int particleNumber(const CouplingParticles<T>& P, int p) {
 template <typename T, typename Sink>
 MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const BlockState<T>* B,
                                  const sdem::ShapeTableView<T>& S, const sdem::BarrierCoulombPhys<T>* phys,
-                                 const BinGridView& bins, const HistoryView<T>& H, T dt, Sink& sink, int* badBlock,
-                                 int* overflow) {
+                                 const BinGridView& bins, const HistoryView<T>& H, T dt, T safety, Sink& sink,
+                                 int* badBlock, int* overflow, T* approach) {
   const Vec3T<T> x{P.x[0][p], P.x[1][p], P.x[2][p]};
   int bc[3];
   for (int d = 0; d < 3; ++d) {
@@ -129,19 +165,30 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     const int b = bins.blocks[i];
     const BlockState<T>& blk = B[b];
     const Vec3T<T> r{x.x - blk.pos[0], x.y - blk.pos[1], x.z - blk.pos[2]};
+    const Vec3T<T> w{blk.angVel[0], blk.angVel[1], blk.angVel[2]};
     const T reach = blk.reach + rp;
-    if (mpm::dot(r, r) >= reach * reach) continue;
+    if (mpm::dot(r, r) >= (reach + T(bins.watch)) * (reach + T(bins.watch))) continue;
     const T* R = blk.rot;
     const Vec3T<T> xb{R[0] * r.x + R[3] * r.y + R[6] * r.z, R[1] * r.x + R[4] * r.y + R[7] * r.z,
                       R[2] * r.x + R[5] * r.y + R[8] * r.z};
     const T cutoff = S.sweepRadius[blk.shape] + rp;
-    if (sdem::coreDistanceLowerBound(S, blk.shape, xb) >= cutoff) continue;
+    const T lower = sdem::coreDistanceLowerBound(S, blk.shape, xb);
+    if (lower >= cutoff + T(bins.watch)) continue;
+    // A pair that does not touch is examined only as far as it can close within dt (watch).
+    T watch = T(bins.watch);
+    if (lower >= cutoff) {
+      watch = closingDistance(vp, blk, reach, dt, T(bins.watch));
+      if (lower >= cutoff + watch) continue;
+    }
     const sdem::CoreQuery<T> q = sdem::closestPointOnCore(S, blk.shape, xb);
-    if (q.distance >= cutoff) continue;
-    const T delta = cutoff - q.distance;
-    if (!(q.distance > T(0)) || !(delta < cutoff)) {
+    if (q.distance >= cutoff + watch) continue;
+    if (!(q.distance > T(0))) {  // also NaN
       *badBlock = b;
       return kCoupleCoreReached;
+    }
+    if (q.distance >= cutoff && lower < cutoff) {
+      watch = closingDistance(vp, blk, reach, dt, T(bins.watch));
+      if (q.distance >= cutoff + watch) continue;
     }
     const Vec3T<T> nb = (T(1) / q.distance) * (xb - q.closest);
     const Vec3T<T> n{R[0] * nb.x + R[1] * nb.y + R[2] * nb.z, R[3] * nb.x + R[4] * nb.y + R[5] * nb.z,
@@ -150,8 +197,16 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     const T Rb = S.sweepRadius[blk.shape];
     const Vec3T<T> c = T(0.5) * ((cw + Rb * n) + (x - rp * n));
     const Vec3T<T> rc{c.x - blk.pos[0], c.y - blk.pos[1], c.z - blk.pos[2]};
-    const Vec3T<T> w{blk.angVel[0], blk.angVel[1], blk.angVel[2]};
     const Vec3T<T> vb = Vec3T<T>{blk.vel[0], blk.vel[1], blk.vel[2]} + sdem::cross(w, rc);
+    if (q.distance >= cutoff) {  // not touching yet
+      const T vn = -mpm::dot(vp - vb, n);
+      if (vn > T(0)) {
+        const T bound = approachStepBound(q.distance - cutoff, vn, dt, mp, cutoff, phys[blk.phys], safety);
+        if (bound < *approach) *approach = bound;
+      }
+      continue;
+    }
+    const T delta = cutoff - q.distance;
     const T meff = blk.fixed ? mp : mp * blk.mass / (mp + blk.mass);
     const long long key = (static_cast<long long>(b) << 32) | (static_cast<long long>(q.featureKind) << 28) |
                           static_cast<long long>(q.featureIndex);

@@ -140,9 +140,10 @@ void MpSdemCoupling::syncBlocks() {
 }
 
 // Bins over the grid box; each lists the blocks whose rounded-body box grown by the largest
-// particle radius touches it.
+// particle radius and the approach watch (a grid cell) touches it.
 void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
   if (binSize_ == 0) {
+    binWatch_ = g.dx;
     binSize_ = 4 * g.dx;
     for (;;) {
       double count = 1;
@@ -164,8 +165,8 @@ void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
                                         sdem_.orientation(static_cast<int>(i)), lo, hi);
     bool outside = false;
     for (int d = 0; d < 3; ++d) {
-      const double a = (lo[d] - maxParticleRadius_ - binOrigin_[d]) / binSize_;
-      const double b = (hi[d] + maxParticleRadius_ - binOrigin_[d]) / binSize_;
+      const double a = (lo[d] - maxParticleRadius_ - binWatch_ - binOrigin_[d]) / binSize_;
+      const double b = (hi[d] + maxParticleRadius_ + binWatch_ - binOrigin_[d]) / binSize_;
       if (b < 0 || a >= binDims_[d]) outside = true;  // no particle can reach it
       range[i][d] = std::clamp(static_cast<int>(std::floor(a)), 0, binDims_[d] - 1);
       range[i][3 + d] = std::clamp(static_cast<int>(std::floor(b)), 0, binDims_[d] - 1);
@@ -194,7 +195,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     // Nothing can touch: no bins, no particle loop, and the force buffer stays closed (the MPM
     // step then adds no external force, as it would add an open buffer's zeros).
     last_.sums.assign(static_cast<std::size_t>(kBlockSums) * blocks_.size(), 0.0);
-    minParticleStep_ = std::numeric_limits<double>::infinity();
+    minParticleStep_ = minApproachStep_ = std::numeric_limits<double>::infinity();
     barrierEnergy_ = springEnergy_ = 0;
     return;
   }
@@ -241,15 +242,17 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
                         1.0 / binSize_,
                         {binDims_[0], binDims_[1], binDims_[2]},
                         binStart_.data(),
-                        binBlocks_.data()};
+                        binBlocks_.data(),
+                        binWatch_};
   in.numBins = binDims_[0] * binDims_[1] * binDims_[2];
   in.numBinEntries = static_cast<int>(binBlocks_.size());
   in.particles = view;
   in.dt = dt;
+  in.stepSafety = sdem_.timeStepSafety();
   in.historySlots = slots_;
   CouplingStepOutput& out = last_;
   out.sums.assign(static_cast<std::size_t>(kBlockSums) * blocks_.size(), 0.0);
-  out.minParticleStep = std::numeric_limits<double>::infinity();
+  out.minParticleStep = out.minApproachStep = std::numeric_limits<double>::infinity();
   out.overflow = 0;
   out.badParticle = -1;
   out.badBlock = -1;
@@ -277,6 +280,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     throw RuntimeFailure(os.str());
   }
   minParticleStep_ = out.minParticleStep;
+  minApproachStep_ = out.minApproachStep;
   overflow_ += out.overflow;
   barrierEnergy_ = springEnergy_ = 0;
   for (std::size_t b = 0; b < blocks_.size(); ++b) {
@@ -323,21 +327,25 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
   P.id = v.id;
   const HistoryView<T> H{key_.data(), side.xi.data(), slots_};
   const T dt = static_cast<T>(in.dt);
+  const T safety = static_cast<T>(in.stepSafety);
   const long n = static_cast<long>(v.n);
   const long nChunks = (n + kChunk - 1) / kChunk;
   side.chunkContacts.resize(nChunks);
   long overflow = 0;
+  double approach = std::numeric_limits<double>::infinity();
   long firstBad = n;
   int badBlock = -1;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : overflow)
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : overflow) reduction(min : approach)
   for (long c = 0; c < nChunks; ++c) {
     std::vector<MpContact<T>>& list = side.chunkContacts[c];
     list.clear();
     auto sink = [&list](const MpContact<T>& ct) { list.push_back(ct); };
     int over = 0;
+    T chunkApproach = std::numeric_limits<T>::infinity();
     for (long p = c * kChunk; p < std::min(n, (c + 1) * kChunk); ++p) {
       int bad = -1;
-      if (coupleParticle(static_cast<int>(p), P, B, S, phys, in.bins, H, dt, sink, &bad, &over) != kCoupleOk) {
+      if (coupleParticle(static_cast<int>(p), P, B, S, phys, in.bins, H, dt, safety, sink, &bad, &over,
+                         &chunkApproach) != kCoupleOk) {
         const long number = particleNumber(P, static_cast<int>(p));
 #pragma omp critical(mpsdem_bad)
         if (number < firstBad) {
@@ -348,8 +356,10 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
       }
     }
     overflow += over;
+    approach = std::min(approach, static_cast<double>(chunkApproach));
   }
   out.overflow = overflow;
+  out.minApproachStep = approach;
   if (firstBad < n) {
     out.badParticle = static_cast<int>(firstBad);
     out.badBlock = badBlock;

@@ -8,7 +8,8 @@
 //  1. blocks in: pose, velocity of every SDEM body (block index = SdemEngine body index);
 //     bodies added since the last step join the shape table;
 //  2. broad phase: uniform bins over the MPM grid list the blocks whose rounded-body box,
-//     grown by the largest MP radius, touches them; a particle tests only its bin's blocks,
+//     grown by the largest MP radius and a grid cell, touches them; a particle tests only its
+//     bin's blocks,
 //     so the cost follows the particles near blocks, not particles x blocks;
 //  3. narrow phase and law per (particle, block): CouplingKernelsCommon.hpp;
 //  4. forces: into the solver's external-force buffer (spread to the grid by the next MPM
@@ -72,6 +73,13 @@ class MpSdemCoupling {
   long totalContacts() const;
   // Smallest sqrt(m_p / max(k_n, K_t)) over the MP contacts [s]; +inf without contacts.
   double particleCriticalStep() const { return minParticleStep_; }
+  // The longest next step [s] that stays within the contact step of the contacts the last step
+  // made (points that did not touch a block at its start but reached its barrier within it):
+  // the smallest approachStepBound (CouplingKernelsCommon.hpp) with the SDEM engine's time-step
+  // safety; +inf when no point did. The contact step itself sees those contacts one step late.
+  // Pairs are examined up to the distance they close in the step, at most one grid cell (a
+  // particle moves less than a cell per stable MPM step).
+  double particleApproachStep() const { return minApproachStep_; }
   long historyOverflow() const { return overflow_; }
 
   // ---- energies [J]: current barrier and tangential-spring potentials, cumulative slip and
@@ -122,6 +130,7 @@ class MpSdemCoupling {
   double maxParticleRadius_ = -1;  // [m], from the particles' initial volumes
   std::size_t particleCount_ = 0;
   double binSize_ = 0;
+  double binWatch_ = 0;  // growth of the block boxes beyond the largest particle radius [m]
   double binOrigin_[3] = {0, 0, 0};
   int binDims_[3] = {0, 0, 0};
   std::vector<int> binStart_, binBlocks_, binCount_;
@@ -140,6 +149,7 @@ class MpSdemCoupling {
 
   CouplingStepOutput last_;
   double minParticleStep_ = std::numeric_limits<double>::infinity();
+  double minApproachStep_ = std::numeric_limits<double>::infinity();
   long overflow_ = 0;
   double barrierEnergy_ = 0, springEnergy_ = 0, frictionWork_ = 0, dampingWork_ = 0;
 };

@@ -35,6 +35,14 @@ MPM_HD_INLINE T hdSqrt(T a) {
 #endif
 }
 template <typename T>
+MPM_HD_INLINE T hdAbs(T a) {
+#if defined(__CUDA_ARCH__)
+  return fabs(a);
+#else
+  return std::fabs(a);
+#endif
+}
+template <typename T>
 MPM_HD_INLINE T hdFloor(T a) {
 #if defined(__CUDA_ARCH__)
   return floor(a);

@@ -74,9 +74,10 @@
 //   "run": {                        (req)
 //     "duration": 1.0,              (req) simulated time [s], > 0
 //     "dt": "auto",                 fixed step [s] > 0, or "auto": dt_factor * the stable step,
-//                                   re-evaluated every step (with blocks: sdem::autoTimeStep,
-//                                   which also bounds how far a block moves in a step and how
-//                                   fast the step grows)
+//                                   re-evaluated every step (with blocks: coupling::coupledAutoStep,
+//                                   which also bounds how far a block moves in a step, how deep
+//                                   a material point may start a step in a barrier it has just
+//                                   reached, and how fast the step grows)
 //     "dt_factor": 0.9,             in (0, 1]; only with "dt": "auto"
 //     "output_every": duration/20,  snapshot interval [s], > 0 (HDF5 snapshot + VTK file)
 //     "series_every": output_every/10,  time-series interval [s], > 0

@@ -53,14 +53,17 @@ class CoupledEngine(_AutoStep):
         (``timeStepWarnings``). May be changed between steps.
     :param dtAuto: time-step control, like YADE's time steppers: None (default) leaves
         ``O.dt`` to the script; a factor f in (0, 1] sets, at the start of every step,
-        ``O.dt = min(f × criticalTimeStep(), 0.1 × approachTimeStep)`` from the contacts of the
-        step before and the blocks' current velocities, growing by at most 1 % a step (at the
+        ``O.dt = min(f × criticalTimeStep(), 0.1 × approachTimeStep, particleApproachStep)``
+        from the contacts of the step before and the blocks' current velocities, growing by at
+        most 1 % a step (at the
         first step, when the contacts are not known yet, ``O.dt`` is only capped at that). No
         block then moves by more than a tenth of its sweep radius in a step, so a block about
         to land, which has no contact yet, enters the barrier gradually and none passes through
-        another. A contact that starts within a step was not known when its ``O.dt`` was chosen:
-        with ``dtAuto`` the step checks (``dtCheck``) allow up to twice the critical step, the
-        leapfrog's own stability limit, and the next step shrinks. A changing step costs a
+        another. ``O.dt`` is also at most :attr:`particleApproachStep`, so a material point
+        that reaches a stiff barrier within a step does not start the next one beyond its
+        contact step. Any other contact that starts within a step was not known when its
+        ``O.dt`` was chosen: with ``dtAuto`` the step checks (``dtCheck``) allow up to twice
+        the critical step, the leapfrog's own stability limit, and the next step shrinks. A changing step costs a
         little energy in elastic impacts (YADE's integrator kicks with the new step): -0.24 %
         for a cube landing face-down, -2.5 % edge-first while spinning; a fixed step keeps them
         to 1e-6. May be changed between steps.
@@ -155,6 +158,18 @@ class CoupledEngine(_AutoStep):
         block, k the tangent barrier stiffness, times the SDEM safety factor; ``inf`` before the
         first step and while nothing touches. A step above it is what ``dtCheck`` acts on."""
         return self._bridge.contactStep
+
+    @property
+    def particleApproachStep(self):
+        """The longest next step [s] that stays within the contact step of the contacts the
+        last step made: material points that did not touch a block at its start but reached its
+        barrier within it, by δ = v_n dt − g (normal speed v_n, gap g). Those contacts act in the
+        next step but are only known once it has begun, so ``dtAuto`` keeps ``O.dt`` under
+        ``s sqrt(m_p R / (6 k_c δ))`` for each (R = R_p0 + R_b, s the SDEM time-step safety, 6 k_c
+        δ/R the barrier's tangent stiffness at first touch, Eq 10; K_t instead when it is the
+        larger). inf when no point reached a block.
+        """
+        return self._bridge.particleApproachStep
 
     @property
     def approachTimeStep(self):
@@ -341,6 +356,7 @@ class CoupledEngine(_AutoStep):
                 "dtAuto": self.dtAuto, "dtMax": self.dtMax,
                 # what dtAuto's next step reads (None: not known yet; a string keeps inf JSON-clean)
                 "contactStep": repr(self._bridge.contactStep) if self._contactsKnown else None,
+                "particleApproachStep": repr(self._bridge.particleApproachStep) if self._contactsKnown else None,
                 "pairs": [{"material": _matDictOf(mats[k]), "pair": p} for k, p in sorted(self._pairs.items())],
                 "historyKeys": base64.b64encode(keys).decode(), "historyXi": base64.b64encode(xi).decode(),
                 "dissipation": [self._bridge.energies()["friction"], self._bridge.energies()["damping"]],
@@ -401,6 +417,8 @@ class CoupledEngine(_AutoStep):
         if data.get("contactStep") is not None:  # the first step's dtAuto sees what it would have seen
             eng._contactsKnown = True
             eng._restoredContactStep = float(data["contactStep"])
+            if data.get("particleApproachStep") is not None:
+                eng._bridge.particleApproachStep = float(data["particleApproachStep"])
         eng._bridge.setHistories(base64.b64decode(data["historyKeys"]), base64.b64decode(data["historyXi"]))
         eng._bridge.setDissipation(*data["dissipation"])
         eng._bridge.setReferenceOrientations(data["referenceOrientations"])

@@ -270,8 +270,8 @@ def test_coupled_contact_step_read_out_and_dt_check_switched_mid_run():
 
 
 def test_coupled_dt_auto_follows_the_critical_step_of_the_step_before():
-    # dtAuto = f: each step runs with O.dt = min(f x criticalTimeStep(), 0.1 x approachTimeStep)
-    # as they stood after the step before, grown by at most 1 % over that step's O.dt (the first
+    # dtAuto = f: each step runs with O.dt = min(f x criticalTimeStep(), 0.1 x approachTimeStep,
+    # particleApproachStep) as they stood after the step before, grown by at most 1 % over that step's O.dt (the first
     # step only caps the script's O.dt); dtMax bounds it; through the impact the contact part
     # falls below the MPM step and O.dt follows it down; no step ever exceeds the check. Bad
     # values are refused by name.
@@ -280,24 +280,25 @@ def test_coupled_dt_auto_follows_the_critical_step_of_the_step_before():
     O.dt = 1e-6
     mpmsdem.run(1, coupled)
     assert O.dt == 1e-6  # the first step: below 0.5 x the MPM step, kept
-    seen = []  # (O.dt of the step, criticalTimeStep() and approachTimeStep after it)
+    seen = []  # (O.dt of the step, criticalTimeStep(), approachTimeStep, particleApproachStep after it)
     O.engines = O.engines + [_every_step(lambda: seen.append((O.dt, coupled.criticalTimeStep(),
-                                                              coupled.approachTimeStep)))]
+                                                              coupled.approachTimeStep,
+                                                              coupled.particleApproachStep)))]
     mpmsdem.run(1500, coupled)
     capped = byContacts = 0
-    for (dt, _, _), (prev, crit, app) in zip(seen[1:], seen[:-1]):
-        assert dt == min(0.5 * crit, 0.1 * app, 1.01 * prev)
+    for (dt, _, _, _), (prev, crit, app, pa) in zip(seen[1:], seen[:-1]):
+        assert dt == min(0.5 * crit, 0.1 * app, pa, 1.01 * prev)
         capped += dt == 1.01 * prev
         byContacts += dt == 0.5 * crit and crit < mpm.stableTimeStep()
     assert 300 < capped < 1499  # grew from 1e-6 at 1 % a step, then followed the contacts
     assert byContacts > 20  # the impact's contact step set it
-    dts = [d for d, _, _ in seen]
+    dts = [d for d, *_ in seen]
     assert max(dts) == pytest.approx(0.5 * mpm.stableTimeStep(), rel=0.05)
     assert min(dts[400:]) < 0.6 * max(dts)
-    assert any(app < math.inf for _, _, app in seen)
+    assert any(app < math.inf for _, _, app, _ in seen)
     coupled.dtMax = 2e-5
     mpmsdem.run(20, coupled)
-    assert all(d <= 2e-5 for d, _, _ in seen[-20:])
+    assert all(d <= 2e-5 for d, *_ in seen[-20:])
     for name, bad in (("dtAuto", 0.0), ("dtAuto", 1.5), ("dtAuto", "0.5")):
         with pytest.raises(ValueError, match="^%s = " % name):
             coupled.dtAuto = bad

@@ -95,20 +95,26 @@ def _coupledScene(out=None, dtAuto=None, barrierStiffness=1e4):
     return coupled, cube
 
 
-@pytest.mark.parametrize("dtAuto, kc, before", [(None, 1e4, 250), (0.2, 1e6, 100)], ids=["fixed dt", "dtAuto"])
+@pytest.mark.parametrize("dtAuto, kc, before", [(None, 1e4, 250), (0.2, 1e6, 100), (0.5, 1e8, 91)],
+                         ids=["fixed dt", "dtAuto", "dtAuto at first touch"])
 def test_coupled_checkpoint_continues_bit_for_bit(tmp_path, dtAuto, kc, before):
     # With dtAuto (and a flow-block barrier stiff enough for the contact step to set O.dt) the
     # restored engine keeps the control, and its first step takes the O.dt the unbroken run
     # took, from the contact step saved with the checkpoint (at step 100 the blob is on the
-    # block and the contact step sets O.dt).
+    # block and the contact step sets O.dt) or, at k_c 1e8 N/m, from the particles' approach
+    # step (at step 91 the blob's face has just reached the barrier: that step sets O.dt).
     out = str(tmp_path / "out")
     coupled, cube = _coupledScene(out, dtAuto, kc)
-    mpmsdem.run(before, coupled)                    # the blob is on the block: histories matter
-    assert coupled.contactCount(cube) > 10
+    mpmsdem.run(before, coupled)
     if dtAuto is None:
+        assert coupled.contactCount(cube) > 10      # the blob is on the block: histories matter
         assert coupled.energies()["friction"] > 0
-    else:  # the contact step, not the MPM one, sets the next step
+    elif kc < 1e8:  # the contact step, not the MPM one, sets the next step
+        assert coupled.contactCount(cube) > 10
         assert coupled.contactTimeStep < coupled.mpm.stableTimeStep()
+    else:
+        assert coupled.contactCount(cube) == 0
+        assert coupled.particleApproachStep < 0.5 * min(0.5 * coupled.criticalTimeStep(), 1.01 * O.dt)
     ck = mpmsdem.saveCheckpoint(str(tmp_path / "ck"), coupled)
     mpmsdem.run(150, coupled)
     ref = {"x": coupled.mpm.particles()["x"].copy(), "v": coupled.mpm.particles()["v"].copy(),

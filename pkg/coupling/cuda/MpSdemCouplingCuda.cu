@@ -119,6 +119,7 @@ class CouplingCuda : public CouplingDeviceBackend {
     init.bad = ~0ull;
     const float inf = std::numeric_limits<float>::infinity();
     std::memcpy(&init.minStepBits, &inf, sizeof(float));
+    std::memcpy(&init.minApproachBits, &inf, sizeof(float));
     init.overflow = 0;
     flags_.upload(&init, 1);
 
@@ -143,7 +144,8 @@ class CouplingCuda : public CouplingDeviceBackend {
     const int n = static_cast<int>(v.n);
     if (n > 0) {
       cudak::coupleKernel<T><<<(n + kThreads - 1) / kThreads, kThreads>>>(
-          n, P, blocks_.ptr, S, phys_.ptr, bins, H, static_cast<T>(in.dt), sums_.ptr, flags_.ptr);
+          n, P, blocks_.ptr, S, phys_.ptr, bins, H, static_cast<T>(in.dt), static_cast<T>(in.stepSafety), sums_.ptr,
+          flags_.ptr);
       CUDA_CHECK(cudaGetLastError());
     }
     cudak::CouplingFlags res;
@@ -153,6 +155,8 @@ class CouplingCuda : public CouplingDeviceBackend {
     float minStep;
     std::memcpy(&minStep, &res.minStepBits, sizeof(float));
     out.minParticleStep = minStep;
+    std::memcpy(&minStep, &res.minApproachBits, sizeof(float));
+    out.minApproachStep = minStep;
     out.overflow = static_cast<long>(res.overflow);
     if (res.bad != ~0ull) {
       out.badParticle = static_cast<int>(res.bad >> 32);

@@ -7,10 +7,12 @@ namespace coupling {
 namespace cudak {
 
 // Device-side step flags: the first failing particle (packed with its block) and the
-// smallest particle step bound as float bits (non-negative floats order like their bits).
+// smallest particle step and approach bounds as float bits (non-negative floats order like
+// their bits).
 struct CouplingFlags {
   unsigned long long bad;       // (particle << 32) | block, or all ones
   unsigned int minStepBits;
+  unsigned int minApproachBits;
   unsigned long long overflow;
 };
 
@@ -33,15 +35,19 @@ struct DeviceSink {
 template <typename T>
 __global__ void coupleKernel(int n, CouplingParticles<T> P, const BlockState<T>* blocks,
                              sdem::ShapeTableView<T> shapes, const sdem::BarrierCoulombPhys<T>* phys,
-                             BinGridView bins, HistoryView<T> hist, T dt, double* sums, CouplingFlags* flags) {
+                             BinGridView bins, HistoryView<T> hist, T dt, T safety, double* sums,
+                             CouplingFlags* flags) {
   const int p = blockIdx.x * blockDim.x + threadIdx.x;
   if (p >= n) return;
   DeviceSink<T> sink{blocks, sums, flags};
   int badBlock = -1, overflow = 0;
-  if (coupleParticle(p, P, blocks, shapes, phys, bins, hist, dt, sink, &badBlock, &overflow) != kCoupleOk)
+  T approach = T(INFINITY);
+  if (coupleParticle(p, P, blocks, shapes, phys, bins, hist, dt, safety, sink, &badBlock, &overflow, &approach) !=
+      kCoupleOk)
     atomicMin(&flags->bad,
               (static_cast<unsigned long long>(particleNumber(P, p)) << 32) | static_cast<unsigned int>(badBlock));
   if (overflow) atomicAdd(&flags->overflow, static_cast<unsigned long long>(overflow));
+  if (approach < T(INFINITY)) atomicMin(&flags->minApproachBits, __float_as_uint(static_cast<float>(approach)));
 }
 
 }  // namespace cudak

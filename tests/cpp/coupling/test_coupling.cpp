@@ -111,10 +111,12 @@ std::unique_ptr<CoupledWorld> blobWorld(int cellsX, double vx, mpm::Backend back
 }
 
 // A blob thrown at 1 m/s at a free cube 0.0144 m ahead, 1500 steps of 1e-5 s: where the cube
-// is, the impulse the flow gave it and the first step with a contact.
+// is, the impulse the flow gave it, the first step with a contact and the smallest particle
+// approach step of the run.
 struct BlobHit {
   Vec3 position, impulse;
   int firstContact = -1;
+  double minApproach = std::numeric_limits<double>::infinity();
 };
 BlobHit blobHitsCube(mpm::Backend backend, mpm::Precision precision) {
   auto world = blobWorld(24, 1.0, backend, precision);
@@ -127,6 +129,7 @@ BlobHit blobHitsCube(mpm::Backend backend, mpm::Precision precision) {
     w.step(1e-5);
     if (r.firstContact < 0 && w.coupling.contactCount(cube) > 0) r.firstContact = s;
     r.impulse += 1e-5 * w.coupling.force(cube);
+    r.minApproach = std::min(r.minApproach, w.coupling.particleApproachStep());
   }
   r.position = w.world.engine.position(cube);
   return r;
@@ -435,6 +438,87 @@ TEST(MpSdemCoupling, BadInputIsRefusedClearly) {
   EXPECT_THROW(w.coupling.setPair(3, pair()), ParameterError);
 }
 
+// The approach step of one material point closing on the upstream face of a fixed cube (outer
+// face at x = 0.08 m, sweep radius 5 mm) at gap g, against the hand-derived bound: the step dt
+// brings it to delta = v_n dt - g, and the next step must stay within sqrt(m R / (6 k_c delta f))
+// (safety 1, R = R_p0 + R_b, f = max(1, 1 / (2 (1 + nu)))); inf for a point that does not
+// reach the barrier within dt, recedes or slides along the face.
+TEST(MpSdemCoupling, ParticleApproachStepIsTheHandDerivedBound) {
+  const double dx = 0.01, rho = 1600, vol0 = dx * dx * dx / 8, Rb = 0.005;
+  const double rp = std::cbrt(3 * vol0 / (4 * M_PI)), m = rho * vol0, R = rp + Rb;
+  auto approach = [&](double gap, const Vec3& v, double kc, double dt, double poisson = 0.3) {
+    mpm::ParticleSet ps;
+    ps.x = {0.08 - rp - gap, 0.07, 0.07};
+    ps.v = {v.x(), v.y(), v.z()};
+    ps.stress.assign(6, 0.0);
+    ps.mass = {m};
+    ps.volume0 = {vol0};
+    ps.J = {1.0};
+    ps.gammaDotP = {0.0};
+    ps.phase = {0};
+    auto solver = mpm::makeSolver(gridParams({20, 14, 14}, dx));
+    solver->setParticles(ps);
+    CoupledWorld w(std::move(solver));
+    addCube(w, 0.02, Rb, Vec3(0.1, 0.07, 0.07), 2000, true);
+    sdem::BarrierPhys ph = pair();
+    ph.barrierStiffness = kc;
+    ph.poisson = poisson;
+    w.coupling.setPair(0, ph);
+    w.coupling.computeForces(w.mpm(), dt);
+    EXPECT_EQ(w.coupling.totalContacts(), 0);
+    EXPECT_EQ(w.coupling.particleCriticalStep(), std::numeric_limits<double>::infinity());
+    return w.coupling.particleApproachStep();
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  // 1e-3 s at 0.5 m/s closes 5e-4 m: 4.9e-4 m into the barrier
+  EXPECT_NEAR(approach(1e-5, Vec3(0.5, 0, 0), 1e4, 1e-3), std::sqrt(m * R / (6 * 1e4 * 4.9e-4)), 1e-12);
+  EXPECT_NEAR(approach(1e-4, Vec3(0.5, 0, 0), 1e7, 1e-3), std::sqrt(m * R / (6 * 1e7 * 4e-4)), 1e-14);
+  // the normal speed counts, not the speed: 45 degrees off the normal
+  EXPECT_NEAR(approach(1e-5, Vec3(0.5, 0.5, 0), 1e4, 1e-3), std::sqrt(m * R / (6 * 1e4 * 4.9e-4)), 1e-12);
+  // K_t above k_n (nu < -1/2): the tangential spring sets the step
+  EXPECT_NEAR(approach(1e-5, Vec3(0.5, 0, 0), 1e4, 1e-3, -0.8), std::sqrt(m * R / (6 * 1e4 * 4.9e-4 * 2.5)),
+              1e-12);
+  EXPECT_EQ(approach(1e-5, Vec3(-0.5, 0, 0), 1e4, 1e-3), inf);  // receding
+  EXPECT_EQ(approach(1e-5, Vec3(0, 0.5, 0), 1e4, 1e-3), inf);   // sliding along the face
+  EXPECT_EQ(approach(5.1e-4, Vec3(0.5, 0, 0), 1e4, 1e-3), inf);  // short of the barrier by 1e-5 m
+}
+
+// A granular blob thrown at 1 m/s at a fixed cube behind a stiff barrier (k_c 1e7 N/m), the
+// step set by coupledAutoStep (factor 0.5) every step. A step's forces come from the contacts
+// at its start, and the contact step of those is known only once the step has begun (the
+// check of "dt": "auto" allows twice it). With the particles' approach step every step stays
+// within the contact step it ran with; without it, the step in which the blob's face first
+// pressed into the barrier overshot twice that.
+TEST(MpSdemCoupling, ParticleApproachStepKeepsAStiffFirstTouchWithinTheStepCheck) {
+  auto worstRatio = [](bool particleApproach, int* firstContactStep) {
+    auto world = blobWorld(24, 1.0);
+    CoupledWorld& w = *world;
+    const int cube = addCube(w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000, true);
+    sdem::BarrierPhys ph = pair(0.3);
+    ph.barrierStiffness = 1e7;
+    w.coupling.setPair(0, ph);
+    double lastDt = 0, worst = 0;
+    *firstContactStep = -1;
+    for (int s = 0; s < 400; ++s) {
+      const double pa = particleApproach ? w.coupling.particleApproachStep() : std::numeric_limits<double>::infinity();
+      const double dt = coupledAutoStep(0.5, w.criticalTimeStep(), w.world.engine.approachTimeStep(), pa, lastDt);
+      w.step(dt);
+      lastDt = dt;
+      if (*firstContactStep < 0 && w.coupling.contactCount(cube) > 0) *firstContactStep = s;
+      worst = std::max(worst, dt / w.contactStep());
+    }
+    return worst;
+  };
+  int firstWith = -1, firstWithout = -1;
+  const double with = worstRatio(true, &firstWith), without = worstRatio(false, &firstWithout);
+  // measured: 1.004 with, 2.46 without (the first contacts at step 289 in both)
+  ASSERT_GT(firstWith, 0);
+  ASSERT_GT(firstWithout, 0);
+  EXPECT_GT(with, 0.5);  // contacts did set the step
+  EXPECT_LE(with, 1.05);
+  EXPECT_GT(without, 2.0);
+}
+
 // A block added between steps joins the coupling (its shape enters the table) and is hit.
 TEST(MpSdemCoupling, BlockAddedMidRunIsCoupled) {
   auto world = blobWorld(24, 1.0);
@@ -459,8 +543,11 @@ TEST(MpSdemCoupling, CpuAndCudaAgree) {
   if (!mpm::cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine: CPU-vs-CUDA coupling check skipped";
   const BlobHit cpu = blobHitsCube(mpm::Backend::Cpu, mpm::Precision::Double);
   ASSERT_GT(cpu.impulse.norm(), 0.0) << "the blob never hit the cube";
+  ASSERT_LT(cpu.minApproach, std::numeric_limits<double>::infinity());
   for (const auto& [prec, tol] : {std::make_pair(mpm::Precision::Double, 1e-9), std::make_pair(mpm::Precision::Float, 2e-3)}) {
     const BlobHit gpu = blobHitsCube(mpm::Backend::Cuda, prec);
+    if (prec == mpm::Precision::Double)  // the device reduces it in float
+      EXPECT_NEAR(gpu.minApproach / cpu.minApproach, 1.0, 1e-6);
     EXPECT_NEAR((gpu.position - cpu.position).norm(), 0.0, tol * 0.1) << "precision " << ::testing::PrintToString(prec);
     EXPECT_NEAR((gpu.impulse - cpu.impulse).norm(), 0.0, tol * cpu.impulse.norm() * 10) << "precision " << ::testing::PrintToString(prec);
   }
