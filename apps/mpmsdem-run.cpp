@@ -193,8 +193,8 @@ struct Stepper {
   double stableStep() { return coupled ? coupled->criticalTimeStep() : solver.stableTimeStep(); }
   // The step in which a moving block travels its sweep radius (SdemEngine::approachTimeStep) [s]
   double approachStep() { return coupled->world.engine.approachTimeStep(); }
-  // The step within which no particle closing on a block ends past its contact step
-  // (MpSdemCoupling::particleApproachStep) [s]
+  // The longest next step within the contact step of the particles that reached a block's
+  // barrier in the last step (MpSdemCoupling::particleApproachStep) [s]
   double particleApproachStep() { return coupled->coupling.particleApproachStep(); }
 };
 

@@ -9,8 +9,7 @@
 //     bodies added since the last step join the shape table;
 //  2. broad phase: uniform bins over the MPM grid list the blocks whose rounded-body box,
 //     grown by the largest MP radius and a grid cell, touches them; a particle tests only its
-//     bin's blocks,
-//     so the cost follows the particles near blocks, not particles x blocks;
+//     bin's blocks, so the cost follows the particles near blocks, not particles x blocks;
 //  3. narrow phase and law per (particle, block): CouplingKernelsCommon.hpp;
 //  4. forces: into the solver's external-force buffer (spread to the grid by the next MPM
 //     step with the P2G weights, Eq 14) and, opposite, onto the blocks (force, torque about
