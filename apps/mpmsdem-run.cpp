@@ -40,8 +40,9 @@
 // "stage_seconds" and "contact_step_min" / "contact_step_min_time" (null while nothing touched).
 // Exit status: 0 done; 2 bad parameters or command line (a scene too large for the memory
 // included); 3 run failure (NaN, blow-up, step
-// above the stable one), after writing the last good state as a final snapshot; 1 other
-// errors (e.g. I/O).
+// above the stable one), after writing the last good state as a final snapshot (with
+// "keep_last_good_state": false, naming the last snapshot written as the last good state); 1
+// other errors (e.g. I/O).
 #include <omp.h>
 
 #include <nlohmann/json.hpp>
@@ -394,6 +395,7 @@ class OutputRun {
       recordSeries();
       writeSnapshot();
     }
+    releaseState();
     // next record and snapshot times: the first multiples of their intervals after now
     const double t0sim = solver_.time();
     double nextSeries = (std::floor(t0sim / run.seriesEvery * (1 + 1e-12)) + 1) * run.seriesEvery;
@@ -434,8 +436,18 @@ class OutputRun {
           std::fflush(stdout);
           nextReport = std::floor(f / 0.05 + 1) * 0.05;
         }
+        releaseState();
       }
     } catch (const RuntimeFailure& e) {
+      if (!solver_.holdsLastGoodState()) {
+        // One copy of the particles (keep_last_good_state false): the failed step changed some.
+        h5_.setAttribute("failure", e.what());
+        if (coupled_) coupled_->h5().setAttribute("failure", e.what());
+        std::fprintf(stderr, "mpmsdem-run: run failure: %s\nmpmsdem-run: last good state: the last snapshot in %s "
+                             "(t = %.6g s; keep_last_good_state is false, so the state at the failure was not kept)\n",
+                     e.what(), h5_.path().c_str(), state_time_);
+        return 3;
+      }
       // The solver keeps the state at the start of the failed step: save it.
       solver_.getParticles(state_);
       const long index = writeSnapshot();
@@ -499,6 +511,10 @@ class OutputRun {
     coupled_->appendSeries("dissipated", w.coupling.frictionDissipation() + w.coupling.dampingDissipation() +
                                              e.frictionDissipation() + e.dampingDissipation());
   }
+
+  // The host copy of the particles lives only while an output uses it: kept between outputs it
+  // would double the particles' memory.
+  void releaseState() { state_ = ParticleSet(); }
 
   long writeSnapshot() {
     const long index = h5_.writeSnapshot(state_, solver_.time(), solver_.steps());

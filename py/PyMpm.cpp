@@ -37,6 +37,9 @@ void exportMpm() {
       .add_property("steps", &PyMpm::steps)
       .add_property("numParticles", &PyMpm::numParticles)
       .add_property("memoryBytes", &PyMpm::memoryBytes)
+      .add_property("holdsLastGoodState", &PyMpm::holdsLastGoodState,
+                    "False once a step failed with keepLastGoodState off: the particles are partly advanced, and "
+                    "the solver refuses to step or give them out (the last snapshot saved is the last good state).")
       .add_property("name", &PyMpm::name)
       .add_property("sceneJson", &PyMpm::sceneJson)
       .add_property("gravity", &PyMpm::gravity, "Gravity of the scene [m/s^2] (an incline resolved).");

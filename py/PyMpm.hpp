@@ -34,12 +34,13 @@ class PyMpm {
 
   void step(double dt) {
     solver_->step(dt);
-    fresh_ = false;
+    dropCache();
   }
   void run(long n, double dt) {
     for (long i = 0; i < n; ++i) solver_->step(dt);
-    fresh_ = false;
+    dropCache();
   }
+  bool holdsLastGoodState() const { return solver_->holdsLastGoodState(); }
   double stableTimeStep() { return solver_->stableTimeStep(); }
   double time() const { return solver_->time(); }
   long steps() const { return solver_->steps(); }
@@ -165,6 +166,12 @@ class PyMpm {
   void sync() {
     if (!fresh_) solver_->getParticles(cache_);
     fresh_ = true;
+  }
+  // A step makes the host copy stale; kept until the next output it would double the memory
+  // the particles take.
+  void dropCache() {
+    cache_ = mpm::ParticleSet();
+    fresh_ = false;
   }
   void requireOutput() const {
     if (!h5_) throw ParameterError("output: call openOutput(dir) before writing outputs");

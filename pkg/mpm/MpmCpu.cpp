@@ -11,6 +11,9 @@ namespace mpm {
 
 namespace {
 constexpr int kBlockNodes = 5;  // nodes per axis reached from one 3x3x3 block of stencil bases
+// With one copy of the particles, G2P leaves them where they are; they are put back in block
+// order every this many steps, before they have drifted far from it (docs/benchmarks.md).
+constexpr int kReorderEvery = 8;
 
 // Sort the m slots a[] by particle number id[a[i]]. The slots of a block come from the previous
 // step's order, in which they were sorted, so only the few particles that changed block are out
@@ -65,8 +68,14 @@ void MpmCpu<T>::setParticles(const ParticleSet& ps) {
   const double meanMass = validateParticles(params_, ps);
   grid_.massEps = static_cast<T>(1e-12 * meanMass);
   n_ = ps.size();
-  for (auto& st : state_) st.resize(n_);
+  state_[0].resize(n_);
+  if (params_.keepLastGoodState)
+    state_[1].resize(n_);
+  else
+    scratch_.assign(n_, T(0));
   cur_ = 0;
+  stepsSinceReorder_ = kReorderEvery - 1;  // given by number: sorted after the first step
+  partlyAdvanced_ = false;
   State& s = state_[0];
   mass_.assign(ps.mass.begin(), ps.mass.end());
   vol0_.assign(ps.volume0.begin(), ps.volume0.end());
@@ -97,6 +106,7 @@ void MpmCpu<T>::setParticles(const ParticleSet& ps) {
 
 template <typename T>
 void MpmCpu<T>::getParticles(ParticleSet& out) {
+  requireLastGoodState("getParticles");
   const State& s = state_[cur_];
   out.x.resize(3 * n_);
   out.v.resize(3 * n_);
@@ -139,6 +149,7 @@ void MpmCpu<T>::setExternalForces(const std::vector<double>& f) {
 
 template <typename T>
 ParticleView MpmCpu<T>::openForceBuffer() {
+  requireLastGoodState("openForceBuffer");
   ParticleView v;
   v.precision = kPrecision;
   v.device = false;
@@ -174,6 +185,7 @@ std::size_t MpmCpu<T>::memoryBytes() const {
     add(st.phase);
     add(st.id);
   }
+  add(scratch_);
   add(mass_);
   add(vol0_);
   for (const auto& a : fext_) add(a);
@@ -206,7 +218,7 @@ ParticleIn<T> MpmCpu<T>::input() const {
 
 template <typename T>
 ParticleOut<T> MpmCpu<T>::output() {
-  State& s = state_[1 - cur_];
+  State& s = state_[params_.keepLastGoodState ? 1 - cur_ : cur_];
   ParticleOut<T> out;
   for (int d = 0; d < 3; ++d) {
     out.x[d] = s.x[d].data();
@@ -217,6 +229,32 @@ ParticleOut<T> MpmCpu<T>::output() {
   out.gdp = s.gdp.data();
   out.phase = s.phase.data();
   return out;
+}
+
+template <typename T>
+void MpmCpu<T>::reorder() {
+  State& s = state_[cur_];
+  const long n = static_cast<long>(n_);
+  const int* order = order_.data();
+  auto gather = [n, order](const auto* from, auto* to) {
+#pragma omp parallel for schedule(static)
+    for (long q = 0; q < n; ++q) to[q] = from[order[q]];
+  };
+  auto permute = [&](std::vector<T>& a) {
+    gather(a.data(), scratch_.data());
+    a.swap(scratch_);
+  };
+  for (auto& a : s.x) permute(a);
+  for (auto& a : s.v) permute(a);
+  for (auto& a : s.s) permute(a);
+  permute(s.J);
+  permute(s.gdp);
+  // blockOf_ is free until the next binning: the numbers are gathered into it.
+  gather(s.id.data(), blockOf_.data());
+  s.id.swap(blockOf_);
+  auto* bytes = reinterpret_cast<std::uint8_t*>(scratch_.data());
+  gather(s.phase.data(), bytes);
+  std::copy(bytes, bytes + n_, s.phase.begin());
 }
 
 template <typename T>
@@ -327,6 +365,7 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
 
 template <typename T>
 void MpmCpu<T>::step(double dt) {
+  requireLastGoodState("step");
   if (steps_ % 100 == 0) checkTimeStep(dt);
   const T dtT = static_cast<T>(dt);
   const ParticleIn<T> in = input();
@@ -362,18 +401,22 @@ void MpmCpu<T>::step(double dt) {
   const long n = static_cast<long>(n_);
   long firstBad = n;
   T vmax = 0;
-  // G2P writes the particles in their block order: the next step reads them (nearly) in turn.
+  // G2P writes the particles in their block order, where the next step reads them (nearly) in
+  // turn; with one copy it updates them in their slots, and reorder() sorts them now and then.
+  const bool inPlace = !params_.keepLastGoodState;
   const int* order = order_.data();
-  int* outId = state_[1 - cur_].id.data();
+  int* outId = inPlace ? state_[cur_].id.data() : state_[1 - cur_].id.data();
 #pragma omp parallel for schedule(static) reduction(min : firstBad) reduction(max : vmax)
   for (long q = 0; q < n; ++q) {
     const int p = order[q];
-    const G2PResult<T> r = g2pParticle(p, in, static_cast<int>(q), out, gridData, g, sc);
-    outId[q] = in.id[p];
-    if (!r.ok && in.id[p] < firstBad) firstBad = in.id[p];
+    const int id = in.id[p];
+    const G2PResult<T> r = g2pParticle(p, in, inPlace ? p : static_cast<int>(q), out, gridData, g, sc);
+    if (!inPlace) outId[q] = id;
+    if (!r.ok && id < firstBad) firstBad = id;
     if (r.speed > vmax) vmax = r.speed;
   }
   if (firstBad < n) {
+    partlyAdvanced_ = inPlace;
     const long p = std::find(outId, outId + n, static_cast<int>(firstBad)) - outId;  // its slot
     std::ostringstream os;
     os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name() << "): particle " << firstBad
@@ -382,10 +425,17 @@ void MpmCpu<T>::step(double dt) {
        << "] (crushed or torn apart: no granular material does that; a step too large for the loading?): x = ("
        << out.x[0][p] << ", " << out.x[1][p] << ", " << out.x[2][p] << ") m, v = (" << out.v[0][p] << ", "
        << out.v[1][p] << ", " << out.v[2][p] << ") m/s, J = " << out.J[p]
-       << ". The particle state is kept at the start of this step.";
+       << (inPlace ? ". The particles are partly advanced (keepLastGoodState is off): the last good state is the last "
+                     "one saved."
+                   : ". The particle state is kept at the start of this step.");
     throw RuntimeFailure(os.str());
   }
-  cur_ = 1 - cur_;
+  if (!inPlace)
+    cur_ = 1 - cur_;
+  else if (++stepsSinceReorder_ == kReorderEvery) {
+    reorder();
+    stepsSinceReorder_ = 0;
+  }
   maxSpeed_ = vmax;
   hasFext_ = false;
   time_ += dt;

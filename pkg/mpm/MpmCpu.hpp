@@ -86,6 +86,8 @@ class MpmCpu : public MpmSolver {
   };
   ParticleIn<T> input() const;
   ParticleOut<T> output();
+  // One copy (keepLastGoodState off): put the particles in the order of order_.
+  void reorder();
   void scatter(T dt, const ParticleIn<T>& in);
   // Binning and the active tiles of the current particle positions.
   void bin(const ParticleIn<T>& in);
@@ -104,8 +106,12 @@ class MpmCpu : public MpmSolver {
   double maxSpeedAllowed_;
   std::size_t n_ = 0;
   int nNodes_;
+  // The state a step reads and, unless params_.keepLastGoodState is off (then state_[1] stays
+  // empty and G2P updates state_[0] in place), the one it writes.
   State state_[2];
   int cur_ = 0;
+  std::vector<T> scratch_;   // one copy: the buffer reorder() gathers into
+  int stepsSinceReorder_ = 0;
   std::vector<T> mass_, vol0_;  // by particle number
   std::vector<T> fext_[3];
   bool hasFext_ = false;

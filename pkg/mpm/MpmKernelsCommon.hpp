@@ -335,8 +335,13 @@ inline GridConst<T> makeGridConst(const MpmParams& prm, double massEps) {
     g.cells[d] = prm.cells[d];
     g.nodes[d] = prm.cells[d] + 1;
     g.gravity[d] = static_cast<T>(prm.gravity[d]);
-    g.lo[d] = static_cast<T>(prm.origin[d] + kWallLayer * prm.dx);
-    g.hi[d] = static_cast<T>(prm.origin[d] + (prm.cells[d] - kWallLayer) * prm.dx);
+    // Rounded inward: a particle held at a bound in float must still pass setParticles'
+    // check in double when its state is loaded again (a restart from a float run).
+    const double lo = prm.origin[d] + kWallLayer * prm.dx, hi = prm.origin[d] + (prm.cells[d] - kWallLayer) * prm.dx;
+    g.lo[d] = static_cast<T>(lo);
+    g.hi[d] = static_cast<T>(hi);
+    if (static_cast<double>(g.lo[d]) < lo) g.lo[d] = std::nextafter(g.lo[d], static_cast<T>(hi));
+    if (static_cast<double>(g.hi[d]) > hi) g.hi[d] = std::nextafter(g.hi[d], static_cast<T>(lo));
   }
   for (int w = 0; w < 6; ++w) g.wallFriction[w] = static_cast<T>(prm.walls[w].friction);
   g.massEps = static_cast<T>(massEps);

@@ -326,7 +326,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   }
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
   // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
-  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "flip_reference_dt", "cfl", "walls", "gate", "material", "particles",
+  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "flip_reference_dt", "cfl", "keep_last_good_state", "walls", "gate", "material", "particles",
                        "run", "blocks", "block_materials"});
   if (root.contains("description") && !root.at("description").is_string())
     throwParameter("description", root.at("description").dump(), "", "a string");
@@ -339,6 +339,11 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   checkRange("flip_reference_dt", s.params.flipReferenceDt, "s", 0, false, kInf, true);
   s.params.cfl = optNumber(root, "", "cfl", s.params.cfl);
   checkRange("cfl", s.params.cfl, "", 0, true, 1, false);
+  if (root.contains("keep_last_good_state")) {
+    const json& k = root.at("keep_last_good_state");
+    if (!k.is_boolean()) throwParameter("keep_last_good_state", k.dump(), "", "true or false");
+    s.params.keepLastGoodState = k.get<bool>();
+  }
   parseWalls(root, s.params);
   parseGate(root, s.params);
   parseMaterial(root, s.params);

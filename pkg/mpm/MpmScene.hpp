@@ -21,6 +21,10 @@
 //                                   second does not depend on dt (MpmParams::flipReferenceDt);
 //                                   0 (default): flip_alpha per step, as in Eq 4
 //   "cfl": 0.3,                     CFL number of the stable-step estimate, in (0, 1]
+//   "keep_last_good_state": true,   false: one copy of the particles, 109 (double) or 57
+//                                   (float) bytes per particle less; a failed step then leaves
+//                                   no state to save beyond the last snapshot
+//                                   (MpmParams::keepLastGoodState)
 //   "walls": {"-x": "free", "+x": "free", "-y": "free", "+y": "free", "-z": "free", "+z": "free"},
 //                                   each wall: "free" (free slip, the default), "noslip",
 //                                   or a Coulomb friction coefficient >= 0 (0 = free slip).

@@ -98,6 +98,12 @@ class MpmSolver {
   // constitutive update. Throws RuntimeFailure on a NaN / blow-up (names the particle).
   virtual void step(double dt) = 0;
 
+  // False once a step failed in a solver that keeps one copy of the particles
+  // (MpmParams::keepLastGoodState false): they are then partly advanced, and step(),
+  // getParticles() and openForceBuffer() throw RuntimeFailure until setParticles() replaces
+  // them. True otherwise: after a failed step the particles are those of its start.
+  bool holdsLastGoodState() const { return !partlyAdvanced_; }
+
   // Add a grid-node hook, run every step in the order added (see GridHook). makeSolver adds
   // the gate of MpmParams::gate this way.
   void addGridHook(std::shared_ptr<GridHook> hook) {
@@ -159,9 +165,16 @@ class MpmSolver {
   void applyGridHooks(const GridView& grid) {
     for (const auto& h : hooks_) h->apply(grid);
   }
+  // Throws RuntimeFailure naming `what` when a failed step left the particles partly advanced.
+  void requireLastGoodState(const char* what) const {
+    if (partlyAdvanced_)
+      throw RuntimeFailure(std::string(what) + ": a failed step left the particles partly advanced (keepLastGoodState "
+                           "is off, so no copy of their state was kept); load the last snapshot with setParticles()");
+  }
 
   double time_ = 0;
   long steps_ = 0;
+  bool partlyAdvanced_ = false;
   std::vector<std::shared_ptr<GridHook>> hooks_;
 };
 

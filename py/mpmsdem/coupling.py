@@ -284,9 +284,12 @@ class CoupledEngine(_AutoStep):
         self.sdem._fail(e)
         if self.sdem.error and "saved" in self.sdem.error:
             self.error += self.sdem.error[self.sdem.error.index(" [last good"):]
-        if self.mpm.output is not None:  # the solver still holds the state of the last good step
-            self.mpm.solver.writeSnapshot()
-            self.error += " [particles of the last good step: last snapshot in %s]" % self.mpm.output
+        if self.mpm.output is not None:
+            if self.mpm.solver.holdsLastGoodState:
+                self.mpm.solver.writeSnapshot()
+                self.error += " [particles of the last good step: last snapshot in %s]" % self.mpm.output
+            else:
+                self.error += " [particles' last good state: the last snapshot in %s]" % self.mpm.output
 
     def _dissipated(self):
         e = self._bridge.energies()

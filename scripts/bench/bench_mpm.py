@@ -12,6 +12,11 @@ cpu-double) at the same size.
     scripts/bench/bench_mpm.py --threads 1 --cpu-precisions double,float
     scripts/bench/bench_mpm.py --cuda --markdown docs/benchmarks.md
     scripts/bench/bench_mpm.py --cpu-sizes 1e5,1e6,1e7 --threads 2
+    scripts/bench/bench_mpm.py --no-cuda --cpu-copies 2,1   # keep_last_good_state on and off
+
+--cpu-copies 2,1 runs each CPU case with the solver's second copy of the particles (the
+default, "keep_last_good_state": true) and with one copy, and prints the speed ratio
+one/two copies.
 
 Uses only the standard library. Exit status 1 when a run fails.
 """
@@ -102,6 +107,17 @@ def gpu_name():
         return ""
 
 
+def parse_copies(text):
+    """'2,1' -> [2, 1]"""
+    try:
+        copies = [int(s) for s in text.split(",") if s.strip()]
+    except ValueError:
+        copies = []
+    if not copies or any(c not in (1, 2) for c in copies):
+        raise argparse.ArgumentTypeError("copies must be 2 and/or 1, comma-separated")
+    return copies
+
+
 def run_one(exe, scene_path, backend, precision, steps, threads, timeout):
     env = dict(os.environ)
     if threads:
@@ -131,15 +147,17 @@ def steps_for(particles, target_updates, min_steps, max_steps):
 
 
 def format_table(rows):
-    head = ["size", "backend", "precision", "particles", "steps", "seconds",
-            "updates/s", "bytes/particle", "float/double", "GPU/CPU"]
+    head = ["size", "backend", "precision", "copies", "particles", "steps", "seconds",
+            "updates/s", "bytes/particle", "float/double", "1/2 copies", "GPU/CPU"]
     body = []
     for r in rows:
         body.append([
-            "%.0e" % r["size"], r["backend"], r["precision"], str(r["particles"]), str(r["steps"]),
+            "%.0e" % r["size"], r["backend"], r["precision"], str(r["copies"]), str(r["particles"]),
+            str(r["steps"]),
             "%.3g" % r["seconds"], "%.3e" % r["particle_updates_per_s"],
             "%.0f" % r["bytes_per_particle"],
             ("%.2f" % r["float_ratio"]) if r.get("float_ratio") is not None else "",
+            ("%.2f" % r["copies_ratio"]) if r.get("copies_ratio") is not None else "",
             ("%.1f" % r["ratio"]) if r.get("ratio") is not None else "n/a"])
     return render_table(head, body)
 
@@ -170,6 +188,9 @@ def main():
     ap.add_argument("--no-cpu", action="store_true", help="skip the CPU runs (no GPU/CPU ratio then)")
     ap.add_argument("--cpu-precisions", type=parse_precisions, default=parse_precisions("double,float"),
                     help="precisions of the CPU runs (default double,float; the GPU/CPU ratio needs double)")
+    ap.add_argument("--cpu-copies", type=parse_copies, default=parse_copies("2"),
+                    help="copies of the particle state in CPU runs: 2 (keep_last_good_state, the default) "
+                         "and/or 1 (default 2)")
     ap.add_argument("--threads", type=int, default=2, help="OMP_NUM_THREADS for CPU runs (default 2)")
     ap.add_argument("--cpu-updates", type=float, default=3e7,
                     help="particle updates per CPU run; steps = this / particles (default 3e7)")
@@ -191,29 +212,30 @@ def main():
         sys.exit("bench_mpm: no executable mpmsdem-run at %s (build it, or pass --build/--exe)" % exe)
     use_cuda = args.cuda or (not args.no_cuda and gpu_present())
 
-    plan = []  # (size, backend, precision)
+    plan = []  # (size, backend, precision, copies)
     if not args.no_cpu:
-        plan += [(n, "cpu", p) for n in args.cpu_sizes for p in args.cpu_precisions]
+        plan += [(n, "cpu", p, c) for n in args.cpu_sizes for p in args.cpu_precisions for c in args.cpu_copies]
     if use_cuda:
         for n in args.sizes:
-            plan += [(n, "cuda", "float"), (n, "cuda", "double")]
+            plan += [(n, "cuda", "float", 2), (n, "cuda", "double", 2)]
     if not plan:
         sys.exit("bench_mpm: nothing to run (no CPU runs and no GPU)")
 
     rows = []
     failed = False
     with tempfile.TemporaryDirectory(prefix="bench_mpm_") as tmp:
-        for size, backend, precision in plan:
+        for size, backend, precision, copies in plan:
             scene, particles = dam_break_scene(size)
-            path = os.path.join(tmp, "dam_break_%d.json" % size)
+            scene["keep_last_good_state"] = copies == 2
+            path = os.path.join(tmp, "dam_break_%d_%d.json" % (size, copies))
             with open(path, "w") as f:
                 json.dump(scene, f)
             if backend == "cpu":
                 steps = steps_for(particles, args.cpu_updates, args.min_steps, args.max_steps)
             else:
                 steps = steps_for(particles, args.gpu_updates, args.min_steps, args.max_steps)
-            print("running %s-%s, %d particles, %d steps ..." % (backend, precision, particles, steps),
-                  flush=True)
+            print("running %s-%s, %d particles, %d steps, %d cop%s ..."
+                  % (backend, precision, particles, steps, copies, "y" if copies == 1 else "ies"), flush=True)
             try:
                 r = run_one(exe, path, backend, precision, steps,
                             args.threads if backend == "cpu" else None, args.timeout)
@@ -222,19 +244,23 @@ def main():
                 failed = True
                 continue
             r["size"] = size
+            r["copies"] = copies
             rows.append(r)
 
-    rate = {(r["size"], r["backend"], r["precision"]): r["particle_updates_per_s"] for r in rows}
+    rate = {(r["size"], r["backend"], r["precision"], r["copies"]): r["particle_updates_per_s"] for r in rows}
     for r in rows:
-        double = rate.get((r["size"], r["backend"], "double"))
+        double = rate.get((r["size"], r["backend"], "double", r["copies"]))
         r["float_ratio"] = r["particle_updates_per_s"] / double if r["precision"] == "float" and double else None
-        cpu = rate.get((r["size"], "cpu", "double"))
+        two = rate.get((r["size"], r["backend"], r["precision"], 2))
+        r["copies_ratio"] = r["particle_updates_per_s"] / two if r["copies"] == 1 and two else None
+        cpu = rate.get((r["size"], "cpu", "double", 2))
         r["ratio"] = r["particle_updates_per_s"] / cpu if r["backend"] == "cuda" and cpu else None
     text, md = format_table(rows)
     print()
     print(text, end="")
-    print("(CPU runs: OMP_NUM_THREADS=%d; float/double: against the same backend in double; "
-          "GPU/CPU: against cpu-double at the same size)" % args.threads)
+    print("(CPU runs: OMP_NUM_THREADS=%d; float/double: against the same backend and copies in double; "
+          "1/2 copies: one copy of the particles against two; GPU/CPU: against cpu-double at the same size)"
+          % args.threads)
 
     if args.json:
         with open(args.json, "w") as f:

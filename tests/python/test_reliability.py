@@ -167,6 +167,71 @@ def test_driver_restart_refuses_an_edited_scene(tmp_path):
     assert r.returncode == 0, r.stderr
 
 
+# ---------------------------------------------------------------- 5. one copy of the particles
+CRUSH = {"grid": {"dx": 0.01, "cells": [12, 12, 14], "origin": [0, 0, 0]},
+         "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65},
+         "particles": [{"lo": [0.03, 0.03, 0.02], "hi": [0.09, 0.09, 0.08], "ppc": 8}],
+         "gravity": [0, 0, -1e5], "walls": {"-z": "noslip"}}  # crushed to J < 1e-3 in a few hundred steps
+
+
+def _snapshots(path):
+    import h5py
+    with h5py.File(path, "r", locking=False) as f:
+        return [(int(g.attrs["step"]), g["x"][:], g["J"][:]) for _, g in sorted(f["snapshots"].items())]
+
+
+def test_a_crushed_mpm_engine_leaves_its_last_good_state_with_one_copy_or_two(tmp_path):
+    # keepLastGoodState on: the state at the start of the failed step is saved (once: the last
+    # step's outputs may have written it already); off: the same run fails at the same step, and
+    # the last good state is the last snapshot written before the failure, equal to the twin's.
+    runs = {}
+    for keep in (True, False):
+        out = tmp_path / ("keep" if keep else "lean")
+        mpm = mpmsdem.MpmEngine(grid=CRUSH["grid"], material=CRUSH["material"], particles=CRUSH["particles"],
+                                gravity=CRUSH["gravity"], walls=CRUSH["walls"], output=str(out), outputEvery=2.79e-4,
+                                keepLastGoodState=keep, verbose=False)
+        O.engines = [mpm.runner]
+        O.dt = 9.3e-5
+        with pytest.raises(RuntimeError, match="volume ratio J"):
+            mpmsdem.run(500, mpm)
+        assert mpm.solver.holdsLastGoodState == keep
+        runs[keep] = (O.iter, mpm.error, _snapshots(out / "mpm.h5"))
+        O.reset()
+    (iterKeep, errKeep, snapKeep), (iterLean, errLean, snapLean) = runs[True], runs[False]
+    assert iterKeep == iterLean == 89                                           # step 90 fails
+    assert "last good state saved as the last snapshot" in errKeep
+    assert "partly advanced (keepLastGoodState is off)" in errLean and "last good state: the last snapshot" in errLean
+    stepsKeep, stepsLean = [s[0] for s in snapKeep], [s[0] for s in snapLean]
+    assert stepsLean == list(range(0, 88, 3))                                   # every 3 steps
+    assert stepsKeep == stepsLean + [89]                                        # and the step's start, once
+    for a, b in zip(snapKeep, snapLean):                                        # the same run to the last bit
+        np.testing.assert_array_equal(a[1], b[1])
+        np.testing.assert_array_equal(a[2], b[2])
+    assert snapKeep[-1][2].min() >= 1e-3 and snapLean[-1][2].min() >= 1e-3
+
+
+def test_driver_with_one_copy_names_the_last_snapshot_as_the_last_good_state(tmp_path):
+    import subprocess
+    import h5py
+    exe = _driver()
+    results = {}
+    for keep in (True, False):
+        scene = dict(CRUSH, keep_last_good_state=keep,
+                     run={"duration": 0.02, "dt": "auto", "dt_factor": 0.9, "output_every": 1e-3, "vtk": "none"})
+        path, out = tmp_path / ("scene%d.json" % keep), tmp_path / ("out%d" % keep)
+        path.write_text(json.dumps(scene))
+        r = subprocess.run([exe, str(path), "--out", str(out)], capture_output=True, text=True,
+                           env=dict(os.environ, OMP_NUM_THREADS="1"))
+        assert r.returncode == 3, r.stderr
+        with h5py.File(out / "mpm.h5", "r", locking=False) as f:
+            results[keep] = (r.stderr, dict(f.attrs), [int(g.attrs["step"]) for _, g in sorted(f["snapshots"].items())])
+    (errKeep, attrsKeep, stepsKeep), (errLean, attrsLean, stepsLean) = results[True], results[False]
+    assert "volume ratio J" in attrsKeep["failure"] and "volume ratio J" in attrsLean["failure"]
+    assert "saved as snapshot" in errKeep and "failure_snapshot" in attrsKeep
+    assert "last good state: the last snapshot in" in errLean and "failure_snapshot" not in attrsLean
+    assert stepsLean == stepsKeep[:-1] and len(stepsLean) > 5                  # the same, none at the failure
+
+
 # ---------------------------------------------------------------- 6. engine order
 def test_misplaced_or_missing_sdem_runner_is_a_clear_error():
     from yade.wrapper import PyRunner

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
 #include <string>
 
 #include "common/Error.hpp"
@@ -19,8 +20,9 @@ using namespace mpmsdem::mpm;
 namespace {
 
 // A 6 cm cube of material resting on a no-slip floor under gravity g [m/s^2] (downward).
-std::unique_ptr<MpmSolver> cubeUnderGravity(double g, Precision precision) {
+std::unique_ptr<MpmSolver> cubeUnderGravity(double g, Precision precision, bool keepLastGoodState = true) {
   MpmParams prm;
+  prm.keepLastGoodState = keepLastGoodState;
   prm.dx = 0.01;
   prm.cells = {12, 12, 14};
   prm.gravity = {0, 0, -g};
@@ -72,4 +74,46 @@ TEST_P(MpmReliability, OrdinaryGravityKeepsJNearOne) {
   auto solver = cubeUnderGravity(9.81, GetParam());
   for (int i = 0; i < 300; ++i) solver->step(0.9 * solver->stableTimeStep());
   EXPECT_GT(minJ(*solver), 0.9);
+}
+
+TEST_P(MpmReliability, WithOneCopyAFailedStepLeavesNothingToMisuse) {
+  // keepLastGoodState off: the crushed cube fails at the same step (the results are the same
+  // to the last bit), but its particles are partly advanced: the solver says so and refuses
+  // to step or hand them out until setParticles() gives it a state again.
+  auto kept = cubeUnderGravity(1e5, GetParam());
+  auto lean = cubeUnderGravity(1e5, GetParam(), false);
+  auto failAt = [](MpmSolver& s, std::string& message) {
+    long steps = 0;
+    try {
+      for (; steps < 20000; ++steps) s.step(0.9 * s.stableTimeStep());
+    } catch (const RuntimeFailure& e) {
+      message = e.what();
+    }
+    return steps;
+  };
+  std::string keptMessage, leanMessage;
+  const long keptSteps = failAt(*kept, keptMessage), leanSteps = failAt(*lean, leanMessage);
+  ASSERT_LT(keptSteps, 20000);
+  EXPECT_EQ(leanSteps, keptSteps);
+  EXPECT_TRUE(kept->holdsLastGoodState());
+  EXPECT_FALSE(lean->holdsLastGoodState());
+  EXPECT_NE(leanMessage.find("partly advanced (keepLastGoodState is off)"), std::string::npos) << leanMessage;
+  // the same particle and values are named
+  EXPECT_EQ(leanMessage.substr(0, leanMessage.find(". The particle")), keptMessage.substr(0, keptMessage.find(". The particle")));
+  ParticleSet out;
+  for (const auto& call : {std::function<void()>([&] { lean->getParticles(out); }),
+                           std::function<void()>([&] { lean->step(1e-6); }),
+                           std::function<void()>([&] { lean->openForceBuffer(); })}) {
+    try {
+      call();
+      ADD_FAILURE() << "a partly advanced state was used";
+    } catch (const RuntimeFailure& e) {
+      EXPECT_NE(std::string(e.what()).find("partly advanced"), std::string::npos) << e.what();
+    }
+  }
+  ParticleSet good;
+  kept->getParticles(good);
+  lean->setParticles(good);
+  EXPECT_TRUE(lean->holdsLastGoodState());
+  EXPECT_GE(minJ(*lean), kMinJ);
 }
