@@ -68,16 +68,22 @@ def material(density, friction=0.5, poisson=0.3, barrierStiffness=1e4, normalDam
 
 
 def run(steps, *engines):
-    """Run YADE for ``steps`` steps (``O.run(steps, True)``) and raise RuntimeError if one of
-    ``engines`` (SdemEngine, MpmEngine) stopped the run. YADE reports an error raised inside a
-    PyRunner on its log and stops, but does not always raise it from ``O.run``."""
+    """Run YADE for ``steps`` steps and raise RuntimeError if one of ``engines`` (SdemEngine,
+    MpmEngine, CoupledEngine) stopped the run, with the engine's message (YADE reports an error
+    raised inside a PyRunner on its log and stops, but does not always raise it from ``O.run``).
+
+    The steps are taken in the calling thread, one ``O.step()`` each: ``O.run(n, True)`` hands
+    them to YADE's worker thread and waits for it in 40 ms polls, which cost more than the steps
+    when a script runs in short chunks to sample its scene (docs/benchmarks.md). An
+    ``O.pause()`` from an engine therefore does not end this call early; use ``O.run`` for that."""
     from yade import O
     for e in engines:  # a misplaced or missing runner: say so now, not after a silent run
         if isinstance(e, (SdemEngine, MpmEngine)):
             e._checkEngines()
     try:
-        O.run(int(steps), True)
-    except RuntimeError:
+        for _ in range(int(steps)):
+            O.step()
+    except Exception:
         for e in engines:
             e.check()
         raise

@@ -78,6 +78,7 @@ class Flume:
         (default 0: smooth)}``. The column settles behind it until t_open; no material above
         the edge passes it (the grid resolves the edge: the opening the flow sees lags the
         edge by about 1.5 dx). None (default): no gate, the column starts free at t = 0.
+    :param flipAlpha: FLIP/PIC blend α of the flow, Eq 4, in [0, 1] (0.99, Table 1).
     :param flipReferenceDt: Δt_ref of the FLIP/PIC blend [s] (see :class:`MpmEngine`; 0: the
         blend α per step, Eq 4);
     :param backend, precision: MPM backend; :param output: folder for all outputs (None: none),
@@ -88,7 +89,7 @@ class Flume:
                  granular=None, basalFriction=0.21, sideWallFriction=0.0, blocks=(), bedSweep=0.005,
                  bedBarrierStiffness=1e4, dtFactor=0.5, backend="cpu", precision="double", output=None,
                  outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None, flipReferenceDt=0.0,
-                 dtAuto=None, dtCheck="raise"):
+                 dtAuto=None, dtCheck="raise", flipAlpha=0.99):
         if gate is not None and (not isinstance(gate, dict) or set(gate) - {"speed", "open_at", "friction"}):
             raise ValueError("gate = %r: must be None or a dict with keys among speed [m/s], open_at [s], friction"
                              % (gate,))
@@ -137,7 +138,7 @@ class Flume:
             gravity={"g": 9.81, "incline_deg": inclineDeg},
             walls={"-x": "free", "+x": "free", "-y": sideWallFriction, "+y": sideWallFriction, "-z": "free",
                    "+z": "free"},
-            backend=backend, precision=precision, verbose=verbose, flipReferenceDt=flipReferenceDt,
+            backend=backend, precision=precision, verbose=verbose, flipAlpha=flipAlpha, flipReferenceDt=flipReferenceDt,
             gate=None if gate is None else dict(gate, x=columnLength, bottom=0.0),
             output=os.path.join(output, "mpm") if output else None, outputEvery=vtkEvery or outputEvery)
         self.coupled = CoupledEngine(self.sdem, self.mpm, pairs=pairs, output=output, outputEvery=outputEvery,
