@@ -74,6 +74,16 @@ inline void expectAgree(const ParticleSet& a, const ParticleSet& b, double tol, 
   EXPECT_GT(r.stressScale, minStress) << what << ": the reference run carries no stress";
 }
 
+// The evolving state of two runs equal to the last bit (mass and volume0 are inputs).
+inline void expectBitIdentical(const ParticleSet& a, const ParticleSet& b) {
+  EXPECT_TRUE(a.x == b.x);
+  EXPECT_TRUE(a.v == b.v);
+  EXPECT_TRUE(a.stress == b.stress);
+  EXPECT_TRUE(a.J == b.J);
+  EXPECT_TRUE(a.gammaDotP == b.gammaDotP);
+  EXPECT_TRUE(a.phase == b.phase);
+}
+
 }  // namespace agreement
 }  // namespace mpm
 }  // namespace mpmsdem

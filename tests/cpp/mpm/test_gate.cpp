@@ -278,12 +278,7 @@ TEST(Gate, InstantOpeningEqualsARestartFromTheHeldStateWithoutGate) {
   for (int i = 0; i < M; ++i) b->step(dt);
   ParticleSet rb;
   b->getParticles(rb);
-  EXPECT_TRUE(ra.x == rb.x);
-  EXPECT_TRUE(ra.v == rb.v);
-  EXPECT_TRUE(ra.stress == rb.stress);
-  EXPECT_TRUE(ra.J == rb.J);
-  EXPECT_TRUE(ra.gammaDotP == rb.gammaDotP);
-  EXPECT_TRUE(ra.phase == rb.phase);
+  agreement::expectBitIdentical(ra, rb);
 
   // The gate did hold: without it the column spreads past x_g in the same N steps.
   auto free = makeSolver(prm);

@@ -12,6 +12,7 @@
 #include "mpm/MpmSolver.hpp"
 #include "mpm/Seeding.hpp"
 
+#include "AgreementHelpers.hpp"
 #include "GranularColumn.hpp"
 
 using namespace mpmsdem;
@@ -71,12 +72,7 @@ TEST(StorageOrder, ARestartByParticleNumberContinuesBitForBit) {
   double travel = 0;
   for (std::size_t p = 0; p < ps.size(); ++p) travel = std::max(travel, endA.x[3 * p] - ps.x[3 * p]);
   EXPECT_GT(travel, 0.02);  // the column did collapse
-  EXPECT_TRUE(endA.x == endC.x);
-  EXPECT_TRUE(endA.v == endC.v);
-  EXPECT_TRUE(endA.stress == endC.stress);
-  EXPECT_TRUE(endA.J == endC.J);
-  EXPECT_TRUE(endA.gammaDotP == endC.gammaDotP);
-  EXPECT_TRUE(endA.phase == endC.phase);
+  agreement::expectBitIdentical(endA, endC);
   EXPECT_TRUE(endA.mass == ps.mass);
 }
 
@@ -167,11 +163,6 @@ TEST(StorageOrder, OneCopyGivesTheSameRunToTheLastBitAndHoldsLessMemory) {
     double travel = 0;
     for (std::size_t p = 0; p < ps.size(); ++p) travel = std::max(travel, endB.x[3 * p] - ps.x[3 * p]);
     EXPECT_GT(travel, 0.02);
-    EXPECT_TRUE(endA.x == endB.x);
-    EXPECT_TRUE(endA.v == endB.v);
-    EXPECT_TRUE(endA.stress == endB.stress);
-    EXPECT_TRUE(endA.J == endB.J);
-    EXPECT_TRUE(endA.gammaDotP == endB.gammaDotP);
-    EXPECT_TRUE(endA.phase == endB.phase);
+    agreement::expectBitIdentical(endA, endB);
   }
 }
