@@ -27,6 +27,26 @@ MpmParams columnScene(ParticleSet& ps, bool keepLastGoodState = true) {
   return prm;
 }
 
+constexpr double kDt = 2e-4;  // [s]
+
+// A solver of `prm` in `precision` started from `start` and stepped `steps` times by kDt; its
+// particles at the end in `end`.
+std::unique_ptr<MpmSolver> run(const MpmParams& prm, const ParticleSet& start, int steps, ParticleSet& end,
+                               Precision precision = Precision::Double) {
+  auto s = makeSolver(prm, Backend::Cpu, precision);
+  s->setParticles(start);
+  for (int n = 0; n < steps; ++n) s->step(kDt);
+  s->getParticles(end);
+  return s;
+}
+
+// Largest distance a particle moved along x from `start` to `end` [m].
+double largestTravel(const ParticleSet& start, const ParticleSet& end) {
+  double travel = 0;
+  for (std::size_t p = 0; p < start.size(); ++p) travel = std::max(travel, end.x[3 * p] - start.x[3 * p]);
+  return travel;
+}
+
 // Slots whose particle number is not the slot itself; fails unless id is a permutation.
 long reordered(const ParticleView& v) {
   std::vector<int> seen(v.n, 0);
@@ -49,29 +69,17 @@ TEST(StorageOrder, ARestartByParticleNumberContinuesBitForBit) {
   // blocks, so the storage orders of the two runs differ; the results must not.
   ParticleSet ps;
   const MpmParams prm = columnScene(ps);
-  const double dt = 2e-4;
-  auto a = makeSolver(prm);
-  a->setParticles(ps);
-  for (int n = 0; n < 600; ++n) a->step(dt);
-  ParticleSet endA;
-  a->getParticles(endA);
-
-  auto b = makeSolver(prm);
-  b->setParticles(ps);
-  for (int n = 0; n < 300; ++n) b->step(dt);
-  ParticleSet half;
-  b->getParticles(half);
+  ParticleSet endA, half, endC;
+  run(prm, ps, 600, endA);
+  auto b = run(prm, ps, 300, half);
   EXPECT_GT(reordered(b->openForceBuffer()), static_cast<long>(ps.size() / 10));  // stored in an order of its own
   auto c = makeSolver(prm);
   c->setParticles(half);
   EXPECT_EQ(reordered(c->openForceBuffer()), 0);
-  for (int n = 0; n < 300; ++n) c->step(dt);
-  ParticleSet endC;
+  for (int n = 0; n < 300; ++n) c->step(kDt);
   c->getParticles(endC);
 
-  double travel = 0;
-  for (std::size_t p = 0; p < ps.size(); ++p) travel = std::max(travel, endA.x[3 * p] - ps.x[3 * p]);
-  EXPECT_GT(travel, 0.02);  // the column did collapse
+  EXPECT_GT(largestTravel(ps, endA), 0.02);  // the column did collapse
   agreement::expectBitIdentical(endA, endC);
   EXPECT_TRUE(endA.mass == ps.mass);
 }
@@ -89,12 +97,8 @@ TEST_P(StorageOrderCopies, ForcesReachTheParticleTheyWereMeantFor) {
   // twin run without it), while particles whose stencils do not reach k's nodes are unchanged.
   ParticleSet ps;
   const MpmParams prm = columnScene(ps, GetParam());
-  const double dt = 2e-4;
-  auto s = makeSolver(prm);
-  s->setParticles(ps);
-  for (int n = 0; n < 300; ++n) s->step(dt);
   ParticleSet now;
-  s->getParticles(now);
+  auto s = run(prm, ps, 300, now);
   auto twin = makeSolver(prm);
   twin->setParticles(now);
 
@@ -117,15 +121,15 @@ TEST_P(StorageOrderCopies, ForcesReachTheParticleTheyWereMeantFor) {
   s->setExternalForces(f);
   s->getParticles(got);
   EXPECT_TRUE(got.fext == f);
-  s->step(dt);
-  twin->step(dt);
+  s->step(kDt);
+  twin->step(kDt);
   ParticleSet pushed, free;
   s->getParticles(pushed);
   twin->getParticles(free);
   // impulse f dt spread over the nodes around k: particle k slows by a share of f dt / m_k
   const double dv = pushed.v[3 * k] - free.v[3 * k];
   EXPECT_LT(dv, 0);
-  EXPECT_GT(dv, -0.05 * dt / ps.mass[k]);
+  EXPECT_GT(dv, -0.05 * kDt / ps.mass[k]);
   long far = 0;
   for (std::size_t p = 0; p < ps.size(); ++p) {
     double reach = 0;
@@ -146,23 +150,13 @@ TEST(StorageOrder, OneCopyGivesTheSameRunToTheLastBitAndHoldsLessMemory) {
   for (const Precision prec : {Precision::Double, Precision::Float}) {
     ParticleSet ps;
     const MpmParams two = columnScene(ps, true), one = columnScene(ps, false);
-    auto a = makeSolver(two, Backend::Cpu, prec);
-    auto b = makeSolver(one, Backend::Cpu, prec);
-    a->setParticles(ps);
-    b->setParticles(ps);
+    ParticleSet endA, endB;
+    auto a = run(two, ps, 604, endA, prec);
+    auto b = run(one, ps, 604, endB, prec);
     const std::size_t value = prec == Precision::Double ? 8 : 4;
     EXPECT_EQ(a->memoryBytes() - b->memoryBytes(), ps.size() * (13 * value + 1 + sizeof(int)));
-    for (int n = 0; n < 604; ++n) {
-      a->step(2e-4);
-      b->step(2e-4);
-    }
     EXPECT_GT(reordered(b->openForceBuffer()), static_cast<long>(ps.size() / 10));
-    ParticleSet endA, endB;
-    a->getParticles(endA);
-    b->getParticles(endB);
-    double travel = 0;
-    for (std::size_t p = 0; p < ps.size(); ++p) travel = std::max(travel, endB.x[3 * p] - ps.x[3 * p]);
-    EXPECT_GT(travel, 0.02);
+    EXPECT_GT(largestTravel(ps, endB), 0.02);
     agreement::expectBitIdentical(endA, endB);
   }
 }
