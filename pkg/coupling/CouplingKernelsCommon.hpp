@@ -32,6 +32,31 @@ struct BlockState {
   int fixed;     // 1: the block does not respond to forces (meff = particle mass)
 };
 
+// The host keeps blocks and pair physics in double; a float step (CPU or CUDA) reads them
+// rounded once per step by these.
+template <typename T>
+BlockState<T> convertBlock(const BlockState<double>& a) {
+  BlockState<T> b;
+  for (int d = 0; d < 3; ++d) {
+    b.pos[d] = static_cast<T>(a.pos[d]);
+    b.vel[d] = static_cast<T>(a.vel[d]);
+    b.angVel[d] = static_cast<T>(a.angVel[d]);
+  }
+  for (int k = 0; k < 9; ++k) b.rot[k] = static_cast<T>(a.rot[k]);
+  b.mass = static_cast<T>(a.mass);
+  b.reach = static_cast<T>(a.reach);
+  b.shape = a.shape;
+  b.phys = a.phys;
+  b.fixed = a.fixed;
+  return b;
+}
+
+template <typename T>
+sdem::BarrierCoulombPhys<T> convertPhys(const sdem::BarrierCoulombPhys<double>& p) {
+  return {static_cast<T>(p.kc), static_cast<T>(p.mu), static_cast<T>(p.nu), static_cast<T>(p.zetaN),
+          static_cast<T>(p.zetaT)};
+}
+
 // Uniform bins over the MPM grid box listing the blocks whose rounded-body box, grown by the
 // largest particle radius and by `watch`, touches them (compressed rows).
 struct BinGridView {

@@ -29,21 +29,6 @@ double largest(const void* values, std::size_t n) {
   return m;
 }
 
-BlockState<float> toFloat(const BlockState<double>& a) {
-  BlockState<float> b;
-  for (int d = 0; d < 3; ++d) {
-    b.pos[d] = static_cast<float>(a.pos[d]);
-    b.vel[d] = static_cast<float>(a.vel[d]);
-    b.angVel[d] = static_cast<float>(a.angVel[d]);
-  }
-  for (int k = 0; k < 9; ++k) b.rot[k] = static_cast<float>(a.rot[k]);
-  b.mass = static_cast<float>(a.mass);
-  b.reach = static_cast<float>(a.reach);
-  b.shape = a.shape;
-  b.phys = a.phys;
-  b.fixed = a.fixed;
-  return b;
-}
 }  // namespace
 
 #if !defined(MPMSDEM_WITH_CUDA)
@@ -303,13 +288,9 @@ void MpSdemCoupling::syncFloatTables() {
     boundingRadiusF_.assign(shapes_.boundingRadius.begin(), shapes_.boundingRadius.end());
   }
   blocksF_.resize(blocks_.size());
-  for (std::size_t i = 0; i < blocks_.size(); ++i) blocksF_[i] = toFloat(blocks_[i]);
+  for (std::size_t i = 0; i < blocks_.size(); ++i) blocksF_[i] = convertBlock<float>(blocks_[i]);
   physF_.resize(phys_.size());
-  for (std::size_t i = 0; i < phys_.size(); ++i) {
-    const auto& p = phys_[i];
-    physF_[i] = {static_cast<float>(p.kc), static_cast<float>(p.mu), static_cast<float>(p.nu),
-                 static_cast<float>(p.zetaN), static_cast<float>(p.zetaT)};
-  }
+  for (std::size_t i = 0; i < phys_.size(); ++i) physF_[i] = convertPhys<float>(phys_[i]);
 }
 
 template <typename T>

@@ -82,26 +82,10 @@ class CouplingCuda : public CouplingDeviceBackend {
     }
     const std::vector<BlockState<double>>& hb = *in.blocks;
     std::vector<BlockState<T>> blocks(hb.size());
-    for (std::size_t i = 0; i < hb.size(); ++i) {
-      const BlockState<double>& a = hb[i];
-      BlockState<T>& b = blocks[i];
-      for (int d = 0; d < 3; ++d) {
-        b.pos[d] = static_cast<T>(a.pos[d]);
-        b.vel[d] = static_cast<T>(a.vel[d]);
-        b.angVel[d] = static_cast<T>(a.angVel[d]);
-      }
-      for (int k = 0; k < 9; ++k) b.rot[k] = static_cast<T>(a.rot[k]);
-      b.mass = static_cast<T>(a.mass);
-      b.reach = static_cast<T>(a.reach);
-      b.shape = a.shape;
-      b.phys = a.phys;
-      b.fixed = a.fixed;
-    }
+    for (std::size_t i = 0; i < hb.size(); ++i) blocks[i] = convertBlock<T>(hb[i]);
     blocks_.upload(blocks.data(), blocks.size());
     std::vector<sdem::BarrierCoulombPhys<T>> phys;
-    for (const auto& p : *in.phys)
-      phys.push_back({static_cast<T>(p.kc), static_cast<T>(p.mu), static_cast<T>(p.nu), static_cast<T>(p.zetaN),
-                      static_cast<T>(p.zetaT)});
+    for (const auto& p : *in.phys) phys.push_back(convertPhys<T>(p));
     phys_.upload(phys.data(), phys.size());
     binStart_.upload(in.bins.start, in.numBins + 1);
     binBlocks_.upload(in.bins.blocks, in.numBinEntries);
