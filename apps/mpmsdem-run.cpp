@@ -146,7 +146,11 @@ struct Diagnostics {
 Diagnostics diagnose(const ParticleSet& p) {
   Diagnostics d;
   const std::size_t n = p.size();
-  if (n == 0) return d;
+  if (n == 0) {
+    // no flow has no front, height or centre of mass; its energy and fractions are zero
+    d.frontX = d.heightZ = d.com[0] = d.com[1] = d.com[2] = std::nan("");
+    return d;
+  }
   d.frontX = -INFINITY;
   d.heightZ = -INFINITY;
   double mass = 0, maxV2 = 0;

@@ -225,9 +225,11 @@ void parseMesh(const json& j, const std::string& path, const std::string& baseDi
 void parseParticles(const json& root, MpmScene& s, const std::string& baseDir) {
   if (!root.contains("particles")) throw ParameterError("missing required key 'particles'");
   const json& list = root.at("particles");
-  if (!list.is_array() || list.empty())
+  // An empty array is a scene without flow: the coupled engine then moves its blocks alone.
+  if (!list.is_array())
     throwParameter("particles", list.dump().substr(0, 80), "",
-                   "a non-empty array of boxes {lo, hi, ppc, velocity} or meshes {mesh, scale, offset, ppc, velocity}");
+                   "an array (empty for no flow) of boxes {lo, hi, ppc, velocity} or meshes {mesh, scale, offset, ppc, "
+                   "velocity}");
   const double tol = 1e-9 * s.params.dx;
   for (std::size_t b = 0; b < list.size(); ++b) {
     const std::string path = "particles[" + std::to_string(b) + "]";

@@ -50,8 +50,8 @@
 //     "solid_density": 2500,        rho_s [kg/m^3], > 0
 //     "critical_density": 0         rho_c [kg/m^3], >= 0; 0 means rho_0
 //   },
-//   "particles": [                  (req) non-empty list of non-overlapping entries, each a box
-//                                   or a closed triangle mesh:
+//   "particles": [                  (req) list of non-overlapping entries, each a box or a
+//                                   closed triangle mesh; [] for a scene without flow:
 //     {"lo": [x,y,z], "hi": [x,y,z],   (req for a box) box corners [m] on grid lines (origin + k dx),
 //                                      hi > lo on every axis, inside the material region
 //      "ppc": 8,                       particles per cell: a cube n^3 (1, 8, 27, ..., 512) or

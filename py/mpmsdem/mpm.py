@@ -35,7 +35,9 @@ class MpmEngine:
     :param grid: ``{"dx": [m], "cells": [nx, ny, nz], "origin": [x, y, z] [m]}``.
     :param material: ``{"density", "young_modulus", "poisson_ratio", "mu_s", "mu_2", "I0",
         "grain_diameter", "solid_density", "critical_density"}`` (SI; see the schema).
-    :param particles: list of ``{"lo", "hi", "ppc", "velocity"}`` boxes of material points.
+    :param particles: list of ``{"lo", "hi", "ppc", "velocity"}`` boxes of material points; an
+        empty list is a scene without flow (a coupled scene whose blocks move alone, at no MPM
+        cost).
     :param gravity: ``[gx, gy, gz]`` [m/s²] or ``{"g": 9.81, "incline_deg": θ}`` (flume
         inclined about y, flowing toward +x: gravity is rotated, not the grid).
     :param walls: per wall ``"-x"``…``"+z"``: ``"free"``, ``"noslip"`` or a friction μ_w ≥ 0.
@@ -251,8 +253,10 @@ class MpmEngine:
         return self.solver.numParticles
 
     def front(self, axis=0):
-        """Position of the flow front: the largest particle coordinate along ``axis`` [m]."""
-        return float(self.solver.particles()["x"][:, axis].max())
+        """Position of the flow front: the largest particle coordinate along ``axis`` [m]; NaN
+        without particles."""
+        x = self.solver.particles()["x"]
+        return float(x[:, axis].max()) if len(x) else float("nan")
 
 
 # The /series of mpm.h5, the same as the driver mpmsdem-run writes (docs/outputs.md).
@@ -263,8 +267,12 @@ SERIES = ("time", "step", "dt", "kinetic_energy", "front_x", "height_z", "centre
 def _diagnostics(p):
     import numpy as np
     m, x, v = p["mass"], p["x"], p["v"]
+    if len(m) == 0:  # no flow: no front, height or centre of mass (the driver's series say the same)
+        nan = float("nan")
+        return {"kinetic_energy": 0.0, "front_x": nan, "height_z": nan, "centre_of_mass": [nan] * 3,
+                "max_speed": 0.0, "flowing_fraction": 0.0, "gasified_fraction": 0.0}
     v2 = (v ** 2).sum(axis=1)
-    n = max(len(m), 1)
+    n = len(m)
     return {"kinetic_energy": 0.5 * float((m * v2).sum()), "front_x": float(x[:, 0].max()),
             "height_z": float(x[:, 2].max()), "centre_of_mass": [float(c) for c in (m @ x) / m.sum()],
             "max_speed": float(np.sqrt(v2.max())), "flowing_fraction": float((p["phase"] == 1).sum()) / n,

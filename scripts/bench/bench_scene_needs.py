@@ -142,26 +142,10 @@ def slabScene(row=None, cubes=1):
     return sdem, mat
 
 
-def emptyFlow(folder):
-    """An MpmEngine over the slab (dx 0.01 m, 100 x 60 x 20 cells) whose particle set is
-    empty: the scene format needs particles, so the solver loads a snapshot without any."""
-    import h5py
-    import numpy as np
-    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [100, 60, 20], "origin": [-0.5, -0.3, -0.05]},
-                            material=GLASS, particles=[{"lo": [0, 0, 0.05], "hi": [0.02, 0.02, 0.07], "ppc": 1}],
-                            gravity=G, verbose=False)
-    path = os.path.join(folder, "empty.h5")
-    with h5py.File(path, "w") as f:
-        g = f.create_group("snapshots/000000")
-        for name, cols in (("x", 3), ("v", 3), ("stress", 6)):
-            g.create_dataset(name, shape=(0, cols), dtype="f8")
-        for name in ("mass", "volume0", "J", "gammaDotP"):
-            g.create_dataset(name, shape=(0,), dtype="f8")
-        g.create_dataset("phase", shape=(0,), dtype="u1")
-        g.attrs["time"] = 0.0
-        g.attrs["step"] = np.int64(0)
-    mpm.solver.loadSnapshot(path)
-    return mpm
+def emptyFlow():
+    """An MpmEngine over the slab (dx 0.01 m, 100 x 60 x 20 cells) without particles."""
+    return mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [100, 60, 20], "origin": [-0.5, -0.3, -0.05]},
+                             material=GLASS, particles=[], gravity=G, verbose=False)
 
 
 COLUMN = {"grid": {"dx": 0.01, "cells": [28, 18, 24], "origin": [-0.02, -0.02, -0.02]},
@@ -197,7 +181,7 @@ def blobScene(out=None, every=None):
 
 
 # ------------------------------------------------------------------ YADE measurements
-def yadeA(repeat, steps, tmp):
+def yadeA(repeat, steps):
     def alone():
         sdem, _ = slabScene(cubes=2)
         O.engines = [ForceResetter(), sdem.runner, newton()]
@@ -206,7 +190,7 @@ def yadeA(repeat, steps, tmp):
 
     def coupled():
         sdem, mat = slabScene(cubes=2)
-        c = mpmsdem.CoupledEngine(sdem, emptyFlow(tmp), pairs={mat: 0.3}, verbose=False)
+        c = mpmsdem.CoupledEngine(sdem, emptyFlow(), pairs={mat: 0.3}, verbose=False)
         O.engines = [ForceResetter(), c.runner, newton()]
         O.dt = 1e-5
         return [c]
@@ -405,7 +389,7 @@ def main(argv=None):
     rows = []
     tmp = tempfile.mkdtemp(prefix="bench_scene_needs_")
     try:
-        a = yadeA(rep, 3000, tmp)
+        a = yadeA(rep, 3000)
         rows.append(("a", "YADE", "CoupledEngine: slab + 2 resting cubes, no material points (grid 100×60×20)",
                      a["coupled"]["total"], "SdemEngine alone", a["alone"]["total"],
                      "MPM step + coupling pass %.1f µs" % a["coupled"]["flow"]))

@@ -29,11 +29,12 @@ def driver_exe():
     return exe
 
 
-def scene(out, stiffness=None, velocity=(1.0, 0, 0)):
+def scene(out, stiffness=None, velocity=(1.0, 0, 0), blob=True):
     """A granular blob falls onto and pushes two blocks resting on a fixed bed: a tilted
     convex hull (unequal principal moments: exact aspherical rotation) and a box that may only
     slide along x and turn about z (blockedDOFs 'yzXY'). stiffness: k_c of the flow–bed and
-    flow–block pairs [N/m] (None: the default); velocity: the blob's [m/s]."""
+    flow–block pairs [N/m] (None: the default); velocity: the blob's [m/s]; blob False: the
+    same scene without particles."""
     sdem = mpmsdem.SdemEngine(verbose=False)
     bedMat = mpmsdem.material(density=2500, friction=0.4)
     wood = mpmsdem.material(density=700, friction=0.5)
@@ -44,7 +45,7 @@ def scene(out, stiffness=None, velocity=(1.0, 0, 0)):
     O.bodies[box].state.blockedDOFs = "yzXY"
     mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [26, 16, 12], "origin": [-0.01, -0.01, -0.01]},
                             material=GLASS, particles=[{"lo": [0.03, 0.03, 0.03], "hi": [0.08, 0.11, 0.07],
-                                                        "ppc": 8, "velocity": list(velocity)}],
+                                                        "ppc": 8, "velocity": list(velocity)}] if blob else [],
                             gravity=G, verbose=False)
     bedPair, woodPair = {"friction": 0.3}, {"friction": 0.2, "normalDamping": 0.1}
     if stiffness is not None:
@@ -93,6 +94,32 @@ def test_driver_matches_yade_for_the_same_coupled_scene(tmp_path):
     assert np.abs(d["rotation"][:, 8]).max() > 1e-4
     assert np.abs(d["pos"][:, 0:3] - d["pos"][0, 0:3]).max() == 0
 
+
+def test_driver_runs_a_coupled_scene_without_particles_as_yade_does(tmp_path):
+    """"particles": [] (MpmEngine(particles=[])): the blocks move under gravity and their own
+    contacts alone, the same in the driver and in YADE, with no flow force and no flow front."""
+    exe = driver_exe()
+    coupled, (bed, hull, box) = scene(tmp_path / "yade", blob=False)
+    steps = 1200
+    path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=O.dt, seriesEvery=O.dt,
+                             outputEvery=0.02, outputDir=str(tmp_path / "driver"), vtk="none")
+    with open(path) as f:
+        assert json.load(f)["particles"] == []
+    mpmsdem.run(steps, coupled)
+    r = subprocess.run([exe, path, "--steps", str(steps)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "0 particles" in r.stdout
+    y, _ = series(tmp_path / "yade" / "coupled.h5")
+    d, _ = series(tmp_path / "driver" / "coupled.h5")
+    assert len(y["time"]) == len(d["time"]) == steps + 1
+    assert np.abs(y["flow_force"]).max() == np.abs(d["flow_force"]).max() == 0
+    # the hull starts 0.5 mm above the bed's barrier and lands: it moved, the same in both
+    assert np.abs(d["pos"][-1, 3:6] - d["pos"][0, 3:6]).max() > 1e-4
+    for k in ("pos", "vel", "rotation"):
+        assert np.abs(y[k] - d[k]).max() <= 1e-11 * np.abs(y[k]).max(), k
+    with h5py.File(tmp_path / "driver" / "mpm.h5", "r", locking=False) as f:
+        assert np.isnan(f["series/front_x"][:]).all() and (f["series/kinetic_energy"][:] == 0).all()
+        assert f["series/time"][-1] == pytest.approx(steps * O.dt, rel=1e-12)
 
 
 @pytest.mark.parametrize("stiffness, steps", [(1e5, 1500), (1e7, 3000)])

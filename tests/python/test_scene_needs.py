@@ -104,36 +104,22 @@ def test_a_released_glued_block_moves_as_a_free_one():
     np.testing.assert_array_equal(released, bodyState([c]))
 
 
-def emptyFlow(tmp_path):
-    """An MpmEngine whose particle set is empty: the scene format needs particles, so the
-    solver loads a snapshot without any (layout of docs/outputs.md)."""
-    h5py = pytest.importorskip("h5py")
+def emptyFlow():
+    """An MpmEngine without particles (``particles=[]``): grid and walls only."""
     mpm = mpmsdem.MpmEngine(grid={"dx": 0.02, "cells": [30, 20, 10], "origin": [-0.3, -0.2, -0.06]},
-                            material=GLASS, particles=[{"lo": [0, 0, 0], "hi": [0.04, 0.04, 0.04], "ppc": 1}],
-                            gravity=G, verbose=False)
-    path = str(tmp_path / "empty.h5")
-    with h5py.File(path, "w") as f:
-        g = f.create_group("snapshots/000000")
-        for name, cols in (("x", 3), ("v", 3), ("stress", 6)):
-            g.create_dataset(name, shape=(0, cols), dtype="f8")
-        for name in ("mass", "volume0", "J", "gammaDotP"):
-            g.create_dataset(name, shape=(0,), dtype="f8")
-        g.create_dataset("phase", shape=(0,), dtype="u1")
-        g.attrs["time"] = 0.0
-        g.attrs["step"] = np.int64(0)
-    mpm.solver.loadSnapshot(path)
+                            material=GLASS, particles=[], gravity=G, verbose=False)
     assert mpm.solver.numParticles == 0
     return mpm
 
 
-def test_coupled_scene_without_particles_moves_its_blocks_as_sdem_alone(tmp_path):
+def test_coupled_scene_without_particles_moves_its_blocks_as_sdem_alone():
     steps = 1500
     states = {}
     for coupled in (False, True):
         O.reset()
         sdem, mat, ids, free = rowScene("fixed")
         if coupled:
-            mpm = emptyFlow(tmp_path)
+            mpm = emptyFlow()
             c = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.3}, verbose=False)
             O.engines = [ForceResetter(), c.runner, NewtonIntegrator(gravity=G, damping=0)]
             mpmsdem.run(steps, c)

@@ -8,6 +8,7 @@
 
 #include "common/Error.hpp"
 #include "mpm/MpmScene.hpp"
+#include "mpm/MpmSolver.hpp"
 
 using namespace mpmsdem;
 using namespace mpmsdem::mpm;
@@ -197,8 +198,33 @@ TEST(MpmScene, ParticlesOutsideTheGrid) {
   j["particles"][0]["hi"] = {0.02, 0.08, 0.12};  // empty
   expectError(j, {"particles[0].hi[0]"});
   j = goodScene();
+  j["particles"] = json::object();
+  expectError(j, {"particles", "an array"});
+}
+
+// No flow: an empty particle list is a scene of grid and walls only (a coupled scene whose
+// blocks move alone); the solver steps it with its CFL step and no particle to move.
+TEST(MpmScene, EmptyParticleListIsASceneWithoutFlow) {
+  json j = goodScene();
   j["particles"] = json::array();
-  expectError(j, {"particles", "non-empty"});
+  const MpmScene s = parseScene(j.dump());
+  const ParticleSet p = seedParticles(s);
+  EXPECT_EQ(p.size(), 0u);
+  auto solver = makeSolver(s.params, s.run.backend, s.run.precision);
+  solver->setParticles(p);
+  ASSERT_EQ(solver->numParticles(), 0u);
+  const double dt = solver->stableTimeStep();
+  // the CFL step of the material's wave speed, with no particle velocity to add to it:
+  // cfl dx / sqrt((K + 4G/3) / rho)
+  const double E = 1e6, nu = 0.3, rho = 1600;
+  const double c = std::sqrt(E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) / rho);
+  EXPECT_NEAR(dt, 0.4 * 0.01 / c, 1e-9 * dt);
+  for (int k = 0; k < 10; ++k) solver->step(dt);
+  EXPECT_NEAR(solver->time(), 10 * dt, 1e-12 * dt);
+  EXPECT_EQ(solver->steps(), 10);
+  ParticleSet out;
+  solver->getParticles(out);
+  EXPECT_EQ(out.size(), 0u);
 }
 
 TEST(MpmScene, BadValueRanges) {
