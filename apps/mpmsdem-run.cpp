@@ -14,7 +14,11 @@
 //                            (its particles, time and step), appending to its outputs;
 //                            --steps then counts the steps of this run. The scene must be
 //                            the one the run was started with (the file's "parameters"),
-//                            except for kRestartFree below (exit 2 naming what changed)
+//                            except for kRestartFree below (exit 2 naming what changed).
+//                            With blocks, from the snapshot that coupled.checkpoint.json
+//                            names (pkg/coupling/CoupledCheckpoint.hpp): the same run, bit
+//                            for bit; the CPU backend only (the CUDA coupling keeps its
+//                            contact histories on the device)
 //   --bench                  write no files, take no diagnostics; print one JSON line on
 //                            stdout at the end: backend, precision, solver, particles,
 //                            steps, seconds (step loop wall time), particle_updates_per_s,
@@ -31,9 +35,9 @@
 //                   flow_kinetic, flow_potential, block_kinetic, dissipated, every
 //                   run.series_every) and scene.pvd (particles and blocks, every
 //                   run.output_every) in place of particles.pvd. The time step is the smaller
-//                   of the MPM step and the contact step (CoupledWorld::criticalTimeStep);
-//                   --restart is refused (block states and contact histories are not in
-//                   mpm.h5).
+//                   of the MPM step and the contact step (CoupledWorld::criticalTimeStep).
+//                   On the CPU backend, coupled.checkpoint.json after every snapshot: what
+//                   --restart needs besides the particles (block states, contact histories).
 // Progress lines go to stdout (stderr with --bench) every 5 % of the run. A coupled run ends
 // with the split of the step loop's wall time (MPM step, MP-block coupling, blocks, the rest)
 // and the smallest contact step of the run and when it occurred, also in --bench's JSON as
@@ -60,6 +64,7 @@
 #include <vector>
 
 #include "common/Error.hpp"
+#include "coupling/CoupledCheckpoint.hpp"
 #include "coupling/CoupledScene.hpp"
 #include "coupling/CoupledWorld.hpp"
 #ifdef MPMSDEM_WITH_HDF5
@@ -359,8 +364,9 @@ void checkRestartScene(const MpmScene& scene, const std::string& h5) {
 
 class OutputRun {
  public:
-  // restart: append to the outputs already in the folder instead of starting them anew.
-  OutputRun(Stepper& stepper, const MpmScene& scene, bool restart)
+  // restart: append to the outputs already in the folder instead of starting them anew;
+  // checkpoint: the coupled state it continues (null without blocks).
+  OutputRun(Stepper& stepper, const MpmScene& scene, bool restart, const coupling::CoupledCheckpoint* checkpoint)
       : stepper_(stepper),
         solver_(stepper.solver),
         scene_(scene),
@@ -375,13 +381,21 @@ class OutputRun {
     if (restart) {
       // A killed run wrote series rows and ParaView entries past its last snapshot, where this
       // run continues from: drop them, or the series would go back in time and repeat.
+      // A coupled run continues from its checkpoint's snapshot, which is the last one unless
+      // the run was killed between writing a snapshot and its checkpoint.
       const double t = solver_.time() * (1 + 1e-12);
       h5_.truncateSeriesAfter("time", t);
+      h5_.dropSnapshotsAfter(t);
       if (pvd_) pvd_->dropAfter(t);
     }
     if (stepper.coupled) {
-      coupled_.emplace(dir_.string(), false, stepper.coupled->world.engine);
+      coupled_.emplace(dir_.string(), restart, stepper.coupled->world.engine);
       coupled_->h5().setAttribute("parameters", scene.sourceJson);
+      if (restart) {
+        coupled_->dropAfter(solver_.time() * (1 + 1e-12));
+        coupled_->setReferenceOrientations(checkpoint->referenceOrientations);
+      }
+      checkpoints_ = scene.run.backend == Backend::Cpu;
     }
     h5_.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
     h5_.setAttribute("parameters", scene.sourceJson);
@@ -452,9 +466,10 @@ class OutputRun {
                      e.what(), h5_.path().c_str(), state_time_);
         return 3;
       }
-      // The solver keeps the state at the start of the failed step: save it.
+      // The solver keeps the state at the start of the failed step: save it. The blocks have
+      // moved past it, so the checkpoint stays that of the last snapshot before.
       solver_.getParticles(state_);
-      const long index = writeSnapshot();
+      const long index = writeSnapshot(false);
       if (coupled_) {
         recordBlocks();
         coupled_->h5().setAttribute("failure", e.what());
@@ -520,7 +535,8 @@ class OutputRun {
   // would double the particles' memory.
   void releaseState() { state_ = ParticleSet(); }
 
-  long writeSnapshot() {
+  // checkpoint: also write the coupled state beside it (blocks and particles at one time).
+  long writeSnapshot(bool checkpoint = true) {
     const long index = h5_.writeSnapshot(state_, solver_.time(), solver_.steps());
     if (coupled_ && scene_.run.vtk != "none") coupled_->writeVtk(solver_.time(), state_, stepper_.coupled->world.engine);
     if (pvd_) {
@@ -530,6 +546,10 @@ class OutputRun {
                             scene_.run.vtk == "ascii" ? io::VtkEncoding::Ascii : io::VtkEncoding::AppendedRaw);
       pvd_->add(solver_.time(), name);
     }
+    if (checkpoint && checkpoints_)
+      coupling::writeCheckpoint((dir_ / "coupled.checkpoint.json").string(),
+                                coupling::captureCheckpoint(*stepper_.coupled, index, stepper_.lastDt,
+                                                            coupled_->referenceOrientations()));
     state_time_ = solver_.time();
     return index;
   }
@@ -542,6 +562,7 @@ class OutputRun {
   io::Hdf5Writer h5_;
   std::optional<io::PvdCollection> pvd_;
   std::optional<coupling::CoupledOutput> coupled_;
+  bool checkpoints_ = false;  // coupled.checkpoint.json with every snapshot (CPU backend)
   ParticleSet state_;
   double state_time_ = -1;  // time of the last snapshot written
 };
@@ -560,11 +581,13 @@ int main(int argc, char** argv) {
     if (opt.precision) scene.run.precision = *opt.precision;
     if (opt.out) scene.run.outputDir = *opt.out;
     const coupling::SceneBlocks blocks = coupling::parseBlocks(scene.sourceJson);
+    if (opt.restart && !blocks.empty() && scene.run.backend != Backend::Cpu)
+      throw ParameterError("--restart: a coupled run on the CUDA backend writes no checkpoint (its MP-block contact "
+                           "histories stay on the device): run the scene again from the start, or run it with "
+                           "--backend cpu");
     auto solver = makeSolver(scene.params, scene.run.backend, scene.run.precision);
     long maxSteps = opt.steps;
-    if (opt.restart && !blocks.empty())
-      throw ParameterError("--restart: not available for scenes with blocks (mpm.h5 holds the particles, not the "
-                           "block states and contact histories): run the scene again from the start");
+    std::optional<coupling::CoupledCheckpoint> checkpoint;
 #ifndef MPMSDEM_WITH_HDF5
     if (!opt.bench)
       throw ParameterError("this mpmsdem-run was built without HDF5 (an MPM-only build, CMakeLists.txt): it runs "
@@ -574,12 +597,24 @@ int main(int argc, char** argv) {
       const std::string h5 = (std::filesystem::path(scene.run.outputDir) / "mpm.h5").string();
       if (!std::filesystem::exists(h5)) throwParameter("--restart", h5, "", "an existing mpm.h5 of an earlier run");
       checkRestartScene(scene, h5);
-      const long last = io::readNumSnapshots(h5) - 1;
+      long last = io::readNumSnapshots(h5) - 1;
       if (last < 0) throwParameter("--restart", h5, "", "a file holding at least one snapshot");
+      if (!blocks.empty()) {
+        checkpoint = coupling::readCheckpoint(
+            (std::filesystem::path(scene.run.outputDir) / "coupled.checkpoint.json").string());
+        if (checkpoint->snapshot < 0 || checkpoint->snapshot > last)
+          throwParameter("--restart: coupled.checkpoint.json snapshot", checkpoint->snapshot, "",
+                         "a snapshot of " + h5 + ", 0 to " + std::to_string(last));
+        last = checkpoint->snapshot;
+      }
       ParticleSet particles;
       double time = 0;
       long step = 0;
       io::readSnapshot(h5, last, particles, &time, &step);
+      if (checkpoint && (checkpoint->step != step || checkpoint->time != time))
+        throw ParameterError("--restart: coupled.checkpoint.json (step " + std::to_string(checkpoint->step) +
+                             ") and snapshot " + std::to_string(last) + " of " + h5 + " (step " +
+                             std::to_string(step) + ") are not of one time: the outputs were not written by one run");
       solver->setParticles(particles);
       solver->setClock(time, step);
       if (maxSteps > 0) maxSteps += step;
@@ -595,8 +630,10 @@ int main(int argc, char** argv) {
     if (!blocks.empty()) {
       coupled.emplace(std::move(solver));
       coupling::addBlocks(blocks, *coupled);
+      if (checkpoint) coupling::restoreCheckpoint(*checkpoint, *coupled);
     }
     Stepper stepper{mpm, coupled ? &*coupled : nullptr};
+    if (checkpoint) stepper.lastDt = checkpoint->lastDt;
     if (scene.run.dt > 0 && scene.run.dt > mpm.stableTimeStep() * kStepSlack) {
       char range[128];
       std::snprintf(range, sizeof range, "<= the stable step %.6g s (cfl dx / wave speed), or \"auto\"",
@@ -605,7 +642,7 @@ int main(int argc, char** argv) {
     }
 #ifdef MPMSDEM_WITH_HDF5
     if (opt.bench) return runBench(stepper, scene, maxSteps);
-    OutputRun out(stepper, scene, opt.restart);
+    OutputRun out(stepper, scene, opt.restart, checkpoint ? &*checkpoint : nullptr);
     return out.run(maxSteps);
 #else
     return runBench(stepper, scene, maxSteps);  // other runs were refused above

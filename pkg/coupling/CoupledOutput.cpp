@@ -33,6 +33,11 @@ CoupledOutput::CoupledOutput(const std::string& dir, bool append, const sdem::Sd
                    "flow_force F_t, face_force F_f, edge_force F_e, flow_torque; contacts (records, blocks)");
 }
 
+void CoupledOutput::dropAfter(double t) {
+  h5_.truncateSeriesAfter("time", t);
+  pvd_.dropAfter(t);
+}
+
 void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, const MpSdemCoupling& coupling) {
   // blocks the coupling has not seen yet (before the first step) have no flow force
   const int n = e.numBodies(), seen = std::min(n, coupling.numBlocks());

@@ -33,6 +33,9 @@ class CoupledOutput {
   void appendSeries(const std::string& name, double value) { h5_.appendScalar(name, value); }
   void writeVtk(double time, const mpm::ParticleSet& particles, const sdem::SdemEngine& engine);
   io::Hdf5Writer& h5() { return h5_; }
+  // A restart from time t [s]: drop the records and ParaView entries written after t by the
+  // run that went on past its checkpoint.
+  void dropAfter(double t);
 
  private:
   std::string dir_;

@@ -65,6 +65,13 @@ double coupledAutoStep(double factor, double critical, double blockApproach, dou
   return std::min(sdem::autoTimeStep(factor, critical, blockApproach, lastDt), particleApproach);
 }
 
+void CoupledWorld::restoreContactSteps(double contactStep, const ContactStepLow& low) {
+  if (!(contactStep > 0)) throwParameter("contact step", contactStep, "s", "> 0 (inf: no contact)");
+  if (!(low.step > 0)) throwParameter("lowest contact step", low.step, "s", "> 0 (inf: no contact)");
+  contactStep_ = contactStep;
+  contactStepLow_ = low;
+}
+
 double CoupledWorld::criticalTimeStep() { return std::min(solver_->stableTimeStep(), contactStep_); }
 
 }  // namespace coupling

@@ -56,6 +56,9 @@ class CoupledWorld {
     double time = std::numeric_limits<double>::quiet_NaN();
   };
   const ContactStepLow& contactStepLow() const { return contactStepLow_; }
+  // What a checkpointed run's steps left: the contact step of its last step (inf: no contact),
+  // which the next automatic step is chosen from, and the lowest one so far.
+  void restoreContactSteps(double contactStep, const ContactStepLow& low);
 
  private:
   std::unique_ptr<mpm::MpmSolver> solver_;

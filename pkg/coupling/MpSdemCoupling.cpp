@@ -80,6 +80,11 @@ void MpSdemCoupling::setHistories(const std::vector<long long>& keys, const std:
   particleCount_ = keys.size() / slots_;
 }
 
+void MpSdemCoupling::restoreParticleApproachStep(double s) {
+  if (!(s > 0)) throwParameter("particle approach step", s, "s", "> 0 (inf: no particle closing on a block)");
+  minApproachStep_ = s;
+}
+
 std::vector<double> MpSdemCoupling::historyXi() const {
   if (hostFloatRun_) return std::vector<double>(hostFloat_.xi.begin(), hostFloat_.xi.end());
   return hostDouble_.xi;

@@ -79,6 +79,8 @@ class MpSdemCoupling {
   // Pairs are examined up to the distance they close in the step, at most one grid cell (a
   // particle moves less than a cell per stable MPM step).
   double particleApproachStep() const { return minApproachStep_; }
+  // The value a checkpointed run's last step left (> 0, inf for none), until the next step.
+  void restoreParticleApproachStep(double s);
   long historyOverflow() const { return overflow_; }
 
   // ---- energies [J]: current barrier and tangential-spring potentials, cumulative slip and

@@ -259,6 +259,13 @@ Real SdemEngine::criticalTimeStep() const {
 
 // ------------------------------------------------------------------ checkpoint
 
+void SdemEngine::setDissipation(Real friction, Real damping) {
+  if (!(std::isfinite(friction) && friction >= 0)) throwParameter("friction dissipation", friction, "J", ">= 0, finite");
+  if (!(std::isfinite(damping) && damping >= 0)) throwParameter("damping dissipation", damping, "J", ">= 0, finite");
+  frictionWork_ = friction;
+  dampingWork_ = damping;
+}
+
 std::vector<ContactHistoryEntry> SdemEngine::contactHistories() const {
   std::vector<ContactHistoryEntry> out;
   out.reserve(history_.size());
@@ -381,6 +388,31 @@ void SdemWorld::step(Real dt, const std::vector<Vec3>* extraForce, const std::ve
     lastAngVel_[i] = w;
   }
   time_ += dt;
+}
+
+bool SdemWorld::angularMomentum(int i, Vec3& L) const {
+  engine.angularVelocity(i);  // checks i
+  const std::size_t k = static_cast<std::size_t>(i);
+  if (k >= angMom_.size() || (k < blocked_.size() && (blocked_[k] & kRotationDofs)) ||
+      !(engine.angularVelocity(i).array() == lastAngVel_[k].array()).all())
+    return false;
+  L = angMom_[k];
+  return true;
+}
+
+void SdemWorld::restoreAngularMomentum(int i, const Vec3& L) {
+  const Vec3& w = engine.angularVelocity(i);  // checks i
+  if (!L.allFinite()) throw ParameterError("angular momentum of body " + std::to_string(i) + ": must be finite");
+  const std::size_t n = static_cast<std::size_t>(engine.numBodies());
+  angMom_.resize(n, Vec3::Zero());
+  lastAngVel_.resize(n, Vec3::Constant(std::numeric_limits<Real>::quiet_NaN()));
+  angMom_[i] = L;
+  lastAngVel_[i] = w;
+}
+
+void SdemWorld::setTime(Real t) {
+  if (!(std::isfinite(t) && t >= 0)) throwParameter("time", t, "s", ">= 0, finite");
+  time_ = t;
 }
 
 Real SdemWorld::kineticEnergy() const {

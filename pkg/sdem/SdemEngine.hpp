@@ -165,6 +165,8 @@ class SdemEngine {
   Real tangentialEnergy() const { return springEnergy_; }        // sum of |F_el|^2 / (2 K_t), current
   Real frictionDissipation() const { return frictionWork_; }     // cumulative slip work
   Real dampingDissipation() const { return dampingWork_; }       // cumulative dashpot work
+  // Continue the cumulative counters of a checkpointed run (finite, >= 0: ParameterError).
+  void setDissipation(Real friction, Real damping);
 
   // ---- checkpoint of the contact histories
   std::vector<ContactHistoryEntry> contactHistories() const;
@@ -254,6 +256,17 @@ class SdemWorld {
   Real kineticEnergy() const;
   // Gravitational potential energy -sum m g . x of the non-fixed bodies [J].
   Real gravityEnergy() const;
+
+  // ---- checkpoint: what a step carries to the next besides the engine's state
+  // World angular momentum L(t - dt/2) of body i [N m s] that the rotation update carries;
+  // false when there is none (before its first step, or its angular velocity was set since,
+  // or a rotational DOF is blocked): the next step derives it from the angular velocity.
+  bool angularMomentum(int i, Vec3& L) const;
+  // Carry L for body i into the next step, as if this world had taken the steps before: its
+  // angular velocity (set with engine.setState) must be the one those steps left.
+  void restoreAngularMomentum(int i, const Vec3& L);
+  // Clock of a restored run [s] (finite, >= 0).
+  void setTime(Real t);
 
  private:
   std::vector<Vec3> angMom_, lastAngVel_;

@@ -158,6 +158,99 @@ def test_driver_auto_step_follows_yade_dtAuto(tmp_path, stiffness, steps):
         assert np.abs(a - b).max() <= 1e-11 * np.abs(a).max(), k
 
 
+def h5tree(path):
+    """The series datasets of an HDF5 file by name, and its snapshots' datasets by their time."""
+    series, snaps = {}, {}
+    with h5py.File(path, "r", locking=False) as f:
+        for k in f.get("series", {}):
+            series[k] = np.array(f["series"][k])
+        for g in f.get("snapshots", {}).values():
+            snaps[float(g.attrs["time"])] = {k: np.array(g[k]) for k in g}
+    return series, snaps
+
+
+@pytest.mark.parametrize("dt, stiffness", [(4e-5, 1e5), ("auto", 1e7)])
+def test_coupled_driver_restart_continues_the_same_run_bit_for_bit(tmp_path, dt, stiffness):
+    """A coupled run stopped and restarted (--restart) is the run that was not stopped: every
+    record of coupled.h5 and mpm.h5 and the last particles equal to the last bit, with a fixed
+    step and with "dt": "auto" (whose next step depends on the contact and approach steps the
+    checkpoint carries). Also when the checkpoint is older than the last snapshot (a run killed
+    between the two): the run continues from the checkpoint's snapshot, and what was written
+    after it is replaced."""
+    exe = driver_exe()
+    coupled, _ = scene(tmp_path / "yade", stiffness=stiffness, velocity=(1.0, 0, -1.0))
+    steps = 1200
+    path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=dt, dtFactor=0.5,
+                             seriesEvery=1e-9, outputEvery=2e-3, outputDir=str(tmp_path / "whole"), vtk="none")
+
+    def drive(out, n, restart=False):
+        r = subprocess.run([exe, path, "--out", str(out), "--steps", str(n)] + (["--restart"] if restart else []),
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        return r.stdout
+
+    drive(tmp_path / "whole", steps)
+    first = steps // 2
+    if dt == "auto":
+        # stop where the next step shrinks: there the contact and approach steps the checkpoint
+        # carries choose it (where it grows, the growth cap does, from the last step alone)
+        with h5py.File(tmp_path / "whole" / "mpm.h5", "r", locking=False) as f:
+            steps_taken = np.array(f["series/dt"])  # record i: the step that led to it
+        first = next(i for i in range(steps // 4, 3 * steps // 4) if steps_taken[i + 1] < steps_taken[i])
+    split = tmp_path / "split"
+    drive(split, first)
+    old = (split / "coupled.checkpoint.json").read_text()
+    # stopped while the blob presses on the blocks: MP-block histories held, the hull turning
+    c = json.loads(old)
+    assert len(c["coupling_histories"]) > 0
+    assert np.abs(c["bodies"][1]["ang_mom"]).max() > 0 and c["contact_step"] is not None
+    assert "restarting" in drive(split, steps // 4, restart=True)
+    # as if the run had been killed after its last snapshot and before that snapshot's checkpoint
+    (split / "coupled.checkpoint.json").write_text(old)
+    drive(split, steps - first, restart=True)
+    for name in ("coupled.h5", "mpm.h5"):
+        a, sa = h5tree(tmp_path / "whole" / name)
+        b, sb = h5tree(split / name)
+        assert sorted(a) == sorted(b), name
+        for k in a:
+            np.testing.assert_array_equal(a[k], b[k], err_msg="%s:%s" % (name, k))
+        # the split run also saved its state where it stopped (and, dropped with its checkpoint,
+        # a quarter run later), off the output times of an automatic step: the rest are the same
+        assert set(sa) <= set(sb) and len(sb) - len(sa) <= 1, name
+        for t in sa:
+            for k in sa[t]:
+                np.testing.assert_array_equal(sa[t][k], sb[t][k], err_msg="%s: snapshot at %g s, %s" % (name, t, k))
+    assert max(sb) == max(sa)
+    d, _ = series(split / "coupled.h5")
+    assert len(d["time"]) == steps + 1 and (np.diff(d["time"]) > 0).all()
+    assert np.abs(d["flow_force"][:, 3:]).max() > 0.05 and np.abs(d["pos"][-1, 3:6] - d["pos"][0, 3:6]).max() > 1e-4
+    if dt == "auto":
+        assert np.ptp(np.diff(d["time"])) > 0  # the contacts did set the steps
+
+
+def test_coupled_driver_restart_refuses_outputs_it_cannot_continue(tmp_path):
+    exe = driver_exe()
+    coupled, _ = scene(tmp_path / "yade")
+    out = tmp_path / "o"
+    path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=4e-5, outputEvery=2e-3,
+                             outputDir=str(out), vtk="none")
+    r = subprocess.run([exe, path, "--steps", "60"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    checkpoint = json.loads((out / "coupled.checkpoint.json").read_text())
+    assert checkpoint["step"] == 60 and checkpoint["snapshot"] == 2  # t = 0, 2e-3 s and the end
+    cases = [({"snapshot": 7}, "snapshot"), ({"step": 59}, "not of one time"), ({"format": "x"}, "format"),
+             ({"bodies": checkpoint["bodies"][:2]}, "blocks")]
+    for change, expect in cases:
+        (out / "coupled.checkpoint.json").write_text(json.dumps(dict(checkpoint, **change)))
+        r = subprocess.run([exe, path, "--steps", "10", "--restart"], capture_output=True, text=True)
+        assert r.returncode == 2 and "--restart" in r.stderr and expect in r.stderr, (change, r.stderr)
+    (out / "coupled.checkpoint.json").unlink()
+    r = subprocess.run([exe, path, "--steps", "10", "--restart"], capture_output=True, text=True)
+    assert r.returncode == 2 and "coupled.checkpoint.json is missing" in r.stderr, r.stderr
+    r = subprocess.run([exe, path, "--steps", "10", "--restart", "--backend", "cuda"], capture_output=True, text=True)
+    assert r.returncode == 2 and "CUDA" in r.stderr, r.stderr
+
+
 def test_bad_block_entries_are_refused_by_name(tmp_path):
     exe = driver_exe()
     base = {"grid": {"dx": 0.02, "cells": [10, 10, 10], "origin": [0, 0, 0]}, "material": GLASS,
@@ -193,11 +286,3 @@ def test_bad_block_entries_are_refused_by_name(tmp_path):
     (tmp_path / "bad.json").write_text(json.dumps(s))
     r = subprocess.run([exe, str(tmp_path / "bad.json"), "--out", str(tmp_path / "o")], capture_output=True, text=True)
     assert r.returncode == 2 and "blocks[0]" in r.stderr and "core.faces" in r.stderr, r.stderr
-    # a scene with blocks cannot be restarted (block states are not in mpm.h5): refused, not glued
-    s = json.loads(json.dumps(base))
-    (tmp_path / "ok.json").write_text(json.dumps(s))
-    r = subprocess.run([exe, str(tmp_path / "ok.json"), "--out", str(tmp_path / "o2")], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    r = subprocess.run([exe, str(tmp_path / "ok.json"), "--out", str(tmp_path / "o2"), "--restart"], capture_output=True,
-                       text=True)
-    assert r.returncode == 2 and "--restart" in r.stderr and "blocks" in r.stderr

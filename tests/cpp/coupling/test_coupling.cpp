@@ -7,12 +7,17 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <random>
+#include <tuple>
 
 #include "common/Error.hpp"
+#include "coupling/CoupledCheckpoint.hpp"
 #include "coupling/CoupledWorld.hpp"
 #include "mpm/Seeding.hpp"
 #include "sdem/ShapeTable.hpp"
@@ -143,6 +148,117 @@ INSTANTIATE_TEST_SUITE_P(CpuBothPrecisions, MpSdemCouplingInPrecision,
                          mpm::agreement::paramName);
 
 }  // namespace
+
+// A checkpoint (driver --restart) written while the blob presses a free cube against a fixed one
+// and read back into a world built anew holds everything the steps carry: captured again it is
+// the same to the last bit, and both worlds then take the same steps to the last bit.
+TEST(CoupledCheckpoint, RestoredWorldContinuesTheSameRunBitForBit) {
+  auto build = [](std::unique_ptr<CoupledWorld> w) {
+    addCube(*w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000);
+    addCube(*w, 0.02, 0.003, Vec3(0.1549, 0.07, 0.07), 2000, true);  // outer surfaces 0.1 mm into each other
+    w->coupling.setPair(0, pair(0.3, 0.2));
+    return w;
+  };
+  auto a = build(blobWorld(24, 1.0));
+  a->world.engine.setState(0, Vec3(0.115, 0.07, 0.07), Quat::Identity(), Vec3::Zero(), Vec3(0.1, 0.2, 0.5));
+  int s = 0;
+  const double dt = 1e-5;
+  do {
+    a->step(dt);
+  } while (!(a->coupling.contactCount(0) > 0 && std::isfinite(a->coupling.particleApproachStep())) && ++s < 1500);
+  ASSERT_LT(s, 1500) << "the blob never touched the cube with a point still closing in";
+  const CoupledCheckpoint c = captureCheckpoint(*a, 3, dt, {Quat::Identity(), Quat::Identity()});
+  ASSERT_FALSE(c.historyIndex.empty());
+  ASSERT_FALSE(c.sdemHistories.empty());
+  ASSERT_TRUE(c.hasAngMom[0]);
+  ASSERT_GT(c.sdemDamping + c.couplingDamping, 0.0);
+  ASSERT_TRUE(std::isfinite(c.contactStep));
+  const std::string path = (std::filesystem::temp_directory_path() / "mpmsdem_test_checkpoint.json").string();
+  writeCheckpoint(path, c);
+  const CoupledCheckpoint r = readCheckpoint(path);
+  std::remove(path.c_str());
+
+  mpm::ParticleSet ps;
+  a->mpm().getParticles(ps);
+  auto solver = mpm::makeSolver(a->mpm().params(), mpm::Backend::Cpu, mpm::Precision::Double);
+  solver->setParticles(ps);
+  solver->setClock(a->mpm().time(), a->mpm().steps());
+  auto b = build(std::make_unique<CoupledWorld>(std::move(solver)));
+  b->world.gravity = Vec3::Zero();
+  restoreCheckpoint(r, *b);
+  const CoupledCheckpoint again = captureCheckpoint(*b, 3, dt, r.referenceOrientations);
+  EXPECT_EQ(again.time, c.time);
+  EXPECT_EQ(again.worldTime, c.worldTime);
+  EXPECT_EQ(again.contactStep, c.contactStep);
+  EXPECT_EQ(again.contactStepLow.step, c.contactStepLow.step);
+  EXPECT_EQ(again.contactStepLow.time, c.contactStepLow.time);
+  EXPECT_EQ(again.particleApproachStep, c.particleApproachStep);
+  for (std::size_t i = 0; i < c.pos.size(); ++i) {
+    EXPECT_EQ(again.pos[i], c.pos[i]);
+    EXPECT_EQ(again.ori[i].coeffs(), c.ori[i].coeffs());
+    EXPECT_EQ(again.vel[i], c.vel[i]);
+    EXPECT_EQ(again.angVel[i], c.angVel[i]);
+    EXPECT_EQ(again.hasAngMom[i], c.hasAngMom[i]);
+    EXPECT_EQ(again.angMom[i], c.angMom[i]);
+  }
+  // block-block histories come out of a hash map, in no particular order
+  auto byKey = [](std::vector<sdem::ContactHistoryEntry> h) {
+    auto tie = [](const sdem::ContactKey& k) {
+      return std::make_tuple(k.bodyA, k.bodyB, static_cast<int>(k.kindA), static_cast<int>(k.kindB), k.indexA, k.indexB);
+    };
+    std::sort(h.begin(), h.end(), [&](const auto& x, const auto& y) { return tie(x.key) < tie(y.key); });
+    return h;
+  };
+  const auto h0 = byKey(c.sdemHistories), h1 = byKey(again.sdemHistories);
+  ASSERT_EQ(h1.size(), h0.size());
+  for (std::size_t k = 0; k < h0.size(); ++k) {
+    EXPECT_TRUE(h1[k].key == h0[k].key);
+    EXPECT_EQ(h1[k].xi, h0[k].xi);
+  }
+  EXPECT_EQ(again.sdemFriction, c.sdemFriction);
+  EXPECT_EQ(again.sdemDamping, c.sdemDamping);
+  EXPECT_EQ(again.historyIndex, c.historyIndex);
+  EXPECT_EQ(again.historyKey, c.historyKey);
+  EXPECT_EQ(again.historyXi, c.historyXi);
+  EXPECT_EQ(again.couplingFriction, c.couplingFriction);
+  EXPECT_EQ(again.couplingDamping, c.couplingDamping);
+
+  for (int k = 0; k < 200; ++k) {
+    a->step(dt);
+    b->step(dt);
+  }
+  EXPECT_GT((a->world.engine.position(0) - c.pos[0]).norm(), 1e-4);  // the cube was pushed on
+  EXPECT_EQ(a->world.engine.position(0), b->world.engine.position(0));
+  EXPECT_EQ(a->world.engine.orientation(0).coeffs(), b->world.engine.orientation(0).coeffs());
+  EXPECT_EQ(a->world.engine.angularVelocity(0), b->world.engine.angularVelocity(0));
+  EXPECT_EQ(a->coupling.force(0), b->coupling.force(0));
+  mpm::ParticleSet pa, pb;
+  a->mpm().getParticles(pa);
+  b->mpm().getParticles(pb);
+  mpm::agreement::expectBitIdentical(pa, pb);
+}
+
+// A checkpoint file that is missing or not one is refused by name.
+TEST(CoupledCheckpoint, BadFilesAreRefusedByName) {
+  const std::string path = (std::filesystem::temp_directory_path() / "mpmsdem_test_bad_checkpoint.json").string();
+  std::remove(path.c_str());
+  try {
+    readCheckpoint(path);
+    ADD_FAILURE() << "a missing checkpoint was read";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("is missing"), std::string::npos) << e.what();
+  }
+  for (const char* text : {"{\"format\": \"other\"}", "{\"format\": \"mpmsdem-driver-coupled-1\"}", "[1, 2"}) {
+    std::ofstream(path) << text;
+    try {
+      readCheckpoint(path);
+      ADD_FAILURE() << "read " << text;
+    } catch (const ParameterError& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+  }
+  std::remove(path.c_str());
+}
 
 // The run's lowest contact step is the smallest coupledContactStep after any step, with the
 // time it was reached: inf before the blob reaches the cube, then finite and never above the

@@ -1,0 +1,220 @@
+#include "coupling/CoupledCheckpoint.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "common/Error.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+namespace {
+
+using nlohmann::json;
+constexpr const char* kFormat = "mpmsdem-driver-coupled-1";
+
+json vec(const Vec3& v) { return json::array({v[0], v[1], v[2]}); }
+json quat(const Quat& q) { return json::array({q.w(), q.x(), q.y(), q.z()}); }
+// JSON has no infinity: a step without a limit is null.
+json step(double s) { return std::isfinite(s) ? json(s) : json(); }
+
+Vec3 toVec(const json& j) { return Vec3(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()); }
+Quat toQuat(const json& j) {
+  return Quat(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>(), j.at(3).get<double>());
+}
+double toStep(const json& j, double none) { return j.is_null() ? none : j.get<double>(); }
+
+}  // namespace
+
+CoupledCheckpoint captureCheckpoint(CoupledWorld& w, long snapshot, double lastDt,
+                                    const std::vector<Quat>& referenceOrientations) {
+  CoupledCheckpoint c;
+  c.snapshot = snapshot;
+  c.step = w.mpm().steps();
+  c.time = w.mpm().time();
+  c.worldTime = w.world.time();
+  c.lastDt = lastDt;
+  c.contactStep = w.contactStep();
+  c.contactStepLow = w.contactStepLow();
+  c.particleApproachStep = w.coupling.particleApproachStep();
+  const sdem::SdemEngine& e = w.world.engine;
+  const int n = e.numBodies();
+  for (int i = 0; i < n; ++i) {
+    c.pos.push_back(e.position(i));
+    c.ori.push_back(e.orientation(i));
+    c.vel.push_back(e.velocity(i));
+    c.angVel.push_back(e.angularVelocity(i));
+    Vec3 L = Vec3::Zero();
+    c.hasAngMom.push_back(w.world.angularMomentum(i, L) ? 1 : 0);
+    c.angMom.push_back(L);
+  }
+  c.sdemHistories = e.contactHistories();
+  c.sdemFriction = e.frictionDissipation();
+  c.sdemDamping = e.dampingDissipation();
+  c.historySlots = w.coupling.historySlots();
+  const std::vector<long long>& keys = w.coupling.historyKeys();
+  c.historyParticles = static_cast<long>(keys.size() / std::max(c.historySlots, 1));
+  if (!keys.empty()) {
+    const std::vector<double> xi = w.coupling.historyXi();
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      if (keys[k] < 0) continue;  // an empty slot
+      c.historyIndex.push_back(static_cast<long long>(k));
+      c.historyKey.push_back(keys[k]);
+      for (int d = 0; d < 3; ++d) c.historyXi.push_back(xi[3 * k + d]);
+    }
+  }
+  c.couplingFriction = w.coupling.frictionDissipation();
+  c.couplingDamping = w.coupling.dampingDissipation();
+  c.referenceOrientations = referenceOrientations;
+  return c;
+}
+
+void writeCheckpoint(const std::string& path, const CoupledCheckpoint& c) {
+  json j;
+  j["format"] = kFormat;
+  j["snapshot"] = c.snapshot;
+  j["step"] = c.step;
+  j["time"] = c.time;
+  j["world_time"] = c.worldTime;
+  j["last_dt"] = c.lastDt;
+  j["contact_step"] = step(c.contactStep);
+  j["contact_step_low"] = json::array({step(c.contactStepLow.step), step(c.contactStepLow.time)});
+  j["particle_approach_step"] = step(c.particleApproachStep);
+  json bodies = json::array();
+  for (std::size_t i = 0; i < c.pos.size(); ++i)
+    bodies.push_back({{"pos", vec(c.pos[i])},
+                      {"ori", quat(c.ori[i])},
+                      {"vel", vec(c.vel[i])},
+                      {"ang_vel", vec(c.angVel[i])},
+                      {"ang_mom", c.hasAngMom[i] ? vec(c.angMom[i]) : json()}});
+  j["bodies"] = bodies;
+  json sh = json::array();
+  for (const auto& h : c.sdemHistories)
+    sh.push_back({h.key.bodyA, h.key.bodyB, static_cast<int>(h.key.kindA), static_cast<int>(h.key.kindB), h.key.indexA,
+                  h.key.indexB, h.xi[0], h.xi[1], h.xi[2]});
+  j["sdem_histories"] = sh;
+  j["sdem_dissipation"] = {c.sdemFriction, c.sdemDamping};
+  j["history_slots"] = c.historySlots;
+  j["history_particles"] = c.historyParticles;
+  json ch = json::array();
+  for (std::size_t k = 0; k < c.historyIndex.size(); ++k)
+    ch.push_back({c.historyIndex[k], c.historyKey[k], c.historyXi[3 * k], c.historyXi[3 * k + 1], c.historyXi[3 * k + 2]});
+  j["coupling_histories"] = ch;
+  j["coupling_dissipation"] = {c.couplingFriction, c.couplingDamping};
+  json ro = json::array();
+  for (const Quat& q : c.referenceOrientations) ro.push_back(quat(q));
+  j["reference_orientations"] = ro;
+
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    f << j.dump();
+    f.flush();
+    if (!f) throw RuntimeFailure("coupled checkpoint: cannot write " + tmp);
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw RuntimeFailure("coupled checkpoint: cannot rename " + tmp + " to " + path + ": " + ec.message());
+}
+
+CoupledCheckpoint readCheckpoint(const std::string& path) {
+  std::ifstream f(path);
+  if (!f)
+    throw ParameterError("--restart: " + path +
+                         " is missing; a coupled run is restarted from the checkpoint its outputs hold, which "
+                         "mpmsdem-run writes beside every snapshot (the CPU backend only)");
+  CoupledCheckpoint c;
+  try {
+    const json j = json::parse(f);
+    if (j.value("format", "") != kFormat)
+      throw ParameterError("format: not \"" + std::string(kFormat) + "\"");
+    c.snapshot = j.at("snapshot").get<long>();
+    c.step = j.at("step").get<long>();
+    c.time = j.at("time").get<double>();
+    c.worldTime = j.at("world_time").get<double>();
+    c.lastDt = j.at("last_dt").get<double>();
+    const double inf = std::numeric_limits<double>::infinity();
+    c.contactStep = toStep(j.at("contact_step"), inf);
+    c.contactStepLow.step = toStep(j.at("contact_step_low").at(0), inf);
+    c.contactStepLow.time = toStep(j.at("contact_step_low").at(1), std::nan(""));
+    c.particleApproachStep = toStep(j.at("particle_approach_step"), inf);
+    for (const json& b : j.at("bodies")) {
+      c.pos.push_back(toVec(b.at("pos")));
+      c.ori.push_back(toQuat(b.at("ori")));
+      c.vel.push_back(toVec(b.at("vel")));
+      c.angVel.push_back(toVec(b.at("ang_vel")));
+      c.hasAngMom.push_back(b.at("ang_mom").is_null() ? 0 : 1);
+      c.angMom.push_back(b.at("ang_mom").is_null() ? Vec3::Zero() : toVec(b.at("ang_mom")));
+    }
+    for (const json& h : j.at("sdem_histories")) {
+      sdem::ContactHistoryEntry e;
+      e.key.bodyA = h.at(0).get<int>();
+      e.key.bodyB = h.at(1).get<int>();
+      e.key.kindA = static_cast<sdem::FeatureKind>(h.at(2).get<int>());
+      e.key.kindB = static_cast<sdem::FeatureKind>(h.at(3).get<int>());
+      e.key.indexA = h.at(4).get<int>();
+      e.key.indexB = h.at(5).get<int>();
+      e.xi = Vec3(h.at(6).get<double>(), h.at(7).get<double>(), h.at(8).get<double>());
+      c.sdemHistories.push_back(e);
+    }
+    c.sdemFriction = j.at("sdem_dissipation").at(0).get<double>();
+    c.sdemDamping = j.at("sdem_dissipation").at(1).get<double>();
+    c.historySlots = j.at("history_slots").get<int>();
+    c.historyParticles = j.at("history_particles").get<long>();
+    for (const json& h : j.at("coupling_histories")) {
+      c.historyIndex.push_back(h.at(0).get<long long>());
+      c.historyKey.push_back(h.at(1).get<long long>());
+      for (int d = 0; d < 3; ++d) c.historyXi.push_back(h.at(2 + d).get<double>());
+    }
+    c.couplingFriction = j.at("coupling_dissipation").at(0).get<double>();
+    c.couplingDamping = j.at("coupling_dissipation").at(1).get<double>();
+    for (const json& q : j.at("reference_orientations")) c.referenceOrientations.push_back(toQuat(q));
+  } catch (const json::exception& e) {
+    throw ParameterError("--restart: " + path + " is not a readable coupled checkpoint: " + e.what());
+  } catch (const ParameterError& e) {
+    throw ParameterError("--restart: " + path + ": " + e.what());
+  }
+  return c;
+}
+
+void restoreCheckpoint(const CoupledCheckpoint& c, CoupledWorld& w) {
+  sdem::SdemEngine& e = w.world.engine;
+  const int n = e.numBodies();
+  if (static_cast<int>(c.pos.size()) != n)
+    throwParameter("--restart: checkpoint blocks", c.pos.size(), "", "the scene's " + std::to_string(n) + " blocks");
+  const long np = static_cast<long>(w.mpm().numParticles());
+  if (c.historyParticles != 0 && c.historyParticles != np)
+    throwParameter("--restart: checkpoint MP-block histories", c.historyParticles, "particles",
+                   "the snapshot's " + std::to_string(np) + " particles");
+  for (int i = 0; i < n; ++i) {
+    e.setState(i, c.pos[i], c.ori[i], c.vel[i], c.angVel[i]);
+    if (c.hasAngMom[i]) w.world.restoreAngularMomentum(i, c.angMom[i]);
+  }
+  w.world.setTime(c.worldTime);
+  e.setContactHistories(c.sdemHistories);
+  e.setDissipation(c.sdemFriction, c.sdemDamping);
+  w.coupling.setHistorySlots(c.historySlots);
+  if (c.historyParticles > 0) {
+    const std::size_t size = static_cast<std::size_t>(c.historySlots) * static_cast<std::size_t>(np);
+    std::vector<long long> keys(size, -1);
+    std::vector<double> xi(3 * size, 0.0);
+    for (std::size_t k = 0; k < c.historyIndex.size(); ++k) {
+      const long long at = c.historyIndex[k];
+      if (at < 0 || static_cast<std::size_t>(at) >= size)
+        throwParameter("--restart: checkpoint history slot", at, "", "in [0, " + std::to_string(size) + ")");
+      keys[at] = c.historyKey[k];
+      for (int d = 0; d < 3; ++d) xi[3 * at + d] = c.historyXi[3 * k + d];
+    }
+    w.coupling.setHistories(keys, xi);
+  }
+  w.coupling.setDissipation(c.couplingFriction, c.couplingDamping);
+  w.coupling.restoreParticleApproachStep(c.particleApproachStep);
+  w.restoreContactSteps(c.contactStep, c.contactStepLow);
+}
+
+}  // namespace coupling
+}  // namespace mpmsdem
