@@ -7,7 +7,8 @@
         print(row)
 
 The numbers are measurements, shipped with the package in ``tradeoffs.json`` and written by the
-benchmark scripts that made them (``scripts/bench/tradeoff_mpm.py --package-data``): each study
+benchmark scripts that made them (``scripts/bench/tradeoff_mpm.py`` and
+``scripts/bench/tradeoff_stacked_blocks.py``, with ``--package-data``): each study
 ran one scene at many settings, took the finest setting as the converged reference and
 recorded every output's relative error against it and the run's cost relative to the default
 setting (the work, points x steps, and the CPU time of one thread, all runs in one command).
