@@ -11,10 +11,17 @@ exactly where an unbroken run of the same scene ends:
 
 Each run is a child process forked from this one (YADE imported once), killed by the parent
 with SIGKILL once it reports the randomly drawn step; kills land anywhere, also while an
-output record or a checkpoint is being written. Exit status 0 when every check holds, 1 with
-the failures listed otherwise.
+output record or a checkpoint is being written.
 
-    python3 scripts/checks/check_fault_injection.py [--seed S] [--kills N]
+The "driver" kind does the same to the C++ driver on a coupled scene (the coupled scene below,
+written with ``mpmsdem.driver.writeScene``): ``mpmsdem-run`` killed after a random wall time,
+then ``mpmsdem-run --restart`` (from the snapshot its coupled.checkpoint.json names), as a
+user would; a run killed before its first checkpoint is started again. Its mpm.h5 and
+coupled.h5 (series and snapshots) must equal those of an unbroken driver run to the last bit.
+
+Exit status 0 when every check holds, 1 with the failures listed otherwise.
+
+    python3 scripts/checks/check_fault_injection.py [--seed S] [--kills N] [--kinds sdem,mpm,coupled,driver]
 """
 import argparse
 import os
@@ -22,6 +29,7 @@ import random
 import shutil
 import signal
 import struct
+import subprocess
 import sys
 import tempfile
 import time
@@ -29,6 +37,7 @@ import time
 import numpy as np
 
 import mpmsdem
+import mpmsdem.driver
 from yade import O
 from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
 
@@ -37,7 +46,7 @@ DATA = os.path.join(HERE, "..", "..", "tests", "data")
 
 # steps of a whole run, steps between checkpoints, output intervals
 # (checkpoints off the record grid: a restart must find the record times of the unbroken run)
-PLAN = {"sdem": (3000, 70), "mpm": (400, 25), "coupled": (400, 25)}
+PLAN = {"sdem": (3000, 70), "mpm": (400, 25), "coupled": (400, 25), "driver": (4000, None)}
 _progressFd = None
 
 
@@ -89,6 +98,69 @@ def buildCoupled(out):
                  _progressRunner()]
     O.dt = 1e-5
     return coupled
+
+
+def driverExe():
+    exe = os.environ.get("MPMSDEM_RUN") or os.path.join(os.path.dirname(os.path.abspath(mpmsdem.__file__)), "..",
+                                                         "..", "mpmsdem-run")
+    if not os.access(exe, os.X_OK):
+        sys.exit("check_fault_injection: no mpmsdem-run at %s (set MPMSDEM_RUN)" % exe)
+    return exe
+
+
+def driverScene(root):
+    """The coupled scene as a driver JSON scene: 4,000 steps of 1e-5 s, a series row every
+    2e-4 s, a snapshot, a ParaView entry and a checkpoint every 5e-4 s."""
+    O.reset()
+    coupled = buildCoupled(os.path.join(root, "unused"))
+    os.makedirs(root, exist_ok=True)
+    return mpmsdem.driver.writeScene(os.path.join(root, "driver_scene.json"), coupled, duration=PLAN["driver"][0] * O.dt,
+                                     dt=O.dt, seriesEvery=2e-4, outputEvery=5e-4, outputDir=os.path.join(root, "x"))
+
+
+def runDriver(exe, scene, work, killAfter=None):
+    """mpmsdem-run into work/out, with --restart when a run was there before; killed with
+    SIGKILL after killAfter seconds. Returns (killed, restarted from scratch)."""
+    out = os.path.join(work, "out")
+    restart = os.path.exists(out)
+    cmd = [exe, scene, "--out", out] + (["--restart"] if restart else [])
+    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        _, err = p.communicate(timeout=killAfter)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        p.communicate()
+        return True, False
+    if p.returncode == 2 and restart and ("is missing" in err or "at least one snapshot" in err):
+        # killed before its first checkpoint: nothing to continue, start again
+        shutil.rmtree(out)
+        return runDriver(exe, scene, work, killAfter)[0], True
+    if p.returncode != 0:
+        raise RuntimeError("driver run failed (exit %d): %s" % (p.returncode, err.strip()[-800:]))
+    return False, False
+
+
+def driverKills(root, rng, kills):
+    """Kill the driver at random moments until `kills` kills landed, then let it finish.
+    Returns (unbroken folder, killed folder, kill count, fresh starts)."""
+    exe = driverExe()
+    scene = driverScene(root)
+    ref, broken = os.path.join(root, "driver_ref"), os.path.join(root, "driver_killed")
+    t0 = time.time()
+    runDriver(exe, scene, ref)
+    whole = time.time() - t0
+    done, fresh = 0, 0
+    for _ in range(20 * kills):
+        if done == kills:
+            break
+        killed, again = runDriver(exe, scene, broken, killAfter=rng.uniform(0.1, 1.0) * whole)
+        fresh += again
+        if not killed:  # the run got to its end: start it over to place the remaining kills
+            shutil.rmtree(os.path.join(broken, "out"))
+            continue
+        done += 1
+    runDriver(exe, scene, broken)
+    return ref, broken, done, fresh
 
 
 def restoreKw(kind, out):
@@ -181,7 +253,8 @@ def h5Arrays(path):
 
 
 def compare(kind, ref, broken, failures):
-    files = {"sdem": ["sdem.h5"], "mpm": ["mpm.h5"], "coupled": ["coupled.h5", "mpm/mpm.h5"]}[kind]
+    files = {"sdem": ["sdem.h5"], "mpm": ["mpm.h5"], "coupled": ["coupled.h5", "mpm/mpm.h5"],
+             "driver": ["coupled.h5", "mpm.h5"]}[kind]
     for name in files:
         try:
             a, b = h5Arrays(os.path.join(ref, "out", name)), h5Arrays(os.path.join(broken, "out", name))
@@ -205,6 +278,8 @@ def compare(kind, ref, broken, failures):
             elif x.tobytes() != y.tobytes():
                 failures.append("%s: %s %s differs from the unbroken run (max |diff| %g)" % (
                     kind, name, k, float(np.max(np.abs(x.astype(float) - y.astype(float))))))
+    if kind == "driver":  # its final state is the last snapshot and record, compared above
+        return
     with np.load(os.path.join(ref, "final.npz")) as a, np.load(os.path.join(broken, "final.npz")) as b:
         for k in a.files:
             if k not in b.files or a[k].tobytes() != b[k].tobytes():
@@ -215,7 +290,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seed", type=int, default=None, help="seed of the kill steps (default: from the clock)")
     ap.add_argument("--kills", type=int, default=20, help="kills per kind of run (>= 1, default 20)")
-    ap.add_argument("--kinds", default="sdem,mpm,coupled", help="comma-separated subset of sdem,mpm,coupled")
+    ap.add_argument("--kinds", default="sdem,mpm,coupled,driver",
+                    help="comma-separated subset of sdem,mpm,coupled,driver")
     ap.add_argument("--keep", action="store_true", help="keep the work folder (printed)")
     a = ap.parse_args()
     if a.kills < 1:
@@ -230,6 +306,14 @@ def main():
             if kind not in PLAN:
                 ap.error("--kinds: %r is not one of %s" % (kind, ", ".join(PLAN)))
             t0 = time.time()
+            if kind == "driver":
+                ref, broken, kills, fresh = driverKills(root, rng, a.kills)
+                compare(kind, ref, broken, failures)
+                print("  %-8s %d kills at random moments (%d before a first checkpoint: started again); %.1f s"
+                      % (kind, kills, fresh, time.time() - t0))
+                if kills < a.kills:
+                    failures.append("driver: only %d kills landed" % kills)
+                continue
             total, every = PLAN[kind]
             ref, broken = os.path.join(root, kind + "_ref"), os.path.join(root, kind + "_killed")
             fork(kind, ref)
