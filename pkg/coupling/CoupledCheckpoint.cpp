@@ -58,14 +58,11 @@ CoupledCheckpoint captureCheckpoint(CoupledWorld& w, long snapshot, double lastD
   c.historySlots = w.coupling.historySlots();
   const std::vector<long long>& keys = w.coupling.historyKeys();
   c.historyParticles = static_cast<long>(keys.size() / std::max(c.historySlots, 1));
-  if (!keys.empty()) {
-    const std::vector<double> xi = w.coupling.historyXi();
-    for (std::size_t k = 0; k < keys.size(); ++k) {
-      if (keys[k] < 0) continue;  // an empty slot
-      c.historyIndex.push_back(static_cast<long long>(k));
-      c.historyKey.push_back(keys[k]);
-      for (int d = 0; d < 3; ++d) c.historyXi.push_back(xi[3 * k + d]);
-    }
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    if (keys[k] < 0) continue;  // an empty slot
+    c.historyIndex.push_back(static_cast<long long>(k));
+    c.historyKey.push_back(keys[k]);
+    for (int d = 0; d < 3; ++d) c.historyXi.push_back(w.coupling.historyXiAt(k, d));
   }
   c.couplingFriction = w.coupling.frictionDissipation();
   c.couplingDamping = w.coupling.dampingDissipation();

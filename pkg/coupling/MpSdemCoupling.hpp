@@ -95,6 +95,10 @@ class MpSdemCoupling {
   // 3 x slots xi values, elastic tangential forces [N] (a float run's converted to double).
   const std::vector<long long>& historyKeys() const { return key_; }
   std::vector<double> historyXi() const;
+  // Component d of historyXi() for history slot k, without copying them all [N].
+  double historyXiAt(std::size_t k, int d) const {
+    return hostFloatRun_ ? double(hostFloat_.xi[3 * k + d]) : hostDouble_.xi[3 * k + d];
+  }
   void setHistories(const std::vector<long long>& keys, const std::vector<double>& xi);
 
   // Bin edge of the broad phase [m] (set on the first step from the grid spacing).
