@@ -391,10 +391,10 @@ void SdemWorld::step(Real dt, const std::vector<Vec3>* extraForce, const std::ve
 }
 
 bool SdemWorld::angularMomentum(int i, Vec3& L) const {
-  engine.angularVelocity(i);  // checks i
+  const Vec3& w = engine.angularVelocity(i);  // checks i
   const std::size_t k = static_cast<std::size_t>(i);
   if (k >= angMom_.size() || (k < blocked_.size() && (blocked_[k] & kRotationDofs)) ||
-      !(engine.angularVelocity(i).array() == lastAngVel_[k].array()).all())
+      !(w.array() == lastAngVel_[k].array()).all())
     return false;
   L = angMom_[k];
   return true;
