@@ -328,10 +328,11 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
     auto sink = [&list](const MpContact<T>& ct) { list.push_back(ct); };
     int over = 0;
     T chunkApproach = std::numeric_limits<T>::infinity();
+    CouplingLoopMemo<T> memo;
     for (long p = c * kChunk; p < std::min(n, (c + 1) * kChunk); ++p) {
       int bad = -1;
       if (coupleParticle(static_cast<int>(p), P, B, S, phys, in.bins, H, dt, safety, sink, &bad, &over,
-                         &chunkApproach) != kCoupleOk) {
+                         &chunkApproach, memo) != kCoupleOk) {
         const long number = particleNumber(P, static_cast<int>(p));
 #pragma omp critical(mpsdem_bad)
         if (number < firstBad) {

@@ -61,7 +61,11 @@ struct CoreQuery {
 // projection, or else the nearest point of its boundary (a vertex, or an edge unless the side
 // is a flat diagonal). Ties within 1e-12 of the shape size go to the lower kind
 // number (face, then edge, then vertex), so a point over a face interior is a face contact.
-// Inside the core (half-spaces for convex cores, winding number otherwise) the distance is 0. Cost: linear in the number of face corners of the shape.
+// Inside the core (half-spaces for convex cores, winding number otherwise) the distance is 0.
+// Outside a convex core only the faces whose plane p is in front of are searched: the nearest
+// point's normal cone holds p - q, so one face through q has (p - q) . n > 0, and that is p's
+// distance to its plane. Cost: linear in the number of face corners of the shape (of the faces
+// facing p for a convex core outside).
 template <typename T>
 MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s, const Vec3T<T>& p) {
   CoreQuery<T> best{T(0), p, kFeatureFace, -1};
@@ -80,10 +84,13 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
     }
   };
   auto vertexAt = [&](int v) { return Vec3T<T>{S.vertex[3 * v], S.vertex[3 * v + 1], S.vertex[3 * v + 2]}; };
-  for (int f = f0; f < S.shapeFaceStart[s + 1]; ++f) {
-    const Vec3T<T> n{S.faceNormal[3 * f], S.faceNormal[3 * f + 1], S.faceNormal[3 * f + 2]};
+  auto normalAt = [&](int f) { return Vec3T<T>{S.faceNormal[3 * f], S.faceNormal[3 * f + 1], S.faceNormal[3 * f + 2]}; };
+  // Offer face f's interior projection of p, or the nearest point of its boundary; height is
+  // p's signed distance to the face plane.
+  auto searchFace = [&](int f, T height) {
+    const Vec3T<T> n = normalAt(f);
     const int l0 = S.faceLoopStart[f], l1 = S.faceLoopStart[f + 1], m = l1 - l0;
-    const Vec3T<T> q = p - (mpm::dot(n, p) - S.faceOffset[f]) * n;
+    const Vec3T<T> q = p - height * n;
     bool inside = true;
     for (int i = 0; i < m && inside; ++i) {
       const Vec3T<T> a = vertexAt(S.loopVertex[l0 + i]);
@@ -92,7 +99,7 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
     }
     if (inside) {
       offer(q, kFeatureFace, f - f0);
-      continue;
+      return;
     }
     for (int i = 0; i < m; ++i) {
       const int ia = S.loopVertex[l0 + i], ib = S.loopVertex[l0 + (i + 1) % m];
@@ -106,18 +113,27 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
       else if (S.loopEdge[l0 + i] >= 0)
         offer(a + t * ab, kFeatureEdge, S.loopEdge[l0 + i] - e0);
     }
-  }
+  };
+  const int f1 = S.shapeFaceStart[s + 1];
+  const bool convex = S.convex[s] != 0;
+  bool facing = false;  // p is in front of a face plane of the convex core, so outside it
+  if (convex)
+    for (int f = f0; f < f1; ++f) {
+      const T height = mpm::dot(normalAt(f), p) - S.faceOffset[f];
+      if (height > T(0)) {
+        facing = true;
+        searchFace(f, height);
+      }
+    }
+  if (!facing)
+    for (int f = f0; f < f1; ++f) searchFace(f, mpm::dot(normalAt(f), p) - S.faceOffset[f]);
   best.distance = mpm::hdSqrt(bestD2 < T(0) ? T(0) : bestD2);
   bool inside;
-  if (S.convex[s]) {
-    inside = true;
-    for (int f = f0; f < S.shapeFaceStart[s + 1] && inside; ++f) {
-      const Vec3T<T> n{S.faceNormal[3 * f], S.faceNormal[3 * f + 1], S.faceNormal[3 * f + 2]};
-      inside = mpm::dot(n, p) <= S.faceOffset[f];
-    }
+  if (convex) {
+    inside = !facing;
   } else {  // winding number: sum of the solid angles of the (fan-triangulated) faces seen from p
     T omega = T(0);
-    for (int f = f0; f < S.shapeFaceStart[s + 1]; ++f) {
+    for (int f = f0; f < f1; ++f) {
       const int l0 = S.faceLoopStart[f], l1 = S.faceLoopStart[f + 1];
       for (int i = l0 + 1; i + 1 < l1; ++i) {
         const Vec3T<T> a = vertexAt(S.loopVertex[l0]) - p, b = vertexAt(S.loopVertex[i]) - p,
@@ -136,19 +152,30 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
   return best;
 }
 
+// Signed distance of p (body frame) to the plane of table face f [m]: > 0 in front of it.
+template <typename T>
+MPM_HD_INLINE T facePlaneDistance(const ShapeTableView<T>& S, int f, const Vec3T<T>& p) {
+  return S.faceNormal[3 * f] * p.x + S.faceNormal[3 * f + 1] * p.y + S.faceNormal[3 * f + 2] * p.z - S.faceOffset[f];
+}
+
 // Lower bound of the distance from p (body frame) to shape s's core: the largest signed
 // distance of p to a face plane, exact outside a convex core along a face normal. Cheaper than
 // closestPointOnCore (one dot product per face), so it culls points out of reach first. For
-// a non-convex core it returns 0 (no bound).
+// a non-convex core it returns 0 (no bound). *face (when given) is the table index of the face
+// that gives the bound, -1 when the bound is 0.
 template <typename T>
-MPM_HD_INLINE T coreDistanceLowerBound(const ShapeTableView<T>& S, int s, const Vec3T<T>& p) {
-  if (!S.convex[s]) return T(0);
+MPM_HD_INLINE T coreDistanceLowerBound(const ShapeTableView<T>& S, int s, const Vec3T<T>& p, int* face = nullptr) {
   T best = T(0);
-  for (int f = S.shapeFaceStart[s]; f < S.shapeFaceStart[s + 1]; ++f) {
-    const T d = S.faceNormal[3 * f] * p.x + S.faceNormal[3 * f + 1] * p.y + S.faceNormal[3 * f + 2] * p.z -
-                S.faceOffset[f];
-    best = d > best ? d : best;
-  }
+  int bestFace = -1;
+  if (S.convex[s])
+    for (int f = S.shapeFaceStart[s]; f < S.shapeFaceStart[s + 1]; ++f) {
+      const T d = facePlaneDistance(S, f, p);
+      if (d > best) {
+        best = d;
+        bestFace = f;
+      }
+    }
+  if (face) *face = bestFace;
   return best;
 }
 

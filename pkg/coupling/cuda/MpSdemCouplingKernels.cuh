@@ -42,8 +42,9 @@ __global__ void coupleKernel(int n, CouplingParticles<T> P, const BlockState<T>*
   DeviceSink<T> sink{blocks, sums, flags};
   int badBlock = -1, overflow = 0;
   T approach = T(INFINITY);
-  if (coupleParticle(p, P, blocks, shapes, phys, bins, hist, dt, safety, sink, &badBlock, &overflow, &approach) !=
-      kCoupleOk)
+  CouplingLoopMemo<T> memo;
+  if (coupleParticle(p, P, blocks, shapes, phys, bins, hist, dt, safety, sink, &badBlock, &overflow, &approach,
+                     memo) != kCoupleOk)
     atomicMin(&flags->bad,
               (static_cast<unsigned long long>(particleNumber(P, p)) << 32) | static_cast<unsigned int>(badBlock));
   if (overflow) atomicAdd(&flags->overflow, static_cast<unsigned long long>(overflow));
