@@ -140,6 +140,7 @@ Options parseArgs(int argc, char** argv) {
 // Whole-system diagnostics of a particle state.
 struct Diagnostics {
   double kineticEnergy = 0;  // [J]
+  double potential = 0;      // potential energy in gravity g, zero at the origin [J]
   double frontX = 0;         // largest particle x [m]
   double heightZ = 0;        // largest particle z [m]
   double com[3] = {0, 0, 0}; // centre of mass [m]
@@ -148,11 +149,12 @@ struct Diagnostics {
   double gasified = 0;       // fraction of particles in phase 2
 };
 
-Diagnostics diagnose(const ParticleSet& p) {
+// Read slice by slice in particle-number order, so the sums are those of the whole set.
+Diagnostics diagnose(mpm::ParticleSlices& particles, const std::array<double, 3>& g) {
   Diagnostics d;
-  const std::size_t n = p.size();
+  const std::size_t n = particles.size();
   if (n == 0) {
-    // no flow has no front, height or centre of mass; its energy and fractions are zero
+    // no flow has no front, height or centre of mass; its energies and fractions are zero
     d.frontX = d.heightZ = d.com[0] = d.com[1] = d.com[2] = std::nan("");
     return d;
   }
@@ -160,17 +162,22 @@ Diagnostics diagnose(const ParticleSet& p) {
   d.heightZ = -INFINITY;
   double mass = 0, maxV2 = 0;
   std::size_t flowing = 0, gasified = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* v = &p.v[3 * i];
-    const double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    d.kineticEnergy += 0.5 * p.mass[i] * v2;
-    maxV2 = std::max(maxV2, v2);
-    d.frontX = std::max(d.frontX, p.x[3 * i]);
-    d.heightZ = std::max(d.heightZ, p.x[3 * i + 2]);
-    for (int a = 0; a < 3; ++a) d.com[a] += p.mass[i] * p.x[3 * i + a];
-    mass += p.mass[i];
-    flowing += p.phase[i] == 1;
-    gasified += p.phase[i] == 2;
+  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
+    const ParticleSet& p = particles.slice(first, std::min(particles.sliceSize(), n - first));
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double* v = &p.v[3 * i];
+      const double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+      d.kineticEnergy += 0.5 * p.mass[i] * v2;
+      maxV2 = std::max(maxV2, v2);
+      d.frontX = std::max(d.frontX, p.x[3 * i]);
+      d.heightZ = std::max(d.heightZ, p.x[3 * i + 2]);
+      for (int a = 0; a < 3; ++a) d.com[a] += p.mass[i] * p.x[3 * i + a];
+      mass += p.mass[i];
+      flowing += p.phase[i] == 1;
+      gasified += p.phase[i] == 2;
+    }
+    for (std::size_t i = 0; i < p.size(); ++i)
+      d.potential -= p.mass[i] * (g[0] * p.x[3 * i] + g[1] * p.x[3 * i + 1] + g[2] * p.x[3 * i + 2]);
   }
   for (double& c : d.com) c /= mass;
   d.maxSpeed = std::sqrt(maxV2);
@@ -406,14 +413,12 @@ class OutputRun {
     const RunSettings& run = scene_.run;
     const std::size_t n = solver_.numParticles();
     const long firstStep = solver_.steps();
-    solver_.getParticles(state_);
     if (restart_) {
       state_time_ = solver_.time();  // the snapshot we start from is already in the file
     } else {
       recordSeries();
       writeSnapshot();
     }
-    releaseState();
     // next record and snapshot times: the first multiples of their intervals after now
     const double t0sim = solver_.time();
     double nextSeries = (std::floor(t0sim / run.seriesEvery * (1 + 1e-12)) + 1) * run.seriesEvery;
@@ -435,7 +440,6 @@ class OutputRun {
         const bool series = t >= nextSeries * (1 - 1e-12), output = t >= nextOutput * (1 - 1e-12);
         const double f = progressFraction(solver_, run, maxSteps, firstStep);
         const bool report = f >= nextReport || finished(solver_, run, maxSteps);
-        if (series || output || report) solver_.getParticles(state_);
         if (series) {
           recordSeries(dt);
           while (nextSeries <= t * (1 + 1e-12)) nextSeries += run.seriesEvery;
@@ -445,7 +449,7 @@ class OutputRun {
           while (nextOutput <= t * (1 + 1e-12)) nextOutput += run.outputEvery;
         }
         if (report) {
-          const Diagnostics d = diagnose(state_);
+          const Diagnostics d = diagnose();
           const double el = since(t0);
           std::printf("[%5.1f%%] t=%.5g s step=%ld dt=%.3g s KE=%.5g J front=%.5g m rate=%.3g upd/s ETA=%s\n",
                       100 * f, t, solver_.steps(), dt, d.kineticEnergy, d.frontX,
@@ -454,7 +458,6 @@ class OutputRun {
           std::fflush(stdout);
           nextReport = std::floor(f / 0.05 + 1) * 0.05;
         }
-        releaseState();
       }
     } catch (const RuntimeFailure& e) {
       if (!solver_.holdsLastGoodState()) {
@@ -468,10 +471,9 @@ class OutputRun {
       }
       // The solver keeps the state at the start of the failed step: save it. The blocks have
       // moved past it, so the checkpoint stays that of the last snapshot before.
-      solver_.getParticles(state_);
       const long index = writeSnapshot(false);
       if (coupled_) {
-        recordBlocks();
+        recordBlocks(diagnose());
         coupled_->h5().setAttribute("failure", e.what());
       }
       h5_.setAttribute("failure", e.what());
@@ -481,10 +483,7 @@ class OutputRun {
                    e.what(), solver_.time(), solver_.steps(), index, h5_.path().c_str());
       return 3;
     }
-    if (solver_.time() > state_time_) {
-      solver_.getParticles(state_);
-      writeSnapshot();
-    }
+    if (solver_.time() > state_time_) writeSnapshot();
     const double loop = since(t0);
     std::printf("mpmsdem-run: done, t = %.6g s, %ld steps, %.3g s wall\n", solver_.time(), solver_.steps(), loop);
     if (stepper_.coupled) {
@@ -500,8 +499,10 @@ class OutputRun {
   }
 
  private:
+  Diagnostics diagnose() { return ::diagnose(slices_, solver_.params().gravity); }
+
   void recordSeries(double dt = 0) {
-    const Diagnostics d = diagnose(state_);
+    const Diagnostics d = diagnose();
     h5_.appendScalar("time", solver_.time());
     h5_.appendScalar("step", double(solver_.steps()));
     h5_.appendScalar("dt", dt);
@@ -512,37 +513,31 @@ class OutputRun {
     h5_.appendScalar("max_speed", d.maxSpeed);
     h5_.appendScalar("flowing_fraction", d.flowing);
     h5_.appendScalar("gasified_fraction", d.gasified);
-    if (coupled_) recordBlocks();
+    if (coupled_) recordBlocks(d);
   }
 
-  // One coupled.h5 record: block series and energies (§5.4) at the solver's time.
-  void recordBlocks() {
+  // One coupled.h5 record: block series and energies (§5.4) at the solver's time; d: the
+  // particles' diagnostics at that time.
+  void recordBlocks(const Diagnostics& d) {
     coupling::CoupledWorld& w = *stepper_.coupled;
     const sdem::SdemEngine& e = w.world.engine;
     coupled_->record(solver_.time(), solver_.steps(), e, w.coupling);
-    const auto& g = solver_.params().gravity;
-    double potential = 0;
-    for (std::size_t i = 0; i < state_.size(); ++i)
-      potential -= state_.mass[i] * (g[0] * state_.x[3 * i] + g[1] * state_.x[3 * i + 1] + g[2] * state_.x[3 * i + 2]);
-    coupled_->appendSeries("flow_kinetic", diagnose(state_).kineticEnergy);
-    coupled_->appendSeries("flow_potential", potential);
+    coupled_->appendSeries("flow_kinetic", d.kineticEnergy);
+    coupled_->appendSeries("flow_potential", d.potential);
     coupled_->appendSeries("block_kinetic", w.world.kineticEnergy());
     coupled_->appendSeries("dissipated", w.coupling.frictionDissipation() + w.coupling.dampingDissipation() +
                                              e.frictionDissipation() + e.dampingDissipation());
   }
 
-  // The host copy of the particles lives only while an output uses it: kept between outputs it
-  // would double the particles' memory.
-  void releaseState() { state_ = ParticleSet(); }
 
   // checkpoint: also write the coupled state beside it (blocks and particles at one time).
   long writeSnapshot(bool checkpoint = true) {
-    const long index = h5_.writeSnapshot(state_, solver_.time(), solver_.steps());
-    if (coupled_ && scene_.run.vtk != "none") coupled_->writeVtk(solver_.time(), state_, stepper_.coupled->world.engine);
+    const long index = h5_.writeSnapshot(slices_, solver_.time(), solver_.steps());
+    if (coupled_ && scene_.run.vtk != "none") coupled_->writeVtk(solver_.time(), slices_, stepper_.coupled->world.engine);
     if (pvd_) {
       char name[64];
       std::snprintf(name, sizeof name, "vtk/particles_%06ld.vtp", index);
-      io::writeParticlesVtp((dir_ / name).string(), state_,
+      io::writeParticlesVtp((dir_ / name).string(), slices_,
                             scene_.run.vtk == "ascii" ? io::VtkEncoding::Ascii : io::VtkEncoding::AppendedRaw);
       pvd_->add(solver_.time(), name);
     }
@@ -563,7 +558,9 @@ class OutputRun {
   std::optional<io::PvdCollection> pvd_;
   std::optional<coupling::CoupledOutput> coupled_;
   bool checkpoints_ = false;  // coupled.checkpoint.json with every snapshot (CPU backend)
-  ParticleSet state_;
+  // Outputs read the particles in slices: a whole host copy would add 145 B per particle to
+  // the solver's memory while it is written.
+  mpm::SolverParticleSlices slices_{solver_, 1 << 16};
   double state_time_ = -1;  // time of the last snapshot written
 };
 
@@ -623,7 +620,8 @@ int main(int argc, char** argv) {
     } else
 #endif
     {
-      solver->setParticles(seedParticles(scene));
+      SeededParticles seeded = seedParticleSlices(scene);
+      solver->setParticles(seeded);
     }
     MpmSolver& mpm = *solver;
     std::optional<coupling::CoupledWorld> coupled;

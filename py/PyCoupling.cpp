@@ -132,7 +132,8 @@ class PyCoupling {
   void writeVtk(const bp::object& bodies, double time) {
     requireOutput();
     sdem_.readStates(bodies);
-    output_->writeVtk(time, mpm_.particleSet(), sdem_.engine());
+    mpm::WholeParticleSet particles(mpm_.particleSet());
+    output_->writeVtk(time, particles, sdem_.engine());
   }
 
   // ---- checkpoint: tangential histories as raw bytes (int64 keys, float64 xi; the restart

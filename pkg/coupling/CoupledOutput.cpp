@@ -87,7 +87,7 @@ std::vector<io::RigidSurface> bodySurfaces(const sdem::SdemEngine& engine) {
   return bodies;
 }
 
-void CoupledOutput::writeVtk(double time, const mpm::ParticleSet& particles, const sdem::SdemEngine& engine) {
+void CoupledOutput::writeVtk(double time, mpm::ParticleSlices& particles, const sdem::SdemEngine& engine) {
   std::ostringstream p, b;
   const std::size_t k = pvd_.size() / 2;
   p << "vtk/scene_particles_" << std::setw(6) << std::setfill('0') << k << ".vtp";

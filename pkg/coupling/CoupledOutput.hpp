@@ -31,7 +31,7 @@ class CoupledOutput {
 
   void record(double time, long step, const sdem::SdemEngine& engine, const MpSdemCoupling& coupling);
   void appendSeries(const std::string& name, double value) { h5_.appendScalar(name, value); }
-  void writeVtk(double time, const mpm::ParticleSet& particles, const sdem::SdemEngine& engine);
+  void writeVtk(double time, mpm::ParticleSlices& particles, const sdem::SdemEngine& engine);
   io::Hdf5Writer& h5() { return h5_; }
   // A restart from time t [s]: drop the records and ParaView entries written after t by the
   // run that went on past its checkpoint.

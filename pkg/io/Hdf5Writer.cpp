@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "common/Error.hpp"
@@ -64,16 +65,6 @@ hid_t openOrCreateGroup(hid_t file, const std::string& name, const std::string& 
   if (linkExists(file, name)) return check(H5Gopen2(file, name.c_str(), H5P_DEFAULT), path, "cannot open group " + name);
   return check(H5Gcreate2(file, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path,
                "cannot create group " + name);
-}
-
-void writeArray(hid_t group, const std::string& name, hid_t fileType, hid_t memType, const void* data,
-                hsize_t rows, hsize_t cols, const std::string& path) {
-  hsize_t dims[2] = {rows, cols};
-  Handle space(check(H5Screate_simple(cols == 1 ? 1 : 2, dims, nullptr), path, "dataspace for " + name), H5Sclose);
-  Handle dset(check(H5Dcreate2(group, name.c_str(), fileType, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path,
-                    "cannot create dataset " + name),
-              H5Dclose);
-  if (rows > 0) check(H5Dwrite(dset, memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), path, "cannot write " + name);
 }
 
 void writeDoubleAttribute(hid_t loc, const std::string& name, double value, const std::string& path) {
@@ -279,26 +270,64 @@ long Hdf5Writer::seriesLength(const std::string& name) const {
 }
 
 long Hdf5Writer::writeSnapshot(const mpm::ParticleSet& p, double time, long step) {
-  const std::size_t n = p.size();
-  p.validateSizes();
+  mpm::WholeParticleSet whole(p);
+  return writeSnapshot(whole, time, step);
+}
 
-  std::vector<double> density(n);
-  for (std::size_t i = 0; i < n; ++i) density[i] = p.density(i);
-
+long Hdf5Writer::writeSnapshot(mpm::ParticleSlices& particles, double time, long step) {
+  const std::size_t n = particles.size();
   if (linkExists(snapshots_, kIncomplete)) H5Ldelete(snapshots_, kIncomplete, H5P_DEFAULT);
   {
     Handle g(check(H5Gcreate2(snapshots_, kIncomplete, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path_,
                    "cannot create snapshot group"),
              H5Gclose);
-    writeArray(g, "x", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.x.data(), n, 3, path_);
-    writeArray(g, "v", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.v.data(), n, 3, path_);
-    writeArray(g, "stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.stress.data(), n, 6, path_);
-    writeArray(g, "density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, density.data(), n, 1, path_);
-    writeArray(g, "phase", H5T_STD_U8LE, H5T_NATIVE_UINT8, p.phase.data(), n, 1, path_);
-    writeArray(g, "gammaDotP", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.gammaDotP.data(), n, 1, path_);
-    writeArray(g, "mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.mass.data(), n, 1, path_);
-    writeArray(g, "volume0", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.volume0.data(), n, 1, path_);
-    writeArray(g, "J", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.J.data(), n, 1, path_);
+    struct Column {
+      const char* name;
+      hid_t fileType, memType;
+      hsize_t cols;
+    };
+    const Column columns[] = {{"x", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                              {"v", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                              {"stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 6},
+                              {"density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                              {"phase", H5T_STD_U8LE, H5T_NATIVE_UINT8, 1},
+                              {"gammaDotP", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                              {"mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                              {"volume0", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                              {"J", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1}};
+    std::vector<std::unique_ptr<Handle>> sets;
+    for (const Column& c : columns) {
+      const hsize_t dims[2] = {n, c.cols};
+      Handle space(check(H5Screate_simple(c.cols == 1 ? 1 : 2, dims, nullptr), path_,
+                         std::string("dataspace for ") + c.name),
+                   H5Sclose);
+      sets.push_back(std::make_unique<Handle>(
+          check(H5Dcreate2(g, c.name, c.fileType, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path_,
+                std::string("cannot create dataset ") + c.name),
+          H5Dclose));
+    }
+    std::vector<double> density;
+    for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
+      const std::size_t count = std::min(particles.sliceSize(), n - first);
+      const mpm::ParticleSet& p = particles.slice(first, count);
+      p.validateSizes();
+      if (p.size() != count) fail(path_, "a particle slice of " + std::to_string(count) + " came back with " +
+                                             std::to_string(p.size()));
+      density.resize(count);
+      for (std::size_t i = 0; i < count; ++i) density[i] = p.density(i);
+      const void* data[] = {p.x.data(),         p.v.data(),    p.stress.data(),  density.data(), p.phase.data(),
+                            p.gammaDotP.data(), p.mass.data(), p.volume0.data(), p.J.data()};
+      for (std::size_t k = 0; k < sets.size(); ++k) {
+        const hsize_t start[2] = {first, 0}, size[2] = {count, columns[k].cols};
+        const int rank = columns[k].cols == 1 ? 1 : 2;
+        Handle fileSpace(H5Dget_space(*sets[k]), H5Sclose);
+        check(H5Sselect_hyperslab(fileSpace, H5S_SELECT_SET, start, nullptr, size, nullptr), path_,
+              std::string("cannot select rows of ") + columns[k].name);
+        Handle memSpace(check(H5Screate_simple(rank, size, nullptr), path_, "memory dataspace"), H5Sclose);
+        check(H5Dwrite(*sets[k], columns[k].memType, memSpace, fileSpace, H5P_DEFAULT, data[k]), path_,
+              std::string("cannot write ") + columns[k].name);
+      }
+    }
     writeDoubleAttribute(g, "time", time, path_);
     writeLongAttribute(g, "step", step, path_);
   }

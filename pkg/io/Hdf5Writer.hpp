@@ -53,8 +53,10 @@ class Hdf5Writer {
   void appendScalar(const std::string& name, double value);
   void appendVector(const std::string& name, const std::vector<double>& values);
 
-  // Write /snapshots/<index>/ for the particles; returns the snapshot index used.
+  // Write /snapshots/<index>/ for the particles; returns the snapshot index used. The second
+  // form reads them slice by slice (a slice of the set on the host at a time), same file.
   long writeSnapshot(const mpm::ParticleSet& particles, double time, long step);
+  long writeSnapshot(mpm::ParticleSlices& particles, double time, long step);
 
   // Restart from a checkpoint taken before the file's end: keep the records of /series/*
   // whose /series/<timeName> value is <= time, drop the later ones (every series is cut to

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <regex>
 #include <sstream>
 
@@ -18,14 +19,19 @@ namespace io {
 namespace {
 
 // One DataArray: values are held as bytes of the VTK type named in `type`.
+// A streamed array (AppendedRaw only) holds no bytes: streamedBytes of it are written into
+// its place in the appended section afterwards (writePolyData's `stream`).
 struct Array {
   std::string name;
   std::string type;  // "Float32", "Int64", "Int32", "UInt8"
   int components = 1;
   std::vector<unsigned char> bytes;
+  bool streamed = false;
+  std::size_t streamedBytes = 0;
 
   std::size_t elementSize() const { return type == "UInt8" ? 1 : (type == "Int64" ? 8 : 4); }
-  std::size_t values() const { return bytes.size() / elementSize(); }
+  std::size_t byteCount() const { return streamed ? streamedBytes : bytes.size(); }
+  std::size_t values() const { return byteCount() / elementSize(); }
 };
 
 template <typename T>
@@ -83,34 +89,53 @@ class PolyDataFile {
       os << indent << "</DataArray>\n";
     } else {
       os << " offset=\"" << offset_ << "\"/>\n";
-      offset_ += sizeof(std::uint64_t) + a.bytes.size();
+      offset_ += sizeof(std::uint64_t) + a.byteCount();
       appended_.push_back(&a);
     }
   }
 
+  // The appended section and the end of the file; a streamed array's bytes are left as a
+  // hole whose file position dataAt() gives.
   void finish(std::ostream& os) {
     if (enc_ == VtkEncoding::AppendedRaw) {
       os << "  <AppendedData encoding=\"raw\">\n   _";
       for (const Array* a : appended_) {
-        const std::uint64_t nbytes = a->bytes.size();
+        const std::uint64_t nbytes = a->byteCount();
         os.write(reinterpret_cast<const char*>(&nbytes), sizeof nbytes);
-        os.write(reinterpret_cast<const char*>(a->bytes.data()), static_cast<std::streamsize>(nbytes));
+        if (a->streamed) {
+          streamedAt_.emplace_back(a, os.tellp());
+          os.seekp(static_cast<std::streamoff>(nbytes), std::ios::cur);
+        } else {
+          os.write(reinterpret_cast<const char*>(a->bytes.data()), static_cast<std::streamsize>(nbytes));
+        }
       }
       os << "\n  </AppendedData>\n";
     }
     os << "</VTKFile>\n";
   }
 
+  std::streampos dataAt(const Array& a) const {
+    for (const auto& [array, at] : streamedAt_)
+      if (array == &a) return at;
+    throw RuntimeFailure("VTK writer: array '" + a.name + "' is not streamed");
+  }
+
  private:
   VtkEncoding enc_;
   std::size_t offset_ = 0;
   std::vector<const Array*> appended_;
+  std::vector<std::pair<const Array*, std::streampos>> streamedAt_;
 };
 
-// Writes a PolyData file with points, point data, and either verts or polys as cells.
+// Writes the bytes of streamed arrays into their places: stream(os, dataAt).
+using ArrayStreamer = std::function<void(std::ostream&, const std::function<std::streampos(const Array&)>&)>;
+
+// Writes a PolyData file with points, point data, and either verts or polys as cells; with
+// streamed arrays, `stream` writes their bytes before the file is closed and renamed.
 void writePolyData(const std::string& path, VtkEncoding enc, const Array& points, const std::vector<Array>& pointData,
                    const char* cellKind, std::size_t numCells, const Array& connectivity, const Array& offsets,
-                   const std::vector<Array>& cellData, const std::string& pointAttributes) {
+                   const std::vector<Array>& cellData, const std::string& pointAttributes,
+                   const ArrayStreamer& stream = {}) {
   const std::string tmp = path + ".tmp";
   {
     std::ofstream os(tmp, std::ios::binary);
@@ -133,6 +158,7 @@ void writePolyData(const std::string& path, VtkEncoding enc, const Array& points
     f.dataArray(os, offsets, "    ");
     os << "   </" << cellKind << ">\n  </Piece>\n </PolyData>\n";
     f.finish(os);
+    if (stream) stream(os, [&f](const Array& a) { return f.dataAt(a); });
     if (!os) throw RuntimeFailure("VTK file '" + path + "': write failed (disk full?)");
   }
   std::error_code ec;
@@ -182,32 +208,117 @@ std::string xmlUnescape(const std::string& s) {
 }  // namespace
 
 void writeParticlesVtp(const std::string& path, const mpm::ParticleSet& p, VtkEncoding encoding) {
-  const std::size_t n = p.size();
-  p.validateSizes();
+  mpm::WholeParticleSet whole(p);
+  writeParticlesVtp(path, whole, encoding);
+}
 
-  std::vector<float> x(p.x.begin(), p.x.end()), v(p.v.begin(), p.v.end());
-  std::vector<float> stress(9 * n), pressure(n), density(n), gdp(p.gammaDotP.begin(), p.gammaDotP.end());
+namespace {
+
+// The per-point arrays of a particle file (point data, then the points, then the vertex
+// cell's connectivity) and their bytes for particles [first, first + p.size()).
+struct ParticleColumn {
+  const char* name;
+  const char* type;
+  int components;
+  std::size_t bytesPerParticle;
+};
+const ParticleColumn kParticleColumns[] = {
+    {"velocity", "Float32", 3, 12}, {"stress", "Float32", 9, 36},   {"pressure", "Float32", 1, 4},
+    {"density", "Float32", 1, 4},   {"gammaDotP", "Float32", 1, 4}, {"phase", "UInt8", 1, 1},
+    {"Points", "Float32", 3, 12},   {"connectivity", "Int64", 1, 8}};
+constexpr int kPointDataColumns = 6;
+
+void particleColumnBytes(int column, const mpm::ParticleSet& p, std::size_t first, std::vector<unsigned char>& out) {
+  const std::size_t n = p.size();
+  out.resize(n * kParticleColumns[column].bytesPerParticle);
+  unsigned char* o = out.data();
+  auto put = [&o](auto value) {
+    std::memcpy(o, &value, sizeof value);
+    o += sizeof value;
+  };
   for (std::size_t i = 0; i < n; ++i) {
     const double* s = &p.stress[6 * i];  // xx yy zz yz xz xy
-    const double full[9] = {s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2]};
-    for (int k = 0; k < 9; ++k) stress[9 * i + k] = static_cast<float>(full[k]);
-    pressure[i] = static_cast<float>(-(s[0] + s[1] + s[2]) / 3.0);
-    density[i] = static_cast<float>(p.density(i));
+    switch (column) {
+      case 0:
+        for (int d = 0; d < 3; ++d) put(static_cast<float>(p.v[3 * i + d]));
+        break;
+      case 1: {
+        const double full[9] = {s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2]};
+        for (double c : full) put(static_cast<float>(c));
+        break;
+      }
+      case 2:
+        put(static_cast<float>(-(s[0] + s[1] + s[2]) / 3.0));
+        break;
+      case 3:
+        put(static_cast<float>(p.density(i)));
+        break;
+      case 4:
+        put(static_cast<float>(p.gammaDotP[i]));
+        break;
+      case 5:
+        put(p.phase[i]);
+        break;
+      case 6:
+        for (int d = 0; d < 3; ++d) put(static_cast<float>(p.x[3 * i + d]));
+        break;
+      default:
+        put(static_cast<std::int64_t>(first + i));
+    }
   }
-  std::vector<Array> pointData;
-  pointData.push_back(makeArray("velocity", "Float32", 3, v));
-  pointData.push_back(makeArray("stress", "Float32", 9, stress));
-  pointData.push_back(makeArray("pressure", "Float32", 1, pressure));
-  pointData.push_back(makeArray("density", "Float32", 1, density));
-  pointData.push_back(makeArray("gammaDotP", "Float32", 1, gdp));
-  pointData.push_back(makeArray("phase", "UInt8", 1, p.phase));
+}
 
+}  // namespace
+
+// AppendedRaw streams the arrays slice by slice into their places in the file, so only a
+// slice of the particles is on the host; Ascii (small debugging files) gathers them.
+void writeParticlesVtp(const std::string& path, mpm::ParticleSlices& particles, VtkEncoding encoding) {
+  const std::size_t n = particles.size();
+  constexpr int kColumns = sizeof kParticleColumns / sizeof kParticleColumns[0];
+  const bool stream = encoding == VtkEncoding::AppendedRaw;
+  std::vector<Array> arrays;
+  for (const ParticleColumn& c : kParticleColumns) {
+    Array a{c.name, c.type, c.components, {}};
+    a.streamed = stream;
+    a.streamedBytes = stream ? n * c.bytesPerParticle : 0;
+    arrays.push_back(std::move(a));
+  }
+  std::vector<unsigned char> bytes;
+  auto forSlices = [&](auto&& fn) {
+    for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
+      const std::size_t count = std::min(particles.sliceSize(), n - first);
+      const mpm::ParticleSet& p = particles.slice(first, count);
+      p.validateSizes();
+      if (p.size() != count)
+        throw RuntimeFailure("VTK file '" + path + "': a particle slice of " + std::to_string(count) +
+                             " came back with " + std::to_string(p.size()));
+      for (int k = 0; k < kColumns; ++k) {
+        particleColumnBytes(k, p, first, bytes);
+        fn(k, first, bytes);
+      }
+    }
+  };
+  if (!stream)
+    forSlices([&](int k, std::size_t, const std::vector<unsigned char>& b) {
+      arrays[k].bytes.insert(arrays[k].bytes.end(), b.begin(), b.end());
+    });
   // One poly-vertex cell holding every point (so ParaView draws them in any representation).
-  std::vector<std::int64_t> conn(n), offs(n > 0 ? 1 : 0, static_cast<std::int64_t>(n));
-  for (std::size_t i = 0; i < n; ++i) conn[i] = static_cast<std::int64_t>(i);
-  writePolyData(path, encoding, makeArray("Points", "Float32", 3, x), pointData, "Verts", n > 0 ? 1 : 0,
-                makeArray("connectivity", "Int64", 1, conn), makeArray("offsets", "Int64", 1, offs), {},
-                " Scalars=\"pressure\" Vectors=\"velocity\" Tensors=\"stress\"");
+  const std::vector<std::int64_t> offs(n > 0 ? 1 : 0, static_cast<std::int64_t>(n));
+  const std::vector<Array> pointData(arrays.begin(), arrays.begin() + kPointDataColumns);
+  const Array& points = arrays[kPointDataColumns];
+  const Array& connectivity = arrays[kPointDataColumns + 1];
+  ArrayStreamer streamer;
+  if (stream)
+    streamer = [&](std::ostream& os, const std::function<std::streampos(const Array&)>& dataAt) {
+      forSlices([&](int k, std::size_t first, const std::vector<unsigned char>& b) {
+        const Array& a = k < kPointDataColumns ? pointData[k] : arrays[k];
+        os.seekp(dataAt(a) + static_cast<std::streamoff>(first * kParticleColumns[k].bytesPerParticle));
+        os.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+      });
+    };
+  writePolyData(path, encoding, points, pointData, "Verts", n > 0 ? 1 : 0, connectivity,
+                makeArray("offsets", "Int64", 1, offs), {}, " Scalars=\"pressure\" Vectors=\"velocity\" Tensors=\"stress\"",
+                streamer);
 }
 
 void writeRigidSurfacesVtp(const std::string& path, const std::vector<RigidSurface>& bodies, VtkEncoding encoding) {

@@ -27,6 +27,9 @@ enum class VtkEncoding { Ascii, AppendedRaw };
 // when the file cannot be written.
 void writeParticlesVtp(const std::string& path, const mpm::ParticleSet& particles,
                        VtkEncoding encoding = VtkEncoding::AppendedRaw);
+// The same file from particles read slice by slice (AppendedRaw holds one slice at a time).
+void writeParticlesVtp(const std::string& path, mpm::ParticleSlices& particles,
+                       VtkEncoding encoding = VtkEncoding::AppendedRaw);
 
 // The triangulated surface of one rigid body in world coordinates.
 struct RigidSurface {

@@ -65,60 +65,113 @@ MpmCpu<T>::MpmCpu(const MpmParams& params)
 
 template <typename T>
 void MpmCpu<T>::setParticles(const ParticleSet& ps) {
-  const double meanMass = validateParticles(params_, ps);
-  grid_.massEps = static_cast<T>(1e-12 * meanMass);
-  n_ = ps.size();
-  state_[0].resize(n_);
+  validateParticles(params_, ps);  // a bad set leaves the solver as it was
+  WholeParticleSet whole(ps);
+  setParticles(whole);
+}
+
+// Slice by slice: the state is allocated once, then each slice is checked and loaded; a bad
+// particle leaves the solver without particles.
+template <typename T>
+void MpmCpu<T>::setParticles(ParticleSlices& particles) {
+  n_ = 0;
+  const std::size_t n = particles.size();
+  std::vector<int>().swap(slotOf_);
+  state_[0].resize(n);
   if (params_.keepLastGoodState)
-    state_[1].resize(n_);
+    state_[1].resize(n);
   else
-    scratch_.assign(n_, T(0));
+    scratch_.assign(n, T(0));
+  mass_.resize(n);
+  vol0_.resize(n);
   cur_ = 0;
   stepsSinceReorder_ = kReorderEvery - 1;  // given by number: sorted after the first step
   partlyAdvanced_ = false;
   State& s = state_[0];
-  mass_.assign(ps.mass.begin(), ps.mass.end());
-  vol0_.assign(ps.volume0.begin(), ps.volume0.end());
   maxSpeed_ = 0;
-  for (std::size_t p = 0; p < n_; ++p) {
-    for (int d = 0; d < 3; ++d) {
-      s.x[d][p] = static_cast<T>(ps.x[3 * p + d]);
-      s.v[d][p] = static_cast<T>(ps.v[3 * p + d]);
+  double massSum = 0;
+  bool anyForce = false;
+  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
+    const std::size_t count = std::min(particles.sliceSize(), n - first);
+    const ParticleSet& ps = particles.slice(first, count);
+    if (ps.size() != count)
+      throwParameter("particle slice " + std::to_string(first) + " size", ps.size(), "", std::to_string(count));
+    validateParticleSlice(params_, ps, first, massSum);
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::size_t p = first + i;
+      mass_[p] = static_cast<T>(ps.mass[i]);
+      vol0_[p] = static_cast<T>(ps.volume0[i]);
+      for (int d = 0; d < 3; ++d) {
+        s.x[d][p] = static_cast<T>(ps.x[3 * i + d]);
+        s.v[d][p] = static_cast<T>(ps.v[3 * i + d]);
+      }
+      for (int k = 0; k < 6; ++k) s.s[k][p] = static_cast<T>(ps.stress[6 * i + k]);
+      s.J[p] = static_cast<T>(ps.J[i]);
+      s.gdp[p] = ps.gammaDotP.empty() ? T(0) : static_cast<T>(ps.gammaDotP[i]);
+      s.phase[p] = ps.phase.empty() ? static_cast<std::uint8_t>(kPhaseElastic) : ps.phase[i];
+      s.id[p] = static_cast<int>(p);
+      const double vx = s.v[0][p], vy = s.v[1][p], vz = s.v[2][p];
+      maxSpeed_ = std::max(maxSpeed_, std::sqrt(vx * vx + vy * vy + vz * vz));
     }
-    for (int k = 0; k < 6; ++k) s.s[k][p] = static_cast<T>(ps.stress[6 * p + k]);
-    s.J[p] = static_cast<T>(ps.J[p]);
-    s.gdp[p] = ps.gammaDotP.empty() ? T(0) : static_cast<T>(ps.gammaDotP[p]);
-    s.phase[p] = ps.phase.empty() ? static_cast<std::uint8_t>(kPhaseElastic) : ps.phase[p];
-    s.id[p] = static_cast<int>(p);
-    const double vx = s.v[0][p], vy = s.v[1][p], vz = s.v[2][p];
-    maxSpeed_ = std::max(maxSpeed_, std::sqrt(vx * vx + vy * vy + vz * vz));
+    anyForce = anyForce || std::any_of(ps.fext.begin(), ps.fext.end(), [](double f) { return f != 0; });
   }
+  grid_.massEps = static_cast<T>(1e-12 * (n ? massSum / static_cast<double>(n) : 1.0));
+  n_ = n;
   hasFext_ = false;
   // All-zero forces (every seeded set has them) load as none: P2G adds the same +0 either way,
   // and no force buffer is held until a coupling opens one.
-  if (std::any_of(ps.fext.begin(), ps.fext.end(), [](double f) { return f != 0; }))
-    setExternalForces(ps.fext);
-  else
-    for (auto& a : fext_) std::vector<T>().swap(a);
+  for (auto& a : fext_) std::vector<T>().swap(a);
+  if (anyForce) {
+    for (int d = 0; d < 3; ++d) fext_[d].assign(n_, T(0));
+    for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
+      const std::size_t count = std::min(particles.sliceSize(), n - first);
+      const ParticleSet& ps = particles.slice(first, count);
+      for (std::size_t i = 0; i < count * (ps.fext.empty() ? 0 : 1); ++i)
+        for (int d = 0; d < 3; ++d) {
+          const double f = ps.fext[3 * i + d];
+          if (!std::isfinite(f))
+            throwParameter("externalForces[" + std::to_string(3 * (first + i) + d) + "]", f, "N", "finite");
+          fext_[d][first + i] = static_cast<T>(f);
+        }
+    }
+    hasFext_ = true;
+  }
   order_.assign(n_, 0);
   blockOf_.assign(n_, 0);
 }
 
 template <typename T>
 void MpmCpu<T>::getParticles(ParticleSet& out) {
+  getParticles(out, 0, n_);
+}
+
+// The slots are in the solver's order, the numbers anywhere: a slice looks its particles up in
+// slotOf_, built at the first slice after a step (4 B per particle until the next step), the
+// whole set is written in one pass over the slots.
+template <typename T>
+void MpmCpu<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t count) {
   requireLastGoodState("getParticles");
+  if (first > n_ || count > n_ - first)
+    throwParameter("particle slice", std::to_string(first) + " + " + std::to_string(count), "",
+                   "within the " + std::to_string(n_) + " particles");
   const State& s = state_[cur_];
-  out.x.resize(3 * n_);
-  out.v.resize(3 * n_);
-  out.stress.resize(6 * n_);
-  out.mass.assign(mass_.begin(), mass_.end());
-  out.volume0.assign(vol0_.begin(), vol0_.end());
-  out.J.resize(n_);
-  out.gammaDotP.resize(n_);
-  out.phase.resize(n_);
-  out.fext.assign(3 * n_, 0.0);
-  for (std::size_t q = 0; q < n_; ++q) {
-    const std::size_t p = s.id[q];
+  const bool whole = first == 0 && count == n_;
+  if (!whole && slotOf_.size() != n_) {
+    slotOf_.resize(n_);
+    for (std::size_t q = 0; q < n_; ++q) slotOf_[s.id[q]] = static_cast<int>(q);
+  }
+  out.x.resize(3 * count);
+  out.v.resize(3 * count);
+  out.stress.resize(6 * count);
+  out.mass.assign(mass_.begin() + first, mass_.begin() + first + count);
+  out.volume0.assign(vol0_.begin() + first, vol0_.begin() + first + count);
+  out.J.resize(count);
+  out.gammaDotP.resize(count);
+  out.phase.resize(count);
+  out.fext.assign(3 * count, 0.0);
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t q = whole ? k : static_cast<std::size_t>(slotOf_[first + k]);
+    const std::size_t p = whole ? static_cast<std::size_t>(s.id[q]) : k;
     for (int d = 0; d < 3; ++d) {
       out.x[3 * p + d] = s.x[d][q];
       out.v[3 * p + d] = s.v[d][q];
@@ -366,6 +419,7 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
 template <typename T>
 void MpmCpu<T>::step(double dt) {
   requireLastGoodState("step");
+  std::vector<int>().swap(slotOf_);  // the particles move in storage
   if (steps_ % 100 == 0) checkTimeStep(dt);
   const T dtT = static_cast<T>(dt);
   const ParticleIn<T> in = input();

@@ -69,7 +69,9 @@ class MpmCpu : public MpmSolver {
   std::string name() const override { return kPrecision == Precision::Float ? "cpu-float" : "cpu-double"; }
   const MpmParams& params() const override { return params_; }
   void setParticles(const ParticleSet& particles) override;
+  void setParticles(ParticleSlices& particles) override;
   void getParticles(ParticleSet& out) override;
+  void getParticles(ParticleSet& out, std::size_t first, std::size_t count) override;
   std::size_t numParticles() const override { return n_; }
   void setExternalForces(const std::vector<double>& f) override;
   ParticleView openForceBuffer() override;
@@ -124,6 +126,7 @@ class MpmCpu : public MpmSolver {
   std::vector<int> blockStart_;        // counting-sort offsets, size nBlocks + 1
   std::vector<int> order_;             // slots sorted by block, by number within a block
   std::vector<int> blockOf_;           // block id of each particle
+  std::vector<int> slotOf_;            // slot of each particle number, for output slices; emptied by step()
   std::vector<int> activeTiles_;       // tiles that may hold non-zero grid values
   std::vector<std::uint8_t> tileMark_; // scratch, all zero between steps
 };

@@ -68,6 +68,45 @@ std::unique_ptr<MpmSolver> withGate(std::unique_ptr<MpmSolver> solver, const Gat
 
 }  // namespace
 
+void MpmSolver::setParticles(ParticleSlices& particles) {
+  ParticleSet all;
+  const std::size_t n = particles.size();
+  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
+    const ParticleSet& p = particles.slice(first, std::min(particles.sliceSize(), n - first));
+    all.x.insert(all.x.end(), p.x.begin(), p.x.end());
+    all.v.insert(all.v.end(), p.v.begin(), p.v.end());
+    all.stress.insert(all.stress.end(), p.stress.begin(), p.stress.end());
+    all.mass.insert(all.mass.end(), p.mass.begin(), p.mass.end());
+    all.volume0.insert(all.volume0.end(), p.volume0.begin(), p.volume0.end());
+    all.J.insert(all.J.end(), p.J.begin(), p.J.end());
+    all.gammaDotP.insert(all.gammaDotP.end(), p.gammaDotP.begin(), p.gammaDotP.end());
+    all.fext.insert(all.fext.end(), p.fext.begin(), p.fext.end());
+    all.phase.insert(all.phase.end(), p.phase.begin(), p.phase.end());
+  }
+  setParticles(all);
+}
+
+void MpmSolver::getParticles(ParticleSet& out, std::size_t first, std::size_t count) {
+  const std::size_t n = numParticles();
+  if (first > n || count > n - first)
+    throwParameter("particle slice", std::to_string(first) + " + " + std::to_string(count), "",
+                   "within the " + std::to_string(n) + " particles");
+  ParticleSet all;
+  getParticles(all);
+  auto cut = [first, count](const auto& from, auto& to, std::size_t per) {
+    to.assign(from.begin() + per * first, from.begin() + per * (first + count));
+  };
+  cut(all.x, out.x, 3);
+  cut(all.v, out.v, 3);
+  cut(all.stress, out.stress, 6);
+  cut(all.mass, out.mass, 1);
+  cut(all.volume0, out.volume0, 1);
+  cut(all.J, out.J, 1);
+  cut(all.gammaDotP, out.gammaDotP, 1);
+  cut(all.fext, out.fext, 3);
+  cut(all.phase, out.phase, 1);
+}
+
 std::unique_ptr<MpmSolver> makeSolver(const MpmParams& params, Backend backend, Precision precision) {
   validate(params);
   if (backend == Backend::Cpu) {

@@ -351,11 +351,9 @@ inline GridConst<T> makeGridConst(const MpmParams& prm, double massEps) {
 // Blow-up threshold on particle speeds: 1e3 times the elastic wave speed [m/s].
 inline double blowUpSpeed(const MpmParams& prm) { return 1e3 * pWaveSpeed(prm.material); }
 
-// Checks a particle set against the grid before it is handed to a backend: consistent array
-// sizes, positive mass and volume, J > 0, finite values, every particle inside the admissible
-// box [origin + kWallLayer dx, origin + (cells - kWallLayer) dx] per axis. Returns the mean
-// particle mass (used for the empty-node threshold). Throws ParameterError naming the field.
-inline double validateParticles(const MpmParams& prm, const ParticleSet& ps) {
+// Checks of validateParticles on particles [first, first + ps.size()) of a set (messages name
+// particle first + p), adding their masses to massSum in order.
+inline void validateParticleSlice(const MpmParams& prm, const ParticleSet& ps, std::size_t first, double& massSum) {
   const std::size_t n = ps.size();
   auto need = [&](const char* name, std::size_t got, std::size_t per) {
     if (got != per * n) {
@@ -372,27 +370,36 @@ inline double validateParticles(const MpmParams& prm, const ParticleSet& ps) {
   if (!ps.gammaDotP.empty()) need("gammaDotP", ps.gammaDotP.size(), 1);
   if (!ps.phase.empty()) need("phase", ps.phase.size(), 1);
   if (!ps.fext.empty()) need("fext", ps.fext.size(), 3);
-  double sum = 0;
+  auto id = [first](std::size_t p) { return "[" + std::to_string(first + p) + "]"; };
   for (std::size_t p = 0; p < n; ++p) {
-    const std::string id = "[" + std::to_string(p) + "]";
-    if (!(ps.mass[p] > 0) || !std::isfinite(ps.mass[p])) throwParameter("mass" + id, ps.mass[p], "kg", "finite and > 0");
+    if (!(ps.mass[p] > 0) || !std::isfinite(ps.mass[p])) throwParameter("mass" + id(p), ps.mass[p], "kg", "finite and > 0");
     if (!(ps.volume0[p] > 0) || !std::isfinite(ps.volume0[p]))
-      throwParameter("volume0" + id, ps.volume0[p], "m^3", "finite and > 0");
-    if (!(ps.J[p] > 0) || !std::isfinite(ps.J[p])) throwParameter("J" + id, ps.J[p], "", "finite and > 0");
+      throwParameter("volume0" + id(p), ps.volume0[p], "m^3", "finite and > 0");
+    if (!(ps.J[p] > 0) || !std::isfinite(ps.J[p])) throwParameter("J" + id(p), ps.J[p], "", "finite and > 0");
     for (int d = 0; d < 3; ++d) {
       const double lo = prm.origin[d] + kWallLayer * prm.dx, hi = prm.origin[d] + (prm.cells[d] - kWallLayer) * prm.dx;
       const double x = ps.x[3 * p + d];
       if (!(x >= lo && x <= hi)) {
         std::ostringstream os;
         os << "in [" << lo << ", " << hi << "] m (the grid box less its " << kWallLayer << "-cell wall layers)";
-        throwParameter("particle x" + id + "[" + std::to_string(d) + "]", x, "m", os.str());
+        throwParameter("particle x" + id(p) + "[" + std::to_string(d) + "]", x, "m", os.str());
       }
-      if (!std::isfinite(ps.v[3 * p + d])) throwParameter("v" + id, ps.v[3 * p + d], "m/s", "finite");
+      if (!std::isfinite(ps.v[3 * p + d])) throwParameter("v" + id(p), ps.v[3 * p + d], "m/s", "finite");
     }
     for (int k = 0; k < 6; ++k)
-      if (!std::isfinite(ps.stress[6 * p + k])) throwParameter("stress" + id, ps.stress[6 * p + k], "Pa", "finite");
-    sum += ps.mass[p];
+      if (!std::isfinite(ps.stress[6 * p + k])) throwParameter("stress" + id(p), ps.stress[6 * p + k], "Pa", "finite");
+    massSum += ps.mass[p];
   }
+}
+
+// Checks a particle set against the grid before it is handed to a backend: consistent array
+// sizes, positive mass and volume, J > 0, finite values, every particle inside the admissible
+// box [origin + kWallLayer dx, origin + (cells - kWallLayer) dx] per axis. Returns the mean
+// particle mass (used for the empty-node threshold). Throws ParameterError naming the field.
+inline double validateParticles(const MpmParams& prm, const ParticleSet& ps) {
+  double sum = 0;
+  validateParticleSlice(prm, ps, 0, sum);
+  const std::size_t n = ps.size();
   return n ? sum / static_cast<double>(n) : 1.0;
 }
 

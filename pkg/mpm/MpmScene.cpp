@@ -390,18 +390,30 @@ std::string sceneSizeDescription(const MpmScene& scene) {
   return os.str();
 }
 
+namespace {
+
+void seedScene(const MpmScene& scene, SeedSink& sink) {
+  for (const ParticleBox& b : scene.boxes) {
+    if (!b.mesh.empty())
+      seedMesh(scene.params, b.vertices, b.triangles, b.ppc, b.velocity, sink, b.mesh);
+    else
+      seedBox(scene.params, b.lo, b.hi, b.ppc, b.velocity, sink);
+  }
+}
+
+}  // namespace
+
 ParticleSet seedParticles(const MpmScene& scene) {
   ParticleSet p;
-  for (const ParticleBox& b : scene.boxes) {
-    if (!b.mesh.empty()) {
-      seedMesh(scene.params, b.vertices, b.triangles, b.ppc, b.velocity, p, b.mesh);
-      continue;
-    }
-    const std::size_t first = p.size();
-    seedBox(scene.params, b.lo, b.hi, b.ppc, p);
-    for (std::size_t i = first; i < p.size(); ++i)
-      for (int a = 0; a < 3; ++a) p.v[3 * i + a] = b.velocity[a];
-  }
+  ParticleSetSink sink(p);
+  seedScene(scene, sink);
+  return p;
+}
+
+SeededParticles seedParticleSlices(const MpmScene& scene) {
+  SeededParticles p;
+  seedScene(scene, p);
+  p.shrink();
   return p;
 }
 

@@ -109,6 +109,7 @@
 #include "common/Types.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "mpm/MpmTypes.hpp"
+#include "mpm/Seeding.hpp"
 
 namespace mpmsdem {
 namespace mpm {
@@ -167,6 +168,8 @@ std::array<double, 3> materialRegionHi(const MpmParams& params);
 
 // Material points of all entries (boxes and meshes), in entry order (see "Seeding" above).
 ParticleSet seedParticles(const MpmScene& scene);
+// The same points held compactly, for MpmSolver::setParticles(ParticleSlices&).
+SeededParticles seedParticleSlices(const MpmScene& scene);
 
 const char* backendName(Backend backend);
 const char* precisionName(Precision precision);

@@ -80,8 +80,15 @@ class MpmSolver {
   // Replace all particles (uploads to the device for CUDA). Throws ParameterError when a
   // particle lies outside the grid domain (names the particle index and the domain).
   virtual void setParticles(const ParticleSet& particles) = 0;
+  // The same from particles read slice by slice (e.g. SeededParticles), so the caller need not
+  // hold the whole set; this version gathers them, a backend that can do without overrides it.
+  virtual void setParticles(ParticleSlices& particles);
   // Copy the current particle state into `out` (downloads for CUDA).
   virtual void getParticles(ParticleSet& out) = 0;
+  // Particles [first, first + count) by number into `out` (count of them), as getParticles
+  // gives them. This version goes through a whole copy; a backend that can do without
+  // overrides it.
+  virtual void getParticles(ParticleSet& out, std::size_t first, std::size_t count);
   virtual std::size_t numParticles() const = 0;
 
   // External forces on particles for the NEXT step only [N], 3 per particle (paper Eq 14:
@@ -176,6 +183,26 @@ class MpmSolver {
   long steps_ = 0;
   bool partlyAdvanced_ = false;
   std::vector<std::shared_ptr<GridHook>> hooks_;
+};
+
+// A solver's current particles in slices of `sliceSize` (what writers read an output from),
+// fetched with getParticles(out, first, count) into one reused buffer.
+class SolverParticleSlices : public ParticleSlices {
+ public:
+  SolverParticleSlices(MpmSolver& solver, std::size_t sliceSize) : solver_(solver), sliceSize_(sliceSize) {
+    if (sliceSize == 0) throwParameter("sliceSize", 0, "particles", ">= 1");
+  }
+  std::size_t size() const override { return solver_.numParticles(); }
+  std::size_t sliceSize() const override { return sliceSize_; }
+  const ParticleSet& slice(std::size_t first, std::size_t count) override {
+    solver_.getParticles(buffer_, first, count);
+    return buffer_;
+  }
+
+ private:
+  MpmSolver& solver_;
+  std::size_t sliceSize_;
+  ParticleSet buffer_;
 };
 
 // Build a solver, with a Gate hook when params.gate is enabled (findGridHook<Gate>() reads

@@ -108,5 +108,34 @@ struct ParticleSet {
   }
 };
 
+// Particles handed out in slices by particle number, so that a writer needs a slice of the
+// set on the host at a time and not the whole set (an output of 10^6 particles would otherwise
+// add 145 B per particle to the solver's memory while it is written).
+class ParticleSlices {
+ public:
+  virtual ~ParticleSlices() = default;
+  virtual std::size_t size() const = 0;       // particles in all
+  virtual std::size_t sliceSize() const = 0;  // particles per slice (> 0)
+  // Particles [first, first + count) by number; valid until the next call.
+  virtual const ParticleSet& slice(std::size_t first, std::size_t count) = 0;
+};
+
+// A set already on the host: one slice, the set itself.
+class WholeParticleSet : public ParticleSlices {
+ public:
+  explicit WholeParticleSet(const ParticleSet& set) : set_(set) {}
+  std::size_t size() const override { return set_.size(); }
+  std::size_t sliceSize() const override { return set_.size() ? set_.size() : 1; }
+  const ParticleSet& slice(std::size_t first, std::size_t count) override {
+    if (first != 0 || count != set_.size())
+      throwParameter("slice", std::to_string(first) + " + " + std::to_string(count), "",
+                     "0 + " + std::to_string(set_.size()) + " (a whole set is one slice)");
+    return set_;
+  }
+
+ private:
+  const ParticleSet& set_;
+};
+
 }  // namespace mpm
 }  // namespace mpmsdem

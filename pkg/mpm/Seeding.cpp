@@ -14,21 +14,6 @@ namespace mpm {
 
 namespace {
 
-// Appends one material point at x with the given mass, volume and velocity.
-void appendPoint(ParticleSet& out, const double x[3], double mass, double vol, const std::array<double, 3>& v) {
-  for (int d = 0; d < 3; ++d) {
-    out.x.push_back(x[d]);
-    out.v.push_back(v[d]);
-    out.fext.push_back(0.0);
-  }
-  for (int s = 0; s < 6; ++s) out.stress.push_back(0.0);
-  out.mass.push_back(mass);
-  out.volume0.push_back(vol);
-  out.J.push_back(1.0);
-  out.gammaDotP.push_back(0.0);
-  out.phase.push_back(0);
-}
-
 void checkPerAxis(const std::array<int, 3>& perAxis) {
   const char* axis[3] = {"x", "y", "z"};
   for (int d = 0; d < 3; ++d)
@@ -162,7 +147,7 @@ MeshBounds checkSeedMesh(const MpmParams& prm, const std::vector<Vec3>& V, const
 }
 
 std::size_t seedMesh(const MpmParams& prm, const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& T,
-                     const std::array<int, 3>& perAxis, const std::array<double, 3>& velocity, ParticleSet& out,
+                     const std::array<int, 3>& perAxis, const std::array<double, 3>& velocity, SeedSink& out,
                      const std::string& name) {
   checkPerAxis(perAxis);
   const MeshBounds mb = checkSeedMesh(prm, V, T, name);
@@ -271,7 +256,7 @@ std::size_t seedMesh(const MpmParams& prm, const std::vector<Vec3>& V, const std
               if (!inside[(static_cast<std::size_t>(m) * np[1] + n) * np[2] + l]) continue;
               const double x[3] = {subCentre(prm, 0, c0[0] + i, a, perAxis[0]), subCentre(prm, 1, c0[1] + j, b, perAxis[1]),
                                    subCentre(prm, 2, c0[2] + k, c, perAxis[2])};
-              appendPoint(out, x, mass, vol, velocity);
+              out.add(x, mass, vol, velocity);
               ++added;
             }
   if (added == 0) {
@@ -284,7 +269,7 @@ std::size_t seedMesh(const MpmParams& prm, const std::vector<Vec3>& V, const std
 }
 
 std::size_t seedBox(const MpmParams& prm, const std::array<double, 3>& lo, const std::array<double, 3>& hi,
-                    const std::array<int, 3>& perAxis, ParticleSet& out) {
+                    const std::array<int, 3>& perAxis, const std::array<double, 3>& velocity, SeedSink& out) {
   const char* axis[3] = {"x", "y", "z"};
   int c0[3], c1[3];
   checkPerAxis(perAxis);
@@ -315,10 +300,16 @@ std::size_t seedBox(const MpmParams& prm, const std::array<double, 3>& lo, const
             for (int c = 0; c < perAxis[2]; ++c) {
               const double x[3] = {subCentre(prm, 0, i, a, perAxis[0]), subCentre(prm, 1, j, b, perAxis[1]),
                                    subCentre(prm, 2, k, c, perAxis[2])};
-              appendPoint(out, x, mass, vol, {0.0, 0.0, 0.0});
+              out.add(x, mass, vol, velocity);
               ++added;
             }
   return added;
+}
+
+std::size_t seedBox(const MpmParams& prm, const std::array<double, 3>& lo, const std::array<double, 3>& hi,
+                    const std::array<int, 3>& perAxis, ParticleSet& out) {
+  ParticleSetSink sink(out);
+  return seedBox(prm, lo, hi, perAxis, {0.0, 0.0, 0.0}, sink);
 }
 
 std::size_t seedBox(const MpmParams& prm, const std::array<double, 3>& lo, const std::array<double, 3>& hi, int perCell,
@@ -327,6 +318,59 @@ std::size_t seedBox(const MpmParams& prm, const std::array<double, 3>& lo, const
   if (perCell < 1 || k * k * k != perCell || k > 8)
     throwParameter("particlesPerCell", perCell, "", "a perfect cube in [1, 512] (1, 8, 27, ...)");
   return seedBox(prm, lo, hi, {k, k, k}, out);
+}
+
+std::size_t seedMesh(const MpmParams& prm, const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& T,
+                     const std::array<int, 3>& perAxis, const std::array<double, 3>& velocity, ParticleSet& out,
+                     const std::string& name) {
+  ParticleSetSink sink(out);
+  return seedMesh(prm, V, T, perAxis, velocity, sink, name);
+}
+
+void ParticleSetSink::add(const double x[3], double mass, double volume0, const std::array<double, 3>& v) {
+  for (int d = 0; d < 3; ++d) {
+    out_.x.push_back(x[d]);
+    out_.v.push_back(v[d]);
+    out_.fext.push_back(0.0);
+  }
+  for (int s = 0; s < 6; ++s) out_.stress.push_back(0.0);
+  out_.mass.push_back(mass);
+  out_.volume0.push_back(volume0);
+  out_.J.push_back(1.0);
+  out_.gammaDotP.push_back(0.0);
+  out_.phase.push_back(0);
+}
+
+void SeededParticles::add(const double x[3], double mass, double volume0, const std::array<double, 3>& v) {
+  if (runs_.empty() || runs_.back().mass != mass || runs_.back().volume0 != volume0 || runs_.back().velocity != v)
+    runs_.push_back({size(), mass, volume0, v});
+  x_.insert(x_.end(), x, x + 3);
+}
+
+const ParticleSet& SeededParticles::slice(std::size_t first, std::size_t count) {
+  if (first > size() || count > size() - first)
+    throwParameter("seeded particle slice", std::to_string(first) + " + " + std::to_string(count), "",
+                   "within the " + std::to_string(size()) + " particles");
+  ParticleSet& p = buffer_;
+  p.x.assign(x_.begin() + 3 * first, x_.begin() + 3 * (first + count));
+  p.v.resize(3 * count);
+  p.stress.assign(6 * count, 0.0);
+  p.mass.resize(count);
+  p.volume0.resize(count);
+  p.J.assign(count, 1.0);
+  p.gammaDotP.assign(count, 0.0);
+  p.fext.assign(3 * count, 0.0);
+  p.phase.assign(count, 0);
+  // the run holding `first`: the last one starting at or before it
+  auto run = std::upper_bound(runs_.begin(), runs_.end(), first,
+                              [](std::size_t i, const Run& r) { return i < r.first; }) - 1;
+  for (std::size_t i = 0; i < count; ++i) {
+    while (run + 1 != runs_.end() && (run + 1)->first <= first + i) ++run;
+    p.mass[i] = run->mass;
+    p.volume0[i] = run->volume0;
+    for (int d = 0; d < 3; ++d) p.v[3 * i + d] = run->velocity[d];
+  }
+  return p;
 }
 
 }  // namespace mpm

@@ -22,6 +22,51 @@ namespace mpm {
 std::size_t seedBox(const MpmParams& params, const std::array<double, 3>& lo, const std::array<double, 3>& hi,
                     const std::array<int, 3>& perAxis, ParticleSet& out);
 
+// Where seeded points go: each point at x [m] with its mass [kg], initial volume [m^3] and
+// velocity [m/s]; everything else starts at rest (zero stress and force, J = 1, phase 0).
+class SeedSink {
+ public:
+  virtual ~SeedSink() = default;
+  virtual void add(const double x[3], double mass, double volume0, const std::array<double, 3>& velocity) = 0;
+};
+
+// Appends to a ParticleSet.
+class ParticleSetSink : public SeedSink {
+ public:
+  explicit ParticleSetSink(ParticleSet& out) : out_(out) {}
+  void add(const double x[3], double mass, double volume0, const std::array<double, 3>& velocity) override;
+
+ private:
+  ParticleSet& out_;
+};
+
+// Seeded points held compactly: their positions (24 B per point) and runs of points that share
+// mass, volume and velocity; handed out as full particle slices (what MpmSolver::setParticles
+// reads), so a scene is seeded without a whole ParticleSet (145 B per point) on the host.
+class SeededParticles : public SeedSink, public ParticleSlices {
+ public:
+  void add(const double x[3], double mass, double volume0, const std::array<double, 3>& velocity) override;
+  std::size_t size() const override { return x_.size() / 3; }
+  std::size_t sliceSize() const override { return 1 << 16; }
+  const ParticleSet& slice(std::size_t first, std::size_t count) override;
+  // Release the growth reserve of the positions once seeding is done.
+  void shrink() { x_.shrink_to_fit(); }
+
+ private:
+  struct Run {
+    std::size_t first;
+    double mass, volume0;
+    std::array<double, 3> velocity;
+  };
+  std::vector<double> x_;
+  std::vector<Run> runs_;
+  ParticleSet buffer_;
+};
+
+// seedBox and seedMesh into any sink, the box's points with `velocity`.
+std::size_t seedBox(const MpmParams& params, const std::array<double, 3>& lo, const std::array<double, 3>& hi,
+                    const std::array<int, 3>& perAxis, const std::array<double, 3>& velocity, SeedSink& out);
+
 // Same with n points per cell, n a perfect cube (1, 8, 27, ...): n^(1/3) per axis.
 std::size_t seedBox(const MpmParams& params, const std::array<double, 3>& lo, const std::array<double, 3>& hi,
                     int perCell, ParticleSet& out);
@@ -80,6 +125,9 @@ MeshBounds checkSeedMesh(const MpmParams& params, const std::vector<Vec3>& verti
 std::size_t seedMesh(const MpmParams& params, const std::vector<Vec3>& vertices,
                      const std::vector<std::array<int, 3>>& triangles, const std::array<int, 3>& perAxis,
                      const std::array<double, 3>& velocity, ParticleSet& out, const std::string& name = "mesh");
+std::size_t seedMesh(const MpmParams& params, const std::vector<Vec3>& vertices,
+                     const std::vector<std::array<int, 3>>& triangles, const std::array<int, 3>& perAxis,
+                     const std::array<double, 3>& velocity, SeedSink& out, const std::string& name = "mesh");
 
 }  // namespace mpm
 }  // namespace mpmsdem

@@ -29,7 +29,9 @@ class MpmCuda : public MpmSolver {
   std::string name() const override;
   const MpmParams& params() const override { return params_; }
   void setParticles(const ParticleSet& particles) override;
+  using MpmSolver::setParticles;  // slices gathered into a whole set
   void getParticles(ParticleSet& out) override;
+  using MpmSolver::getParticles;  // slices through a whole download
   std::size_t numParticles() const override { return n_; }
   void setExternalForces(const std::vector<double>& f) override;
   ParticleView openForceBuffer() override;

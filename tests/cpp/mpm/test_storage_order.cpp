@@ -160,3 +160,46 @@ TEST(StorageOrder, OneCopyGivesTheSameRunToTheLastBitAndHoldsLessMemory) {
     agreement::expectBitIdentical(endA, endB);
   }
 }
+
+// An output reads the particles in slices by number (MpmSolver::getParticles(out, first,
+// count)): each slice is exactly its range of the whole set, with the particles stored in an
+// order of their own, in both precisions and with one or two copies; steps in between make
+// the next slices read the particles in their new slots; a slice outside the set is refused by name.
+TEST(StorageOrder, SlicesByNumberAreTheWholeSetsRanges) {
+  for (const Precision precision : {Precision::Double, Precision::Float})
+    for (const bool keep : {true, false}) {
+      ParticleSet ps, whole, slice;
+      const MpmParams prm = columnScene(ps, keep);
+      auto s = run(prm, ps, 30, whole, precision);
+      ASSERT_GT(reordered(s->openForceBuffer()), static_cast<long>(ps.size() / 10));
+      for (int pass = 0; pass < 2; ++pass) {
+        s->getParticles(whole);
+        const std::size_t n = whole.size(), size = 97;  // not a divisor of n: a short last slice
+        ASSERT_NE(n % size, 0u);
+        for (std::size_t first = 0; first < n; first += size) {
+          const std::size_t count = std::min(size, n - first);
+          s->getParticles(slice, first, count);
+          ASSERT_EQ(slice.size(), count);
+          auto same = [&](const auto& a, const auto& b, std::size_t per, const char* name) {
+            for (std::size_t k = 0; k < per * count; ++k)
+              ASSERT_EQ(a[k], b[per * first + k]) << name << ", particle " << first + k / per;
+          };
+          same(slice.x, whole.x, 3, "x");
+          same(slice.v, whole.v, 3, "v");
+          same(slice.stress, whole.stress, 6, "stress");
+          same(slice.mass, whole.mass, 1, "mass");
+          same(slice.volume0, whole.volume0, 1, "volume0");
+          same(slice.J, whole.J, 1, "J");
+          same(slice.gammaDotP, whole.gammaDotP, 1, "gammaDotP");
+          same(slice.phase, whole.phase, 1, "phase");
+          same(slice.fext, whole.fext, 3, "fext");
+        }
+        const ParticleView before = s->openForceBuffer();
+        const std::vector<int> order(before.id, before.id + before.n);
+        for (int k = 0; k < 200; ++k) s->step(kDt);
+        const ParticleView after = s->openForceBuffer();
+        ASSERT_FALSE(std::equal(order.begin(), order.end(), after.id)) << "the particles kept their slots";
+      }
+      EXPECT_THROW(s->getParticles(slice, ps.size() - 2, 3), ParameterError);
+    }
+}
