@@ -604,10 +604,9 @@ int main(int argc, char** argv) {
                          "a snapshot of " + h5 + ", 0 to " + std::to_string(last));
         last = checkpoint->snapshot;
       }
-      ParticleSet particles;
-      double time = 0;
-      long step = 0;
-      io::readSnapshot(h5, last, particles, &time, &step);
+      io::SnapshotSlices particles(h5, last);
+      const double time = particles.time();
+      const long step = particles.step();
       if (checkpoint && (checkpoint->step != step || checkpoint->time != time))
         throw ParameterError("--restart: coupled.checkpoint.json (step " + std::to_string(checkpoint->step) +
                              ") and snapshot " + std::to_string(last) + " of " + h5 + " (step " +

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -362,33 +363,97 @@ long readNumSnapshots(const std::string& path) {
 }
 
 void readSnapshot(const std::string& path, long index, mpm::ParticleSet& out, double* time, long* step) {
+  SnapshotSlices snapshot(path, index, std::numeric_limits<std::size_t>::max());
+  out = snapshot.slice(0, snapshot.size());
+  if (time) *time = snapshot.time();
+  if (step) *step = snapshot.step();
+}
+
+namespace {
+
+// The arrays of a snapshot: name, values per particle.
+const std::pair<const char*, hsize_t> kSnapshotArrays[] = {{"x", 3},    {"v", 3},       {"stress", 6},
+                                                           {"mass", 1}, {"volume0", 1}, {"J", 1},
+                                                           {"gammaDotP", 1}, {"phase", 1}};
+
+// Rows [first, first + count) of a dataset of `cols` values per row into out.
+template <typename T>
+void readRows(hid_t group, const char* name, hid_t memType, hsize_t first, hsize_t count, hsize_t cols,
+              std::vector<T>& out, const std::string& path) {
+  out.resize(count * cols);
+  if (count == 0) return;
+  Handle dset(check(H5Dopen2(group, name, H5P_DEFAULT), path, std::string("cannot open dataset ") + name), H5Dclose);
+  Handle fileSpace(H5Dget_space(dset), H5Sclose);
+  const int rank = H5Sget_simple_extent_ndims(fileSpace);
+  const hsize_t start[2] = {first, 0}, size[2] = {count, cols};
+  check(H5Sselect_hyperslab(fileSpace, H5S_SELECT_SET, start, nullptr, size, nullptr), path,
+        std::string("cannot select rows of ") + name);
+  Handle memSpace(check(H5Screate_simple(rank, size, nullptr), path, "memory dataspace"), H5Sclose);
+  check(H5Dread(dset, memType, memSpace, fileSpace, H5P_DEFAULT, out.data()), path,
+        std::string("cannot read dataset ") + name);
+}
+
+}  // namespace
+
+SnapshotSlices::SnapshotSlices(const std::string& path, long index, std::size_t sliceSize)
+    : path_(path), group_("snapshots/" + snapshotName(index)), sliceSize_(sliceSize) {
+  if (sliceSize == 0) throwParameter("sliceSize", 0, "particles", ">= 1");
   Handle file = openForReading(path);
-  const std::string name = "snapshots/" + snapshotName(index);
-  if (!linkExists(file, "snapshots") || !linkExists(file, name)) fail(path, "no snapshot /" + name);
-  Handle g(H5Gopen2(file, name.c_str(), H5P_DEFAULT), H5Gclose);
-  std::size_t rows = 0, cols = 0;
-  out.x = readArray<double>(g, "x", H5T_NATIVE_DOUBLE, rows, cols, path);
-  const std::size_t n = rows;
-  out.v = readArray<double>(g, "v", H5T_NATIVE_DOUBLE, rows, cols, path);
-  out.stress = readArray<double>(g, "stress", H5T_NATIVE_DOUBLE, rows, cols, path);
-  out.mass = readArray<double>(g, "mass", H5T_NATIVE_DOUBLE, rows, cols, path);
-  out.volume0 = readArray<double>(g, "volume0", H5T_NATIVE_DOUBLE, rows, cols, path);
-  out.J = readArray<double>(g, "J", H5T_NATIVE_DOUBLE, rows, cols, path);
-  out.gammaDotP = readArray<double>(g, "gammaDotP", H5T_NATIVE_DOUBLE, rows, cols, path);
-  out.phase = readArray<std::uint8_t>(g, "phase", H5T_NATIVE_UINT8, rows, cols, path);
-  out.fext.assign(3 * n, 0.0);
-  if (out.v.size() != 3 * n || out.stress.size() != 6 * n || out.mass.size() != n || out.phase.size() != n)
-    fail(path, "snapshot /" + name + " has arrays of inconsistent length");
-  if (time) {
-    Handle a(check(H5Aopen(g, "time", H5P_DEFAULT), path, "no attribute time in /" + name), H5Aclose);
-    H5Aread(a, H5T_NATIVE_DOUBLE, time);
+  if (!linkExists(file, "snapshots") || !linkExists(file, group_)) fail(path, "no snapshot /" + group_);
+  Handle g(check(H5Gopen2(file, group_.c_str(), H5P_DEFAULT), path, "cannot open /" + group_), H5Gclose);
+  bool first = true;
+  for (const auto& [name, cols] : kSnapshotArrays) {
+    if (!linkExists(g, name)) fail(path, "no dataset " + std::string(name) + " in /" + group_);
+    Handle dset(check(H5Dopen2(g, name, H5P_DEFAULT), path, std::string("cannot open dataset ") + name), H5Dclose);
+    Handle space(H5Dget_space(dset), H5Sclose);
+    hsize_t dims[2] = {0, 1};
+    const int rank = H5Sget_simple_extent_ndims(space);
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    const hsize_t width = rank == 2 ? dims[1] : 1;
+    if (rank < 1 || rank > 2 || width != cols || (!first && dims[0] != n_))
+      fail(path, "snapshot /" + group_ + " has arrays of inconsistent length");
+    n_ = dims[0];
+    first = false;
   }
-  if (step) {
-    Handle a(check(H5Aopen(g, "step", H5P_DEFAULT), path, "no attribute step in /" + name), H5Aclose);
+  {
+    Handle a(check(H5Aopen(g, "time", H5P_DEFAULT), path, "no attribute time in /" + group_), H5Aclose);
+    H5Aread(a, H5T_NATIVE_DOUBLE, &time_);
+  }
+  {
+    Handle a(check(H5Aopen(g, "step", H5P_DEFAULT), path, "no attribute step in /" + group_), H5Aclose);
     long long s = 0;
     H5Aread(a, H5T_NATIVE_LLONG, &s);
-    *step = static_cast<long>(s);
+    step_ = static_cast<long>(s);
   }
+  Handle fapl(fileAccessWithoutLocking(), H5Pclose);
+  file_ = check(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl), path, "cannot open for reading");
+  snapshot_ = H5Gopen2(file_, group_.c_str(), H5P_DEFAULT);
+  if (snapshot_ < 0) {
+    H5Fclose(file_);
+    fail(path, "cannot open /" + group_);
+  }
+}
+
+SnapshotSlices::~SnapshotSlices() {
+  H5Gclose(snapshot_);
+  H5Fclose(file_);
+}
+
+const mpm::ParticleSet& SnapshotSlices::slice(std::size_t first, std::size_t count) {
+  if (first > n_ || count > n_ - first)
+    throwParameter("snapshot slice", std::to_string(first) + " + " + std::to_string(count), "",
+                   "within the " + std::to_string(n_) + " particles of /" + group_ + " in " + path_);
+  mpm::ParticleSet& p = buffer_;
+  readRows(snapshot_, "x", H5T_NATIVE_DOUBLE, first, count, 3, p.x, path_);
+  readRows(snapshot_, "v", H5T_NATIVE_DOUBLE, first, count, 3, p.v, path_);
+  readRows(snapshot_, "stress", H5T_NATIVE_DOUBLE, first, count, 6, p.stress, path_);
+  readRows(snapshot_, "mass", H5T_NATIVE_DOUBLE, first, count, 1, p.mass, path_);
+  readRows(snapshot_, "volume0", H5T_NATIVE_DOUBLE, first, count, 1, p.volume0, path_);
+  readRows(snapshot_, "J", H5T_NATIVE_DOUBLE, first, count, 1, p.J, path_);
+  readRows(snapshot_, "gammaDotP", H5T_NATIVE_DOUBLE, first, count, 1, p.gammaDotP, path_);
+  readRows(snapshot_, "phase", H5T_NATIVE_UINT8, first, count, 1, p.phase, path_);
+  p.fext.assign(3 * count, 0.0);
+  return p;
 }
 
 std::string readStringAttribute(const std::string& path, const std::string& name) {

@@ -94,11 +94,36 @@ std::vector<double> readSeries(const std::string& path, const std::string& name,
 // Number of snapshot groups in the file.
 long readNumSnapshots(const std::string& path);
 // Snapshot `index` into `out` (x, v, stress, mass, volume0, J, gammaDotP, phase; fext is
-// resized to zeros); `time` and `step` receive its attributes when non-null.
+// resized to zeros); `time` and `step` receive its attributes when non-null. SnapshotSlices
+// below reads the same a slice at a time.
 void readSnapshot(const std::string& path, long index, mpm::ParticleSet& out, double* time = nullptr,
                   long* step = nullptr);
 // Root string attribute `name`.
 std::string readStringAttribute(const std::string& path, const std::string& name);
+
+// Snapshot `index` read slice by slice (what readSnapshot reads, a slice at a time on the
+// host): MpmSolver::setParticles(ParticleSlices&) loads a restart this way. The file stays
+// open while the object lives.
+class SnapshotSlices : public mpm::ParticleSlices {
+ public:
+  SnapshotSlices(const std::string& path, long index, std::size_t sliceSize = 1 << 16);
+  ~SnapshotSlices();
+  SnapshotSlices(const SnapshotSlices&) = delete;
+  SnapshotSlices& operator=(const SnapshotSlices&) = delete;
+  std::size_t size() const override { return n_; }
+  std::size_t sliceSize() const override { return sliceSize_; }
+  const mpm::ParticleSet& slice(std::size_t first, std::size_t count) override;
+  double time() const { return time_; }  // the snapshot's `time` attribute [s]
+  long step() const { return step_; }     // its `step` attribute
+
+ private:
+  std::string path_, group_;
+  hid_t file_ = -1, snapshot_ = -1;
+  std::size_t n_ = 0, sliceSize_;
+  double time_ = 0;
+  long step_ = 0;
+  mpm::ParticleSet buffer_;
+};
 
 }  // namespace io
 }  // namespace mpmsdem

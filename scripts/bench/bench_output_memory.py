@@ -4,8 +4,9 @@
 Runs ``mpmsdem-run SCENE --out DIR --steps N`` on bench_mpm.py's dam-break block (8 points per
 cell) for each particle count, with one or two copies of the particle state
 (``keep_last_good_state``) and with VTK off or in the default binary encoding, and prints the
-peak resident size of the process (``ru_maxrss`` of that child) in MB and per particle, next to
-the solver's own ``memoryBytes()`` per particle (``--bench`` of the same scene). With
+peak resident size of the process (``ru_maxrss`` of that child) in MB and per particle, that of
+the same run continued with ``--restart`` for as many steps again, and the solver's own
+``memoryBytes()`` per particle (``--bench`` of the same scene). With
 ``--baseline-exe`` an older build runs each case in the same command, and the last column is
 the new peak over the old one.
 
@@ -70,7 +71,8 @@ def main():
         if not os.access(exe, os.X_OK):
             ap.error("%s build: %s is not an executable mpmsdem-run" % (name, exe))
     env = dict(os.environ, OMP_NUM_THREADS=str(args.threads))
-    head = ["particles", "precision", "copies", "vtk", "build", "peak RSS [MB]", "B/particle", "solver B/particle"]
+    head = ["particles", "precision", "copies", "vtk", "build", "peak RSS [MB]", "B/particle",
+            "restart B/particle", "solver B/particle"]
     if args.baseline_exe:
         head.append("new / old peak")
     body = []
@@ -92,17 +94,19 @@ def main():
                     if solverBytes is None:
                         solverBytes = bench_mpm.run_one(args.exe, path, "cpu", precision, 2, args.threads,
                                                         None)["bytes_per_particle"]
-                    peaks = {}
+                    peaks, restarts = {}, {}
                     for name, exe in exes:
                         out = os.path.join(tmp, "out")
                         shutil.rmtree(out, ignore_errors=True)
-                        peaks[name] = peak_rss([exe, path, "--out", out, "--steps", str(args.steps),
-                                                "--precision", precision], env)
-                        print("%d particles, %s, %d copies, vtk %s, %s: peak %.0f MB (%.0f B/particle)"
-                              % (n, precision, copies, vtk, name, peaks[name] / 1e6, peaks[name] / n), flush=True)
+                        cmd = [exe, path, "--out", out, "--precision", precision]
+                        peaks[name] = peak_rss(cmd + ["--steps", str(args.steps)], env)
+                        restarts[name] = peak_rss(cmd + ["--steps", str(args.steps), "--restart"], env)
+                        print("%d particles, %s, %d copies, vtk %s, %s: peak %.0f MB (%.0f B/particle), restarted "
+                              "%.0f MB" % (n, precision, copies, vtk, name, peaks[name] / 1e6, peaks[name] / n,
+                                           restarts[name] / 1e6), flush=True)
                     for name, _ in exes:
                         row = [str(n), precision, str(copies), vtk, name, "%.0f" % (peaks[name] / 1e6),
-                               "%.0f" % (peaks[name] / n), "%.0f" % solverBytes]
+                               "%.0f" % (peaks[name] / n), "%.0f" % (restarts[name] / n), "%.0f" % solverBytes]
                         if args.baseline_exe:
                             row.append("%.2f" % (peaks["new"] / peaks["old"]) if name == "new" else "")
                         body.append(row)
