@@ -377,6 +377,23 @@ TEST(ParticleSlices, SlicedOutputsAreTheWholeSetsFiles) {
     EXPECT_EQ(a.phase, b.phase);
     EXPECT_EQ(a.x, p.x);
     EXPECT_EQ(a.J, p.J);
+    // and read back 3 at a time (what --restart loads)
+    SnapshotSlices back(path.string(), 1, 3);
+    EXPECT_EQ(back.size(), n);
+    EXPECT_EQ(back.time(), 0.25);
+    EXPECT_EQ(back.step(), 1);
+    for (std::size_t first = 0; first < n; first += 3) {
+      const std::size_t count = std::min<std::size_t>(3, n - first);
+      const mpm::ParticleSet& q = back.slice(first, count);
+      for (std::size_t i = 0; i < count; ++i) {
+        for (int d = 0; d < 3; ++d) EXPECT_EQ(q.x[3 * i + d], p.x[3 * (first + i) + d]);
+        for (int k = 0; k < 6; ++k) EXPECT_EQ(q.stress[6 * i + k], p.stress[6 * (first + i) + k]);
+        EXPECT_EQ(q.mass[i], p.mass[first + i]);
+        EXPECT_EQ(q.phase[i], p.phase[first + i]);
+        EXPECT_EQ(q.fext[3 * i], 0.0);
+      }
+    }
+    EXPECT_THROW(back.slice(n, 1), ParameterError);
 #endif
   }
 }
