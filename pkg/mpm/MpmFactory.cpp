@@ -93,18 +93,7 @@ void MpmSolver::getParticles(ParticleSet& out, std::size_t first, std::size_t co
                    "within the " + std::to_string(n) + " particles");
   ParticleSet all;
   getParticles(all);
-  auto cut = [first, count](const auto& from, auto& to, std::size_t per) {
-    to.assign(from.begin() + per * first, from.begin() + per * (first + count));
-  };
-  cut(all.x, out.x, 3);
-  cut(all.v, out.v, 3);
-  cut(all.stress, out.stress, 6);
-  cut(all.mass, out.mass, 1);
-  cut(all.volume0, out.volume0, 1);
-  cut(all.J, out.J, 1);
-  cut(all.gammaDotP, out.gammaDotP, 1);
-  cut(all.fext, out.fext, 3);
-  cut(all.phase, out.phase, 1);
+  copyParticleRange(all, first, count, out);
 }
 
 std::unique_ptr<MpmSolver> makeSolver(const MpmParams& params, Backend backend, Precision precision) {

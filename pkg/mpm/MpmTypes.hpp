@@ -108,6 +108,26 @@ struct ParticleSet {
   }
 };
 
+// Particles [first, first + count) of `from` into `to` (an optional array left empty in `from`
+// stays empty); the range must lie within `from`.
+inline void copyParticleRange(const ParticleSet& from, std::size_t first, std::size_t count, ParticleSet& to) {
+  auto cut = [first, count](const auto& a, auto& b, std::size_t per) {
+    if (a.empty())
+      b.clear();
+    else
+      b.assign(a.begin() + per * first, a.begin() + per * (first + count));
+  };
+  cut(from.x, to.x, 3);
+  cut(from.v, to.v, 3);
+  cut(from.stress, to.stress, 6);
+  cut(from.mass, to.mass, 1);
+  cut(from.volume0, to.volume0, 1);
+  cut(from.J, to.J, 1);
+  cut(from.gammaDotP, to.gammaDotP, 1);
+  cut(from.fext, to.fext, 3);
+  cut(from.phase, to.phase, 1);
+}
+
 // Particles handed out in slices by particle number, so that a writer needs a slice of the
 // set on the host at a time and not the whole set (an output of 10^6 particles would otherwise
 // add 145 B per particle to the solver's memory while it is written).

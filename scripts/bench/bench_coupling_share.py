@@ -15,7 +15,6 @@ the old one from the same command (interleaved runs, so machine load hits both a
 Needs YADE's Python (the scene is written by the example script). Exit status 1 when a run fails.
 """
 import argparse
-import datetime
 import json
 import os
 import subprocess
@@ -101,14 +100,8 @@ def main():
     label = "full (dx 0.01 m, 96,000 points)" if args.full else "coarse (dx 0.02 m, 12,000 points)"
     print("(§3.2 flume, %s, %d steps, OMP_NUM_THREADS=%d)" % (label, steps, args.threads))
     if args.markdown:
-        commit = subprocess.run(["git", "-C", bench_mpm.REPO, "rev-parse", "--short", "HEAD"],
-                                capture_output=True, text=True).stdout.strip()
-        with open(args.markdown, "a") as f:
-            f.write("\n### Coupling share, §3.2 flume %s, %s (commit %s)\n\n"
-                    % (label, datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), commit or "unknown"))
-            f.write("Machine: %s. %d steps, OMP_NUM_THREADS=%d. Command: `%s`\n\n"
-                    % (bench_mpm.machine(), steps, args.threads, " ".join(sys.argv)))
-            f.write(md)
+        bench_mpm.append_markdown(args.markdown, "Coupling share, §3.2 flume " + label,
+                                  "%d steps, OMP_NUM_THREADS=%d" % (steps, args.threads), md)
     return 0
 
 

@@ -162,6 +162,18 @@ def format_table(rows):
     return render_table(head, body)
 
 
+def append_markdown(path, title, settings, table):
+    """Append `table` (markdown) to the file at `path` under a heading with `title`, the date and
+    the commit, then a line with the machine, `settings` and the command that made it."""
+    commit = subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"],
+                            capture_output=True, text=True).stdout.strip()
+    with open(path, "a") as f:
+        f.write("\n### %s, %s (commit %s)\n\n" % (title, datetime.datetime.now().strftime("%Y-%m-%d %H:%M"),
+                                                    commit or "unknown"))
+        f.write("Machine: %s. %s. Command: `%s`\n\n" % (machine(), settings, " ".join(sys.argv)))
+        f.write(table)
+
+
 def render_table(head, body, mdRule="---|"):
     """(aligned text, markdown) of a table given its header and rows of strings."""
     widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)]

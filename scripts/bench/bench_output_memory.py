@@ -17,7 +17,6 @@ the new peak over the old one.
 Uses only the standard library. Exit status 1 when a run fails.
 """
 import argparse
-import datetime
 import json
 import os
 import shutil
@@ -115,14 +114,8 @@ def main():
     print(text, end="")
     print("(dam-break block, 8 points per cell, %d steps, OMP_NUM_THREADS=%d)" % (args.steps, args.threads))
     if args.markdown:
-        commit = subprocess.run(["git", "-C", bench_mpm.REPO, "rev-parse", "--short", "HEAD"],
-                                capture_output=True, text=True).stdout.strip()
-        with open(args.markdown, "a") as f:
-            f.write("\n### Peak memory of an output run, %s (commit %s)\n\n"
-                    % (datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), commit or "unknown"))
-            f.write("Machine: %s. %d steps, OMP_NUM_THREADS=%d. Command: `%s`\n\n"
-                    % (bench_mpm.machine(), args.steps, args.threads, " ".join(sys.argv)))
-            f.write(md)
+        bench_mpm.append_markdown(args.markdown, "Peak memory of an output run",
+                                  "%d steps, OMP_NUM_THREADS=%d" % (args.steps, args.threads), md)
     return 0
 
 

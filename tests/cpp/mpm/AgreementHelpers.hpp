@@ -27,6 +27,25 @@ inline double roundOff(Precision p) {
 // Test name suffix of a precision parameter: "double", "float".
 inline std::string paramName(const ::testing::TestParamInfo<Precision>& info) { return ::testing::PrintToString(info.param); }
 
+// `slice` is particles [first, first + slice.size()) of `whole`, every field to the last bit.
+inline void expectRangeOf(const ParticleSet& slice, const ParticleSet& whole, std::size_t first) {
+  const std::size_t count = slice.size();
+  auto same = [&](const auto& a, const auto& b, std::size_t per, const char* name) {
+    ASSERT_EQ(a.size(), per * count) << name;
+    for (std::size_t k = 0; k < per * count; ++k)
+      ASSERT_EQ(a[k], b[per * first + k]) << name << ", particle " << first + k / per;
+  };
+  same(slice.x, whole.x, 3, "x");
+  same(slice.v, whole.v, 3, "v");
+  same(slice.stress, whole.stress, 6, "stress");
+  same(slice.mass, whole.mass, 1, "mass");
+  same(slice.volume0, whole.volume0, 1, "volume0");
+  same(slice.J, whole.J, 1, "J");
+  same(slice.gammaDotP, whole.gammaDotP, 1, "gammaDotP");
+  same(slice.fext, whole.fext, 3, "fext");
+  same(slice.phase, whole.phase, 1, "phase");
+}
+
 // Largest differences between two states of the same particles (same order).
 struct Agreement {
   double position = 0;     // max |x_a - x_b| [m]

@@ -320,18 +320,7 @@ class SetInSlices : public mpm::ParticleSlices {
   std::size_t sliceSize() const override { return size_; }
   const mpm::ParticleSet& slice(std::size_t first, std::size_t count) override {
     ++calls;
-    auto cut = [&](const auto& from, auto& to, std::size_t per) {
-      to.assign(from.begin() + per * first, from.begin() + per * (first + count));
-    };
-    cut(set_.x, buf_.x, 3);
-    cut(set_.v, buf_.v, 3);
-    cut(set_.stress, buf_.stress, 6);
-    cut(set_.mass, buf_.mass, 1);
-    cut(set_.volume0, buf_.volume0, 1);
-    cut(set_.J, buf_.J, 1);
-    cut(set_.gammaDotP, buf_.gammaDotP, 1);
-    cut(set_.fext, buf_.fext, 3);
-    cut(set_.phase, buf_.phase, 1);
+    mpm::copyParticleRange(set_, first, count, buf_);
     return buf_;
   }
   int calls = 0;

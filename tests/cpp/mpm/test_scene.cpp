@@ -10,6 +10,8 @@
 #include "mpm/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 
+#include "AgreementHelpers.hpp"
+
 using namespace mpmsdem;
 using namespace mpmsdem::mpm;
 using nlohmann::json;
@@ -216,19 +218,7 @@ TEST(MpmScene, CompactSeedingGivesTheSeededSetAndTheSameSolver) {
   for (const auto& [first, count] : ranges) {
     const ParticleSet& p = compact.slice(first, count);
     ASSERT_EQ(p.size(), count);
-    auto same = [&](const auto& a, const auto& b, std::size_t per, const char* name) {
-      for (std::size_t k = 0; k < per * count; ++k)
-        ASSERT_EQ(a[k], b[per * first + k]) << name << ", particle " << first + k / per;
-    };
-    same(p.x, whole.x, 3, "x");
-    same(p.v, whole.v, 3, "v");
-    same(p.stress, whole.stress, 6, "stress");
-    same(p.mass, whole.mass, 1, "mass");
-    same(p.volume0, whole.volume0, 1, "volume0");
-    same(p.J, whole.J, 1, "J");
-    same(p.gammaDotP, whole.gammaDotP, 1, "gammaDotP");
-    same(p.fext, whole.fext, 3, "fext");
-    same(p.phase, whole.phase, 1, "phase");
+    agreement::expectRangeOf(p, whole, first);
   }
   EXPECT_NE(whole.v[3 * (n - 1)], whole.v[0]);  // the boxes' runs differ
   EXPECT_THROW(compact.slice(n - 1, 2), ParameterError);

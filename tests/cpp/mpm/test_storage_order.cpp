@@ -180,19 +180,7 @@ TEST(StorageOrder, SlicesByNumberAreTheWholeSetsRanges) {
           const std::size_t count = std::min(size, n - first);
           s->getParticles(slice, first, count);
           ASSERT_EQ(slice.size(), count);
-          auto same = [&](const auto& a, const auto& b, std::size_t per, const char* name) {
-            for (std::size_t k = 0; k < per * count; ++k)
-              ASSERT_EQ(a[k], b[per * first + k]) << name << ", particle " << first + k / per;
-          };
-          same(slice.x, whole.x, 3, "x");
-          same(slice.v, whole.v, 3, "v");
-          same(slice.stress, whole.stress, 6, "stress");
-          same(slice.mass, whole.mass, 1, "mass");
-          same(slice.volume0, whole.volume0, 1, "volume0");
-          same(slice.J, whole.J, 1, "J");
-          same(slice.gammaDotP, whole.gammaDotP, 1, "gammaDotP");
-          same(slice.phase, whole.phase, 1, "phase");
-          same(slice.fext, whole.fext, 3, "fext");
+          agreement::expectRangeOf(slice, whole, first);
         }
         const ParticleView before = s->openForceBuffer();
         const std::vector<int> order(before.id, before.id + before.n);
