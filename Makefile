@@ -8,7 +8,7 @@ YADE_PY  := $(shell ls -d /usr/lib/x86_64-linux-gnu/yade-double/py 2>/dev/null |
 export PYTHONPATH := $(CURDIR)/$(BUILD)/python:$(YADE_PY)$(if $(PYTHONPATH),:$(PYTHONPATH))
 export OMP_NUM_THREADS ?= $(JOBS)
 
-.PHONY: all deps configure build install demo test test-cpp test-py checks bench bench-peers bench-scene-needs clean
+.PHONY: all deps configure build install demo test test-cpp test-py checks bench bench-peers bench-scene-needs bench-coupling bench-memory clean
 
 all: build
 
@@ -61,6 +61,16 @@ bench-peers: build
 # (a few minutes); docs/benchmarks.md. Not part of `make test`.
 bench-scene-needs: build
 	OMP_NUM_THREADS=1 $(PY) scripts/bench/bench_scene_needs.py --build $(BUILD)
+
+# Opt-in: what the MP-block coupling adds to the MPM step on the coarse §3.2 flume (goal <= 25 %),
+# the driver, one thread (about a minute); docs/benchmarks.md. Not part of `make test`.
+bench-coupling: install
+	OMP_NUM_THREADS=1 $(PY) scripts/bench/bench_coupling_share.py --exe $(BUILD)/mpmsdem-run
+
+# Opt-in: peak memory of whole driver runs with outputs and restarts at 10^6 points, both
+# precisions (a few minutes, about 0.6 GB); docs/benchmarks.md. Not part of `make test`.
+bench-memory: build
+	$(PY) scripts/bench/bench_output_memory.py --exe $(BUILD)/mpmsdem-run --precisions double,float
 
 clean:
 	rm -rf $(BUILD)
