@@ -72,6 +72,7 @@
 #include "io/Hdf5Writer.hpp"
 #endif
 #include "io/VtkWriter.hpp"
+#include "mpm/Diagnostics.hpp"
 #include "mpm/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 
@@ -135,55 +136,6 @@ Options parseArgs(int argc, char** argv) {
   if (o.scene.empty()) throw ParameterError(std::string("no scene file given\n") + kUsage);
   if (o.restart && o.bench) throw ParameterError("--restart and --bench: choose one (a benchmark writes no files)");
   return o;
-}
-
-// Whole-system diagnostics of a particle state.
-struct Diagnostics {
-  double kineticEnergy = 0;  // [J]
-  double potential = 0;      // potential energy in gravity g, zero at the origin [J]
-  double frontX = 0;         // largest particle x [m]
-  double heightZ = 0;        // largest particle z [m]
-  double com[3] = {0, 0, 0}; // centre of mass [m]
-  double maxSpeed = 0;       // [m/s]
-  double flowing = 0;        // fraction of particles in phase 1
-  double gasified = 0;       // fraction of particles in phase 2
-};
-
-// Read slice by slice in particle-number order, so the sums are those of the whole set.
-Diagnostics diagnose(mpm::ParticleSlices& particles, const std::array<double, 3>& g) {
-  Diagnostics d;
-  const std::size_t n = particles.size();
-  if (n == 0) {
-    // no flow has no front, height or centre of mass; its energies and fractions are zero
-    d.frontX = d.heightZ = d.com[0] = d.com[1] = d.com[2] = std::nan("");
-    return d;
-  }
-  d.frontX = -INFINITY;
-  d.heightZ = -INFINITY;
-  double mass = 0, maxV2 = 0;
-  std::size_t flowing = 0, gasified = 0;
-  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
-    const ParticleSet& p = particles.slice(first, std::min(particles.sliceSize(), n - first));
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      const double* v = &p.v[3 * i];
-      const double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-      d.kineticEnergy += 0.5 * p.mass[i] * v2;
-      maxV2 = std::max(maxV2, v2);
-      d.frontX = std::max(d.frontX, p.x[3 * i]);
-      d.heightZ = std::max(d.heightZ, p.x[3 * i + 2]);
-      for (int a = 0; a < 3; ++a) d.com[a] += p.mass[i] * p.x[3 * i + a];
-      mass += p.mass[i];
-      flowing += p.phase[i] == 1;
-      gasified += p.phase[i] == 2;
-    }
-    for (std::size_t i = 0; i < p.size(); ++i)
-      d.potential -= p.mass[i] * (g[0] * p.x[3 * i] + g[1] * p.x[3 * i + 1] + g[2] * p.x[3 * i + 2]);
-  }
-  for (double& c : d.com) c /= mass;
-  d.maxSpeed = std::sqrt(maxV2);
-  d.flowing = double(flowing) / n;
-  d.gasified = double(gasified) / n;
-  return d;
 }
 
 std::string formatDuration(double s) {
@@ -449,7 +401,7 @@ class OutputRun {
           while (nextOutput <= t * (1 + 1e-12)) nextOutput += run.outputEvery;
         }
         if (report) {
-          const Diagnostics d = diagnose();
+          const mpm::Diagnostics d = diagnose();
           const double el = since(t0);
           std::printf("[%5.1f%%] t=%.5g s step=%ld dt=%.3g s KE=%.5g J front=%.5g m rate=%.3g upd/s ETA=%s\n",
                       100 * f, t, solver_.steps(), dt, d.kineticEnergy, d.frontX,
@@ -499,10 +451,10 @@ class OutputRun {
   }
 
  private:
-  Diagnostics diagnose() { return ::diagnose(slices_, solver_.params().gravity); }
+  mpm::Diagnostics diagnose() { return mpm::diagnose(slices_, solver_.params().gravity); }
 
   void recordSeries(double dt = 0) {
-    const Diagnostics d = diagnose();
+    const mpm::Diagnostics d = diagnose();
     h5_.appendScalar("time", solver_.time());
     h5_.appendScalar("step", double(solver_.steps()));
     h5_.appendScalar("dt", dt);
@@ -518,7 +470,7 @@ class OutputRun {
 
   // One coupled.h5 record: block series and energies (§5.4) at the solver's time; d: the
   // particles' diagnostics at that time.
-  void recordBlocks(const Diagnostics& d) {
+  void recordBlocks(const mpm::Diagnostics& d) {
     coupling::CoupledWorld& w = *stepper_.coupled;
     const sdem::SdemEngine& e = w.world.engine;
     coupled_->record(solver_.time(), solver_.steps(), e, w.coupling);

@@ -132,8 +132,7 @@ class PyCoupling {
   void writeVtk(const bp::object& bodies, double time) {
     requireOutput();
     sdem_.readStates(bodies);
-    mpm::WholeParticleSet particles(mpm_.particleSet());
-    output_->writeVtk(time, particles, sdem_.engine());
+    output_->writeVtk(time, mpm_.outputParticles(), sdem_.engine());
   }
 
   // ---- checkpoint: tangential histories as raw bytes (int64 keys, float64 xi; the restart

@@ -27,6 +27,10 @@ void exportMpm() {
       .def("gateEdgeHeight", &PyMpm::gateEdgeHeight, (bp::arg("t")),
            "Height of the gate's lower edge at time t [m], inf once removed; ValueError without a gate.")
       .def("particles", &PyMpm::particles)
+      .def("diagnostics", &PyMpm::diagnostics,
+           "Whole-system diagnostics of the current state (what the series record): kinetic_energy and "
+           "potential_energy [J] (zero height at the origin), front_x and height_z [m], centre_of_mass [m], "
+           "max_speed [m/s], flowing_fraction and gasified_fraction; read from the solver a slice at a time.")
       .def("openOutput", &PyMpm::openOutput, (bp::arg("dir"), bp::arg("append") = false))
       .def("writeSnapshot", &PyMpm::writeSnapshot)
       .def("appendSeries", &PyMpm::appendSeries, (bp::arg("name"), bp::arg("value")))

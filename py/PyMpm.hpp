@@ -7,11 +7,13 @@
 #include <iomanip>
 #include <memory>
 #include <new>
+#include <optional>
 #include <sstream>
 
 #include "PyConvert.hpp"
 #include "io/Hdf5Writer.hpp"
 #include "io/VtkWriter.hpp"
+#include "mpm/Diagnostics.hpp"
 #include "mpm/Gate.hpp"
 #include "mpm/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
@@ -24,7 +26,9 @@ class PyMpm {
   explicit PyMpm(const std::string& sceneJson) : scene_(mpm::parseScene(sceneJson, "MpmEngine scene")) {
     try {
       solver_ = mpm::makeSolver(scene_.params, scene_.run.backend, scene_.run.precision);
-      solver_->setParticles(mpm::seedParticles(scene_));
+      mpm::SeededParticles seeded = mpm::seedParticleSlices(scene_);
+      solver_->setParticles(seeded);
+      slices_ = std::make_unique<mpm::SolverParticleSlices>(*solver_, 1 << 16);
     } catch (const std::bad_alloc&) {
       throw ParameterError("out of memory for " + mpm::sceneSizeDescription(scene_) +
                            ": reduce grid.cells (a coarser dx or a smaller domain) or the particles per cell (ppc)");
@@ -88,6 +92,21 @@ class PyMpm {
     return d;
   }
 
+  // The series' diagnostics of the current state (mpm::diagnose), read slice by slice.
+  bp::dict diagnostics() {
+    const mpm::Diagnostics d = mpm::diagnose(outputParticles(), scene_.params.gravity);
+    bp::dict out;
+    out["kinetic_energy"] = d.kineticEnergy;
+    out["potential_energy"] = d.potential;
+    out["front_x"] = d.frontX;
+    out["height_z"] = d.heightZ;
+    out["centre_of_mass"] = bp::make_tuple(d.com[0], d.com[1], d.com[2]);
+    out["max_speed"] = d.maxSpeed;
+    out["flowing_fraction"] = d.flowing;
+    out["gasified_fraction"] = d.gasified;
+    return out;
+  }
+
   // Outputs: <dir>/mpm.h5 (append-only series + snapshots) and <dir>/vtk/particles_*.vtp + .pvd.
   void openOutput(const std::string& dir, bool append) {
     std::filesystem::create_directories(std::filesystem::path(dir) / "vtk");
@@ -99,31 +118,28 @@ class PyMpm {
   }
   void writeSnapshot() {
     requireOutput();
-    sync();
-    const long k = h5_->writeSnapshot(cache_, solver_->time(), solver_->steps());
+    const long k = h5_->writeSnapshot(outputParticles(), solver_->time(), solver_->steps());
     std::ostringstream name;
     name << "vtk/particles_" << std::setw(6) << std::setfill('0') << k << ".vtp";
-    io::writeParticlesVtp((std::filesystem::path(dir_) / name.str()).string(), cache_);
+    io::writeParticlesVtp((std::filesystem::path(dir_) / name.str()).string(), outputParticles());
     pvd_->add(solver_->time(), name.str());
   }
-  void writeParticlesVtp(const std::string& path) {
-    sync();
-    io::writeParticlesVtp(path, cache_);
-  }
-  // The current particle state (downloaded once per step at most).
-  const mpm::ParticleSet& particleSet() {
-    sync();
-    return cache_;
+  void writeParticlesVtp(const std::string& path) { io::writeParticlesVtp(path, outputParticles()); }
+  // The particles for an output: the host copy when Python fetched it since the last step,
+  // else read from the solver slice by slice (no whole copy on the host).
+  mpm::ParticleSlices& outputParticles() {
+    if (!fresh_) return *slices_;
+    whole_.emplace(cache_);
+    return *whole_;
   }
   // A checkpoint: one HDF5 file with the scene and the full particle state at this time
   // (the same layout as mpm.h5, so any output file also works as a checkpoint).
   void saveCheckpoint(const std::string& path) {
-    sync();
     const std::string tmp = path + ".tmp";
     {
       io::Hdf5Writer w(tmp, io::Hdf5Writer::Mode::Truncate);
       writeHeader(w);
-      w.writeSnapshot(cache_, solver_->time(), solver_->steps());
+      w.writeSnapshot(outputParticles(), solver_->time(), solver_->steps());
     }
     std::filesystem::rename(tmp, path);
   }
@@ -133,13 +149,10 @@ class PyMpm {
     if (index < 0) index += n;
     if (index < 0 || index >= n) throwParameter("index", index, "", "in [-" + std::to_string(n) + ", " +
                                                  std::to_string(n) + ") (snapshots in " + path + ")");
-    mpm::ParticleSet p;
-    double time = 0;
-    long step = 0;
-    io::readSnapshot(path, index, p, &time, &step);
-    solver_->setParticles(p);
-    solver_->setClock(time, step);
-    fresh_ = false;
+    io::SnapshotSlices snapshot(path, index);
+    solver_->setParticles(snapshot);
+    solver_->setClock(snapshot.time(), snapshot.step());
+    dropCache();
   }
   void appendSeries(const std::string& name, double value) {
     requireOutput();
@@ -170,6 +183,7 @@ class PyMpm {
   // A step makes the host copy stale; kept until the next output it would double the memory
   // the particles take.
   void dropCache() {
+    whole_.reset();
     cache_ = mpm::ParticleSet();
     fresh_ = false;
   }
@@ -179,7 +193,9 @@ class PyMpm {
 
   mpm::MpmScene scene_;
   std::unique_ptr<mpm::MpmSolver> solver_;
+  std::unique_ptr<mpm::SolverParticleSlices> slices_;
   mpm::ParticleSet cache_;
+  std::optional<mpm::WholeParticleSet> whole_;  // over cache_ while it is fresh
   bool fresh_ = false;
   std::unique_ptr<io::Hdf5Writer> h5_;
   std::unique_ptr<io::PvdCollection> pvd_;

@@ -297,14 +297,12 @@ class CoupledEngine(_AutoStep):
         return e["friction"] + e["damping"] + s["friction"] + s["damping"]
 
     def _record(self, t):
-        import numpy as np
         ids = self.sdem.ids
         if self.output is not None:
             self._bridge.record(O.bodies, t, O.iter)
-            p = self.mpm.particles()
-            g = np.array(self.mpm.gravity)
-            self._bridge.appendSeries("flow_kinetic", 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum()))
-            self._bridge.appendSeries("flow_potential", -float((p["mass"] * (p["x"] @ g)).sum()))
+            d = self.mpm.diagnostics()
+            self._bridge.appendSeries("flow_kinetic", d["kinetic_energy"])
+            self._bridge.appendSeries("flow_potential", d["potential_energy"])
             self._bridge.appendSeries("block_kinetic", self.blockKineticEnergy())
             self._bridge.appendSeries("dissipated", self._dissipated())
         if self.plot:

@@ -123,7 +123,7 @@ class MpmEngine:
             self._nextOutput = t + outputEvery
 
     def _recordSeries(self, dt):
-        d = _diagnostics(self.solver.particles())
+        d = self.solver.diagnostics()
         self.solver.appendSeries("time", self.solver.time)
         self.solver.appendSeries("step", float(self.solver.steps))
         self.solver.appendSeries("dt", float(dt))
@@ -237,7 +237,14 @@ class MpmEngine:
 
     def kineticEnergy(self):
         """Total kinetic energy of the material points [J]."""
-        return _kineticEnergy(self.solver.particles())
+        return self.solver.diagnostics()["kinetic_energy"]
+
+    def diagnostics(self):
+        """Whole-system diagnostics of the current state, a dict: kinetic_energy and
+        potential_energy [J] (zero height at the origin), front_x and height_z [m] (NaN without
+        particles), centre_of_mass [m], max_speed [m/s], flowing_fraction and gasified_fraction
+        (the series of mpm.h5 record these)."""
+        return self.solver.diagnostics()
 
     @property
     def time(self):
@@ -262,25 +269,6 @@ class MpmEngine:
 # The /series of mpm.h5, the same as the driver mpmsdem-run writes (docs/outputs.md).
 SERIES = ("time", "step", "dt", "kinetic_energy", "front_x", "height_z", "centre_of_mass", "max_speed",
           "flowing_fraction", "gasified_fraction")
-
-
-def _diagnostics(p):
-    import numpy as np
-    m, x, v = p["mass"], p["x"], p["v"]
-    if len(m) == 0:  # no flow: no front, height or centre of mass (the driver's series say the same)
-        nan = float("nan")
-        return {"kinetic_energy": 0.0, "front_x": nan, "height_z": nan, "centre_of_mass": [nan] * 3,
-                "max_speed": 0.0, "flowing_fraction": 0.0, "gasified_fraction": 0.0}
-    v2 = (v ** 2).sum(axis=1)
-    n = len(m)
-    return {"kinetic_energy": 0.5 * float((m * v2).sum()), "front_x": float(x[:, 0].max()),
-            "height_z": float(x[:, 2].max()), "centre_of_mass": [float(c) for c in (m @ x) / m.sum()],
-            "max_speed": float(np.sqrt(v2.max())), "flowing_fraction": float((p["phase"] == 1).sum()) / n,
-            "gasified_fraction": float((p["phase"] == 2).sum()) / n}
-
-
-def _kineticEnergy(p):
-    return 0.5 * float((p["mass"] * (p["v"] ** 2).sum(axis=1)).sum())
 
 
 def _plain(obj, path):

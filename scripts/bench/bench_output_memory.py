@@ -8,7 +8,8 @@ peak resident size of the process (``ru_maxrss`` of that child) in MB and per pa
 the same run continued with ``--restart`` for as many steps again, and the solver's own
 ``memoryBytes()`` per particle (``--bench`` of the same scene). With
 ``--baseline-exe`` an older build runs each case in the same command, and the last column is
-the new peak over the old one.
+the new peak over the old one. ``--yade`` adds the same scene run through YADE (MpmEngine with
+outputs; its module from ``--yade-pythonpath``, an older one from ``--baseline-yade-pythonpath``).
 
     python3 scripts/bench/bench_output_memory.py --exe build/mpmsdem-run [--baseline-exe OLD/mpmsdem-run]
         [--sizes 1e6] [--precisions double,float] [--copies 1,2] [--vtk none,binary] [--steps 20]
@@ -26,6 +27,8 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bench_mpm  # noqa: E402  (the dam-break scene, machine description and table helpers)
+
+YADE_RUN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "yade_output_run.py")
 
 
 def peak_rss(cmd, env):
@@ -59,6 +62,12 @@ def main():
                     default=["double"], help="double and/or float (default double)")
     ap.add_argument("--steps", type=int, default=20, help="steps per run (default 20; a snapshot at the start and end)")
     ap.add_argument("--threads", type=int, default=2, help="OMP_NUM_THREADS (default 2)")
+    ap.add_argument("--yade", action="store_true",
+                    help="also the same scene through YADE (MpmEngine with outputs, yade_output_run.py; "
+                         "no restart), with the mpmsdem module of --yade-pythonpath and --baseline-yade-pythonpath")
+    ap.add_argument("--yade-pythonpath", default=os.path.join(bench_mpm.REPO, "build", "python"),
+                    help="PYTHONPATH entry holding the mpmsdem package to measure (default build/python)")
+    ap.add_argument("--baseline-yade-pythonpath", help="the same for the older build")
     ap.add_argument("--markdown", help="append the table, the commit, the machine and the command to FILE")
     args = ap.parse_args()
     if args.steps < 1:
@@ -94,6 +103,24 @@ def main():
                         solverBytes = bench_mpm.run_one(args.exe, path, "cpu", precision, 2, args.threads,
                                                         None)["bytes_per_particle"]
                     peaks, restarts = {}, {}
+                    if args.yade and vtk == "binary":
+                        yadeRuns = [("yade new", args.yade_pythonpath)]
+                        if args.baseline_yade_pythonpath:
+                            yadeRuns.append(("yade old", args.baseline_yade_pythonpath))
+                        for name, path_ in yadeRuns:
+                            out = os.path.join(tmp, "out")
+                            shutil.rmtree(out, ignore_errors=True)
+                            yenv = dict(env, PYTHONPATH=os.pathsep.join([path_] + [p for p in sys.path if "yade" in p]))
+                            scene["run"]["precision"] = precision
+                            with open(path, "w") as f:
+                                json.dump(scene, f)
+                            peak = peak_rss([sys.executable, YADE_RUN, path, out, str(args.steps)], yenv)
+                            print("%d particles, %s, %d copies, %s: peak %.0f MB (%.0f B/particle)"
+                                  % (n, precision, copies, name, peak / 1e6, peak / n), flush=True)
+                            body.append([str(n), precision, str(copies), "binary", name, "%.0f" % (peak / 1e6),
+                                         "%.0f" % (peak / n), "", "%.0f" % solverBytes]
+                                        + ([""] if args.baseline_exe else []))
+                        scene["run"].pop("precision", None)
                     for name, exe in exes:
                         out = os.path.join(tmp, "out")
                         shutil.rmtree(out, ignore_errors=True)
