@@ -368,7 +368,7 @@ class OutputRun {
     if (restart_) {
       state_time_ = solver_.time();  // the snapshot we start from is already in the file
     } else {
-      recordSeries();
+      recordSeries(diagnose());
       writeSnapshot();
     }
     // next record and snapshot times: the first multiples of their intervals after now
@@ -392,8 +392,11 @@ class OutputRun {
         const bool series = t >= nextSeries * (1 - 1e-12), output = t >= nextOutput * (1 - 1e-12);
         const double f = progressFraction(solver_, run, maxSteps, firstStep);
         const bool report = f >= nextReport || finished(solver_, run, maxSteps);
+        // one pass over the particles serves the series record and the progress line
+        std::optional<mpm::Diagnostics> d;
+        if (series || report) d = diagnose();
         if (series) {
-          recordSeries(dt);
+          recordSeries(*d, dt);
           while (nextSeries <= t * (1 + 1e-12)) nextSeries += run.seriesEvery;
         }
         if (output) {
@@ -401,10 +404,9 @@ class OutputRun {
           while (nextOutput <= t * (1 + 1e-12)) nextOutput += run.outputEvery;
         }
         if (report) {
-          const mpm::Diagnostics d = diagnose();
           const double el = since(t0);
           std::printf("[%5.1f%%] t=%.5g s step=%ld dt=%.3g s KE=%.5g J front=%.5g m rate=%.3g upd/s ETA=%s\n",
-                      100 * f, t, solver_.steps(), dt, d.kineticEnergy, d.frontX,
+                      100 * f, t, solver_.steps(), dt, d->kineticEnergy, d->frontX,
                       n * double(solver_.steps() - firstStep) / el,
                       formatDuration(f > 0 ? el * (1 - f) / f : 0).c_str());
           std::fflush(stdout);
@@ -453,8 +455,7 @@ class OutputRun {
  private:
   mpm::Diagnostics diagnose() { return mpm::diagnose(slices_, solver_.params().gravity); }
 
-  void recordSeries(double dt = 0) {
-    const mpm::Diagnostics d = diagnose();
+  void recordSeries(const mpm::Diagnostics& d, double dt = 0) {
     h5_.appendScalar("time", solver_.time());
     h5_.appendScalar("step", double(solver_.steps()));
     h5_.appendScalar("dt", dt);

@@ -67,13 +67,18 @@ template <typename T>
 void MpmCpu<T>::setParticles(const ParticleSet& ps) {
   validateParticles(params_, ps);  // a bad set leaves the solver as it was
   WholeParticleSet whole(ps);
-  setParticles(whole);
+  load(whole, true);
 }
 
-// Slice by slice: the state is allocated once, then each slice is checked and loaded; a bad
-// particle leaves the solver without particles.
 template <typename T>
 void MpmCpu<T>::setParticles(ParticleSlices& particles) {
+  load(particles, false);
+}
+
+// Slice by slice: the state is allocated once, then each slice is checked (unless `checked`:
+// the caller did) and loaded; a bad particle leaves the solver without particles.
+template <typename T>
+void MpmCpu<T>::load(ParticleSlices& particles, bool checked) {
   n_ = 0;
   const std::size_t n = particles.size();
   std::vector<int>().swap(slotOf_);
@@ -90,13 +95,17 @@ void MpmCpu<T>::setParticles(ParticleSlices& particles) {
   State& s = state_[0];
   maxSpeed_ = 0;
   double massSum = 0;
-  bool anyForce = false;
+  hasFext_ = false;
+  for (auto& a : fext_) std::vector<T>().swap(a);
   for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
     const std::size_t count = std::min(particles.sliceSize(), n - first);
     const ParticleSet& ps = particles.slice(first, count);
     if (ps.size() != count)
       throwParameter("particle slice " + std::to_string(first) + " size", ps.size(), "", std::to_string(count));
-    validateParticleSlice(params_, ps, first, massSum);
+    if (checked)
+      for (std::size_t i = 0; i < count; ++i) massSum += ps.mass[i];
+    else
+      validateParticleSlice(params_, ps, first, massSum);
     for (std::size_t i = 0; i < count; ++i) {
       const std::size_t p = first + i;
       mass_[p] = static_cast<T>(ps.mass[i]);
@@ -113,29 +122,23 @@ void MpmCpu<T>::setParticles(ParticleSlices& particles) {
       const double vx = s.v[0][p], vy = s.v[1][p], vz = s.v[2][p];
       maxSpeed_ = std::max(maxSpeed_, std::sqrt(vx * vx + vy * vy + vz * vz));
     }
-    anyForce = anyForce || std::any_of(ps.fext.begin(), ps.fext.end(), [](double f) { return f != 0; });
+    // All-zero forces (every seeded set has them) load as none: P2G adds the same +0 either
+    // way, and no force buffer is held until a coupling opens one. The buffer starts at the
+    // first slice with a force; the slices before it held zeros.
+    if (!hasFext_ && std::any_of(ps.fext.begin(), ps.fext.end(), [](double f) { return f != 0; })) {
+      for (int d = 0; d < 3; ++d) fext_[d].assign(n, T(0));
+      hasFext_ = true;
+    }
+    for (std::size_t i = 0; hasFext_ && !ps.fext.empty() && i < count; ++i)
+      for (int d = 0; d < 3; ++d) {
+        const double f = ps.fext[3 * i + d];
+        if (!std::isfinite(f))
+          throwParameter("externalForces[" + std::to_string(3 * (first + i) + d) + "]", f, "N", "finite");
+        fext_[d][first + i] = static_cast<T>(f);
+      }
   }
   grid_.massEps = static_cast<T>(1e-12 * (n ? massSum / static_cast<double>(n) : 1.0));
   n_ = n;
-  hasFext_ = false;
-  // All-zero forces (every seeded set has them) load as none: P2G adds the same +0 either way,
-  // and no force buffer is held until a coupling opens one.
-  for (auto& a : fext_) std::vector<T>().swap(a);
-  if (anyForce) {
-    for (int d = 0; d < 3; ++d) fext_[d].assign(n_, T(0));
-    for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
-      const std::size_t count = std::min(particles.sliceSize(), n - first);
-      const ParticleSet& ps = particles.slice(first, count);
-      for (std::size_t i = 0; i < count * (ps.fext.empty() ? 0 : 1); ++i)
-        for (int d = 0; d < 3; ++d) {
-          const double f = ps.fext[3 * i + d];
-          if (!std::isfinite(f))
-            throwParameter("externalForces[" + std::to_string(3 * (first + i) + d) + "]", f, "N", "finite");
-          fext_[d][first + i] = static_cast<T>(f);
-        }
-    }
-    hasFext_ = true;
-  }
   order_.assign(n_, 0);
   blockOf_.assign(n_, 0);
 }

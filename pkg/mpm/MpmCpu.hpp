@@ -80,6 +80,7 @@ class MpmCpu : public MpmSolver {
   std::size_t memoryBytes() const override;
 
  private:
+  void load(ParticleSlices& particles, bool checked);
   struct State {
     std::vector<T> x[3], v[3], s[6], J, gdp;
     std::vector<std::uint8_t> phase;

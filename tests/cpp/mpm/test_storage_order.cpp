@@ -191,3 +191,41 @@ TEST(StorageOrder, SlicesByNumberAreTheWholeSetsRanges) {
       EXPECT_THROW(s->getParticles(slice, ps.size() - 2, 3), ParameterError);
     }
 }
+
+// Loading slice by slice: forces that first appear in a later slice are loaded (the slices
+// before held zeros), and a non-finite one is refused by its index.
+TEST(StorageOrder, ForcesFirstGivenInALaterSliceAreLoaded) {
+  ParticleSet ps;
+  const MpmParams prm = columnScene(ps);
+  class InSlices : public ParticleSlices {
+   public:
+    explicit InSlices(const ParticleSet& set) : set_(set) {}
+    std::size_t size() const override { return set_.size(); }
+    std::size_t sliceSize() const override { return 97; }
+    const ParticleSet& slice(std::size_t first, std::size_t count) override {
+      copyParticleRange(set_, first, count, buf_);
+      return buf_;
+    }
+
+   private:
+    const ParticleSet& set_;
+    ParticleSet buf_;
+  };
+  const std::size_t k = ps.size() - 3;
+  ASSERT_GT(k, 2 * 97u);
+  ps.fext[3 * k + 2] = 0.25;
+  auto s = makeSolver(prm);
+  InSlices slices(ps);
+  s->setParticles(slices);
+  ParticleSet got;
+  s->getParticles(got);
+  EXPECT_TRUE(got.fext == ps.fext);
+  ps.fext[3 * k] = std::nan("");
+  try {
+    s->setParticles(slices);
+    ADD_FAILURE() << "a NaN force was loaded";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("externalForces[" + std::to_string(3 * k) + "]"), std::string::npos)
+        << e.what();
+  }
+}
