@@ -11,7 +11,8 @@
 //   --out DIR                output folder (run.output_dir)
 //   --steps N                run exactly N steps (N >= 1) instead of run.duration
 //   --restart                continue from the last snapshot of the output folder's mpm.h5
-//                            (its particles, time and step), appending to its outputs;
+//                            (its particles, time and step), appending to its outputs as
+//                            they were at that snapshot (mpm.h5.restart, coupled.h5.restart);
 //                            --steps then counts the steps of this run. The scene must be
 //                            the one the run was started with (the file's "parameters"),
 //                            except for kRestartFree below (exit 2 naming what changed).
@@ -27,8 +28,10 @@
 //   mpm.h5          HDF5 (pkg/io/Hdf5Writer.hpp): /series/{time, step, dt, kinetic_energy,
 //                   front_x, height_z, centre_of_mass (3), max_speed, flowing_fraction,
 //                   gasified_fraction} every run.series_every, /snapshots every
-//                   run.output_every, root attributes units, parameters (scene JSON),
-//                   solver, and on failure "failure" (message) and "failure_snapshot".
+//                   run.output_every (each a file in mpm.snapshots/, linked from mpm.h5),
+//                   root attributes units, parameters (scene JSON), solver, and on failure
+//                   "failure" (message) and "failure_snapshot". mpm.h5.restart (and
+//                   coupled.h5.restart): the file as of the last snapshot, for --restart.
 //   particles.pvd + vtk/particles_NNNNNN.vtp   ParaView series (unless run.vtk = "none").
 //   With blocks: coupled.h5 (pkg/coupling/CoupledOutput.hpp: per-block pos, vel, rotation,
 //                   flow_force, face_force, edge_force, flow_torque, contacts, and the energies
@@ -332,7 +335,7 @@ class OutputRun {
         restart_(restart),
         dir_(scene.run.outputDir),
         h5_((std::filesystem::create_directories(dir_), (dir_ / "mpm.h5").string()),
-            restart ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate),
+            restart ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate, true),
         pvd_(scene.run.vtk == "none" || stepper.coupled
                  ? std::nullopt
                  : std::optional<io::PvdCollection>(std::in_place, (dir_ / "particles.pvd").string(), restart)) {
@@ -494,6 +497,10 @@ class OutputRun {
                             scene_.run.vtk == "ascii" ? io::VtkEncoding::Ascii : io::VtkEncoding::AppendedRaw);
       pvd_->add(solver_.time(), name);
     }
+    // What a restart goes back to: the files as they are now, then (coupled) the checkpoint
+    // naming this snapshot, so every checkpoint finds its records in the copies.
+    if (coupled_) coupled_->h5().commit();
+    h5_.commit();
     if (checkpoint && checkpoints_)
       coupling::writeCheckpoint((dir_ / "coupled.checkpoint.json").string(),
                                 coupling::captureCheckpoint(*stepper_.coupled, index, stepper_.lastDt,
@@ -544,14 +551,21 @@ int main(int argc, char** argv) {
                            "--bench only; build with libhdf5 for outputs and --restart");
 #else
     if (opt.restart) {
-      const std::string h5 = (std::filesystem::path(scene.run.outputDir) / "mpm.h5").string();
-      if (!std::filesystem::exists(h5)) throwParameter("--restart", h5, "", "an existing mpm.h5 of an earlier run");
+      const std::filesystem::path dir(scene.run.outputDir);
+      const std::string h5 = (dir / "mpm.h5").string();
+      // Back to the files as they were at the last snapshot: a run killed while it flushed
+      // one of them may have left it unreadable.
+      if (!io::resumeFromCommit(h5))
+        throwParameter("--restart", dir.string(), "",
+                       "an output folder with a restart point (mpm.h5.restart, copied with every snapshot); there is "
+                       "none: the run was stopped before its first snapshot was complete, or it was written by a "
+                       "version without restart points. Run the scene again without --restart");
+      if (!blocks.empty()) io::resumeFromCommit((dir / "coupled.h5").string());
       checkRestartScene(scene, h5);
       long last = io::readNumSnapshots(h5) - 1;
       if (last < 0) throwParameter("--restart", h5, "", "a file holding at least one snapshot");
       if (!blocks.empty()) {
-        checkpoint = coupling::readCheckpoint(
-            (std::filesystem::path(scene.run.outputDir) / "coupled.checkpoint.json").string());
+        checkpoint = coupling::readCheckpoint((dir / "coupled.checkpoint.json").string());
         if (checkpoint->snapshot < 0 || checkpoint->snapshot > last)
           throwParameter("--restart: coupled.checkpoint.json snapshot", checkpoint->snapshot, "",
                          "a snapshot of " + h5 + ", 0 to " + std::to_string(last));

@@ -118,6 +118,10 @@ class PyCoupling {
     output_ = std::make_unique<coupling::CoupledOutput>(dir, append, sdem_.engine());
     if (!ori0_.empty()) output_->setReferenceOrientations(ori0_);
   }
+  // A checkpoint is being taken: what a restart from it goes back to (Hdf5Writer::commit).
+  void commitOutput() {
+    if (output_) output_->h5().commit();
+  }
   // The blocks' state is read from YADE first: between two steps NewtonIntegrator has moved
   // them past what the engine last read.
   void record(const bp::object& bodies, double time, long step) {
@@ -250,6 +254,7 @@ void exportCoupling() {
       .def("timings", &PyCoupling::timings)
       .def("resetTimings", &PyCoupling::resetTimings)
       .def("openOutput", &PyCoupling::openOutput)
+      .def("commitOutput", &PyCoupling::commitOutput)
       .def("record", &PyCoupling::record)
       .def("appendSeries", &PyCoupling::appendSeries)
       .def("writeVtk", &PyCoupling::writeVtk)

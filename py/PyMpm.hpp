@@ -111,7 +111,7 @@ class PyMpm {
   void openOutput(const std::string& dir, bool append) {
     std::filesystem::create_directories(std::filesystem::path(dir) / "vtk");
     const auto mode = append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate;
-    h5_ = std::make_unique<io::Hdf5Writer>((std::filesystem::path(dir) / "mpm.h5").string(), mode);
+    h5_ = std::make_unique<io::Hdf5Writer>((std::filesystem::path(dir) / "mpm.h5").string(), mode, true);
     writeHeader(*h5_);
     pvd_ = std::make_unique<io::PvdCollection>((std::filesystem::path(dir) / "particles.pvd").string(), append);
     dir_ = dir;
@@ -135,6 +135,7 @@ class PyMpm {
   // A checkpoint: one HDF5 file with the scene and the full particle state at this time
   // (the same layout as mpm.h5, so any output file also works as a checkpoint).
   void saveCheckpoint(const std::string& path) {
+    if (h5_) h5_->commit();  // a restart from this checkpoint finds the outputs as they are now
     const std::string tmp = path + ".tmp";
     {
       io::Hdf5Writer w(tmp, io::Hdf5Writer::Mode::Truncate);

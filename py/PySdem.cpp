@@ -20,17 +20,21 @@ bp::tuple readMeshFile(const std::string& path, double scale) {
   return bp::make_tuple(v, t);
 }
 
-// A restart from a checkpoint taken at `time`: records, snapshots and ParaView entries later
-// than it were written by the run that went on past the checkpoint and are dropped, so that
-// the continued run appends without duplicates or steps back in time. Either path may be
-// empty or name a file that does not exist yet (nothing to do). Returns (time of the last
-// series record kept or NaN, snapshots kept, time of the last .pvd entry kept or NaN).
+// A restart from a checkpoint taken at `time`: the HDF5 file goes back to its copy of the
+// last commit (io::resumeFromCommit; the killed run may have left the file itself damaged),
+// then records, snapshots and ParaView entries later than `time` were written by the run that
+// went on past the checkpoint and are dropped, so that the continued run appends without
+// duplicates or steps back in time. Either path may be empty or name a file that does not
+// exist yet (nothing to do). Returns (time of the last series record kept or NaN, snapshots
+// kept, time of the last .pvd entry kept or NaN).
 bp::tuple truncateOutputsAfter(const std::string& h5, const std::string& pvd, double time) {
+  namespace fs = std::filesystem;
   double lastRecord = std::nan("");
   long snapshots = 0;
   double lastVtk = std::nan("");
-  if (!h5.empty() && std::filesystem::exists(h5)) {
-    io::Hdf5Writer w(h5, io::Hdf5Writer::Mode::Append);
+  if (!h5.empty() && (io::resumeFromCommit(h5) || fs::exists(h5))) {
+    const bool snapshotFiles = fs::is_directory(fs::path(h5).parent_path() / io::snapshotFolder(h5));
+    io::Hdf5Writer w(h5, io::Hdf5Writer::Mode::Append, snapshotFiles);
     w.truncateSeriesAfter("time", time, &lastRecord);
     snapshots = w.dropSnapshotsAfter(time);
   }
@@ -42,7 +46,8 @@ bp::tuple truncateOutputsAfter(const std::string& h5, const std::string& pvd, do
 
 void exportSdem() {
   bp::def("truncateOutputsAfter", &truncateOutputsAfter, (bp::arg("h5"), bp::arg("pvd"), bp::arg("time")),
-          "Drop the HDF5 series records, snapshots and .pvd entries later than time [s] (a restart).");
+          "Restore the HDF5 file's last commit, then drop its series records, snapshots and the .pvd entries "
+          "later than time [s] (a restart).");
   bp::def("readMeshFile", &readMeshFile, (bp::arg("path"), bp::arg("scale") = 1.0),
           "(vertices, triangles) of an STL/OBJ file as SpheroPolyhedron.meshFile reads it [m].");
   bp::class_<SdemMaterial>("SdemMat",
@@ -73,6 +78,7 @@ void exportSdem() {
       .def("contacts", &YadeSdemBridge::contacts)
       .def("histories", &YadeSdemBridge::histories)
       .def("openOutput", &YadeSdemBridge::openOutput)
+      .def("commitOutput", &YadeSdemBridge::commitOutput)
       .def("record", &YadeSdemBridge::record)
       .def("recordCurrent", &YadeSdemBridge::recordCurrent)
       .def("writeVtk", &YadeSdemBridge::writeVtk)

@@ -256,14 +256,19 @@ class YadeSdemBridge {
   }
 
   // ---- outputs: <dir>/sdem.h5 (append-only series) and <dir>/bodies.pvd + vtk/bodies_*.vtp
+  // A checkpoint is being taken: what a restart from it goes back to (Hdf5Writer::commit).
+  void commitOutput() {
+    if (h5_) h5_->commit();
+  }
   // append: continue the files of a restored run; records after `time` (the checkpoint's),
   // left by the run that went on past it, are dropped. Returns the times of the last HDF5
   // record and the last VTK entry kept (NaN: none), from which the next ones are due.
   bp::tuple openOutput(const std::string& dir, bool append, double time) {
     namespace fs = std::filesystem;
     fs::create_directories(fs::path(dir) / "vtk");
-    h5_ = std::make_unique<io::Hdf5Writer>((fs::path(dir) / "sdem.h5").string(),
-                                           append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate);
+    const std::string h5 = (fs::path(dir) / "sdem.h5").string();
+    if (append) io::resumeFromCommit(h5);  // the file as of the checkpoint: a kill may have damaged it since
+    h5_ = std::make_unique<io::Hdf5Writer>(h5, append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate);
     double lastRecord = std::nan(""), lastVtk = std::nan("");
     if (append) h5_->truncateSeriesAfter("time", time, &lastRecord);
     std::ostringstream ids;

@@ -62,6 +62,17 @@ std::string snapshotName(long index) {
 
 bool linkExists(hid_t loc, const std::string& name) { return H5Lexists(loc, name.c_str(), H5P_DEFAULT) > 0; }
 
+// `to` becomes a copy of `from`, whole or not at all: a kill during the copy leaves `to` as it
+// was (the copy goes to a temporary name, renamed over `to` once complete).
+void copyWhole(const std::string& from, const std::string& to) {
+  namespace fs = std::filesystem;
+  const std::string part = to + ".part";
+  std::error_code ec;
+  fs::copy_file(from, part, fs::copy_options::overwrite_existing, ec);
+  if (!ec) fs::rename(part, to, ec);
+  if (ec) fail(to, "cannot copy " + from + " there: " + ec.message());
+}
+
 hid_t openOrCreateGroup(hid_t file, const std::string& name, const std::string& path) {
   if (linkExists(file, name)) return check(H5Gopen2(file, name.c_str(), H5P_DEFAULT), path, "cannot open group " + name);
   return check(H5Gcreate2(file, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path,
@@ -123,13 +134,27 @@ std::vector<T> readArray(hid_t loc, const std::string& name, hid_t memType, std:
 
 // ------------------------------------------------------------------------------ writer
 
-Hdf5Writer::Hdf5Writer(const std::string& path, Mode mode) : path_(path) {
+Hdf5Writer::Hdf5Writer(const std::string& path, Mode mode, bool snapshotFiles)
+    : path_(path), snapshotFolder_(snapshotFiles ? snapshotFolder(path) : "") {
+  namespace fs = std::filesystem;
   quietHdf5();
+  const fs::path folder = fs::path(path).parent_path() / snapshotFolder_;
+  std::error_code ec;
   Handle fapl(fileAccessWithoutLocking(), H5Pclose);
-  if (mode == Mode::Append && std::filesystem::exists(path)) {
+  if (mode == Mode::Append && fs::exists(path)) {
     file_ = check(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl), path, "cannot open for appending");
+    if (snapshotFiles && fs::is_directory(folder))  // snapshots a killed run left half-written
+      for (const auto& entry : fs::directory_iterator(folder))
+        if (entry.path().extension() == ".part") fs::remove(entry.path(), ec);
   } else {
+    // a new run: nothing of an earlier one in this place may be restored or linked later
+    fs::remove(restartCopyPath(path), ec);
+    if (snapshotFiles) fs::remove_all(folder, ec);
     file_ = check(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl), path, "cannot create");
+  }
+  if (snapshotFiles) {
+    fs::create_directories(folder, ec);
+    if (ec) fail(path, "cannot create the snapshot folder " + folder.string() + ": " + ec.message());
   }
   series_ = openOrCreateGroup(file_, "series", path);
   snapshots_ = openOrCreateGroup(file_, "snapshots", path);
@@ -146,6 +171,28 @@ Hdf5Writer::~Hdf5Writer() {
 }
 
 void Hdf5Writer::flush() { check(H5Fflush(file_, H5F_SCOPE_GLOBAL), path_, "flush failed"); }
+
+std::string Hdf5Writer::snapshotFile(long index) const {
+  return (std::filesystem::path(snapshotFolder_) / (snapshotName(index) + ".h5")).string();
+}
+
+void Hdf5Writer::commit() {
+  flush();
+  copyWhole(path_, restartCopyPath(path_));
+}
+
+std::string snapshotFolder(const std::string& path) {
+  return std::filesystem::path(path).stem().string() + ".snapshots";
+}
+
+std::string restartCopyPath(const std::string& path) { return path + ".restart"; }
+
+bool resumeFromCommit(const std::string& path) {
+  const std::string copy = restartCopyPath(path);
+  if (!std::filesystem::exists(copy)) return false;
+  copyWhole(copy, path);
+  return true;
+}
 
 void Hdf5Writer::setAttribute(const std::string& name, const std::string& value) {
   if (H5Aexists(file_, name.c_str()) > 0) H5Adelete(file_, name.c_str());
@@ -192,10 +239,12 @@ long Hdf5Writer::truncateSeriesAfter(const std::string& timeName, double time, d
 }
 
 long Hdf5Writer::dropSnapshotsAfter(double time) {
+  namespace fs = std::filesystem;
   while (nextSnapshot_ > 0) {
     const std::string name = snapshotName(nextSnapshot_ - 1);
-    double t = 0;
-    {
+    const fs::path file = fs::path(path_).parent_path() / snapshotFile(nextSnapshot_ - 1);
+    double t = std::numeric_limits<double>::infinity();
+    if (snapshotFolder_.empty() || fs::exists(file)) {
       Handle g(check(H5Gopen2(snapshots_, name.c_str(), H5P_DEFAULT), path_, "cannot open snapshot " + name),
                H5Gclose);
       Handle a(check(H5Aopen(g, "time", H5P_DEFAULT), path_, "no attribute time in snapshot " + name), H5Aclose);
@@ -203,6 +252,10 @@ long Hdf5Writer::dropSnapshotsAfter(double time) {
     }
     if (t <= time) break;
     check(H5Ldelete(snapshots_, name.c_str(), H5P_DEFAULT), path_, "cannot drop snapshot " + name);
+    if (!snapshotFolder_.empty()) {
+      std::error_code ec;
+      fs::remove(file, ec);
+    }
     --nextSnapshot_;
   }
   flush();
@@ -275,67 +328,93 @@ long Hdf5Writer::writeSnapshot(const mpm::ParticleSet& p, double time, long step
   return writeSnapshot(whole, time, step);
 }
 
-long Hdf5Writer::writeSnapshot(mpm::ParticleSlices& particles, double time, long step) {
+namespace {
+
+// A snapshot's datasets and its time and step attributes, written into `loc` (a group, or a
+// snapshot file's root) slice by slice.
+void writeSnapshotArrays(hid_t loc, mpm::ParticleSlices& particles, double time, long step, const std::string& path) {
   const std::size_t n = particles.size();
-  if (linkExists(snapshots_, kIncomplete)) H5Ldelete(snapshots_, kIncomplete, H5P_DEFAULT);
-  {
-    Handle g(check(H5Gcreate2(snapshots_, kIncomplete, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path_,
-                   "cannot create snapshot group"),
-             H5Gclose);
-    struct Column {
-      const char* name;
-      hid_t fileType, memType;
-      hsize_t cols;
-    };
-    const Column columns[] = {{"x", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
-                              {"v", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
-                              {"stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 6},
-                              {"density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
-                              {"phase", H5T_STD_U8LE, H5T_NATIVE_UINT8, 1},
-                              {"gammaDotP", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
-                              {"mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
-                              {"volume0", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
-                              {"J", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1}};
-    std::vector<std::unique_ptr<Handle>> sets;
-    for (const Column& c : columns) {
-      const hsize_t dims[2] = {n, c.cols};
-      Handle space(check(H5Screate_simple(c.cols == 1 ? 1 : 2, dims, nullptr), path_,
-                         std::string("dataspace for ") + c.name),
-                   H5Sclose);
-      sets.push_back(std::make_unique<Handle>(
-          check(H5Dcreate2(g, c.name, c.fileType, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path_,
-                std::string("cannot create dataset ") + c.name),
-          H5Dclose));
-    }
-    std::vector<double> density;
-    for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
-      const std::size_t count = std::min(particles.sliceSize(), n - first);
-      const mpm::ParticleSet& p = particles.slice(first, count);
-      p.validateSizes();
-      if (p.size() != count) fail(path_, "a particle slice of " + std::to_string(count) + " came back with " +
-                                             std::to_string(p.size()));
-      density.resize(count);
-      for (std::size_t i = 0; i < count; ++i) density[i] = p.density(i);
-      const void* data[] = {p.x.data(),         p.v.data(),    p.stress.data(),  density.data(), p.phase.data(),
-                            p.gammaDotP.data(), p.mass.data(), p.volume0.data(), p.J.data()};
-      for (std::size_t k = 0; k < sets.size(); ++k) {
-        const hsize_t start[2] = {first, 0}, size[2] = {count, columns[k].cols};
-        const int rank = columns[k].cols == 1 ? 1 : 2;
-        Handle fileSpace(H5Dget_space(*sets[k]), H5Sclose);
-        check(H5Sselect_hyperslab(fileSpace, H5S_SELECT_SET, start, nullptr, size, nullptr), path_,
-              std::string("cannot select rows of ") + columns[k].name);
-        Handle memSpace(check(H5Screate_simple(rank, size, nullptr), path_, "memory dataspace"), H5Sclose);
-        check(H5Dwrite(*sets[k], columns[k].memType, memSpace, fileSpace, H5P_DEFAULT, data[k]), path_,
-              std::string("cannot write ") + columns[k].name);
-      }
-    }
-    writeDoubleAttribute(g, "time", time, path_);
-    writeLongAttribute(g, "step", step, path_);
+  struct Column {
+    const char* name;
+    hid_t fileType, memType;
+    hsize_t cols;
+  };
+  const Column columns[] = {{"x", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                            {"v", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
+                            {"stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 6},
+                            {"density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                            {"phase", H5T_STD_U8LE, H5T_NATIVE_UINT8, 1},
+                            {"gammaDotP", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                            {"mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                            {"volume0", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
+                            {"J", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1}};
+  std::vector<std::unique_ptr<Handle>> sets;
+  for (const Column& c : columns) {
+    const hsize_t dims[2] = {n, c.cols};
+    Handle space(check(H5Screate_simple(c.cols == 1 ? 1 : 2, dims, nullptr), path,
+                       std::string("dataspace for ") + c.name),
+                 H5Sclose);
+    sets.push_back(std::make_unique<Handle>(
+        check(H5Dcreate2(loc, c.name, c.fileType, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path,
+              std::string("cannot create dataset ") + c.name),
+        H5Dclose));
   }
-  flush();
+  std::vector<double> density;
+  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
+    const std::size_t count = std::min(particles.sliceSize(), n - first);
+    const mpm::ParticleSet& p = particles.slice(first, count);
+    p.validateSizes();
+    if (p.size() != count) fail(path, "a particle slice of " + std::to_string(count) + " came back with " +
+                                           std::to_string(p.size()));
+    density.resize(count);
+    for (std::size_t i = 0; i < count; ++i) density[i] = p.density(i);
+    const void* data[] = {p.x.data(),         p.v.data(),    p.stress.data(),  density.data(), p.phase.data(),
+                          p.gammaDotP.data(), p.mass.data(), p.volume0.data(), p.J.data()};
+    for (std::size_t k = 0; k < sets.size(); ++k) {
+      const hsize_t start[2] = {first, 0}, size[2] = {count, columns[k].cols};
+      const int rank = columns[k].cols == 1 ? 1 : 2;
+      Handle fileSpace(H5Dget_space(*sets[k]), H5Sclose);
+      check(H5Sselect_hyperslab(fileSpace, H5S_SELECT_SET, start, nullptr, size, nullptr), path,
+            std::string("cannot select rows of ") + columns[k].name);
+      Handle memSpace(check(H5Screate_simple(rank, size, nullptr), path, "memory dataspace"), H5Sclose);
+      check(H5Dwrite(*sets[k], columns[k].memType, memSpace, fileSpace, H5P_DEFAULT, data[k]), path,
+            std::string("cannot write ") + columns[k].name);
+    }
+  }
+  writeDoubleAttribute(loc, "time", time, path);
+  writeLongAttribute(loc, "step", step, path);
+}
+
+}  // namespace
+
+long Hdf5Writer::writeSnapshot(mpm::ParticleSlices& particles, double time, long step) {
   const long index = nextSnapshot_;
-  check(H5Lmove(snapshots_, kIncomplete, snapshots_, snapshotName(index).c_str(), H5P_DEFAULT, H5P_DEFAULT), path_,
-        "cannot name snapshot " + snapshotName(index));
+  const std::string name = snapshotName(index);
+  if (snapshotFolder_.empty()) {
+    if (linkExists(snapshots_, kIncomplete)) H5Ldelete(snapshots_, kIncomplete, H5P_DEFAULT);
+    {
+      Handle g(check(H5Gcreate2(snapshots_, kIncomplete, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path_,
+                     "cannot create snapshot group"),
+               H5Gclose);
+      writeSnapshotArrays(g, particles, time, step, path_);
+    }
+    flush();
+    check(H5Lmove(snapshots_, kIncomplete, snapshots_, name.c_str(), H5P_DEFAULT, H5P_DEFAULT), path_,
+          "cannot name snapshot " + name);
+  } else {
+    const std::string file = (std::filesystem::path(path_).parent_path() / snapshotFile(index)).string();
+    const std::string part = file + ".part";
+    {
+      Handle fapl(fileAccessWithoutLocking(), H5Pclose);
+      Handle f(check(H5Fcreate(part.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl), part, "cannot create"), H5Fclose);
+      writeSnapshotArrays(f, particles, time, step, part);
+    }
+    std::error_code ec;
+    std::filesystem::rename(part, file, ec);
+    if (ec) fail(file, "cannot rename the finished snapshot " + part + ": " + ec.message());
+    check(H5Lcreate_external(snapshotFile(index).c_str(), "/", snapshots_, name.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+          path_, "cannot link snapshot " + name);
+  }
   flush();
   ++nextSnapshot_;
   return index;

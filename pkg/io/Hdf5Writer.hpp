@@ -13,10 +13,20 @@
 //                            phase (N) uint8 (0 elastic, 1 flowing, 2 gasified),
 //                            gammaDotP (N) [1/s], mass (N) [kg], volume0 (N) [m^3], J (N) [-]
 //                          (mass, volume0 and J make a snapshot a complete restart state).
+//                          With snapshot files (run outputs), each snapshot is a file of its
+//                          own, <name>.snapshots/NNNNNN.h5, holding that group's attributes and
+//                          datasets at its root, and /snapshots/NNNNNN is an external link to
+//                          it: h5py and the readers below follow it as if it were the group.
 //
 // Every record is followed by H5Fflush, so a run killed between two records leaves a file
-// whose every record written so far can be read. The writer disables HDF5's file locking,
-// so h5py can open the file (read-only) while the run is still writing.
+// whose every record written so far can be read. A run killed *during* a flush can leave the
+// file unreadable: HDF5 rewrites its metadata in place, in several writes. commit() is the
+// guard for restarts: it copies the flushed file to <file>.restart (a temporary name renamed,
+// so the copy is always whole), and resumeFromCommit() puts that copy back before a restart
+// appends. Snapshot files are written under a temporary name and renamed, so they are whole or
+// absent; keeping them out of the main file keeps that file, and each commit's copy, small.
+// The writer disables HDF5's file locking, so h5py can open the file (read-only) while the
+// run is still writing.
 #pragma once
 #include <hdf5.h>
 
@@ -32,12 +42,15 @@ namespace io {
 
 class Hdf5Writer {
  public:
-  // Truncate: create the file (replacing an existing one). Append: open an existing file
-  // and continue its series and snapshot numbering (restart); creates it when absent.
+  // Truncate: create the file (replacing an existing one, its restart copy and its snapshot
+  // files). Append: open an existing file and continue its series and snapshot numbering
+  // (restart: call resumeFromCommit first); creates it when absent.
   enum class Mode { Truncate, Append };
 
-  // Throws RuntimeFailure when the file cannot be created or opened (names the path).
-  explicit Hdf5Writer(const std::string& path, Mode mode = Mode::Truncate);
+  // snapshotFiles: false keeps every snapshot a group inside the file (a checkpoint file);
+  // true writes each as a file of its own in snapshotFolder(path) (run outputs). Throws
+  // RuntimeFailure when the file cannot be created or opened (names the path).
+  explicit Hdf5Writer(const std::string& path, Mode mode = Mode::Truncate, bool snapshotFiles = false);
   ~Hdf5Writer();
   Hdf5Writer(const Hdf5Writer&) = delete;
   Hdf5Writer& operator=(const Hdf5Writer&) = delete;
@@ -66,8 +79,15 @@ class Hdf5Writer {
   // checkpoint, so the continued run appends without duplicates or steps back in time.
   long truncateSeriesAfter(const std::string& timeName, double time, double* lastKept = nullptr);
   // The same for /snapshots: drop the numbered snapshots whose `time` attribute is later than
-  // `time` (numbering continues after the last one kept); returns how many are kept.
+  // `time` (numbering continues after the last one kept), with their files; returns how many
+  // are kept. A last snapshot whose file is gone was dropped by an earlier restart that was
+  // killed before its next commit: it is dropped again.
   long dropSnapshotsAfter(double time);
+
+  // The file as it is now becomes what a restart goes back to: flushed and copied to
+  // restartCopyPath(path()), whole (written under a temporary name, then renamed). Call it
+  // where a run takes a checkpoint, before the checkpoint itself is written.
+  void commit();
 
   // Number of records in /series/<name> (0 when absent) and of snapshots in the file.
   long seriesLength(const std::string& name) const;
@@ -76,14 +96,27 @@ class Hdf5Writer {
  private:
   void appendRow(const std::string& name, const double* values, hsize_t width, bool isVector);
   void flush();
+  std::string snapshotFile(long index) const;  // relative to the file's directory
 
   std::string path_;
+  std::string snapshotFolder_;
   hid_t file_ = -1;
   hid_t series_ = -1;
   hid_t snapshots_ = -1;
   std::map<std::string, hid_t> openSeries_;  // series datasets kept open between appends
   long nextSnapshot_ = 0;
 };
+
+// The folder of a file's snapshot files, beside it: <name without .h5>.snapshots (mpm.h5:
+// mpm.snapshots/), and the name its links use (relative to the file's directory).
+std::string snapshotFolder(const std::string& path);
+// <path>.restart: the copy commit() keeps.
+std::string restartCopyPath(const std::string& path);
+// Before a restart appends to `path`: put the copy of its last commit() back in its place (the
+// records written after that commit belong to the killed run and are dropped by the restart
+// anyway; the file itself may be damaged). Returns false, leaving `path` alone, when there is
+// no copy (no commit yet, or a file of a version without commits).
+bool resumeFromCommit(const std::string& path);
 
 // Readers (used for restart and by tests). All throw RuntimeFailure naming the path and
 // the object when the file or the object does not exist.

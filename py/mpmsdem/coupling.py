@@ -351,6 +351,7 @@ class CoupledEngine(_AutoStep):
         keys, xi, slots = self._bridge.histories()
         self.sdem.save(prefix + ".sdem.json")
         self.mpm.save(prefix + ".mpm.h5")
+        self._bridge.commitOutput()  # a restart from this checkpoint finds coupled.h5 as it is now
         mats = {k: m for m, k in self.sdem._materials}
         data = {"format": "mpmsdem-coupled-2", "time": O.time, "iter": O.iter, "mpmTime": self.mpm.time,
                 "mpmSteps": self.mpm.solver.steps, "dtCheck": self.dtCheck, "historySlots": slots,

@@ -473,6 +473,7 @@ class SdemEngine(_AutoStep):
     def save(self, path):
         """Write the engine's state (shapes' recipes, materials, contact histories) as JSON,
         to go alongside ``O.save()``; restore with :meth:`SdemEngine.restore`."""
+        self._bridge.commitOutput()  # a restart from this checkpoint finds sdem.h5 as it is now
         hist = [[a, b, ka, kb, ia, ib, list(xi)] for (a, b, ka, kb, ia, ib, xi) in self._bridge.histories()]
         rolledBack = self._rolledBackAt is not None and self._rolledBackAt == O.iter
         data = {"format": "mpmsdem-sdem-2", "dtCheck": self.dtCheck,

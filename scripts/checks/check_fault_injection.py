@@ -19,9 +19,15 @@ then ``mpmsdem-run --restart`` (from the snapshot its coupled.checkpoint.json na
 user would; a run killed before its first checkpoint is started again. Its mpm.h5 and
 coupled.h5 (series and snapshots) must equal those of an unbroken driver run to the last bit.
 
+The opt-in "driver-writes" kind (``--kinds driver-writes``, needs strace) kills the driver at
+write calls drawn from all those of its run (strace's fault injection: SIGKILL at the n-th
+pwrite64), so that kills land inside HDF5's own flushes, where the random instants rarely fall;
+each killed run is restarted to its end and compared with the unbroken one.
+
 Exit status 0 when every check holds, 1 with the failures listed otherwise.
 
     python3 scripts/checks/check_fault_injection.py [--seed S] [--kills N] [--kinds sdem,mpm,coupled,driver]
+    python3 scripts/checks/check_fault_injection.py --kinds driver-writes --kills 300
 """
 import argparse
 import os
@@ -131,7 +137,7 @@ def runDriver(exe, scene, work, killAfter=None):
         p.kill()
         p.communicate()
         return True, False
-    if p.returncode == 2 and restart and ("is missing" in err or "at least one snapshot" in err):
+    if p.returncode == 2 and restart and "with a restart point" in err:
         # killed before its first checkpoint: nothing to continue, start again
         shutil.rmtree(out)
         return runDriver(exe, scene, work, killAfter)[0], True
@@ -161,6 +167,31 @@ def driverKills(root, rng, kills):
         done += 1
     runDriver(exe, scene, broken)
     return ref, broken, done, fresh
+
+
+def driverWriteKills(root, rng, kills):
+    """Kill the driver at `kills` write calls drawn from all those of an unbroken run (strace's
+    fault injection sends SIGKILL at the n-th pwrite64, so kills land inside HDF5 flushes too),
+    each followed by --restart to the end; every restarted folder must equal the unbroken one.
+    Returns (unbroken folder, [(write number, folder)], fresh starts)."""
+    if not shutil.which("strace"):
+        sys.exit("check_fault_injection: --kinds driver-writes needs strace (apt install strace)")
+    exe = driverExe()
+    scene = driverScene(root)
+    ref = os.path.join(root, "driver_ref")
+    count = subprocess.run(["strace", "-f", "-c", "-e", "trace=pwrite64", exe, scene, "--out", os.path.join(ref, "out")],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, check=True).stderr
+    writes = int(next(line.split()[3] for line in count.splitlines() if line.rstrip().endswith("pwrite64")))
+    runs, fresh = [], 0
+    for n in sorted(rng.sample(range(1, writes), min(kills, writes - 1))):
+        work = os.path.join(root, "driver_write_%d" % n)
+        subprocess.run(["strace", "-f", "-o", "/dev/null", "-e", "trace=pwrite64", "-e",
+                        "inject=pwrite64:signal=KILL:when=%d" % n, exe, scene, "--out", os.path.join(work, "out")],
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        _, again = runDriver(exe, scene, work)
+        fresh += again
+        runs.append((n, work))
+    return ref, runs, fresh
 
 
 def restoreKw(kind, out):
@@ -247,8 +278,10 @@ def h5Arrays(path):
     out = {}
     with h5py.File(path, "r") as f:
         f.visititems(lambda name, obj: out.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
-        for name, g in f.get("snapshots", {}).items():
+        for name, g in f.get("snapshots", {}).items():  # also those in files of their own (links)
             out["snapshots/%s@time" % name] = np.array(g.attrs["time"])
+            for k, d in g.items():
+                out["snapshots/%s/%s" % (name, k)] = d[()]
     return out
 
 
@@ -291,7 +324,8 @@ def main():
     ap.add_argument("--seed", type=int, default=None, help="seed of the kill steps (default: from the clock)")
     ap.add_argument("--kills", type=int, default=20, help="kills per kind of run (>= 1, default 20)")
     ap.add_argument("--kinds", default="sdem,mpm,coupled,driver",
-                    help="comma-separated subset of sdem,mpm,coupled,driver")
+                    help="comma-separated subset of sdem,mpm,coupled,driver, or driver-writes (opt-in, needs strace: "
+                         "the driver killed at --kills write calls drawn from its whole run)")
     ap.add_argument("--keep", action="store_true", help="keep the work folder (printed)")
     a = ap.parse_args()
     if a.kills < 1:
@@ -303,9 +337,20 @@ def main():
     failures = []
     try:
         for kind in a.kinds.split(","):
-            if kind not in PLAN:
-                ap.error("--kinds: %r is not one of %s" % (kind, ", ".join(PLAN)))
+            if kind not in PLAN and kind != "driver-writes":
+                ap.error("--kinds: %r is not one of %s, driver-writes" % (kind, ", ".join(PLAN)))
             t0 = time.time()
+            if kind == "driver-writes":
+                ref, runs, fresh = driverWriteKills(root, rng, a.kills)
+                for n, work in runs:
+                    before = len(failures)
+                    compare("driver", ref, work, failures)
+                    failures[before:] = ["killed at write %d: %s" % (n, f) for f in failures[before:]]
+                    if len(failures) == before:
+                        shutil.rmtree(work)
+                print("  %-8s %d kills at write calls %s (%d before a first snapshot: started again); %.1f s"
+                      % (kind, len(runs), [n for n, _ in runs], fresh, time.time() - t0))
+                continue
             if kind == "driver":
                 ref, broken, kills, fresh = driverKills(root, rng, a.kills)
                 compare(kind, ref, broken, failures)

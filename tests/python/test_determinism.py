@@ -85,6 +85,9 @@ def _h5Arrays(path):
     out = {}
     with h5py.File(path, "r") as f:
         f.visititems(lambda name, obj: out.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
+        for name, g in f.get("snapshots", {}).items():  # snapshot files are external links
+            for k, d in g.items():
+                out["snapshots/%s/%s" % (name, k)] = d[()]
     return out
 
 

@@ -170,17 +170,41 @@ def test_driver_restart_appends_and_reproduces(tmp_path):
             assert np.array_equal(f1["snapshots"][last][k][:], f2["snapshots"][last][k][:]), k
         assert np.array_equal(f1["series/time"][:], f2["series/time"][:])
     # a run killed between snapshots: its series goes past the last snapshot (emulated by
-    # deleting the final snapshot of a 290-step run); the restart drops those rows
+    # deleting the final snapshot of a 290-step run, from mpm.h5 and from the copy a restart
+    # goes back to); the restart drops those rows
     run("--out", str(tmp_path / "three"), "--steps", "290")
-    with h5py.File(tmp_path / "three" / "mpm.h5", "r+") as f:
-        last = sorted(f["snapshots"])[-1]
-        assert f["snapshots"][last].attrs["step"] == 290
-        del f["snapshots"][last]
-        assert f["series/time"][-1] > 0.055  # rows at 0.044 ... 0.056 s, past the 0.04 s snapshot
+    for name in ("mpm.h5", "mpm.h5.restart"):
+        with h5py.File(tmp_path / "three" / name, "r+") as f:
+            last = sorted(f["snapshots"])[-1]
+            assert f["snapshots"][last].attrs["step"] == 290
+            del f["snapshots"][last]
+            assert f["series/time"][-1] > 0.055  # rows at 0.044 ... 0.056 s, past the 0.04 s snapshot
     run("--out", str(tmp_path / "three"), "--steps", "200", "--restart")  # from step 200, t = 0.04 s
     with h5py.File(tmp_path / "one" / "mpm.h5", "r") as f1, h5py.File(tmp_path / "three" / "mpm.h5", "r") as f3:
         assert np.array_equal(f1["series/time"][:], f3["series/time"][:])
         assert np.array_equal(f1["series/kinetic_energy"][:], f3["series/kinetic_energy"][:])
+    # a run killed while HDF5 rewrote mpm.h5's bookkeeping: the file no longer opens (emulated
+    # by overwriting its first half); the restart goes back to mpm.h5.restart, the file as of
+    # the last snapshot (step 290), and ends where the unbroken run ends, to the last bit
+    run("--out", str(tmp_path / "four"), "--steps", "290")
+    h5 = tmp_path / "four" / "mpm.h5"
+    with open(h5, "r+b") as f:
+        f.write(b"\x5a" * (h5.stat().st_size // 2))
+    with pytest.raises(OSError):
+        h5py.File(h5, "r")
+    run("--out", str(tmp_path / "four"), "--steps", "110", "--restart")
+    with h5py.File(tmp_path / "one" / "mpm.h5", "r") as f1, h5py.File(h5, "r") as f4:
+        for k in ("time", "kinetic_energy", "front_x", "centre_of_mass"):
+            assert np.array_equal(f1["series"][k][:], f4["series"][k][:]), k
+        # one snapshot more than the unbroken run's: the end of the 290-step run, at 0.058 s
+        assert [f4["snapshots"][k].attrs["step"] for k in sorted(f4["snapshots"])] == [0, 100, 200, 290, 300, 400]
+        a, b = f1["snapshots"][sorted(f1["snapshots"])[-1]], f4["snapshots"][sorted(f4["snapshots"])[-1]]
+        for k in ("x", "v", "stress", "J"):
+            assert np.array_equal(a[k][:], b[k][:]), k
+    # without a restart point (a run stopped before its first snapshot was whole): refused
+    (tmp_path / "four" / "mpm.h5.restart").unlink()
+    r = subprocess.run([exe, str(path), "--out", str(tmp_path / "four"), "--restart"], capture_output=True, text=True)
+    assert r.returncode == 2 and "restart point" in r.stderr, r.stderr
 
 
 SCENES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "scenes")

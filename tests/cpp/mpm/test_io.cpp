@@ -236,6 +236,116 @@ TEST(Hdf5Writer, FileOnDiskIsValidAfterEveryRecord) {
   EXPECT_EQ(readSeries(path.string(), "kinetic_energy").size(), 4u);
 }
 
+// Run outputs keep each snapshot in a file of its own, linked from the main file: the readers
+// see the same snapshots through the links, the main file holds no particle data, and a
+// dropped snapshot's file goes with it.
+TEST(Hdf5Writer, SnapshotFilesAreLinkedAndReadBack) {
+  const fs::path dir = scratchDir() / "linked";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path path = dir / "mpm.h5";
+  const auto p = makeParticles(2000);
+  {
+    Hdf5Writer w(path.string(), Hdf5Writer::Mode::Truncate, true);
+    for (int k = 0; k < 3; ++k) {
+      w.appendScalar("time", 0.1 * k);
+      EXPECT_EQ(w.writeSnapshot(p, 0.1 * k, 10 * k), k);
+    }
+  }
+  EXPECT_EQ(snapshotFolder(path.string()), "mpm.snapshots");
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(fs::exists(dir / "mpm.snapshots" / ("00000" + std::to_string(k) + ".h5")));
+  // 2000 particles x 19 values x 8 B = 304 kB per snapshot: none of it in the main file
+  EXPECT_LT(fs::file_size(path), 100000u);
+  EXPECT_EQ(readNumSnapshots(path.string()), 3);
+  mpm::ParticleSet q;
+  double t = 0;
+  long step = 0;
+  readSnapshot(path.string(), 2, q, &t, &step);
+  EXPECT_EQ(t, 0.1 * 2);
+  EXPECT_EQ(step, 20);
+  EXPECT_EQ(q.x, p.x);
+  EXPECT_EQ(q.stress, p.stress);
+  EXPECT_EQ(q.phase, p.phase);
+  {
+    Hdf5Writer w(path.string(), Hdf5Writer::Mode::Append, true);
+    EXPECT_EQ(w.dropSnapshotsAfter(0.15), 2);
+  }
+  EXPECT_EQ(readNumSnapshots(path.string()), 2);
+  EXPECT_FALSE(fs::exists(dir / "mpm.snapshots" / "000002.h5"));
+  EXPECT_TRUE(fs::exists(dir / "mpm.snapshots" / "000001.h5"));
+  // A new run in the same place starts without the old snapshot files.
+  { Hdf5Writer w(path.string(), Hdf5Writer::Mode::Truncate, true); }
+  EXPECT_EQ(readNumSnapshots(path.string()), 0);
+  EXPECT_TRUE(fs::is_empty(dir / "mpm.snapshots"));
+}
+
+// What a run killed while HDF5 rewrote its metadata leaves: a damaged main file. The restart
+// puts back the copy of the last commit: records and snapshots up to that commit, exactly, and
+// the run appends from there.
+TEST(Hdf5Writer, ResumeFromCommitRestoresADamagedFile) {
+  const fs::path dir = scratchDir() / "resume";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path path = dir / "mpm.h5";
+  const auto p = makeParticles(5);
+  EXPECT_FALSE(resumeFromCommit(path.string()));  // nothing committed: nothing to restore
+  {
+    Hdf5Writer w(path.string(), Hdf5Writer::Mode::Truncate, true);
+    for (int k = 0; k < 4; ++k) w.appendScalar("time", 0.1 * k);
+    w.writeSnapshot(p, 0.3, 3);
+    w.commit();
+    for (int k = 4; k < 9; ++k) w.appendScalar("time", 0.1 * k);
+    w.writeSnapshot(p, 0.8, 8);
+  }
+  EXPECT_EQ(readSeries(path.string(), "time").size(), 9u);
+  {  // the damage: the first half of the file overwritten
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    const std::string junk(fs::file_size(path) / 2, '\x5a');
+    f.write(junk.data(), static_cast<std::streamsize>(junk.size()));
+  }
+  EXPECT_THROW(readSeries(path.string(), "time"), RuntimeFailure);
+  ASSERT_TRUE(resumeFromCommit(path.string()));
+  const auto time = readSeries(path.string(), "time");
+  ASSERT_EQ(time.size(), 4u);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(time[k], 0.1 * k);
+  EXPECT_EQ(readNumSnapshots(path.string()), 1);
+  {
+    Hdf5Writer w(path.string(), Hdf5Writer::Mode::Append, true);
+    EXPECT_EQ(w.dropSnapshotsAfter(0.3), 1);
+    w.appendScalar("time", 0.4);
+    EXPECT_EQ(w.writeSnapshot(p, 0.4, 4), 1);  // index 1 again: the killed run's file replaced
+  }
+  EXPECT_EQ(readSeries(path.string(), "time").size(), 5u);
+  double t = 0;
+  mpm::ParticleSet q;
+  readSnapshot(path.string(), 1, q, &t);
+  EXPECT_EQ(t, 0.4);
+  EXPECT_EQ(q.v, p.v);
+}
+
+// A restart drops a snapshot (and its file) past its checkpoint and is killed before its next
+// commit: the copy it goes back to still links that snapshot, whose file is gone. The next
+// restart drops it again rather than failing on it.
+TEST(Hdf5Writer, ADroppedSnapshotsLinkLeftInTheCopyIsDroppedAgain) {
+  const fs::path dir = scratchDir() / "dangling";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path path = dir / "mpm.h5";
+  const auto p = makeParticles(3);
+  {
+    Hdf5Writer w(path.string(), Hdf5Writer::Mode::Truncate, true);
+    for (int k = 0; k < 3; ++k) w.writeSnapshot(p, 0.1 * k, k);
+    w.commit();
+  }
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    ASSERT_TRUE(resumeFromCommit(path.string()));
+    Hdf5Writer w(path.string(), Hdf5Writer::Mode::Append, true);
+    EXPECT_EQ(w.dropSnapshotsAfter(0.05), 1) << "restart " << attempt;
+  }
+  EXPECT_FALSE(fs::exists(dir / "mpm.snapshots" / "000001.h5"));
+  EXPECT_TRUE(fs::exists(dir / "mpm.snapshots" / "000000.h5"));
+}
+
 TEST(Hdf5Writer, RejectsInconsistentRecords) {
   const fs::path path = scratch("bad.h5");
   Hdf5Writer w(path.string());
