@@ -363,7 +363,11 @@ class CoupledEngine(_AutoStep):
                 "historyKeys": base64.b64encode(keys).decode(), "historyXi": base64.b64encode(xi).decode(),
                 "dissipation": [self._bridge.energies()["friction"], self._bridge.energies()["damping"]],
                 "referenceOrientations": [list(q) for q in self._bridge.referenceOrientations()],
-                "plotOrientations": {str(i): [q[k] for k in range(4)] for i, q in self._ori0.items()}}
+                "plotOrientations": {str(i): [q[k] for k in range(4)] for i, q in self._ori0.items()},
+                # before the first step coupled.h5 is not open yet (unless restored onto one): a
+                # restore then starts it afresh, whatever a killed run left of it (none of it is
+                # this checkpoint's)
+                "outputOpen": self._started or self._appendOutput}
         tmp = prefix + ".coupled.json.tmp"
         with open(tmp, "w") as f:
             json.dump(data, f)
@@ -425,7 +429,7 @@ class CoupledEngine(_AutoStep):
         eng._bridge.setDissipation(*data["dissipation"])
         eng._bridge.setReferenceOrientations(data["referenceOrientations"])
         eng._ori0 = {int(i): Quaternion(*q) for i, q in data["plotOrientations"].items()}
-        eng._appendOutput = bool(appendOutput)
+        eng._appendOutput = bool(appendOutput) and data.get("outputOpen", True)
         return eng
 
     def finish(self, files=True):

@@ -484,7 +484,11 @@ class SdemEngine(_AutoStep):
                 "time": self._bridge.goodTime if rolledBack else O.time,
                 "frictionDissipation": self._bridge.frictionDissipation,
                 "dampingDissipation": self._bridge.dampingDissipation,
-                "bodies": self._recipes, "histories": hist}
+                "bodies": self._recipes, "histories": hist,
+                # before the first step no output is open yet (unless restored onto one): a restore
+                # then starts it afresh, whatever a killed run left of it (none of it is this
+                # checkpoint's)
+                "outputOpen": self._checkedEngines or self._appendOutput}
         tmp = str(path) + ".tmp"
         with open(tmp, "w") as f:
             json.dump(data, f)
@@ -515,7 +519,7 @@ class SdemEngine(_AutoStep):
         kw = {k: data[k] for k in ("dtCheck", "timeStepSafety", "maxSpeed", "dtAuto", "dtMax") if k in data}
         kw.update(engineKw)
         eng = cls(**kw)
-        eng._appendOutput = bool(appendOutput)
+        eng._appendOutput = bool(appendOutput) and data.get("outputOpen", True)
         if data.get("criticalStep") is not None:  # the first step's dtAuto sees what it would have seen
             eng._contactsKnown = True
             eng._restoredCritical = float(data["criticalStep"])

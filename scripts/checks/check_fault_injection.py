@@ -19,15 +19,15 @@ then ``mpmsdem-run --restart`` (from the snapshot its coupled.checkpoint.json na
 user would; a run killed before its first checkpoint is started again. Its mpm.h5 and
 coupled.h5 (series and snapshots) must equal those of an unbroken driver run to the last bit.
 
-The opt-in "driver-writes" kind (``--kinds driver-writes``, needs strace) kills the driver at
-write calls drawn from all those of its run (strace's fault injection: SIGKILL at the n-th
-pwrite64), so that kills land inside HDF5's own flushes, where the random instants rarely fall;
-each killed run is restarted to its end and compared with the unbroken one.
+The opt-in kinds sdem-writes, mpm-writes, coupled-writes and driver-writes (need strace) kill
+the same runs at write calls drawn from all those of the run (strace's fault injection: SIGKILL
+at the n-th pwrite64), so that kills land inside HDF5's own flushes, where the random instants
+rarely fall; each killed run is continued to its end and compared with the unbroken one.
 
 Exit status 0 when every check holds, 1 with the failures listed otherwise.
 
     python3 scripts/checks/check_fault_injection.py [--seed S] [--kills N] [--kinds sdem,mpm,coupled,driver]
-    python3 scripts/checks/check_fault_injection.py --kinds driver-writes --kills 300
+    python3 scripts/checks/check_fault_injection.py --kinds sdem-writes,mpm-writes,coupled-writes,driver-writes --kills 60
 """
 import argparse
 import os
@@ -169,28 +169,43 @@ def driverKills(root, rng, kills):
     return ref, broken, done, fresh
 
 
-def driverWriteKills(root, rng, kills):
-    """Kill the driver at `kills` write calls drawn from all those of an unbroken run (strace's
-    fault injection sends SIGKILL at the n-th pwrite64, so kills land inside HDF5 flushes too),
-    each followed by --restart to the end; every restarted folder must equal the unbroken one.
-    Returns (unbroken folder, [(write number, folder)], fresh starts)."""
+def writeKills(kind, root, rng, kills):
+    """Kill a run of `kind` at `kills` write calls drawn from all those of an unbroken run
+    (strace's fault injection sends SIGKILL at the n-th pwrite64, so kills land inside HDF5
+    flushes too), then continue it to its end as a user would (the driver with --restart, a
+    YADE script from its last checkpoint). Returns (unbroken folder, [(write number, folder,
+    error or None)], fresh starts)."""
     if not shutil.which("strace"):
-        sys.exit("check_fault_injection: --kinds driver-writes needs strace (apt install strace)")
-    exe = driverExe()
-    scene = driverScene(root)
-    ref = os.path.join(root, "driver_ref")
-    count = subprocess.run(["strace", "-f", "-c", "-e", "trace=pwrite64", exe, scene, "--out", os.path.join(ref, "out")],
-                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, check=True).stderr
+        sys.exit("check_fault_injection: the *-writes kinds need strace (apt install strace)")
+    if kind == "driver":
+        exe = driverExe()
+        scene = driverScene(root)
+        command = lambda work: [exe, scene, "--out", os.path.join(work, "out")]  # noqa: E731
+
+        def finish(work):
+            try:
+                return None, runDriver(exe, scene, work)[1]
+            except RuntimeError as e:
+                return str(e), False
+    else:
+        command = lambda work: [sys.executable, os.path.abspath(__file__), "--child", kind, work]  # noqa: E731
+
+        def finish(work):
+            p = subprocess.run(command(work), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            return (None if p.returncode == 0 else "continued run failed: " + p.stderr.strip()[-600:]), False
+    ref = os.path.join(root, kind + "_writes_ref")
+    count = subprocess.run(["strace", "-f", "-c", "-e", "trace=pwrite64"] + command(ref), stdout=subprocess.DEVNULL,
+                           stderr=subprocess.PIPE, text=True, check=True).stderr
     writes = int(next(line.split()[3] for line in count.splitlines() if line.rstrip().endswith("pwrite64")))
     runs, fresh = [], 0
     for n in sorted(rng.sample(range(1, writes), min(kills, writes - 1))):
-        work = os.path.join(root, "driver_write_%d" % n)
+        work = os.path.join(root, "%s_write_%d" % (kind, n))
         subprocess.run(["strace", "-f", "-o", "/dev/null", "-e", "trace=pwrite64", "-e",
-                        "inject=pwrite64:signal=KILL:when=%d" % n, exe, scene, "--out", os.path.join(work, "out")],
+                        "inject=pwrite64:signal=KILL:when=%d" % n] + command(work),
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        _, again = runDriver(exe, scene, work)
+        error, again = finish(work)
         fresh += again
-        runs.append((n, work))
+        runs.append((n, work, error))
     return ref, runs, fresh
 
 
@@ -324,10 +339,15 @@ def main():
     ap.add_argument("--seed", type=int, default=None, help="seed of the kill steps (default: from the clock)")
     ap.add_argument("--kills", type=int, default=20, help="kills per kind of run (>= 1, default 20)")
     ap.add_argument("--kinds", default="sdem,mpm,coupled,driver",
-                    help="comma-separated subset of sdem,mpm,coupled,driver, or driver-writes (opt-in, needs strace: "
-                         "the driver killed at --kills write calls drawn from its whole run)")
+                    help="comma-separated subset of sdem,mpm,coupled,driver; opt-in, needing strace: the same "
+                         "with -writes (e.g. driver-writes), killed at --kills write calls drawn from the whole run")
+    ap.add_argument("--child", nargs=2, metavar=("KIND", "FOLDER"), help=argparse.SUPPRESS)
     ap.add_argument("--keep", action="store_true", help="keep the work folder (printed)")
     a = ap.parse_args()
+    if a.child:  # one run of a *-writes kind, in its own process so that strace can kill it
+        O.reset()
+        runChild(*a.child)
+        return 0
     if a.kills < 1:
         ap.error("--kills = %d: must be >= 1" % a.kills)
     seed = a.seed if a.seed is not None else int(time.time() * 1000) % 2 ** 31
@@ -337,19 +357,25 @@ def main():
     failures = []
     try:
         for kind in a.kinds.split(","):
-            if kind not in PLAN and kind != "driver-writes":
-                ap.error("--kinds: %r is not one of %s, driver-writes" % (kind, ", ".join(PLAN)))
+            if kind not in PLAN and kind[:-len("-writes")] not in PLAN:
+                ap.error("--kinds: %r is not one of %s or one of them with -writes" % (kind, ", ".join(PLAN)))
             t0 = time.time()
-            if kind == "driver-writes":
-                ref, runs, fresh = driverWriteKills(root, rng, a.kills)
-                for n, work in runs:
+            if kind.endswith("-writes"):
+                base = kind[:-len("-writes")]
+                ref, runs, fresh = writeKills(base, root, rng, a.kills)
+                for n, work, error in runs:
                     before = len(failures)
-                    compare("driver", ref, work, failures)
-                    failures[before:] = ["killed at write %d: %s" % (n, f) for f in failures[before:]]
+                    if error:
+                        failures.append(error)
+                    else:
+                        compare(base, ref, work, failures)
+                    failures[before:] = ["%s killed at write %d: %s" % (base, n, f) for f in failures[before:]]
                     if len(failures) == before:
                         shutil.rmtree(work)
-                print("  %-8s %d kills at write calls %s (%d before a first snapshot: started again); %.1f s"
-                      % (kind, len(runs), [n for n, _ in runs], fresh, time.time() - t0))
+                print("  %-8s %d kills at write calls %s%s; %.1f s" % (
+                    kind, len(runs), [n for n, _, _ in runs],
+                    " (%d before a first snapshot: started again)" % fresh if base == "driver" else "",
+                    time.time() - t0))
                 continue
             if kind == "driver":
                 ref, broken, kills, fresh = driverKills(root, rng, a.kills)

@@ -136,6 +136,39 @@ def test_coupled_checkpoint_continues_bit_for_bit(tmp_path, dtAuto, kc, before):
             np.testing.assert_array_equal(f["series/" + k][:], v, err_msg=k)
 
 
+@pytest.mark.parametrize("before", [0, 120], ids=["checkpoint before the first step", "after 120 steps"])
+def test_a_coupled_h5_damaged_by_a_kill_is_replaced_on_restore(tmp_path, before):
+    """A kill in the middle of an HDF5 flush can leave coupled.h5 unreadable (emulated: a run in
+    a process of its own that ends without closing anything, then its file's first half
+    overwritten). Restoring puts back the file as the checkpoint saw it (coupled.h5.restart)
+    or, for a checkpoint taken before the first step, when no coupled.h5 existed yet, starts the
+    file afresh; either way the continued run's records equal the unbroken run's."""
+    import os
+    import subprocess
+    import sys
+    out, ck = tmp_path / "out", tmp_path / "ck"
+    killed = ("import os, sys\nsys.path.insert(0, %r)\nimport mpmsdem, test_outputs\n"
+              "coupled, cube = test_outputs._coupledScene(%r)\nif %d: mpmsdem.run(%d, coupled)\n"
+              "mpmsdem.saveCheckpoint(%r, coupled)\nmpmsdem.run(100, coupled)\nos._exit(0)\n"
+              % (os.path.dirname(os.path.abspath(__file__)), str(out), before, before, str(ck)))
+    subprocess.run([sys.executable, "-c", killed], check=True, capture_output=True)
+    assert (out / "coupled.h5.restart").exists() == bool(before)
+    h5 = out / "coupled.h5"
+    with h5py.File(h5, "r", locking=False) as f:
+        refSeries = {k: f["series/" + k][:] for k in f["series"]}
+    assert len(refSeries["time"]) > 10
+    with open(h5, "r+b") as f:
+        f.write(b"\x5a" * (h5.stat().st_size // 2))
+    with pytest.raises(OSError):
+        h5py.File(h5, "r", locking=False)
+    coupled = mpmsdem.loadCheckpoint(mpmsdem.lastCheckpoint(str(ck)), output=str(out), outputEvery=1e-4, verbose=False)
+    mpmsdem.run(100, coupled)
+    with h5py.File(h5, "r", locking=False) as f:
+        assert set(f["series"]) == set(refSeries)
+        for k, v in refSeries.items():
+            np.testing.assert_array_equal(f["series/" + k][:], v, err_msg=k)
+
+
 def test_a_half_written_coupled_checkpoint_is_refused(tmp_path):
     coupled, cube = _coupledScene()
     mpmsdem.run(20, coupled)
