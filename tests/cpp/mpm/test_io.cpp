@@ -42,6 +42,14 @@ fs::path scratch(const std::string& name) {
   return p;
 }
 
+// An empty folder of the scratch folder (snapshot files and restart copies go beside a file).
+fs::path freshFolder(const std::string& name) {
+  const fs::path dir = scratchDir() / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
 // n particles with distinct, non-round values in every field.
 mpm::ParticleSet makeParticles(std::size_t n) {
   mpm::ParticleSet p;
@@ -240,9 +248,7 @@ TEST(Hdf5Writer, FileOnDiskIsValidAfterEveryRecord) {
 // see the same snapshots through the links, the main file holds no particle data, and a
 // dropped snapshot's file goes with it.
 TEST(Hdf5Writer, SnapshotFilesAreLinkedAndReadBack) {
-  const fs::path dir = scratchDir() / "linked";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = freshFolder("linked");
   const fs::path path = dir / "mpm.h5";
   const auto p = makeParticles(2000);
   {
@@ -283,9 +289,7 @@ TEST(Hdf5Writer, SnapshotFilesAreLinkedAndReadBack) {
 // puts back the copy of the last commit: records and snapshots up to that commit, exactly, and
 // the run appends from there.
 TEST(Hdf5Writer, ResumeFromCommitRestoresADamagedFile) {
-  const fs::path dir = scratchDir() / "resume";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = freshFolder("resume");
   const fs::path path = dir / "mpm.h5";
   const auto p = makeParticles(5);
   EXPECT_FALSE(resumeFromCommit(path.string()));  // nothing committed: nothing to restore
@@ -327,9 +331,7 @@ TEST(Hdf5Writer, ResumeFromCommitRestoresADamagedFile) {
 // commit: the copy it goes back to still links that snapshot, whose file is gone. The next
 // restart drops it again rather than failing on it.
 TEST(Hdf5Writer, ADroppedSnapshotsLinkLeftInTheCopyIsDroppedAgain) {
-  const fs::path dir = scratchDir() / "dangling";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = freshFolder("dangling");
   const fs::path path = dir / "mpm.h5";
   const auto p = makeParticles(3);
   {
