@@ -7,7 +7,9 @@ exactly where an unbroken run of the same scene ends:
 - its /series/time is strictly increasing (no duplicate, no step back) and continuous (no
   gap: the same records as the unbroken run);
 - every series and snapshot array, and the final YADE body states and particle arrays, are
-  bit-identical to the unbroken run's (the restarts are documented as bit-for-bit on the CPU).
+  bit-identical to the unbroken run's (the restarts are documented as bit-for-bit on the CPU);
+- the ParaView files (.pvd collections and their .vtp/.vtu pieces) are byte for byte those of
+  the unbroken run, with nothing left over (no half-written piece, no entry twice).
 
 Each run is a child process forked from this one (YADE imported once), killed by the parent
 with SIGKILL once it reports the randomly drawn step; kills land anywhere, also while an
@@ -300,6 +302,18 @@ def h5Arrays(path):
     return out
 
 
+def paraviewFiles(out):
+    """Every ParaView file under an output folder (.pvd collections, .vtp/.vtu pieces and what
+    a killed writer may have left beside them), as {path relative to out: bytes}."""
+    found = {}
+    for folder, _, names in os.walk(out):
+        for name in names:
+            if name.endswith((".pvd", ".vtp", ".vtu")) or ".pvd." in name or ".vtp." in name or ".vtu." in name:
+                with open(os.path.join(folder, name), "rb") as f:
+                    found[os.path.relpath(os.path.join(folder, name), out)] = f.read()
+    return found
+
+
 def compare(kind, ref, broken, failures):
     files = {"sdem": ["sdem.h5"], "mpm": ["mpm.h5"], "coupled": ["coupled.h5", "mpm/mpm.h5"],
              "driver": ["coupled.h5", "mpm.h5"]}[kind]
@@ -326,6 +340,13 @@ def compare(kind, ref, broken, failures):
             elif x.tobytes() != y.tobytes():
                 failures.append("%s: %s %s differs from the unbroken run (max |diff| %g)" % (
                     kind, name, k, float(np.max(np.abs(x.astype(float) - y.astype(float))))))
+    a, b = paraviewFiles(os.path.join(ref, "out")), paraviewFiles(os.path.join(broken, "out"))
+    if a.keys() != b.keys():
+        failures.append("%s: ParaView files differ: only unbroken %s, only restarted %s" % (
+            kind, sorted(set(a) - set(b))[:5], sorted(set(b) - set(a))[:5]))
+    for name in sorted(set(a) & set(b)):
+        if a[name] != b[name]:
+            failures.append("%s: ParaView file %s differs from the unbroken run's" % (kind, name))
     if kind == "driver":  # its final state is the last snapshot and record, compared above
         return
     with np.load(os.path.join(ref, "final.npz")) as a, np.load(os.path.join(broken, "final.npz")) as b:
