@@ -62,10 +62,7 @@ def main():
         ap.error("--repeat must be >= 1")
     if args.threads < 1:
         ap.error("--threads must be >= 1")
-    exes = [("new", args.exe)] + ([("old", args.baseline_exe)] if args.baseline_exe else [])
-    for name, exe in exes:
-        if not os.access(exe, os.X_OK):
-            ap.error("%s build: %s is not an executable mpmsdem-run" % (name, exe))
+    exes = bench_mpm.builds(ap, args.exe, args.baseline_exe)
     with tempfile.TemporaryDirectory() as tmp:
         scene = os.path.join(tmp, "flume.json")
         write_scene(scene, args.full)
@@ -94,20 +91,11 @@ def main():
             if args.baseline_exe:
                 row.append("%.2f" % (results["old"][k]["seconds"] / r["seconds"]) if name == "new" else "")
             body.append(row)
-    text, md = bench_mpm.render_table(head, body)
-    print()
-    print(text, end="")
     label = "full (dx 0.01 m, 96,000 points)" if args.full else "coarse (dx 0.02 m, 12,000 points)"
-    print("(§3.2 flume, %s, %d steps, OMP_NUM_THREADS=%d)" % (label, steps, args.threads))
-    if args.markdown:
-        bench_mpm.append_markdown(args.markdown, "Coupling share, §3.2 flume " + label,
-                                  "%d steps, OMP_NUM_THREADS=%d" % (steps, args.threads), md)
+    bench_mpm.report(head, body, "§3.2 flume, %s, %d steps, OMP_NUM_THREADS=%d" % (label, steps, args.threads),
+                     args.markdown, "Coupling share, §3.2 flume " + label)
     return 0
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main())
-    except RuntimeError as e:
-        print("bench_coupling_share: %s" % e, file=sys.stderr)
-        sys.exit(1)
+    bench_mpm.run_main(main, "bench_coupling_share")

@@ -174,6 +174,37 @@ def append_markdown(path, title, settings, table):
         f.write(table)
 
 
+def report(head, body, caption, markdown=None, title=None):
+    """Print the table (header, rows of strings) and its caption in parentheses; with
+    `markdown` (a path), also append it there under `title` (append_markdown)."""
+    text, md = render_table(head, body)
+    print()
+    print(text, end="")
+    print("(%s)" % caption)
+    if markdown:
+        append_markdown(markdown, title, caption, md)
+
+
+def builds(ap, exe, baselineExe):
+    """[("new", exe)], and ("old", baselineExe) when one is given, for a benchmark that compares
+    two builds of mpmsdem-run; an error of the parser `ap` names one that is not an executable."""
+    exes = [("new", exe)] + ([("old", baselineExe)] if baselineExe else [])
+    for name, path in exes:
+        if not os.access(path, os.X_OK):
+            ap.error("%s build: %s is not an executable mpmsdem-run" % (name, path))
+    return exes
+
+
+def run_main(main, name):
+    """Exit with main()'s status; a RuntimeError (a run that failed) is printed as 'name:
+    message' and exits with status 1."""
+    try:
+        sys.exit(main())
+    except RuntimeError as e:
+        print("%s: %s" % (name, e), file=sys.stderr)
+        sys.exit(1)
+
+
 def render_table(head, body, mdRule="---|"):
     """(aligned text, markdown) of a table given its header and rows of strings."""
     widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)]

@@ -74,10 +74,7 @@ def main():
         ap.error("--steps must be >= 1")
     if args.threads < 1:
         ap.error("--threads must be >= 1")
-    exes = [("new", args.exe)] + ([("old", args.baseline_exe)] if args.baseline_exe else [])
-    for name, exe in exes:
-        if not os.access(exe, os.X_OK):
-            ap.error("%s build: %s is not an executable mpmsdem-run" % (name, exe))
+    exes = bench_mpm.builds(ap, args.exe, args.baseline_exe)
     env = dict(os.environ, OMP_NUM_THREADS=str(args.threads))
     head = ["particles", "precision", "copies", "vtk", "build", "peak RSS [MB]", "B/particle",
             "restart B/particle", "solver B/particle"]
@@ -136,19 +133,10 @@ def main():
                         if args.baseline_exe:
                             row.append("%.2f" % (peaks["new"] / peaks["old"]) if name == "new" else "")
                         body.append(row)
-    text, md = bench_mpm.render_table(head, body)
-    print()
-    print(text, end="")
-    print("(dam-break block, 8 points per cell, %d steps, OMP_NUM_THREADS=%d)" % (args.steps, args.threads))
-    if args.markdown:
-        bench_mpm.append_markdown(args.markdown, "Peak memory of an output run",
-                                  "%d steps, OMP_NUM_THREADS=%d" % (args.steps, args.threads), md)
+    bench_mpm.report(head, body, "dam-break block, 8 points per cell, %d steps, OMP_NUM_THREADS=%d"
+                     % (args.steps, args.threads), args.markdown, "Peak memory of an output run")
     return 0
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main())
-    except RuntimeError as e:
-        print("bench_output_memory: %s" % e, file=sys.stderr)
-        sys.exit(1)
+    bench_mpm.run_main(main, "bench_output_memory")
