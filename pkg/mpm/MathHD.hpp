@@ -10,7 +10,9 @@
 #define MPM_HD_INLINE __host__ __device__ __forceinline__
 #else
 #define MPM_HD
-#define MPM_HD_INLINE inline
+// Inlined on the host too: a CPU loop over particles is vectorized only when every call in it
+// is inlined, which the compiler's size limits would otherwise decide case by case.
+#define MPM_HD_INLINE inline __attribute__((always_inline))
 #endif
 
 // Loops over the components of a value of several lanes (P2G shares, G2P sums): one SIMD

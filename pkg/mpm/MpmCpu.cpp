@@ -14,6 +14,35 @@ constexpr int kBlockNodes = 5;  // nodes per axis reached from one 3x3x3 block o
 // With one copy of the particles, G2P leaves them where they are; they are put back in block
 // order every this many steps, before they have drifted far from it (docs/benchmarks.md).
 constexpr int kReorderEvery = 8;
+constexpr int kG2PBatch = 32;  // particles per vector loop of the G2P update
+
+// The G2P update of a batch of m particles whose values g2pGather put at a[c * kG2PBatch + l],
+// as one vector loop. The particles go to slot[l] of out; unless kScattered, these slots are
+// consecutive and the loop stores whole vectors. out, g and sc come by value, so the loop's
+// stores cannot change the array addresses or the constants it reads. The phase comes back as
+// an int: a byte-wide result would set the vector length to 64 lanes, more than a batch.
+template <bool kScattered, typename T>
+void g2pUpdateBatch(const T* a, int m, const int* slot, const int* id, ParticleOut<T> out, const GridConst<T> g,
+                    const StepConst<T> sc, int* phase, long& firstBad, T& vmax) {
+  if (!kScattered) {
+    const long q0 = slot[0];
+    for (int d = 0; d < 3; ++d) out.x[d] += q0, out.v[d] += q0;
+    for (int k = 0; k < 6; ++k) out.s[k] += q0;
+    out.J += q0;
+    out.gdp += q0;
+  }
+  long bad = firstBad;
+  T fastest = vmax;
+#pragma omp simd reduction(min : bad) reduction(max : fastest)
+  for (int l = 0; l < m; ++l) {
+    T speed;
+    const bool ok = g2pUpdate(a + l, kG2PBatch, kScattered ? slot[l] : l, out, g, sc, speed, phase[l]);
+    if (!ok && id[l] < bad) bad = id[l];
+    fastest = speed > fastest ? speed : fastest;
+  }
+  firstBad = bad;
+  vmax = fastest;
+}
 
 // Sort the m slots a[] by particle number id[a[i]]. The slots of a block come from the previous
 // step's order, in which they were sorted, so only the few particles that changed block are out
@@ -463,14 +492,31 @@ void MpmCpu<T>::step(double dt) {
   const bool inPlace = !params_.keepLastGoodState;
   const int* order = order_.data();
   int* outId = inPlace ? state_[cur_].id.data() : state_[1 - cur_].id.data();
+  // The particles go in batches: the grid sums of a batch one particle at a time, then the
+  // update of the batch as one vector loop (the update is the same arithmetic for every
+  // particle, so several particles share each vector instruction).
+  const long batches = (n + kG2PBatch - 1) / kG2PBatch;
 #pragma omp parallel for schedule(static) reduction(min : firstBad) reduction(max : vmax)
-  for (long q = 0; q < n; ++q) {
-    const int p = order[q];
-    const int id = in.id[p];
-    const G2PResult<T> r = g2pParticle(p, in, inPlace ? p : static_cast<int>(q), out, gridData, g, sc);
-    if (!inPlace) outId[q] = id;
-    if (!r.ok && id < firstBad) firstBad = id;
-    if (r.speed > vmax) vmax = r.speed;
+  for (long b = 0; b < batches; ++b) {
+    alignas(64) T a[kG2PValues * kG2PBatch];
+    int slot[kG2PBatch], id[kG2PBatch];
+    int phase[kG2PBatch];
+    const long q0 = b * kG2PBatch;
+    const int m = static_cast<int>(std::min<long>(kG2PBatch, n - q0));
+    for (int l = 0; l < m; ++l) {
+      const int p = order[q0 + l];
+      g2pGather(p, in, gridData, g, a + l, kG2PBatch);
+      slot[l] = inPlace ? p : static_cast<int>(q0 + l);
+      id[l] = in.id[p];
+    }
+    if (inPlace)
+      g2pUpdateBatch<true>(a, m, slot, id, out, g, sc, phase, firstBad, vmax);
+    else
+      g2pUpdateBatch<false>(a, m, slot, id, out, g, sc, phase, firstBad, vmax);
+    for (int l = 0; l < m; ++l) {
+      out.phase[slot[l]] = static_cast<std::uint8_t>(phase[l]);
+      if (!inPlace) outId[q0 + l] = id[l];
+    }
   }
   if (firstBad < n) {
     partlyAdvanced_ = inPlace;

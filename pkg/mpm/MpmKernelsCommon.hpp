@@ -206,14 +206,29 @@ struct G2PResult {
   T speed;    // |v_p| after the step [m/s]
 };
 
-// G2P and stress update of the particle in slot p of P (Eq 4 and Appendix B): reads P (start of
-// step) and the updated grid, writes the new state to slot q of Q (a CPU step that keeps the
-// particles sorted by grid block writes them in their new order, elsewhere q = p). Velocity v = alpha (v + sum w dv) + (1 - alpha)
-// sum w v_new; position x += dt sum w v_new (clamped to the admissible box);
-// L = sum v_new (x) grad w; J *= det(I + dt L); rho = m / (J V0).
+// What the G2P update of one particle reads, gathered by g2pGather as kG2PValues values at
+// a[c * stride], c one of the offsets below: the grid sums over the particle's stencil, sum
+// w (v_new - v_old) (3 values), sum w v_new (3) and the velocity gradient L = sum v_new (x)
+// grad w [1/s] (9, row-major); then the particle's state at the start of the step. The stride
+// lets a CPU loop keep the values of several particles side by side, so that g2pUpdate runs on
+// them as one vector loop that reads each value of consecutive particles from consecutive
+// addresses.
+enum : int {
+  kG2PDv = 0,
+  kG2PVPic = 3,
+  kG2PL = 6,
+  kG2PX = 15,
+  kG2PV = 18,
+  kG2PSigma = 21,
+  kG2PJ = 27,
+  kG2PMass = 28,
+  kG2PVol0 = 29,
+  kG2PValues = 30
+};
+
 template <typename T>
-MPM_HD_INLINE G2PResult<T> g2pParticle(int p, const ParticleIn<T>& P, int q, const ParticleOut<T>& Q,
-                                       const T* grid, const GridConst<T>& g, const StepConst<T>& sc) {
+MPM_HD_INLINE void g2pGather(int p, const ParticleIn<T>& P, const T* grid, const GridConst<T>& g, T* a,
+                             int stride) {
   T gc[3];
   gridCoordinate(P, p, g, gc);
   Stencil<T> st;
@@ -254,49 +269,91 @@ MPM_HD_INLINE G2PResult<T> g2pParticle(int p, const ParticleIn<T>& P, int q, con
         sz[c] += wij * bn[c];
       }
     }
-  const Vec3T<T> dv{sd[0], sd[1], sd[2]}, vPic{sw[0], sw[1], sw[2]};
-  Mat3T<T> L;
-  for (int a = 0; a < 3; ++a) {
-    L.m[a][0] = g.invDx * sx[a];
-    L.m[a][1] = g.invDx * sy[a];
-    L.m[a][2] = g.invDx * sz[a];
+  for (int d = 0; d < 3; ++d) {
+    a[(kG2PDv + d) * stride] = sd[d];
+    a[(kG2PVPic + d) * stride] = sw[d];
+    a[(kG2PL + 3 * d) * stride] = g.invDx * sx[d];
+    a[(kG2PL + 3 * d + 1) * stride] = g.invDx * sy[d];
+    a[(kG2PL + 3 * d + 2) * stride] = g.invDx * sz[d];
+    a[(kG2PX + d) * stride] = P.x[d][p];
+    a[(kG2PV + d) * stride] = P.v[d][p];
   }
+  for (int k = 0; k < 6; ++k) a[(kG2PSigma + k) * stride] = P.s[k][p];
+  const int k0 = particleNumber(P, p);
+  a[kG2PJ * stride] = P.J[p];
+  a[kG2PMass * stride] = P.mass[k0];
+  a[kG2PVol0 * stride] = P.vol0[k0];
+}
+
+// The update of one particle from the values g2pGather collected (Eq 4 and Appendix B): writes
+// its new state to slot q of Q (a CPU step that keeps the particles sorted by grid block writes
+// them in their new order, elsewhere q is the slot read), except the phase, which it gives back
+// with the speed |v| [m/s]; returns false for a non-finite state, |v| above StepConst::maxSpeed,
+// or J outside [kMinJ, kMaxJ]. Velocity v = alpha (v + sum w dv) + (1 - alpha) sum w v_new;
+// position x += dt sum w v_new (clamped to the admissible box); J *= det(I + dt L); rho = m /
+// (J V0); stress update. Every branch is a select (the checks combine with &, an inverted point
+// keeps its old stress) and the byte-wide phase is left to the caller, so that the CPU step
+// updates several particles per vector instruction.
+template <typename T>
+MPM_HD_INLINE bool g2pUpdate(const T* a, int stride, int q, const ParticleOut<T>& Q, const GridConst<T>& g,
+                             const StepConst<T>& sc, T& speed, int& phase) {
+  Mat3T<T> L;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) L.m[r][c] = a[(kG2PL + 3 * r + c) * stride];
   const T dt = sc.dt;
   Vec3T<T> v{T(0), T(0), T(0)};
   bool ok = true;
   for (int d = 0; d < 3; ++d) {
-    v[d] = sc.alpha * (P.v[d][p] + dv[d]) + (T(1) - sc.alpha) * vPic[d];
-    T x = P.x[d][p] + dt * vPic[d];
-    ok = ok && hdIsFinite(x) && hdIsFinite(v[d]);
-    x = x < g.lo[d] ? g.lo[d] : (x > g.hi[d] ? g.hi[d] : x);
+    const T vPic = a[(kG2PVPic + d) * stride];
+    v[d] = sc.alpha * (a[(kG2PV + d) * stride] + a[(kG2PDv + d) * stride]) + (T(1) - sc.alpha) * vPic;
+    T x = a[(kG2PX + d) * stride] + dt * vPic;
+    ok = ok & hdIsFinite(x) & hdIsFinite(v[d]);
+    const T lo = g.lo[d], hi = g.hi[d];
+    x = x < lo ? lo : (x > hi ? hi : x);
     Q.x[d][q] = x;
     Q.v[d][q] = v[d];
   }
   Mat3T<T> F;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) F.m[a][b] = (a == b ? T(1) : T(0)) + dt * L.m[a][b];
-  const T J = P.J[p] * F.det();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) F.m[r][c] = (r == c ? T(1) : T(0)) + dt * L.m[r][c];
+  const T J = a[kG2PJ * stride] * F.det();
   Q.J[q] = J;
+  speed = hdSqrt(dot(v, v));
   Sym6T<T> sig;
-  for (int k = 0; k < 6; ++k) sig.s[k] = P.s[k][p];
-  T gdp = T(0);
-  std::uint8_t phase = kPhaseGasified;
-  if (J > T(0)) {
-    const int k0 = particleNumber(P, p);
-    const T rho = P.mass[k0] / (J * P.vol0[k0]);
-    phase = updateStress(sig, L, dt, rho, sc.mat, gdp);
-  } else {
-    ok = false;  // inverted material point
+  for (int k = 0; k < 6; ++k) sig.s[k] = a[(kG2PSigma + k) * stride];
+  // An inverted point (J <= 0) fails the step; it keeps its stress for the error report.
+  const bool inverted = !(J > T(0));
+  T gdp;
+  {
+    const T rho = a[kG2PMass * stride] / (J * a[kG2PVol0 * stride]);
+    Sym6T<T> sigNew = sig;
+    T gdpNew;
+    const std::uint8_t phaseNew = updateStress(sigNew, L, dt, rho, sc.mat, gdpNew);
+    for (int k = 0; k < 6; ++k) sig.s[k] = inverted ? sig.s[k] : sigNew.s[k];
+    gdp = inverted ? T(0) : gdpNew;
+    phase = inverted ? int(kPhaseGasified) : int(phaseNew);
   }
   for (int k = 0; k < 6; ++k) {
     Q.s[k][q] = sig.s[k];
-    ok = ok && hdIsFinite(sig.s[k]);
+    ok = ok & hdIsFinite(sig.s[k]);
   }
   Q.gdp[q] = gdp;
-  Q.phase[q] = phase;
-  const T speed = hdSqrt(dot(v, v));
-  ok = ok && hdIsFinite(J) && J >= T(kMinJ) && J <= T(kMaxJ) && speed <= sc.maxSpeed;
-  return {ok, speed};
+  ok = ok & !inverted & hdIsFinite(J) & (J >= T(kMinJ)) & (J <= T(kMaxJ)) & (speed <= sc.maxSpeed);
+  return ok;
+}
+
+// G2P and stress update of the particle in slot p of P into slot q of Q: g2pGather, then
+// g2pUpdate.
+template <typename T>
+MPM_HD_INLINE G2PResult<T> g2pParticle(int p, const ParticleIn<T>& P, int q, const ParticleOut<T>& Q,
+                                       const T* grid, const GridConst<T>& g, const StepConst<T>& sc) {
+  T a[kG2PValues];
+  g2pGather(p, P, grid, g, a, 1);
+  G2PResult<T> r;
+  int phase;
+  r.ok = g2pUpdate(a, 1, q, Q, g, sc, r.speed, phase);
+  Q.phase[q] = static_cast<std::uint8_t>(phase);
+  return r;
 }
 
 
