@@ -330,33 +330,57 @@ long Hdf5Writer::writeSnapshot(const mpm::ParticleSet& p, double time, long step
 
 namespace {
 
+// The arrays of a snapshot, one row per particle: name, values per row, what they hold (the
+// density, m / (J V0), is written for readers and not read back) and, for doubles of the state,
+// the ParticleSet member holding them.
+enum class SnapshotValues { kState, kPhase, kDensity };
+struct SnapshotColumn {
+  const char* name;
+  hsize_t cols;
+  SnapshotValues kind;
+  std::vector<double> mpm::ParticleSet::*values;
+};
+const SnapshotColumn kSnapshotColumns[] = {
+    {"x", 3, SnapshotValues::kState, &mpm::ParticleSet::x},
+    {"v", 3, SnapshotValues::kState, &mpm::ParticleSet::v},
+    {"stress", 6, SnapshotValues::kState, &mpm::ParticleSet::stress},
+    {"density", 1, SnapshotValues::kDensity, nullptr},
+    {"phase", 1, SnapshotValues::kPhase, nullptr},
+    {"gammaDotP", 1, SnapshotValues::kState, &mpm::ParticleSet::gammaDotP},
+    {"mass", 1, SnapshotValues::kState, &mpm::ParticleSet::mass},
+    {"volume0", 1, SnapshotValues::kState, &mpm::ParticleSet::volume0},
+    {"J", 1, SnapshotValues::kState, &mpm::ParticleSet::J}};
+
+// Writes (or reads) rows [first, first + count) of the dataset of a column from (into) data.
+void transferRows(hid_t dset, const SnapshotColumn& c, hsize_t first, hsize_t count, const void* in, void* out,
+                  const std::string& path) {
+  const hid_t memType = c.kind == SnapshotValues::kPhase ? H5T_NATIVE_UINT8 : H5T_NATIVE_DOUBLE;
+  const hsize_t start[2] = {first, 0}, size[2] = {count, c.cols};
+  Handle fileSpace(H5Dget_space(dset), H5Sclose);
+  check(H5Sselect_hyperslab(fileSpace, H5S_SELECT_SET, start, nullptr, size, nullptr), path,
+        std::string("cannot select rows of ") + c.name);
+  Handle memSpace(check(H5Screate_simple(c.cols == 1 ? 1 : 2, size, nullptr), path, "memory dataspace"), H5Sclose);
+  if (in)
+    check(H5Dwrite(dset, memType, memSpace, fileSpace, H5P_DEFAULT, in), path, std::string("cannot write ") + c.name);
+  else
+    check(H5Dread(dset, memType, memSpace, fileSpace, H5P_DEFAULT, out), path,
+          std::string("cannot read dataset ") + c.name);
+}
+
 // A snapshot's datasets and its time and step attributes, written into `loc` (a group, or a
 // snapshot file's root) slice by slice.
 void writeSnapshotArrays(hid_t loc, mpm::ParticleSlices& particles, double time, long step, const std::string& path) {
   const std::size_t n = particles.size();
-  struct Column {
-    const char* name;
-    hid_t fileType, memType;
-    hsize_t cols;
-  };
-  const Column columns[] = {{"x", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
-                            {"v", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3},
-                            {"stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 6},
-                            {"density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
-                            {"phase", H5T_STD_U8LE, H5T_NATIVE_UINT8, 1},
-                            {"gammaDotP", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
-                            {"mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
-                            {"volume0", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1},
-                            {"J", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 1}};
   std::vector<std::unique_ptr<Handle>> sets;
-  for (const Column& c : columns) {
+  for (const SnapshotColumn& c : kSnapshotColumns) {
     const hsize_t dims[2] = {n, c.cols};
     Handle space(check(H5Screate_simple(c.cols == 1 ? 1 : 2, dims, nullptr), path,
                        std::string("dataspace for ") + c.name),
                  H5Sclose);
     sets.push_back(std::make_unique<Handle>(
-        check(H5Dcreate2(loc, c.name, c.fileType, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path,
-              std::string("cannot create dataset ") + c.name),
+        check(H5Dcreate2(loc, c.name, c.kind == SnapshotValues::kPhase ? H5T_STD_U8LE : H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT,
+                         H5P_DEFAULT),
+              path, std::string("cannot create dataset ") + c.name),
         H5Dclose));
   }
   std::vector<double> density;
@@ -368,17 +392,12 @@ void writeSnapshotArrays(hid_t loc, mpm::ParticleSlices& particles, double time,
                                            std::to_string(p.size()));
     density.resize(count);
     for (std::size_t i = 0; i < count; ++i) density[i] = p.density(i);
-    const void* data[] = {p.x.data(),         p.v.data(),    p.stress.data(),  density.data(), p.phase.data(),
-                          p.gammaDotP.data(), p.mass.data(), p.volume0.data(), p.J.data()};
     for (std::size_t k = 0; k < sets.size(); ++k) {
-      const hsize_t start[2] = {first, 0}, size[2] = {count, columns[k].cols};
-      const int rank = columns[k].cols == 1 ? 1 : 2;
-      Handle fileSpace(H5Dget_space(*sets[k]), H5Sclose);
-      check(H5Sselect_hyperslab(fileSpace, H5S_SELECT_SET, start, nullptr, size, nullptr), path,
-            std::string("cannot select rows of ") + columns[k].name);
-      Handle memSpace(check(H5Screate_simple(rank, size, nullptr), path, "memory dataspace"), H5Sclose);
-      check(H5Dwrite(*sets[k], columns[k].memType, memSpace, fileSpace, H5P_DEFAULT, data[k]), path,
-            std::string("cannot write ") + columns[k].name);
+      const SnapshotColumn& c = kSnapshotColumns[k];
+      const void* data = c.kind == SnapshotValues::kState   ? static_cast<const void*>((p.*c.values).data())
+                         : c.kind == SnapshotValues::kPhase ? static_cast<const void*>(p.phase.data())
+                                                            : density.data();
+      transferRows(*sets[k], c, first, count, data, nullptr, path);
     }
   }
   writeDoubleAttribute(loc, "time", time, path);
@@ -448,32 +467,6 @@ void readSnapshot(const std::string& path, long index, mpm::ParticleSet& out, do
   if (step) *step = snapshot.step();
 }
 
-namespace {
-
-// The arrays of a snapshot: name, values per particle.
-const std::pair<const char*, hsize_t> kSnapshotArrays[] = {{"x", 3},    {"v", 3},       {"stress", 6},
-                                                           {"mass", 1}, {"volume0", 1}, {"J", 1},
-                                                           {"gammaDotP", 1}, {"phase", 1}};
-
-// Rows [first, first + count) of a dataset of `cols` values per row into out.
-template <typename T>
-void readRows(hid_t group, const char* name, hid_t memType, hsize_t first, hsize_t count, hsize_t cols,
-              std::vector<T>& out, const std::string& path) {
-  out.resize(count * cols);
-  if (count == 0) return;
-  Handle dset(check(H5Dopen2(group, name, H5P_DEFAULT), path, std::string("cannot open dataset ") + name), H5Dclose);
-  Handle fileSpace(H5Dget_space(dset), H5Sclose);
-  const int rank = H5Sget_simple_extent_ndims(fileSpace);
-  const hsize_t start[2] = {first, 0}, size[2] = {count, cols};
-  check(H5Sselect_hyperslab(fileSpace, H5S_SELECT_SET, start, nullptr, size, nullptr), path,
-        std::string("cannot select rows of ") + name);
-  Handle memSpace(check(H5Screate_simple(rank, size, nullptr), path, "memory dataspace"), H5Sclose);
-  check(H5Dread(dset, memType, memSpace, fileSpace, H5P_DEFAULT, out.data()), path,
-        std::string("cannot read dataset ") + name);
-}
-
-}  // namespace
-
 SnapshotSlices::SnapshotSlices(const std::string& path, long index, std::size_t sliceSize)
     : path_(path), group_("snapshots/" + snapshotName(index)), sliceSize_(sliceSize) {
   if (sliceSize == 0) throwParameter("sliceSize", 0, "particles", ">= 1");
@@ -481,15 +474,17 @@ SnapshotSlices::SnapshotSlices(const std::string& path, long index, std::size_t 
   if (!linkExists(file, "snapshots") || !linkExists(file, group_)) fail(path, "no snapshot /" + group_);
   Handle g(check(H5Gopen2(file, group_.c_str(), H5P_DEFAULT), path, "cannot open /" + group_), H5Gclose);
   bool first = true;
-  for (const auto& [name, cols] : kSnapshotArrays) {
-    if (!linkExists(g, name)) fail(path, "no dataset " + std::string(name) + " in /" + group_);
-    Handle dset(check(H5Dopen2(g, name, H5P_DEFAULT), path, std::string("cannot open dataset ") + name), H5Dclose);
+  for (const SnapshotColumn& c : kSnapshotColumns) {
+    if (c.kind == SnapshotValues::kDensity) continue;
+    if (!linkExists(g, c.name)) fail(path, "no dataset " + std::string(c.name) + " in /" + group_);
+    Handle dset(check(H5Dopen2(g, c.name, H5P_DEFAULT), path, std::string("cannot open dataset ") + c.name),
+                H5Dclose);
     Handle space(H5Dget_space(dset), H5Sclose);
     hsize_t dims[2] = {0, 1};
     const int rank = H5Sget_simple_extent_ndims(space);
     H5Sget_simple_extent_dims(space, dims, nullptr);
     const hsize_t width = rank == 2 ? dims[1] : 1;
-    if (rank < 1 || rank > 2 || width != cols || (!first && dims[0] != n_))
+    if (rank < 1 || rank > 2 || width != c.cols || (!first && dims[0] != n_))
       fail(path, "snapshot /" + group_ + " has arrays of inconsistent length");
     n_ = dims[0];
     first = false;
@@ -504,13 +499,12 @@ SnapshotSlices::SnapshotSlices(const std::string& path, long index, std::size_t 
     H5Aread(a, H5T_NATIVE_LLONG, &s);
     step_ = static_cast<long>(s);
   }
-  Handle fapl(fileAccessWithoutLocking(), H5Pclose);
-  file_ = check(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl), path, "cannot open for reading");
-  snapshot_ = H5Gopen2(file_, group_.c_str(), H5P_DEFAULT);
-  if (snapshot_ < 0) {
-    H5Fclose(file_);
-    fail(path, "cannot open /" + group_);
-  }
+  // Valid: keep the file and the group open for the slices (an extra reference outlives the
+  // handles, which close theirs on any failure above).
+  H5Iinc_ref(file);
+  H5Iinc_ref(g);
+  file_ = file;
+  snapshot_ = g;
 }
 
 SnapshotSlices::~SnapshotSlices() {
@@ -523,14 +517,21 @@ const mpm::ParticleSet& SnapshotSlices::slice(std::size_t first, std::size_t cou
     throwParameter("snapshot slice", std::to_string(first) + " + " + std::to_string(count), "",
                    "within the " + std::to_string(n_) + " particles of /" + group_ + " in " + path_);
   mpm::ParticleSet& p = buffer_;
-  readRows(snapshot_, "x", H5T_NATIVE_DOUBLE, first, count, 3, p.x, path_);
-  readRows(snapshot_, "v", H5T_NATIVE_DOUBLE, first, count, 3, p.v, path_);
-  readRows(snapshot_, "stress", H5T_NATIVE_DOUBLE, first, count, 6, p.stress, path_);
-  readRows(snapshot_, "mass", H5T_NATIVE_DOUBLE, first, count, 1, p.mass, path_);
-  readRows(snapshot_, "volume0", H5T_NATIVE_DOUBLE, first, count, 1, p.volume0, path_);
-  readRows(snapshot_, "J", H5T_NATIVE_DOUBLE, first, count, 1, p.J, path_);
-  readRows(snapshot_, "gammaDotP", H5T_NATIVE_DOUBLE, first, count, 1, p.gammaDotP, path_);
-  readRows(snapshot_, "phase", H5T_NATIVE_UINT8, first, count, 1, p.phase, path_);
+  for (const SnapshotColumn& c : kSnapshotColumns) {
+    if (c.kind == SnapshotValues::kDensity) continue;
+    void* data;
+    if (c.kind == SnapshotValues::kState) {
+      (p.*c.values).resize(count * c.cols);
+      data = (p.*c.values).data();
+    } else {
+      p.phase.resize(count);
+      data = p.phase.data();
+    }
+    if (count == 0) continue;
+    Handle dset(check(H5Dopen2(snapshot_, c.name, H5P_DEFAULT), path_, std::string("cannot open dataset ") + c.name),
+                H5Dclose);
+    transferRows(dset, c, first, count, nullptr, data, path_);
+  }
   p.fext.assign(3 * count, 0.0);
   return p;
 }
