@@ -1,4 +1,5 @@
-// Appendix B mu(I) model (with the corrections of docs/physics.md) and the Appendix A wall condition.
+// Appendix B mu(I) model (with the corrections of docs/physics.md), the Appendix A wall condition,
+// and the G2P update of one particle (Eq 4 and the stress update) from its gathered values.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -131,4 +132,113 @@ TEST(GridBoundary, CoulombWallRemovesInwardNormalAndCapsTangential) {
   EXPECT_EQ(v.x, 0);
   EXPECT_EQ(v.y, 0);
   EXPECT_EQ(v.z, 0);
+}
+
+// ------------------------------------------------------------------ the G2P update of one particle
+namespace {
+// A particle's G2P values at a[c * stride + lane] (kG2P... offsets) and one output slot.
+struct G2PCase {
+  static constexpr int kStride = 4, kLane = 2;
+  double a[kG2PValues * kStride] = {};
+  double x[3][kStride], v[3][kStride], s[6][kStride], J[kStride], gdp[kStride];
+  std::uint8_t phase[kStride];
+  ParticleOut<double> out;
+  GridConst<double> g;
+  StepConst<double> sc;
+  G2PCase() {
+    MpmParams prm;  // 10 cells of 1 cm: admissible box [0.02, 0.08] m on each axis
+    g = makeGridConst<double>(prm, 1e-12);
+    sc.dt = 1e-3;
+    sc.alpha = 0.99;
+    sc.maxSpeed = 100;
+    sc.mat = material();
+    for (int d = 0; d < 3; ++d) out.x[d] = x[d], out.v[d] = v[d];
+    for (int k = 0; k < 6; ++k) out.s[k] = s[k];
+    out.J = J, out.gdp = gdp, out.phase = phase;
+    const double dv[3] = {0.01, -0.02, -0.00981}, vPic[3] = {0.5, 0.1, -0.3}, x0[3] = {0.05, 0.04, 0.03},
+                 v0[3] = {0.49, 0.12, -0.29};
+    for (int d = 0; d < 3; ++d) {
+      set(kG2PDv + d, dv[d]);
+      set(kG2PVPic + d, vPic[d]);
+      set(kG2PX + d, x0[d]);
+      set(kG2PV + d, v0[d]);
+    }
+    const double L[3][3] = {{-2e-2, 5e-3, 0}, {1e-2, 4e-3, -3e-3}, {0, 2e-3, -1e-2}};
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) set(kG2PL + 3 * r + c, L[r][c]);
+    for (int k = 0; k < 6; ++k) set(kG2PSigma + k, stress0().s[k]);
+    set(kG2PJ, 0.95);
+    set(kG2PMass, 1.7e-4);
+    set(kG2PVol0, 1e-7);
+  }
+  // 1 kPa pressure and a shear stress above mu_s p: the update goes through the return map.
+  static Sym6T<double> stress0() {
+    Sym6T<double> s = isotropic(1000);
+    s.s[4] = 300;
+    return s;
+  }
+  void set(int c, double value) { a[c * kStride + kLane] = value; }
+  double get(int c) const { return a[c * kStride + kLane]; }
+  Mat3T<double> L() const {
+    Mat3T<double> m;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) m.m[r][c] = get(kG2PL + 3 * r + c);
+    return m;
+  }
+  bool update(double& speed, int& ph) { return g2pUpdate(a + kLane, kStride, kLane, out, g, sc, speed, ph); }
+};
+}  // namespace
+
+TEST(G2PUpdate, GivesEq4TheVolumeRatioAndTheStressUpdateOfTheLaneItReads) {
+  G2PCase t;
+  double speed = -1;
+  int ph = -1;
+  ASSERT_TRUE(t.update(speed, ph));
+  Vec3T<double> v{0, 0, 0};
+  for (int d = 0; d < 3; ++d) {
+    v[d] = 0.99 * (t.get(kG2PV + d) + t.get(kG2PDv + d)) + 0.01 * t.get(kG2PVPic + d);
+    EXPECT_NEAR(t.v[d][G2PCase::kLane], v[d], 1e-15);
+    EXPECT_NEAR(t.x[d][G2PCase::kLane], t.get(kG2PX + d) + 1e-3 * t.get(kG2PVPic + d), 1e-16);
+  }
+  EXPECT_NEAR(speed, std::sqrt(dot(v, v)), 1e-15);
+  Mat3T<double> F = t.L();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) F.m[r][c] = (r == c ? 1.0 : 0.0) + 1e-3 * F.m[r][c];
+  const double J = 0.95 * F.det();
+  EXPECT_NEAR(t.J[G2PCase::kLane], J, 1e-15);
+  Sym6T<double> s = G2PCase::stress0();
+  double gdp = -1;
+  const std::uint8_t phase = updateStress(s, t.L(), 1e-3, 1.7e-4 / (J * 1e-7), material(), gdp);
+  EXPECT_EQ(ph, phase);
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(t.s[k][G2PCase::kLane], s.s[k], 1e-9) << k;
+  EXPECT_NEAR(t.gdp[G2PCase::kLane], gdp, 1e-12);
+  EXPECT_EQ(ph, kPhasePlastic);
+  EXPECT_GT(gdp, 0);
+}
+
+TEST(G2PUpdate, AnInvertedPointFailsKeepingItsStress) {
+  G2PCase t;
+  t.set(kG2PL, -2e3);  // 1 + dt L_xx = -1: the point is turned inside out (J < 0)
+  double speed;
+  int ph = -1;
+  EXPECT_FALSE(t.update(speed, ph));
+  EXPECT_LT(t.J[G2PCase::kLane], 0);
+  EXPECT_EQ(ph, kPhaseGasified);
+  for (int k = 0; k < 6; ++k) EXPECT_EQ(t.s[k][G2PCase::kLane], t.get(kG2PSigma + k)) << k;
+  EXPECT_EQ(t.gdp[G2PCase::kLane], 0.0);
+}
+
+TEST(G2PUpdate, ANonFiniteOrTooFastPointFails) {
+  double speed;
+  int ph;
+  G2PCase nan;
+  nan.set(kG2PDv + 1, std::nan(""));
+  EXPECT_FALSE(nan.update(speed, ph));
+  G2PCase fast;
+  fast.set(kG2PV, 200);  // above StepConst::maxSpeed = 100 m/s
+  EXPECT_FALSE(fast.update(speed, ph));
+  EXPECT_GT(speed, 100);
+  G2PCase crushed;
+  crushed.set(kG2PJ, 5e-4);  // below kMinJ
+  EXPECT_FALSE(crushed.update(speed, ph));
 }
