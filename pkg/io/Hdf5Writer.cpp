@@ -377,10 +377,10 @@ void writeSnapshotArrays(hid_t loc, mpm::ParticleSlices& particles, double time,
     Handle space(check(H5Screate_simple(c.cols == 1 ? 1 : 2, dims, nullptr), path,
                        std::string("dataspace for ") + c.name),
                  H5Sclose);
+    const hid_t fileType = c.kind == SnapshotValues::kPhase ? H5T_STD_U8LE : H5T_IEEE_F64LE;
     sets.push_back(std::make_unique<Handle>(
-        check(H5Dcreate2(loc, c.name, c.kind == SnapshotValues::kPhase ? H5T_STD_U8LE : H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT,
-                         H5P_DEFAULT),
-              path, std::string("cannot create dataset ") + c.name),
+        check(H5Dcreate2(loc, c.name, fileType, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path,
+              std::string("cannot create dataset ") + c.name),
         H5Dclose));
   }
   std::vector<double> density;
