@@ -43,14 +43,22 @@ inline Quat toQuat(const bp::object& o, const char* name) {
   return q.normalized();
 }
 
-// A new numpy array of doubles with shape (rows, cols) (cols == 0: 1-D) copied from `data`.
-inline bp::object numpyArray(const double* data, npy_intp rows, npy_intp cols) {
+// A new, unfilled numpy array of doubles with shape (rows, cols) (cols == 0: 1-D); *data
+// receives its buffer.
+inline bp::object numpyEmpty(npy_intp rows, npy_intp cols, double** data) {
   npy_intp dims[2] = {rows, cols};
   PyObject* arr = PyArray_SimpleNew(cols == 0 ? 1 : 2, dims, NPY_DOUBLE);
   if (!arr) bp::throw_error_already_set();
-  const npy_intp n = rows * (cols == 0 ? 1 : cols);
-  std::copy(data, data + n, static_cast<double*>(PyArray_DATA(reinterpret_cast<PyArrayObject*>(arr))));
+  *data = static_cast<double*>(PyArray_DATA(reinterpret_cast<PyArrayObject*>(arr)));
   return bp::object(bp::handle<>(arr));
+}
+
+// A new numpy array of doubles with shape (rows, cols) (cols == 0: 1-D) copied from `data`.
+inline bp::object numpyArray(const double* data, npy_intp rows, npy_intp cols) {
+  double* out;
+  bp::object arr = numpyEmpty(rows, cols, &out);
+  std::copy(data, data + rows * (cols == 0 ? 1 : cols), out);
+  return arr;
 }
 
 inline bp::object numpyArrayInt(const std::vector<long>& data) {

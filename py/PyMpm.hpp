@@ -7,7 +7,6 @@
 #include <iomanip>
 #include <memory>
 #include <new>
-#include <optional>
 #include <sstream>
 
 #include "PyConvert.hpp"
@@ -33,16 +32,11 @@ class PyMpm {
       throw ParameterError("out of memory for " + mpm::sceneSizeDescription(scene_) +
                            ": reduce grid.cells (a coarser dx or a smaller domain) or the particles per cell (ppc)");
     }
-    fresh_ = false;
   }
 
-  void step(double dt) {
-    solver_->step(dt);
-    dropCache();
-  }
+  void step(double dt) { solver_->step(dt); }
   void run(long n, double dt) {
     for (long i = 0; i < n; ++i) solver_->step(dt);
-    dropCache();
   }
   bool holdsLastGoodState() const { return solver_->holdsLastGoodState(); }
   double stableTimeStep() { return solver_->stableTimeStep(); }
@@ -70,25 +64,36 @@ class PyMpm {
     solver_->setExternalForces(fromNumpy(f, 3 * solver_->numParticles(), "forces"));
   }
 
+  // The particle state as new numpy arrays, filled from the solver slice by slice (no whole
+  // host copy of the particles besides the arrays themselves).
   bp::dict particles() {
-    sync();
-    const auto& p = cache_;
-    const npy_intp n = static_cast<npy_intp>(p.size());
-    std::vector<double> density(n), phase(n);
-    for (npy_intp i = 0; i < n; ++i) {
-      density[i] = p.density(i);
-      phase[i] = p.phase[i];
+    const npy_intp n = static_cast<npy_intp>(solver_->numParticles());
+    struct Column {
+      const char* name;
+      npy_intp cols;  // 0: one value per particle, a 1-D array
+      bp::object array;
+      double* data;
+    };
+    Column columns[] = {{"x", 3, {}, nullptr},         {"v", 3, {}, nullptr},     {"stress", 6, {}, nullptr},
+                        {"mass", 0, {}, nullptr},      {"volume0", 0, {}, nullptr}, {"J", 0, {}, nullptr},
+                        {"density", 0, {}, nullptr},   {"gammaDotP", 0, {}, nullptr}, {"phase", 0, {}, nullptr}};
+    for (Column& c : columns) c.array = numpyEmpty(n, c.cols, &c.data);
+    for (std::size_t first = 0; first < static_cast<std::size_t>(n); first += slices_->sliceSize()) {
+      const std::size_t count = std::min(slices_->sliceSize(), static_cast<std::size_t>(n) - first);
+      const mpm::ParticleSet& p = slices_->slice(first, count);
+      const std::vector<double>* state[] = {&p.x, &p.v, &p.stress, &p.mass, &p.volume0, &p.J};
+      for (int k = 0; k < 6; ++k) {
+        const std::size_t width = columns[k].cols == 0 ? 1 : columns[k].cols;
+        std::copy(state[k]->begin(), state[k]->end(), columns[k].data + first * width);
+      }
+      for (std::size_t i = 0; i < count; ++i) {
+        columns[6].data[first + i] = p.density(i);
+        columns[7].data[first + i] = p.gammaDotP[i];
+        columns[8].data[first + i] = p.phase[i];
+      }
     }
     bp::dict d;
-    d["x"] = numpyArray(p.x.data(), n, 3);
-    d["v"] = numpyArray(p.v.data(), n, 3);
-    d["stress"] = numpyArray(p.stress.data(), n, 6);
-    d["mass"] = numpyArray(p.mass.data(), n, 0);
-    d["volume0"] = numpyArray(p.volume0.data(), n, 0);
-    d["J"] = numpyArray(p.J.data(), n, 0);
-    d["density"] = numpyArray(density.data(), n, 0);
-    d["gammaDotP"] = numpyArray(p.gammaDotP.data(), n, 0);
-    d["phase"] = numpyArray(phase.data(), n, 0);
+    for (Column& c : columns) d[c.name] = c.array;
     return d;
   }
 
@@ -125,13 +130,8 @@ class PyMpm {
     pvd_->add(solver_->time(), name.str());
   }
   void writeParticlesVtp(const std::string& path) { io::writeParticlesVtp(path, outputParticles()); }
-  // The particles for an output: the host copy when Python fetched it since the last step,
-  // else read from the solver slice by slice (no whole copy on the host).
-  mpm::ParticleSlices& outputParticles() {
-    if (!fresh_) return *slices_;
-    whole_.emplace(cache_);
-    return *whole_;
-  }
+  // The particles for an output, read from the solver slice by slice.
+  mpm::ParticleSlices& outputParticles() { return *slices_; }
   // A checkpoint: one HDF5 file with the scene and the full particle state at this time
   // (the same layout as mpm.h5, so any output file also works as a checkpoint).
   void saveCheckpoint(const std::string& path) {
@@ -153,7 +153,6 @@ class PyMpm {
     io::SnapshotSlices snapshot(path, index);
     solver_->setParticles(snapshot);
     solver_->setClock(snapshot.time(), snapshot.step());
-    dropCache();
   }
   void appendSeries(const std::string& name, double value) {
     requireOutput();
@@ -177,17 +176,6 @@ class PyMpm {
     w.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
     w.setAttribute("solver", solver_->name());
   }
-  void sync() {
-    if (!fresh_) solver_->getParticles(cache_);
-    fresh_ = true;
-  }
-  // A step makes the host copy stale; kept until the next output it would double the memory
-  // the particles take.
-  void dropCache() {
-    whole_.reset();
-    cache_ = mpm::ParticleSet();
-    fresh_ = false;
-  }
   void requireOutput() const {
     if (!h5_) throw ParameterError("output: call openOutput(dir) before writing outputs");
   }
@@ -195,9 +183,6 @@ class PyMpm {
   mpm::MpmScene scene_;
   std::unique_ptr<mpm::MpmSolver> solver_;
   std::unique_ptr<mpm::SolverParticleSlices> slices_;
-  mpm::ParticleSet cache_;
-  std::optional<mpm::WholeParticleSet> whole_;  // over cache_ while it is fresh
-  bool fresh_ = false;
   std::unique_ptr<io::Hdf5Writer> h5_;
   std::unique_ptr<io::PvdCollection> pvd_;
   std::string dir_;
