@@ -67,33 +67,43 @@ class PyMpm {
   // The particle state as new numpy arrays, filled from the solver slice by slice (no whole
   // host copy of the particles besides the arrays themselves).
   bp::dict particles() {
-    const npy_intp n = static_cast<npy_intp>(solver_->numParticles());
+    const std::size_t n = solver_->numParticles();
     struct Column {
       const char* name;
-      npy_intp cols;  // 0: one value per particle, a 1-D array
+      npy_intp cols;                                  // 0: one value per particle, a 1-D array
+      std::vector<double> mpm::ParticleSet::*values;  // null: density and phase, converted below
       bp::object array;
       double* data;
     };
-    Column columns[] = {{"x", 3, {}, nullptr},         {"v", 3, {}, nullptr},     {"stress", 6, {}, nullptr},
-                        {"mass", 0, {}, nullptr},      {"volume0", 0, {}, nullptr}, {"J", 0, {}, nullptr},
-                        {"density", 0, {}, nullptr},   {"gammaDotP", 0, {}, nullptr}, {"phase", 0, {}, nullptr}};
-    for (Column& c : columns) c.array = numpyEmpty(n, c.cols, &c.data);
-    for (std::size_t first = 0; first < static_cast<std::size_t>(n); first += slices_->sliceSize()) {
-      const std::size_t count = std::min(slices_->sliceSize(), static_cast<std::size_t>(n) - first);
+    Column columns[] = {{"x", 3, &mpm::ParticleSet::x, {}, nullptr},
+                        {"v", 3, &mpm::ParticleSet::v, {}, nullptr},
+                        {"stress", 6, &mpm::ParticleSet::stress, {}, nullptr},
+                        {"mass", 0, &mpm::ParticleSet::mass, {}, nullptr},
+                        {"volume0", 0, &mpm::ParticleSet::volume0, {}, nullptr},
+                        {"J", 0, &mpm::ParticleSet::J, {}, nullptr},
+                        {"gammaDotP", 0, &mpm::ParticleSet::gammaDotP, {}, nullptr},
+                        {"density", 0, nullptr, {}, nullptr},
+                        {"phase", 0, nullptr, {}, nullptr}};
+    Column& density = columns[7];
+    Column& phase = columns[8];
+    bp::dict d;
+    for (Column& c : columns) {
+      c.array = numpyEmpty(static_cast<npy_intp>(n), c.cols, &c.data);
+      d[c.name] = c.array;
+    }
+    for (std::size_t first = 0; first < n; first += slices_->sliceSize()) {
+      const std::size_t count = std::min(slices_->sliceSize(), n - first);
       const mpm::ParticleSet& p = slices_->slice(first, count);
-      const std::vector<double>* state[] = {&p.x, &p.v, &p.stress, &p.mass, &p.volume0, &p.J};
-      for (int k = 0; k < 6; ++k) {
-        const std::size_t width = columns[k].cols == 0 ? 1 : columns[k].cols;
-        std::copy(state[k]->begin(), state[k]->end(), columns[k].data + first * width);
+      for (const Column& c : columns) {
+        if (!c.values) continue;
+        const std::vector<double>& v = p.*c.values;
+        std::copy(v.begin(), v.end(), c.data + first * std::max<npy_intp>(c.cols, 1));
       }
       for (std::size_t i = 0; i < count; ++i) {
-        columns[6].data[first + i] = p.density(i);
-        columns[7].data[first + i] = p.gammaDotP[i];
-        columns[8].data[first + i] = p.phase[i];
+        density.data[first + i] = p.density(i);
+        phase.data[first + i] = p.phase[i];
       }
     }
-    bp::dict d;
-    for (Column& c : columns) d[c.name] = c.array;
     return d;
   }
 
