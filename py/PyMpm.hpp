@@ -91,19 +91,17 @@ class PyMpm {
       c.array = numpyEmpty(static_cast<npy_intp>(n), c.cols, &c.data);
       d[c.name] = c.array;
     }
-    for (std::size_t first = 0; first < n; first += slices_->sliceSize()) {
-      const std::size_t count = std::min(slices_->sliceSize(), n - first);
-      const mpm::ParticleSet& p = slices_->slice(first, count);
+    mpm::forEachSlice(*slices_, [&](std::size_t first, const mpm::ParticleSet& p) {
       for (const Column& c : columns) {
         if (!c.values) continue;
         const std::vector<double>& v = p.*c.values;
         std::copy(v.begin(), v.end(), c.data + first * std::max<npy_intp>(c.cols, 1));
       }
-      for (std::size_t i = 0; i < count; ++i) {
+      for (std::size_t i = 0; i < p.size(); ++i) {
         density.data[first + i] = p.density(i);
         phase.data[first + i] = p.phase[i];
       }
-    }
+    });
     return d;
   }
 

@@ -384,12 +384,9 @@ void writeSnapshotArrays(hid_t loc, mpm::ParticleSlices& particles, double time,
         H5Dclose));
   }
   std::vector<double> density;
-  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
-    const std::size_t count = std::min(particles.sliceSize(), n - first);
-    const mpm::ParticleSet& p = particles.slice(first, count);
+  mpm::forEachSlice(particles, [&](std::size_t first, const mpm::ParticleSet& p) {
     p.validateSizes();
-    if (p.size() != count) fail(path, "a particle slice of " + std::to_string(count) + " came back with " +
-                                           std::to_string(p.size()));
+    const std::size_t count = p.size();
     density.resize(count);
     for (std::size_t i = 0; i < count; ++i) density[i] = p.density(i);
     for (std::size_t k = 0; k < sets.size(); ++k) {
@@ -399,7 +396,7 @@ void writeSnapshotArrays(hid_t loc, mpm::ParticleSlices& particles, double time,
                                                             : density.data();
       transferRows(*sets[k], c, first, count, data, nullptr, path);
     }
-  }
+  });
   writeDoubleAttribute(loc, "time", time, path);
   writeLongAttribute(loc, "step", step, path);
 }

@@ -285,18 +285,13 @@ void writeParticlesVtp(const std::string& path, mpm::ParticleSlices& particles, 
   }
   std::vector<unsigned char> bytes;
   auto forSlices = [&](auto&& fn) {
-    for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
-      const std::size_t count = std::min(particles.sliceSize(), n - first);
-      const mpm::ParticleSet& p = particles.slice(first, count);
+    mpm::forEachSlice(particles, [&](std::size_t first, const mpm::ParticleSet& p) {
       p.validateSizes();
-      if (p.size() != count)
-        throw RuntimeFailure("VTK file '" + path + "': a particle slice of " + std::to_string(count) +
-                             " came back with " + std::to_string(p.size()));
       for (int k = 0; k < kColumns; ++k) {
         particleColumnBytes(k, p, first, bytes);
         fn(k, first, bytes);
       }
-    }
+    });
   };
   if (!stream)
     forSlices([&](int k, std::size_t, const std::vector<unsigned char>& b) {

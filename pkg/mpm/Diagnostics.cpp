@@ -18,8 +18,7 @@ Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& g) 
   d.heightZ = -INFINITY;
   double mass = 0, maxV2 = 0;
   std::size_t flowing = 0, gasified = 0;
-  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
-    const ParticleSet& p = particles.slice(first, std::min(particles.sliceSize(), n - first));
+  forEachSlice(particles, [&](std::size_t, const ParticleSet& p) {
     for (std::size_t i = 0; i < p.size(); ++i) {
       const double* v = &p.v[3 * i];
       const double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
@@ -34,7 +33,7 @@ Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& g) 
     }
     for (std::size_t i = 0; i < p.size(); ++i)
       d.potential -= p.mass[i] * (g[0] * p.x[3 * i] + g[1] * p.x[3 * i + 1] + g[2] * p.x[3 * i + 2]);
-  }
+  });
   for (double& c : d.com) c /= mass;
   d.maxSpeed = std::sqrt(maxV2);
   d.flowing = double(flowing) / n;

@@ -126,11 +126,8 @@ void MpmCpu<T>::load(ParticleSlices& particles, bool checked) {
   double massSum = 0;
   hasFext_ = false;
   for (auto& a : fext_) std::vector<T>().swap(a);
-  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
-    const std::size_t count = std::min(particles.sliceSize(), n - first);
-    const ParticleSet& ps = particles.slice(first, count);
-    if (ps.size() != count)
-      throwParameter("particle slice " + std::to_string(first) + " size", ps.size(), "", std::to_string(count));
+  forEachSlice(particles, [&](std::size_t first, const ParticleSet& ps) {
+    const std::size_t count = ps.size();
     if (checked)
       for (std::size_t i = 0; i < count; ++i) massSum += ps.mass[i];
     else
@@ -165,7 +162,7 @@ void MpmCpu<T>::load(ParticleSlices& particles, bool checked) {
           throwParameter("externalForces[" + std::to_string(3 * (first + i) + d) + "]", f, "N", "finite");
         fext_[d][first + i] = static_cast<T>(f);
       }
-  }
+  });
   grid_.massEps = static_cast<T>(1e-12 * (n ? massSum / static_cast<double>(n) : 1.0));
   n_ = n;
   order_.assign(n_, 0);

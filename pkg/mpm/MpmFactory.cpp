@@ -70,9 +70,7 @@ std::unique_ptr<MpmSolver> withGate(std::unique_ptr<MpmSolver> solver, const Gat
 
 void MpmSolver::setParticles(ParticleSlices& particles) {
   ParticleSet all;
-  const std::size_t n = particles.size();
-  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
-    const ParticleSet& p = particles.slice(first, std::min(particles.sliceSize(), n - first));
+  forEachSlice(particles, [&all](std::size_t, const ParticleSet& p) {
     all.x.insert(all.x.end(), p.x.begin(), p.x.end());
     all.v.insert(all.v.end(), p.v.begin(), p.v.end());
     all.stress.insert(all.stress.end(), p.stress.begin(), p.stress.end());
@@ -82,7 +80,7 @@ void MpmSolver::setParticles(ParticleSlices& particles) {
     all.gammaDotP.insert(all.gammaDotP.end(), p.gammaDotP.begin(), p.gammaDotP.end());
     all.fext.insert(all.fext.end(), p.fext.begin(), p.fext.end());
     all.phase.insert(all.phase.end(), p.phase.begin(), p.phase.end());
-  }
+  });
   setParticles(all);
 }
 

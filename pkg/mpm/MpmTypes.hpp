@@ -2,6 +2,7 @@
 // driver and the Python binding. Host-side containers are double precision; the CUDA
 // backend may run in float and converts at upload/download.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -139,6 +140,20 @@ class ParticleSlices {
   // Particles [first, first + count) by number; valid until the next call.
   virtual const ParticleSet& slice(std::size_t first, std::size_t count) = 0;
 };
+
+// Calls fn(first, slice) for the slices of `particles` in order, after checking that each came
+// back with the particles asked for.
+template <typename Fn>
+void forEachSlice(ParticleSlices& particles, Fn&& fn) {
+  const std::size_t n = particles.size();
+  for (std::size_t first = 0; first < n; first += particles.sliceSize()) {
+    const std::size_t count = std::min(particles.sliceSize(), n - first);
+    const ParticleSet& p = particles.slice(first, count);
+    if (p.size() != count)
+      throwParameter("particle slice " + std::to_string(first) + " size", p.size(), "", std::to_string(count));
+    fn(first, p);
+  }
+}
 
 // A set already on the host: one slice, the set itself.
 class WholeParticleSet : public ParticleSlices {
