@@ -15,6 +15,12 @@ constexpr int kBlockNodes = 5;  // nodes per axis reached from one 3x3x3 block o
 // order every this many steps, before they have drifted far from it (docs/benchmarks.md).
 constexpr int kReorderEvery = 8;
 constexpr int kG2PBatch = 32;  // particles per vector loop of the G2P update
+constexpr int kBlockCells = 27;  // stencil bases per 3x3x3 block
+// Particles of one stencil base whose G2P grid sums share vector instructions: 8 in float, 4 in
+// double (one AVX2 register; wider groups ran slower, from register spills and half-empty groups
+// at 8 particles per cell).
+template <typename T>
+constexpr int kG2PGroup = 32 / static_cast<int>(sizeof(T));
 
 // The G2P update of a batch of m particles whose values g2pGather put at a[c * kG2PBatch + l],
 // as one vector loop. The particles go to slot[l] of out; unless kScattered, these slots are
@@ -44,22 +50,24 @@ void g2pUpdateBatch(const T* a, int m, const int* slot, const int* id, ParticleO
   vmax = fastest;
 }
 
-// Sort the m slots a[] by particle number id[a[i]]. The slots of a block come from the previous
-// step's order, in which they were sorted, so only the few particles that changed block are out
-// of place: insertion sort then costs O(m) per misplaced particle; a block with many (the first
-// step after setParticles in an unsorted order) is sorted in O(m log m).
-void sortByNumber(int* a, int m, const int* id) {
+// Sort the m slots a[] of one block by grid cell, then by particle number: by (cell[x], id[x]).
+// The slots come from the previous step's order, in which they were sorted, so only the few
+// particles that changed cell are out of place: insertion sort then costs O(m) per misplaced
+// particle; a block with many (the first step after setParticles in an unsorted order) is
+// sorted in O(m log m).
+void sortByCellAndNumber(int* a, int m, const int* cell, const int* id) {
+  auto before = [cell, id](int x, int y) { return cell[x] < cell[y] || (cell[x] == cell[y] && id[x] < id[y]); };
   int descents = 0;
-  for (int i = 1; i < m; ++i) descents += id[a[i]] < id[a[i - 1]];
+  for (int i = 1; i < m; ++i) descents += before(a[i], a[i - 1]);
   if (descents == 0) return;
   if (descents > 8) {
-    std::sort(a, a + m, [id](int x, int y) { return id[x] < id[y]; });
+    std::sort(a, a + m, before);
     return;
   }
   for (int i = 1; i < m; ++i) {
-    const int v = a[i], key = id[v];
+    const int v = a[i];
     int j = i;
-    for (; j > 0 && id[a[j - 1]] > key; --j) a[j] = a[j - 1];
+    for (; j > 0 && before(v, a[j - 1]); --j) a[j] = a[j - 1];
     a[j] = v;
   }
 }
@@ -166,7 +174,7 @@ void MpmCpu<T>::load(ParticleSlices& particles, bool checked) {
   grid_.massEps = static_cast<T>(1e-12 * (n ? massSum / static_cast<double>(n) : 1.0));
   n_ = n;
   order_.assign(n_, 0);
-  blockOf_.assign(n_, 0);
+  cellOf_.assign(n_, 0);
 }
 
 template <typename T>
@@ -274,7 +282,7 @@ std::size_t MpmCpu<T>::memoryBytes() const {
   add(nodes_);
   add(blockStart_);
   add(order_);
-  add(blockOf_);
+  add(cellOf_);
   for (const auto& c : colourBlocks_) add(c);
   add(activeTiles_);
   add(tileMark_);
@@ -331,9 +339,9 @@ void MpmCpu<T>::reorder() {
   for (auto& a : s.s) permute(a);
   permute(s.J);
   permute(s.gdp);
-  // blockOf_ is free until the next binning: the numbers are gathered into it.
-  gather(s.id.data(), blockOf_.data());
-  s.id.swap(blockOf_);
+  // cellOf_ is free until the next binning: the numbers are gathered into it.
+  gather(s.id.data(), cellOf_.data());
+  s.id.swap(cellOf_);
   auto* bytes = reinterpret_cast<std::uint8_t*>(scratch_.data());
   gather(s.phase.data(), bytes);
   std::copy(bytes, bytes + n_, s.phase.begin());
@@ -343,28 +351,34 @@ template <typename T>
 void MpmCpu<T>::bin(const ParticleIn<T>& in) {
   const long n = static_cast<long>(n_);
   const int nBlocks = static_cast<int>(blockStart_.size()) - 1;
-  // Bin the particles by the 3x3x3 block of their stencil base node, computed in T exactly as
-  // Stencil::compute does.
+  // Bin the particles by their stencil base node (computed in T exactly as Stencil::compute
+  // does): cellOf_[p] = 27 b + c for the c-th base of the 3x3x3 block b.
 #pragma omp parallel for schedule(static)
   for (long p = 0; p < n; ++p) {
     T g[3];
     gridCoordinate(in, static_cast<int>(p), grid_, g);
-    int b[3];
-    for (int d = 0; d < 3; ++d) b[d] = static_cast<int>(hdFloor(g[d] - T(0.5))) / 3;  // base >= 1 inside the admissible box
-    blockOf_[p] = (b[0] * blocks_[1] + b[1]) * blocks_[2] + b[2];
+    int b[3], c = 0;
+    for (int d = 0; d < 3; ++d) {
+      const int base = static_cast<int>(hdFloor(g[d] - T(0.5)));  // >= 1 inside the admissible box
+      b[d] = base / 3;
+      c = 3 * c + base % 3;
+    }
+    cellOf_[p] = kBlockCells * ((b[0] * blocks_[1] + b[1]) * blocks_[2] + b[2]) + c;
   }
   std::fill(blockStart_.begin(), blockStart_.end(), 0);
-  for (long p = 0; p < n; ++p) ++blockStart_[blockOf_[p] + 1];
+  for (long p = 0; p < n; ++p) ++blockStart_[cellOf_[p] / kBlockCells + 1];
   for (int b = 0; b < nBlocks; ++b) blockStart_[b + 1] += blockStart_[b];
   {
     std::vector<int> fill(blockStart_.begin(), blockStart_.end() - 1);
-    for (long p = 0; p < n; ++p) order_[fill[blockOf_[p]]++] = static_cast<int>(p);
+    for (long p = 0; p < n; ++p) order_[fill[cellOf_[p] / kBlockCells]++] = static_cast<int>(p);
   }
-  // Within a block the particles go by number, as they did before any reordering, so that the
-  // P2G sums and hence the results do not depend on the storage order (a restart from a
-  // snapshot, which holds the particles by number, continues bit for bit).
+  // Within a block the particles go by stencil base, so that the particles of one base are
+  // neighbours for G2P's groups, and then by number, so that the P2G sums and hence the
+  // results do not depend on the storage order (a restart from a snapshot, which holds the
+  // particles by number, continues bit for bit).
 #pragma omp parallel for schedule(dynamic, 64)
-  for (int b = 0; b < nBlocks; ++b) sortByNumber(order_.data() + blockStart_[b], blockStart_[b + 1] - blockStart_[b], in.id);
+  for (int b = 0; b < nBlocks; ++b)
+    sortByCellAndNumber(order_.data() + blockStart_[b], blockStart_[b + 1] - blockStart_[b], cellOf_.data(), in.id);
   for (auto& c : colourBlocks_) c.clear();
   for (int b = 0; b < nBlocks; ++b) {
     if (blockStart_[b + 1] == blockStart_[b]) continue;
@@ -488,8 +502,9 @@ void MpmCpu<T>::step(double dt) {
   // turn; with one copy it updates them in their slots, and reorder() sorts them now and then.
   const bool inPlace = !params_.keepLastGoodState;
   const int* order = order_.data();
+  const int* cellOf = cellOf_.data();
   int* outId = inPlace ? state_[cur_].id.data() : state_[1 - cur_].id.data();
-  // The particles go in batches: the grid sums of a batch one particle at a time, then the
+  // The particles go in batches: the grid sums of a batch one stencil base at a time, then the
   // update of the batch as one vector loop (the update is the same arithmetic for every
   // particle, so several particles share each vector instruction).
   const long batches = (n + kG2PBatch - 1) / kG2PBatch;
@@ -500,11 +515,17 @@ void MpmCpu<T>::step(double dt) {
     int phase[kG2PBatch];
     const long q0 = b * kG2PBatch;
     const int m = static_cast<int>(std::min<long>(kG2PBatch, n - q0));
-    for (int l = 0; l < m; ++l) {
-      const int p = order[q0 + l];
-      g2pGather(p, in, gridData, g, a + l, kG2PBatch);
-      slot[l] = inPlace ? p : static_cast<int>(q0 + l);
-      id[l] = in.id[p];
+    for (int l = 0; l < m;) {
+      // The next run of up to kG2PGroup particles with one stencil base.
+      const int* ps = order + q0 + l;
+      int count = 1;
+      while (count < kG2PGroup<T> && l + count < m && cellOf[ps[count]] == cellOf[ps[0]]) ++count;
+      g2pGatherGroup<kG2PGroup<T>>(ps, count, in, gridData, g, a + l, kG2PBatch);
+      for (int e = l + count; l < e; ++l) {
+        const int p = order[q0 + l];
+        slot[l] = inPlace ? p : static_cast<int>(q0 + l);
+        id[l] = in.id[p];
+      }
     }
     if (inPlace)
       g2pUpdateBatch<true>(a, m, slot, id, out, g, sc, phase, firstBad, vmax);

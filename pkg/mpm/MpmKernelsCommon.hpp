@@ -226,63 +226,96 @@ enum : int {
   kG2PValues = 30
 };
 
+// The G2P grid sums of `count` (1..G) particles ps[] that share one stencil base, one lane per
+// particle, so that one vector instruction serves G particles (the CPU step's groups of a
+// stencil base; g2pGather is the group of one). A node's values are the same for the whole
+// group, so each is read once and broadcast. Every lane runs the same instructions, so a
+// particle's sums do not depend on the other members of its group or on its lane; lanes of
+// missing particles repeat the last one and are not written.
+template <int G, typename T>
+MPM_HD_INLINE void g2pGatherGroup(const int* ps, int count, const ParticleIn<T>& P, const T* grid,
+                                  const GridConst<T>& g, T* a, int stride) {
+  T wx[3][G], dwx[3][G], wy[3][G], dwy[3][G], wz[3][G], dwz[3][G];
+  int base[3] = {0, 0, 0};
+  for (int l = 0; l < G; ++l) {
+    T gc[3];
+    gridCoordinate(P, ps[l < count ? l : count - 1], g, gc);
+    Stencil<T> st;
+    st.compute(gc);
+    if (l == 0)
+      for (int d = 0; d < 3; ++d) base[d] = st.base[d];
+    for (int k = 0; k < 3; ++k) {
+      wx[k][l] = st.w[0][k], dwx[k][l] = st.dw[0][k];
+      wy[k][l] = st.w[1][k], dwy[k][l] = st.dw[1][k];
+      wz[k][l] = st.w[2][k], dwz[k][l] = st.dw[2][k];
+    }
+  }
+  // Sums over the stencil of w (v_new - v_old), w v_new and the gradient components times
+  // v_new, per component d and particle l, factored per (i, j) row like P2G.
+  T sd[3][G], sw[3][G], sx[3][G], sy[3][G], sz[3][G];
+  for (int d = 0; d < 3; ++d) {
+    MPM_SIMD
+    for (int l = 0; l < G; ++l) sd[d][l] = sw[d][l] = sx[d][l] = sy[d][l] = sz[d][l] = T(0);
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const T* row = grid + kNodeValues * (((base[0] + i) * g.nodes[1] + (base[1] + j)) * g.nodes[2] + base[2]);
+      T ad[3][G], an[3][G], bn[3][G];
+      for (int d = 0; d < 3; ++d) {
+        MPM_SIMD
+        for (int l = 0; l < G; ++l) ad[d][l] = an[d][l] = bn[d][l] = T(0);
+      }
+      for (int k = 0; k < 3; ++k) {
+        const T* r = row + kNodeValues * k;
+        for (int d = 0; d < 3; ++d) {
+          const T vn = r[kNodeVNew + d], dv = vn - r[d];
+          MPM_SIMD
+          for (int l = 0; l < G; ++l) {
+            ad[d][l] += wz[k][l] * dv;
+            an[d][l] += wz[k][l] * vn;
+            bn[d][l] += dwz[k][l] * vn;
+          }
+        }
+      }
+      for (int d = 0; d < 3; ++d) {
+        MPM_SIMD
+        for (int l = 0; l < G; ++l) {
+          const T wij = wx[i][l] * wy[j][l];
+          const T xij = dwx[i][l] * wy[j][l];
+          const T yij = wx[i][l] * dwy[j][l];
+          sd[d][l] += wij * ad[d][l];
+          sw[d][l] += wij * an[d][l];
+          sx[d][l] += xij * an[d][l];
+          sy[d][l] += yij * an[d][l];
+          sz[d][l] += wij * bn[d][l];
+        }
+      }
+    }
+  for (int l = 0; l < count; ++l) {
+    const int p = ps[l];
+    T* al = a + l;
+    for (int d = 0; d < 3; ++d) {
+      al[(kG2PDv + d) * stride] = sd[d][l];
+      al[(kG2PVPic + d) * stride] = sw[d][l];
+      al[(kG2PL + 3 * d) * stride] = g.invDx * sx[d][l];
+      al[(kG2PL + 3 * d + 1) * stride] = g.invDx * sy[d][l];
+      al[(kG2PL + 3 * d + 2) * stride] = g.invDx * sz[d][l];
+      al[(kG2PX + d) * stride] = P.x[d][p];
+      al[(kG2PV + d) * stride] = P.v[d][p];
+    }
+    for (int k = 0; k < 6; ++k) al[(kG2PSigma + k) * stride] = P.s[k][p];
+    const int k0 = particleNumber(P, p);
+    al[kG2PJ * stride] = P.J[p];
+    al[kG2PMass * stride] = P.mass[k0];
+    al[kG2PVol0 * stride] = P.vol0[k0];
+  }
+}
+
+// The G2P grid sums and state of particle p at a[c * stride] (kG2PValues values).
 template <typename T>
 MPM_HD_INLINE void g2pGather(int p, const ParticleIn<T>& P, const T* grid, const GridConst<T>& g, T* a,
                              int stride) {
-  T gc[3];
-  gridCoordinate(P, p, g, gc);
-  Stencil<T> st;
-  st.compute(gc);
-  // Sums over the stencil of w (v_new - v_old), w v_new and the gradient components times
-  // v_new, factored per (i, j) row like P2G. Lanes 0..2 carry the vectors; lane 3 (the
-  // difference's lane holds minus the mass) is not used.
-  constexpr int kL = 4;
-  T sd[kL], sw[kL], sx[kL], sy[kL], sz[kL];
-  MPM_SIMD
-  for (int c = 0; c < kL; ++c) sd[c] = sw[c] = sx[c] = sy[c] = sz[c] = T(0);
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      const T* row = grid + kNodeValues * (((st.base[0] + i) * g.nodes[1] + (st.base[1] + j)) * g.nodes[2] + st.base[2]);
-      T ad[kL], an[kL], bn[kL];
-      MPM_SIMD
-      for (int c = 0; c < kL; ++c) ad[c] = an[c] = bn[c] = T(0);
-      for (int k = 0; k < 3; ++k) {
-        const T* r = row + kNodeValues * k;
-        const T w = st.w[2][k], dw = st.dw[2][k];
-        MPM_SIMD
-        for (int c = 0; c < kL; ++c) {
-          const T vn = r[kNodeVNew + c];
-          ad[c] += w * (vn - r[c]);
-          an[c] += w * vn;
-          bn[c] += dw * vn;
-        }
-      }
-      const T wij = st.w[0][i] * st.w[1][j];
-      const T xij = st.dw[0][i] * st.w[1][j];
-      const T yij = st.w[0][i] * st.dw[1][j];
-      MPM_SIMD
-      for (int c = 0; c < kL; ++c) {
-        sd[c] += wij * ad[c];
-        sw[c] += wij * an[c];
-        sx[c] += xij * an[c];
-        sy[c] += yij * an[c];
-        sz[c] += wij * bn[c];
-      }
-    }
-  for (int d = 0; d < 3; ++d) {
-    a[(kG2PDv + d) * stride] = sd[d];
-    a[(kG2PVPic + d) * stride] = sw[d];
-    a[(kG2PL + 3 * d) * stride] = g.invDx * sx[d];
-    a[(kG2PL + 3 * d + 1) * stride] = g.invDx * sy[d];
-    a[(kG2PL + 3 * d + 2) * stride] = g.invDx * sz[d];
-    a[(kG2PX + d) * stride] = P.x[d][p];
-    a[(kG2PV + d) * stride] = P.v[d][p];
-  }
-  for (int k = 0; k < 6; ++k) a[(kG2PSigma + k) * stride] = P.s[k][p];
-  const int k0 = particleNumber(P, p);
-  a[kG2PJ * stride] = P.J[p];
-  a[kG2PMass * stride] = P.mass[k0];
-  a[kG2PVol0 * stride] = P.vol0[k0];
+  g2pGatherGroup<1>(&p, 1, P, grid, g, a, stride);
 }
 
 // The update of one particle from the values g2pGather collected (Eq 4 and Appendix B): writes

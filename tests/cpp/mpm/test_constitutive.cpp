@@ -1,8 +1,11 @@
 // Appendix B mu(I) model (with the corrections of docs/physics.md), the Appendix A wall condition,
-// and the G2P update of one particle (Eq 4 and the stress update) from its gathered values.
+// the G2P grid sums (one particle and groups of one stencil base), and the G2P update of one
+// particle (Eq 4 and the stress update) from its gathered values.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "mpm/Constitutive.hpp"
 #include "mpm/GridBoundary.hpp"
@@ -241,4 +244,94 @@ TEST(G2PUpdate, ANonFiniteOrTooFastPointFails) {
   G2PCase crushed;
   crushed.set(kG2PJ, 5e-4);  // below kMinJ
   EXPECT_FALSE(crushed.update(speed, ph));
+}
+
+namespace {
+// Grid sums of g2pGather written out node by node with Stencil::weight and gradient: the
+// reference the grouped, factored sums must match.
+template <typename T>
+void gatherByNode(const T* x, const T* grid, const GridConst<T>& g, double out[15]) {
+  T gc[3];
+  for (int d = 0; d < 3; ++d) gc[d] = (x[d] - g.origin[d]) * g.invDx;
+  Stencil<T> st;
+  st.compute(gc);
+  for (int c = 0; c < 15; ++c) out[c] = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) {
+        const T* r = grid + kNodeValues * (((st.base[0] + i) * g.nodes[1] + st.base[1] + j) * g.nodes[2] + st.base[2] + k);
+        const double w = st.weight(i, j, k);
+        const Vec3T<T> dw = st.gradient(i, j, k, g.invDx);
+        for (int d = 0; d < 3; ++d) {
+          const double vn = r[kNodeVNew + d];
+          out[kG2PDv + d] += w * (vn - r[d]);
+          out[kG2PVPic + d] += w * vn;
+          for (int e = 0; e < 3; ++e) out[kG2PL + 3 * d + e] += vn * dw[e];
+        }
+      }
+}
+
+// Seven particles in one stencil base (grid cell (4, 5, 6) shifted by half a cell) over a grid
+// of pseudo-random node velocities. The CPU step gathers a particle in a group of 8 whatever the
+// others in it (their number, its lane): it must get the same bits in every group; and the sums
+// must be those of the node-by-node formula, as must those of the single-particle g2pGather
+// (the CUDA path; the compiler may contract its multiply-adds differently).
+template <typename T>
+void groupedGatherMatchesOneByOne() {
+  MpmParams prm;  // 10 cells of 1 cm
+  const GridConst<T> g = makeGridConst<T>(prm, 1e-12);
+  std::vector<T> grid(kNodeValues * g.nodes[0] * g.nodes[1] * g.nodes[2]);
+  unsigned state = 12345;
+  for (T& v : grid) {
+    state = state * 1664525u + 1013904223u;
+    v = T(state >> 8) / T(1 << 24) - T(0.5);  // [-0.5, 0.5) m/s
+  }
+  constexpr int n = 7;
+  std::vector<T> x[3], vel[3], s[6], J(n, T(1)), mass(n, T(1e-4)), vol0(n, T(1e-7));
+  for (auto& c : x) c.resize(n);
+  for (auto& c : vel) c.assign(n, T(0.1));
+  for (auto& c : s) c.assign(n, T(-100));
+  for (int q = 0; q < n; ++q)
+    for (int d = 0; d < 3; ++d) x[d][q] = g.origin[d] + g.dx * (T(4.55 + d) + T(0.13) * ((q + d) % 7) + T(0.01) * q);
+  ParticleIn<T> in{};
+  for (int d = 0; d < 3; ++d) in.x[d] = x[d].data(), in.v[d] = vel[d].data();
+  for (int k = 0; k < 6; ++k) in.s[k] = s[k].data();
+  in.J = J.data(), in.mass = mass.data(), in.vol0 = vol0.data();
+  const int ps[n] = {6, 2, 0, 5, 1, 3, 4};
+  T one[kG2PValues * n], eight[kG2PValues * n], alone[kG2PValues * n], threes[kG2PValues * n];
+  for (int l = 0; l < n; ++l) g2pGather(ps[l], in, grid.data(), g, one + l, n);
+  g2pGatherGroup<8>(ps, n, in, grid.data(), g, eight, n);
+  for (int l = 0; l < n; ++l) g2pGatherGroup<8>(ps + l, 1, in, grid.data(), g, alone + l, n);
+  for (int l = 0; l < n; l += 3) g2pGatherGroup<8>(ps + l, std::min(3, n - l), in, grid.data(), g, threes + l, n);
+  const double tol = sizeof(T) == 8 ? 1e-14 : 1e-5;  // of sums of order 1 m/s (L: 1/dx times that)
+  for (int l = 0; l < n; ++l) {
+    const int p = ps[l];
+    Stencil<T> st;
+    T gc[3] = {(x[0][p] - g.origin[0]) * g.invDx, (x[1][p] - g.origin[1]) * g.invDx, (x[2][p] - g.origin[2]) * g.invDx};
+    st.compute(gc);
+    ASSERT_EQ(st.base[0], 4);  // the test's particles do share one base
+    ASSERT_EQ(st.base[1], 5);
+    ASSERT_EQ(st.base[2], 6);
+    double ref[15];
+    T xp[3] = {x[0][p], x[1][p], x[2][p]};
+    gatherByNode(xp, grid.data(), g, ref);
+    for (int c = 0; c < kG2PValues; ++c) {
+      EXPECT_EQ(alone[c * n + l], eight[c * n + l]) << "value " << c << " of particle " << p;
+      EXPECT_EQ(threes[c * n + l], eight[c * n + l]) << "value " << c << " of particle " << p;
+    }
+    for (int c = 0; c < 15; ++c) {
+      const double scale = c >= kG2PL ? double(g.invDx) : 1.0;
+      EXPECT_NEAR(eight[c * n + l], ref[c], tol * scale) << "sum " << c << " of particle " << p;
+      EXPECT_NEAR(one[c * n + l], ref[c], tol * scale) << "sum " << c << " of particle " << p;
+    }
+    for (int c = 15; c < kG2PValues; ++c) EXPECT_EQ(one[c * n + l], eight[c * n + l]) << "state " << c;
+    EXPECT_EQ(eight[kG2PX * n + l], x[0][p]);
+    EXPECT_EQ(eight[kG2PMass * n + l], mass[p]);
+  }
+}
+}  // namespace
+
+TEST(G2PGather, AParticleGetsTheSameSumsInAnyGroupOfItsStencilBase) {
+  groupedGatherMatchesOneByOne<double>();
+  groupedGatherMatchesOneByOne<float>();
 }
