@@ -127,7 +127,7 @@ struct MpContact {
 constexpr int kCoupleOk = 0;
 constexpr int kCoupleCoreReached = 1;  // the particle centre reached a block core (delta >= R)
 
-// The solver's particles (mpm::ParticleView): x, v and force per storage slot; mass, vol0 and the
+// The solver's particles (mpm::ParticleView): x, v, mass, vol0 and force per storage slot; the
 // histories per particle number id[slot] (id null: slot and number are the same).
 template <typename T>
 struct CouplingParticles {
@@ -203,8 +203,8 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
   const int slots = H.slots < kMaxSlots ? H.slots : kMaxSlots;
   bool oldRead = false;  // most points in a block's bins touch nothing: read the history at the first contact
   int used = 0;
-  const T rp = particleRadius(P.vol0[h], memo);
-  const T mp = P.mass[h];
+  const T rp = particleRadius(P.vol0[p], memo);
+  const T mp = P.mass[p];
   const Vec3T<T> vp{P.v[0][p], P.v[1][p], P.v[2][p]};
   Vec3T<T> fsum{T(0), T(0), T(0)};
   for (int i = b0; i < b1; ++i) {

@@ -80,6 +80,8 @@ void MpmCpu<T>::State::resize(std::size_t n) {
   for (auto& a : s) a.assign(n, T(0));
   J.assign(n, T(1));
   gdp.assign(n, T(0));
+  mass.assign(n, T(0));
+  vol0.assign(n, T(0));
   phase.assign(n, 0);
   id.assign(n, 0);
 }
@@ -124,8 +126,6 @@ void MpmCpu<T>::load(ParticleSlices& particles, bool checked) {
     state_[1].resize(n);
   else
     scratch_.assign(n, T(0));
-  mass_.resize(n);
-  vol0_.resize(n);
   cur_ = 0;
   stepsSinceReorder_ = kReorderEvery - 1;  // given by number: sorted after the first step
   partlyAdvanced_ = false;
@@ -142,8 +142,8 @@ void MpmCpu<T>::load(ParticleSlices& particles, bool checked) {
       validateParticleSlice(params_, ps, first, massSum);
     for (std::size_t i = 0; i < count; ++i) {
       const std::size_t p = first + i;
-      mass_[p] = static_cast<T>(ps.mass[i]);
-      vol0_[p] = static_cast<T>(ps.volume0[i]);
+      s.mass[p] = static_cast<T>(ps.mass[i]);
+      s.vol0[p] = static_cast<T>(ps.volume0[i]);
       for (int d = 0; d < 3; ++d) {
         s.x[d][p] = static_cast<T>(ps.x[3 * i + d]);
         s.v[d][p] = static_cast<T>(ps.v[3 * i + d]);
@@ -200,8 +200,8 @@ void MpmCpu<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t co
   out.x.resize(3 * count);
   out.v.resize(3 * count);
   out.stress.resize(6 * count);
-  out.mass.assign(mass_.begin() + first, mass_.begin() + first + count);
-  out.volume0.assign(vol0_.begin() + first, vol0_.begin() + first + count);
+  out.mass.resize(count);
+  out.volume0.resize(count);
   out.J.resize(count);
   out.gammaDotP.resize(count);
   out.phase.resize(count);
@@ -215,6 +215,8 @@ void MpmCpu<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t co
       if (hasFext_) out.fext[3 * p + d] = fext_[d][q];
     }
     for (int k = 0; k < 6; ++k) out.stress[6 * p + k] = s.s[k][q];
+    out.mass[p] = s.mass[q];
+    out.volume0[p] = s.vol0[q];
     out.J[p] = s.J[q];
     out.gammaDotP[p] = s.gdp[q];
     out.phase[p] = s.phase[q];
@@ -252,8 +254,8 @@ ParticleView MpmCpu<T>::openForceBuffer() {
     v.v[d] = s.v[d].data();
     v.force[d] = fext_[d].data();
   }
-  v.mass = mass_.data();
-  v.volume0 = vol0_.data();
+  v.mass = s.mass.data();
+  v.volume0 = s.vol0.data();
   v.J = s.J.data();
   hasFext_ = true;
   return v;
@@ -272,12 +274,12 @@ std::size_t MpmCpu<T>::memoryBytes() const {
     for (const auto& a : st.s) add(a);
     add(st.J);
     add(st.gdp);
+    add(st.mass);
+    add(st.vol0);
     add(st.phase);
     add(st.id);
   }
   add(scratch_);
-  add(mass_);
-  add(vol0_);
   for (const auto& a : fext_) add(a);
   add(nodes_);
   add(blockStart_);
@@ -300,8 +302,8 @@ ParticleIn<T> MpmCpu<T>::input() const {
   }
   for (int k = 0; k < 6; ++k) in.s[k] = s.s[k].data();
   in.J = s.J.data();
-  in.mass = mass_.data();
-  in.vol0 = vol0_.data();
+  in.mass = s.mass.data();
+  in.vol0 = s.vol0.data();
   in.id = s.id.data();
   return in;
 }
@@ -339,6 +341,8 @@ void MpmCpu<T>::reorder() {
   for (auto& a : s.s) permute(a);
   permute(s.J);
   permute(s.gdp);
+  permute(s.mass);
+  permute(s.vol0);
   // cellOf_ is free until the next binning: the numbers are gathered into it.
   gather(s.id.data(), cellOf_.data());
   s.id.swap(cellOf_);
@@ -503,7 +507,10 @@ void MpmCpu<T>::step(double dt) {
   const bool inPlace = !params_.keepLastGoodState;
   const int* order = order_.data();
   const int* cellOf = cellOf_.data();
-  int* outId = inPlace ? state_[cur_].id.data() : state_[1 - cur_].id.data();
+  State& next = state_[inPlace ? cur_ : 1 - cur_];
+  int* outId = next.id.data();
+  T* outMass = next.mass.data();
+  T* outVol0 = next.vol0.data();
   // The particles go in batches: the grid sums of a batch one stencil base at a time, then the
   // update of the batch as one vector loop (the update is the same arithmetic for every
   // particle, so several particles share each vector instruction).
@@ -533,7 +540,10 @@ void MpmCpu<T>::step(double dt) {
       g2pUpdateBatch<false>(a, m, slot, id, out, g, sc, phase, firstBad, vmax);
     for (int l = 0; l < m; ++l) {
       out.phase[slot[l]] = static_cast<std::uint8_t>(phase[l]);
-      if (!inPlace) outId[q0 + l] = id[l];
+      if (inPlace) continue;
+      outId[q0 + l] = id[l];
+      outMass[q0 + l] = a[kG2PMass * kG2PBatch + l];
+      outVol0[q0 + l] = a[kG2PVol0 * kG2PBatch + l];
     }
   }
   if (firstBad < n) {

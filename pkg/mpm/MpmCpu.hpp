@@ -82,7 +82,9 @@ class MpmCpu : public MpmSolver {
  private:
   void load(ParticleSlices& particles, bool checked);
   struct State {
-    std::vector<T> x[3], v[3], s[6], J, gdp;
+    // mass and volume0 never change; they are kept by slot like the rest, so that a step reads
+    // them in turn and not scattered by particle number.
+    std::vector<T> x[3], v[3], s[6], J, gdp, mass, vol0;
     std::vector<std::uint8_t> phase;
     std::vector<int> id;  // particle number of each slot
     void resize(std::size_t n);
@@ -115,7 +117,6 @@ class MpmCpu : public MpmSolver {
   int cur_ = 0;
   std::vector<T> scratch_;   // one copy: the buffer reorder() gathers into
   int stepsSinceReorder_ = 0;
-  std::vector<T> mass_, vol0_;  // by particle number
   std::vector<T> fext_[3];
   bool hasFext_ = false;
   std::vector<T> nodes_;  // kNodeValues * nNodes_

@@ -53,9 +53,9 @@ struct StepConst {
   ConstitutiveConst<T> mat;
 };
 
-// Particle state read by a step (SoA, one array per component). The state arrays are indexed by
-// storage slot; mass and vol0 by particle number, id[slot] (a backend that keeps the particles
-// in their own order has id null: slot and number are the same).
+// Particle state read by a step (SoA, one array per component), indexed by storage slot; id[slot]
+// is the particle number (a backend that keeps the particles in their own order has id null:
+// slot and number are the same).
 template <typename T>
 struct ParticleIn {
   const T* x[3];
@@ -67,11 +67,6 @@ struct ParticleIn {
   const T* fext[3];  // all null when no external forces are set for this step
   const int* id;
 };
-
-template <typename T>
-MPM_HD_INLINE int particleNumber(const ParticleIn<T>& P, int p) {
-  return P.id ? P.id[p] : p;
-}
 
 // Particle state written by a step.
 template <typename T>
@@ -96,9 +91,8 @@ MPM_HD_INLINE void gridCoordinate(const ParticleIn<T>& P, int p, const GridConst
 // weights factored per (i, j) row, so that a row of 3 nodes costs two multiply-adds per value.
 template <typename T, typename Scatter>
 MPM_HD_INLINE void p2gStencil(int p, const ParticleIn<T>& P, const Stencil<T>& st, T invDx, T dt, Scatter& add) {
-  const int k0 = particleNumber(P, p);
-  const T m = P.mass[k0];
-  const T vol = P.J[p] * P.vol0[k0];
+  const T m = P.mass[p];
+  const T vol = P.J[p] * P.vol0[p];
   T s[6];
   for (int k = 0; k < 6; ++k) s[k] = -dt * vol * invDx * P.s[k][p];  // -dt V sigma / dx
   T cw[kNodeValues], cx[kNodeValues], cy[kNodeValues], cz[kNodeValues];
@@ -304,10 +298,9 @@ MPM_HD_INLINE void g2pGatherGroup(const int* ps, int count, const ParticleIn<T>&
       al[(kG2PV + d) * stride] = P.v[d][p];
     }
     for (int k = 0; k < 6; ++k) al[(kG2PSigma + k) * stride] = P.s[k][p];
-    const int k0 = particleNumber(P, p);
     al[kG2PJ * stride] = P.J[p];
-    al[kG2PMass * stride] = P.mass[k0];
-    al[kG2PVol0 * stride] = P.vol0[k0];
+    al[kG2PMass * stride] = P.mass[p];
+    al[kG2PVol0 * stride] = P.vol0[p];
   }
 }
 

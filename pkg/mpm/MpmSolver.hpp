@@ -33,8 +33,8 @@ struct ParticleView {
   const int* id = nullptr;         // particle number of each slot (null: the slot itself)
   const void* x[3] = {};           // position [m], per slot
   const void* v[3] = {};           // velocity [m/s], per slot
-  const void* mass = nullptr;      // [kg], per particle number
-  const void* volume0 = nullptr;   // initial volume [m^3] (sets the contact radius, Eq 13), per number
+  const void* mass = nullptr;      // [kg], per slot
+  const void* volume0 = nullptr;   // initial volume [m^3] (sets the contact radius, Eq 13), per slot
   const void* J = nullptr;         // det F, per slot: current volume = J volume0
   void* force[3] = {};             // external force of the next step [N], per slot: accumulate into it (Eq 14)
 };

@@ -103,8 +103,8 @@ TEST(CpuFloat, HoldsFloatArraysBehindItsViews) {
 
 TEST(CpuFloat, HalvesEveryArrayOfT) {
   // Every particle and grid array is T, the particle numbers and the binning arrays int: the
-  // double solver holds exactly 4 bytes more per value, 30 values per particle (14 twice, mass,
-  // volume0) and 8 per grid node (7 and a pad), and 3 per particle more once a force buffer is
+  // double solver holds exactly 4 bytes more per value, 32 values per particle (16 twice: 14
+  // state values, mass and volume0) and 8 per grid node (7 and a pad), and 3 per particle more once a force buffer is
   // opened.
   MpmParams prm = columnParams({20, 5, 22});
   ParticleSet ps;
@@ -114,18 +114,18 @@ TEST(CpuFloat, HalvesEveryArrayOfT) {
   f->setParticles(ps);
   d->setParticles(ps);
   const std::size_t n = ps.size(), nodes = 21 * 6 * 23;
-  EXPECT_EQ(d->memoryBytes() - f->memoryBytes(), 4 * (30 * n + 8 * nodes));
+  EXPECT_EQ(d->memoryBytes() - f->memoryBytes(), 4 * (32 * n + 8 * nodes));
   f->openForceBuffer();
   d->openForceBuffer();
-  EXPECT_EQ(d->memoryBytes() - f->memoryBytes(), 4 * (33 * n + 8 * nodes));
-  // and what float holds per particle: 30 floats, 2 phase bytes, 8 number bytes, 8 binning bytes
+  EXPECT_EQ(d->memoryBytes() - f->memoryBytes(), 4 * (35 * n + 8 * nodes));
+  // and what float holds per particle: 32 floats, 2 phase bytes, 8 number bytes, 8 binning bytes
   // and 3 forces,
   // besides the grid's 8 floats per node and the block lists of the P2G colouring (an int or
   // two per block of 3 x 3 x 3 cells)
   const double blocks = (20 / 3 + 1) * (5 / 3 + 1) * (22 / 3 + 1);
   const double perParticle = (f->memoryBytes() - 8.0 * 4 * nodes) / n;
-  EXPECT_GE(perParticle, 30 * 4 + 2 + 8 + 8 + 12);
-  EXPECT_LE(perParticle, 30 * 4 + 2 + 8 + 8 + 12 + 4 * 4 * blocks / n);
+  EXPECT_GE(perParticle, 32 * 4 + 2 + 8 + 8 + 12);
+  EXPECT_LE(perParticle, 32 * 4 + 2 + 8 + 8 + 12 + 4 * 4 * blocks / n);
 }
 
 TEST(CpuFloat, AgreesWithDoubleOnACollapsingColumn) {
