@@ -5,6 +5,7 @@
 #pragma once
 #include <filesystem>
 #include <iomanip>
+#include <iterator>
 #include <memory>
 #include <new>
 #include <sstream>
@@ -68,38 +69,23 @@ class PyMpm {
   // host copy of the particles besides the arrays themselves).
   bp::dict particles() {
     const std::size_t n = solver_->numParticles();
-    struct Column {
-      const char* name;
-      npy_intp cols;                                  // 0: one value per particle, a 1-D array
-      std::vector<double> mpm::ParticleSet::*values;  // null: density and phase, converted below
-      bp::object array;
-      double* data;
-    };
-    Column columns[] = {{"x", 3, &mpm::ParticleSet::x, {}, nullptr},
-                        {"v", 3, &mpm::ParticleSet::v, {}, nullptr},
-                        {"stress", 6, &mpm::ParticleSet::stress, {}, nullptr},
-                        {"mass", 0, &mpm::ParticleSet::mass, {}, nullptr},
-                        {"volume0", 0, &mpm::ParticleSet::volume0, {}, nullptr},
-                        {"J", 0, &mpm::ParticleSet::J, {}, nullptr},
-                        {"gammaDotP", 0, &mpm::ParticleSet::gammaDotP, {}, nullptr},
-                        {"density", 0, nullptr, {}, nullptr},
-                        {"phase", 0, nullptr, {}, nullptr}};
-    Column& density = columns[7];
-    Column& phase = columns[8];
+    constexpr std::size_t kColumns = std::size(mpm::kParticleColumns);
+    double* data[kColumns];
     bp::dict d;
-    for (Column& c : columns) {
-      c.array = numpyEmpty(static_cast<npy_intp>(n), c.cols, &c.data);
-      d[c.name] = c.array;
+    for (std::size_t k = 0; k < kColumns; ++k) {
+      const mpm::ParticleColumn& c = mpm::kParticleColumns[k];
+      const npy_intp cols = c.values == 1 ? 0 : static_cast<npy_intp>(c.values);  // 0: a 1-D array
+      d[c.name] = numpyEmpty(static_cast<npy_intp>(n), cols, &data[k]);
     }
     mpm::forEachSlice(*slices_, [&](std::size_t first, const mpm::ParticleSet& p) {
-      for (const Column& c : columns) {
-        if (!c.values) continue;
-        const std::vector<double>& v = p.*c.values;
-        std::copy(v.begin(), v.end(), c.data + first * std::max<npy_intp>(c.cols, 1));
-      }
-      for (std::size_t i = 0; i < p.size(); ++i) {
-        density.data[first + i] = p.density(i);
-        phase.data[first + i] = p.phase[i];
+      for (std::size_t k = 0; k < kColumns; ++k) {
+        const mpm::ParticleColumn& c = mpm::kParticleColumns[k];
+        double* out = data[k] + first * c.values;
+        if (c.kind == mpm::ColumnKind::kState)
+          std::copy((p.*c.member).begin(), (p.*c.member).end(), out);
+        else
+          for (std::size_t i = 0; i < p.size(); ++i)
+            out[i] = c.kind == mpm::ColumnKind::kPhase ? p.phase[i] : p.density(i);
       }
     });
     return d;

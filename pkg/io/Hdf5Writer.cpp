@@ -330,36 +330,18 @@ long Hdf5Writer::writeSnapshot(const mpm::ParticleSet& p, double time, long step
 
 namespace {
 
-// The arrays of a snapshot, one row per particle: name, values per row, what they hold (the
-// density, m / (J V0), is written for readers and not read back) and, for doubles of the state,
-// the ParticleSet member holding them.
-enum class SnapshotValues { kState, kPhase, kDensity };
-struct SnapshotColumn {
-  const char* name;
-  hsize_t cols;
-  SnapshotValues kind;
-  std::vector<double> mpm::ParticleSet::*values;
-};
-const SnapshotColumn kSnapshotColumns[] = {
-    {"x", 3, SnapshotValues::kState, &mpm::ParticleSet::x},
-    {"v", 3, SnapshotValues::kState, &mpm::ParticleSet::v},
-    {"stress", 6, SnapshotValues::kState, &mpm::ParticleSet::stress},
-    {"density", 1, SnapshotValues::kDensity, nullptr},
-    {"phase", 1, SnapshotValues::kPhase, nullptr},
-    {"gammaDotP", 1, SnapshotValues::kState, &mpm::ParticleSet::gammaDotP},
-    {"mass", 1, SnapshotValues::kState, &mpm::ParticleSet::mass},
-    {"volume0", 1, SnapshotValues::kState, &mpm::ParticleSet::volume0},
-    {"J", 1, SnapshotValues::kState, &mpm::ParticleSet::J}};
+using mpm::ColumnKind;
+using mpm::kParticleColumns;
 
 // Writes (or reads) rows [first, first + count) of the dataset of a column from (into) data.
-void transferRows(hid_t dset, const SnapshotColumn& c, hsize_t first, hsize_t count, const void* in, void* out,
+void transferRows(hid_t dset, const mpm::ParticleColumn& c, hsize_t first, hsize_t count, const void* in, void* out,
                   const std::string& path) {
-  const hid_t memType = c.kind == SnapshotValues::kPhase ? H5T_NATIVE_UINT8 : H5T_NATIVE_DOUBLE;
-  const hsize_t start[2] = {first, 0}, size[2] = {count, c.cols};
+  const hid_t memType = c.kind == ColumnKind::kPhase ? H5T_NATIVE_UINT8 : H5T_NATIVE_DOUBLE;
+  const hsize_t start[2] = {first, 0}, size[2] = {count, c.values};
   Handle fileSpace(H5Dget_space(dset), H5Sclose);
   check(H5Sselect_hyperslab(fileSpace, H5S_SELECT_SET, start, nullptr, size, nullptr), path,
         std::string("cannot select rows of ") + c.name);
-  Handle memSpace(check(H5Screate_simple(c.cols == 1 ? 1 : 2, size, nullptr), path, "memory dataspace"), H5Sclose);
+  Handle memSpace(check(H5Screate_simple(c.values == 1 ? 1 : 2, size, nullptr), path, "memory dataspace"), H5Sclose);
   if (in)
     check(H5Dwrite(dset, memType, memSpace, fileSpace, H5P_DEFAULT, in), path, std::string("cannot write ") + c.name);
   else
@@ -372,12 +354,12 @@ void transferRows(hid_t dset, const SnapshotColumn& c, hsize_t first, hsize_t co
 void writeSnapshotArrays(hid_t loc, mpm::ParticleSlices& particles, double time, long step, const std::string& path) {
   const std::size_t n = particles.size();
   std::vector<std::unique_ptr<Handle>> sets;
-  for (const SnapshotColumn& c : kSnapshotColumns) {
-    const hsize_t dims[2] = {n, c.cols};
-    Handle space(check(H5Screate_simple(c.cols == 1 ? 1 : 2, dims, nullptr), path,
+  for (const mpm::ParticleColumn& c : kParticleColumns) {
+    const hsize_t dims[2] = {n, c.values};
+    Handle space(check(H5Screate_simple(c.values == 1 ? 1 : 2, dims, nullptr), path,
                        std::string("dataspace for ") + c.name),
                  H5Sclose);
-    const hid_t fileType = c.kind == SnapshotValues::kPhase ? H5T_STD_U8LE : H5T_IEEE_F64LE;
+    const hid_t fileType = c.kind == ColumnKind::kPhase ? H5T_STD_U8LE : H5T_IEEE_F64LE;
     sets.push_back(std::make_unique<Handle>(
         check(H5Dcreate2(loc, c.name, fileType, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path,
               std::string("cannot create dataset ") + c.name),
@@ -390,9 +372,9 @@ void writeSnapshotArrays(hid_t loc, mpm::ParticleSlices& particles, double time,
     density.resize(count);
     for (std::size_t i = 0; i < count; ++i) density[i] = p.density(i);
     for (std::size_t k = 0; k < sets.size(); ++k) {
-      const SnapshotColumn& c = kSnapshotColumns[k];
-      const void* data = c.kind == SnapshotValues::kState   ? static_cast<const void*>((p.*c.values).data())
-                         : c.kind == SnapshotValues::kPhase ? static_cast<const void*>(p.phase.data())
+      const mpm::ParticleColumn& c = kParticleColumns[k];
+      const void* data = c.kind == ColumnKind::kState   ? static_cast<const void*>((p.*c.member).data())
+                         : c.kind == ColumnKind::kPhase ? static_cast<const void*>(p.phase.data())
                                                             : density.data();
       transferRows(*sets[k], c, first, count, data, nullptr, path);
     }
@@ -471,8 +453,8 @@ SnapshotSlices::SnapshotSlices(const std::string& path, long index, std::size_t 
   if (!linkExists(file, "snapshots") || !linkExists(file, group_)) fail(path, "no snapshot /" + group_);
   Handle g(check(H5Gopen2(file, group_.c_str(), H5P_DEFAULT), path, "cannot open /" + group_), H5Gclose);
   bool first = true;
-  for (const SnapshotColumn& c : kSnapshotColumns) {
-    if (c.kind == SnapshotValues::kDensity) continue;
+  for (const mpm::ParticleColumn& c : kParticleColumns) {
+    if (c.kind == ColumnKind::kDensity) continue;
     if (!linkExists(g, c.name)) fail(path, "no dataset " + std::string(c.name) + " in /" + group_);
     Handle dset(check(H5Dopen2(g, c.name, H5P_DEFAULT), path, std::string("cannot open dataset ") + c.name),
                 H5Dclose);
@@ -481,7 +463,7 @@ SnapshotSlices::SnapshotSlices(const std::string& path, long index, std::size_t 
     const int rank = H5Sget_simple_extent_ndims(space);
     H5Sget_simple_extent_dims(space, dims, nullptr);
     const hsize_t width = rank == 2 ? dims[1] : 1;
-    if (rank < 1 || rank > 2 || width != c.cols || (!first && dims[0] != n_))
+    if (rank < 1 || rank > 2 || width != c.values || (!first && dims[0] != n_))
       fail(path, "snapshot /" + group_ + " has arrays of inconsistent length");
     n_ = dims[0];
     first = false;
@@ -514,12 +496,12 @@ const mpm::ParticleSet& SnapshotSlices::slice(std::size_t first, std::size_t cou
     throwParameter("snapshot slice", std::to_string(first) + " + " + std::to_string(count), "",
                    "within the " + std::to_string(n_) + " particles of /" + group_ + " in " + path_);
   mpm::ParticleSet& p = buffer_;
-  for (const SnapshotColumn& c : kSnapshotColumns) {
-    if (c.kind == SnapshotValues::kDensity) continue;
+  for (const mpm::ParticleColumn& c : kParticleColumns) {
+    if (c.kind == ColumnKind::kDensity) continue;
     void* data;
-    if (c.kind == SnapshotValues::kState) {
-      (p.*c.values).resize(count * c.cols);
-      data = (p.*c.values).data();
+    if (c.kind == ColumnKind::kState) {
+      (p.*c.member).resize(count * c.values);
+      data = (p.*c.member).data();
     } else {
       p.phase.resize(count);
       data = p.phase.data();

@@ -109,6 +109,28 @@ struct ParticleSet {
   }
 };
 
+// The per-particle arrays of a particle snapshot, as the HDF5 snapshots (io::Hdf5Writer) and
+// MpmEngine.particles() give them: name, values per particle, what they hold (the density,
+// m / (J V0), is derived for readers and never read back) and, for the doubles of the state, the
+// ParticleSet member holding them. The external forces are not part of a snapshot.
+enum class ColumnKind { kState, kPhase, kDensity };
+struct ParticleColumn {
+  const char* name;
+  std::size_t values;
+  ColumnKind kind;
+  std::vector<double> ParticleSet::*member;  // null unless kind is kState
+};
+inline constexpr ParticleColumn kParticleColumns[] = {
+    {"x", 3, ColumnKind::kState, &ParticleSet::x},
+    {"v", 3, ColumnKind::kState, &ParticleSet::v},
+    {"stress", 6, ColumnKind::kState, &ParticleSet::stress},
+    {"density", 1, ColumnKind::kDensity, nullptr},
+    {"phase", 1, ColumnKind::kPhase, nullptr},
+    {"gammaDotP", 1, ColumnKind::kState, &ParticleSet::gammaDotP},
+    {"mass", 1, ColumnKind::kState, &ParticleSet::mass},
+    {"volume0", 1, ColumnKind::kState, &ParticleSet::volume0},
+    {"J", 1, ColumnKind::kState, &ParticleSet::J}};
+
 // Particles [first, first + count) of `from` into `to` (an optional array left empty in `from`
 // stays empty); the range must lie within `from`.
 inline void copyParticleRange(const ParticleSet& from, std::size_t first, std::size_t count, ParticleSet& to) {

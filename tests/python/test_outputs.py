@@ -58,7 +58,8 @@ def test_mpm_h5_has_the_driver_series_and_snapshot_0_before_step_1(tmp_path):
     mpm = mpmsdem.MpmEngine(grid={"dx": 0.02, "cells": [10, 6, 10], "origin": [-0.04, -0.04, -0.04]},
                             material=GLASS, particles=[{"lo": [0, 0, 0], "hi": [0.08, 0.04, 0.08], "ppc": 1}],
                             output=str(tmp_path), outputEvery=0.002, verbose=False)
-    x0 = mpm.particles()["x"].copy()
+    p0 = mpm.particles()
+    x0 = p0["x"].copy()
     O.engines = [mpm.runner]
     O.dt = 2e-4
     mpmsdem.run(25, mpm)
@@ -74,6 +75,12 @@ def test_mpm_h5_has_the_driver_series_and_snapshot_0_before_step_1(tmp_path):
         snap0 = f["snapshots/000000"]
         assert snap0.attrs["time"] == 0 and snap0.attrs["step"] == 0
         np.testing.assert_array_equal(snap0["x"][:], x0)
+        # a snapshot holds what MpmEngine.particles() gives, array for array (one table for both)
+        assert set(snap0) == set(p0)
+        for name in p0:
+            np.testing.assert_array_equal(snap0[name][:], p0[name], err_msg=name)
+        np.testing.assert_allclose(p0["density"], p0["mass"] / (p0["J"] * p0["volume0"]), rtol=1e-15)
+        assert p0["stress"].shape == (len(x0), 6) and p0["phase"].shape == (len(x0),)
         assert sorted(f["snapshots"]) == ["000000", "000001", "000002"]  # t = 0, 0.002, 0.004
         com = s["centre_of_mass"][-1]
         p = mpm.particles()
