@@ -68,7 +68,7 @@ struct MpmParams {
   double cfl = 0.3;                        // CFL number for the time-step estimate, in (0, 1]
   // Keep a second copy of the particle state (default true), so that a step that fails (NaN,
   // blow-up) leaves the particles as they were at its start, ready to be saved. false: one
-  // copy, updated in place, 109 B per particle less in double and 57 in float
+  // copy, updated in place, 125 B per particle less in double and 65 in float
   // (docs/benchmarks.md), with results equal to the last bit; a failed step then leaves the
   // particles partly advanced: the solver refuses to step or hand them out again
   // (MpmSolver::holdsLastGoodState), and the last good state is the last snapshot saved. The

@@ -56,7 +56,7 @@ class MpmEngine:
     :param cfl: CFL number of :meth:`stableTimeStep`, in (0, 1].
     :param keepLastGoodState: True (default): the solver keeps a second copy of the particles,
         so that a step that fails (NaN, blow-up) leaves them as they were at its start, and they
-        are saved as the last snapshot. False: one copy, 109 B per particle less in double and 57
+        are saved as the last snapshot. False: one copy, 125 B per particle less in double and 65
         in float (CPU; CUDA keeps the copy), the same results to the last bit; a failed step
         then leaves the particles partly advanced, and the last good state is the last snapshot
         written before it.
