@@ -126,7 +126,7 @@ class MpmCpu : public MpmSolver {
   int tiles_[3];
   std::vector<int> colourBlocks_[8];   // occupied block ids of each colour, this step
   std::vector<int> blockStart_;        // counting-sort offsets, size nBlocks + 1
-  std::vector<int> order_;             // slots sorted by block, by number within a block
+  std::vector<int> order_;             // slots sorted by block, within a block by stencil base, then number
   std::vector<int> cellOf_;           // stencil base of each particle (27 x block + base in the block)
   std::vector<int> slotOf_;            // slot of each particle number, for output slices; emptied by step()
   std::vector<int> activeTiles_;       // tiles that may hold non-zero grid values
