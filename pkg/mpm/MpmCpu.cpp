@@ -436,19 +436,22 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
       // The block's particles add into a private copy of the nodes they reach (in L1), which
       // is then added to the grid once: the grid is touched once per block, not per particle.
       T loc[kBlockNodes][kBlockNodes][kBlockNodes][kNodeValues] = {};
-      for (int q = blockStart_[b]; q < blockStart_[b + 1]; ++q) {
-        const int p = order_[q];
-        T gc[3];
-        gridCoordinate(in, p, g, gc);
-        Stencil<T> st;
-        st.compute(gc);
-        const int o0 = st.base[0] - b0[0], o1 = st.base[1] - b0[1], o2 = st.base[2] - b0[2];
-        auto add = [&loc, o0, o1, o2](int a, int bb, int cc, const T* r) {
-          T* l = loc[o0 + a][o1 + bb][o2 + cc];
+      // The next particle is prepared before this one is added: its coefficients, written
+      // value by value, are then in the cache when they are read as whole vectors (read right
+      // after being written, the reads waited for the writes).
+      const int q0 = blockStart_[b], q1 = blockStart_[b + 1];
+      P2GParticle<T> prepared[2];
+      if (q0 < q1) p2gPrepare(order_[q0], in, g, dt, prepared[0]);
+      for (int q = q0; q < q1; ++q) {
+        if (q + 1 < q1) p2gPrepare(order_[q + 1], in, g, dt, prepared[(q + 1 - q0) & 1]);
+        const P2GParticle<T>& a = prepared[(q - q0) & 1];
+        const int o0 = a.st.base[0] - b0[0], o1 = a.st.base[1] - b0[1], o2 = a.st.base[2] - b0[2];
+        auto add = [&loc, o0, o1, o2](int di, int dj, int dk, const T* r) {
+          T* l = loc[o0 + di][o1 + dj][o2 + dk];
           MPM_SIMD
           for (int v = 0; v < kNodeValues; ++v) l[v] += r[v];
         };
-        p2gStencil(p, in, st, g.invDx, dt, add);
+        p2gStencil(a, add);
       }
       const int e0 = std::min(kBlockNodes, g.nodes[0] - b0[0]), e1 = std::min(kBlockNodes, g.nodes[1] - b0[1]),
                 e2 = std::min(kBlockNodes, g.nodes[2] - b0[2]);

@@ -84,32 +84,47 @@ MPM_HD_INLINE void gridCoordinate(const ParticleIn<T>& P, int p, const GridConst
   for (int d = 0; d < 3; ++d) out[d] = (P.x[d][p] - g.origin[d]) * g.invDx;
 }
 
-// P2G of particle p over its stencil st: calls add(i, j, k, r) for the 27 nodes st.base + (i, j, k)
-// with r[c] the particle's share of node value c (r[7] = 0): mass w m, momentum w m v, and
-// momentum plus the impulse dt (w f_ext - V_p sigma grad w), V_p = J V0 (Eq 14). Written as
-// r = w C_w + (grad w) . (C_x, C_y, C_z) with per-particle coefficients and the separable
-// weights factored per (i, j) row, so that a row of 3 nodes costs two multiply-adds per value.
-template <typename T, typename Scatter>
-MPM_HD_INLINE void p2gStencil(int p, const ParticleIn<T>& P, const Stencil<T>& st, T invDx, T dt, Scatter& add) {
+// What P2G needs of one particle: its stencil and the coefficients of its share of each node's
+// values, r = w C_w + (grad w) . (C_x, C_y, C_z) (see p2gStencil).
+template <typename T>
+struct P2GParticle {
+  Stencil<T> st;
+  T cw[kNodeValues], cx[kNodeValues], cy[kNodeValues], cz[kNodeValues];
+};
+
+template <typename T>
+MPM_HD_INLINE void p2gPrepare(int p, const ParticleIn<T>& P, const GridConst<T>& g, T dt, P2GParticle<T>& a) {
+  T gc[3];
+  gridCoordinate(P, p, g, gc);
+  a.st.compute(gc);
   const T m = P.mass[p];
   const T vol = P.J[p] * P.vol0[p];
   T s[6];
-  for (int k = 0; k < 6; ++k) s[k] = -dt * vol * invDx * P.s[k][p];  // -dt V sigma / dx
-  T cw[kNodeValues], cx[kNodeValues], cy[kNodeValues], cz[kNodeValues];
+  for (int k = 0; k < 6; ++k) s[k] = -dt * vol * g.invDx * P.s[k][p];  // -dt V sigma / dx
   for (int d = 0; d < 3; ++d) {
-    cw[d] = m * P.v[d][p];
-    cw[kNodeVNew + d] = cw[d] + (P.fext[0] ? dt * P.fext[d][p] : T(0));
+    a.cw[d] = m * P.v[d][p];
+    a.cw[kNodeVNew + d] = a.cw[d] + (P.fext[0] ? dt * P.fext[d][p] : T(0));
   }
-  cw[kNodeMass] = m;
-  cw[7] = T(0);
-  for (int c = 0; c < kNodeValues; ++c) cx[c] = cy[c] = cz[c] = T(0);
+  a.cw[kNodeMass] = m;
+  a.cw[7] = T(0);
+  for (int c = 0; c < kNodeValues; ++c) a.cx[c] = a.cy[c] = a.cz[c] = T(0);
   // (-dt V sigma) . grad w, sigma symmetric in Voigt order xx yy zz yz xz xy
-  T* ix = cx + kNodeVNew;
-  T* iy = cy + kNodeVNew;
-  T* iz = cz + kNodeVNew;
+  T* ix = a.cx + kNodeVNew;
+  T* iy = a.cy + kNodeVNew;
+  T* iz = a.cz + kNodeVNew;
   ix[0] = s[0], iy[0] = s[5], iz[0] = s[4];
   ix[1] = s[5], iy[1] = s[1], iz[1] = s[3];
   ix[2] = s[4], iy[2] = s[3], iz[2] = s[2];
+}
+
+// P2G of a prepared particle: calls add(i, j, k, r) for the 27 nodes a.st.base + (i, j, k) with
+// r[c] the particle's share of node value c (r[7] = 0): mass w m, momentum w m v, and momentum
+// plus the impulse dt (w f_ext - V_p sigma grad w), V_p = J V0 (Eq 14), from the coefficients
+// and the separable weights factored per (i, j) row, so that a row of 3 nodes costs two
+// multiply-adds per value.
+template <typename T, typename Scatter>
+MPM_HD_INLINE void p2gStencil(const P2GParticle<T>& a, Scatter& add) {
+  const Stencil<T>& st = a.st;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
       const T wij = st.w[0][i] * st.w[1][j];
@@ -118,8 +133,8 @@ MPM_HD_INLINE void p2gStencil(int p, const ParticleIn<T>& P, const Stencil<T>& s
       T row[kNodeValues], rowZ[kNodeValues];
       MPM_SIMD
       for (int c = 0; c < kNodeValues; ++c) {
-        row[c] = wij * cw[c] + xij * cx[c] + yij * cy[c];
-        rowZ[c] = wij * cz[c];
+        row[c] = wij * a.cw[c] + xij * a.cx[c] + yij * a.cy[c];
+        rowZ[c] = wij * a.cz[c];
       }
       for (int k = 0; k < 3; ++k) {
         T r[kNodeValues];
@@ -133,14 +148,12 @@ MPM_HD_INLINE void p2gStencil(int p, const ParticleIn<T>& P, const Stencil<T>& s
 // P2G of particle p into the flat grid: calls add(node, r) for its 27 nodes (see p2gStencil).
 template <typename T, typename Scatter>
 MPM_HD_INLINE void p2gParticle(int p, const ParticleIn<T>& P, const GridConst<T>& g, T dt, Scatter& add) {
-  T gc[3];
-  gridCoordinate(P, p, g, gc);
-  Stencil<T> st;
-  st.compute(gc);
+  P2GParticle<T> a;
+  p2gPrepare(p, P, g, dt, a);
   auto toNode = [&](int i, int j, int k, const T* r) {
-    add(((st.base[0] + i) * g.nodes[1] + (st.base[1] + j)) * g.nodes[2] + (st.base[2] + k), r);
+    add(((a.st.base[0] + i) * g.nodes[1] + (a.st.base[1] + j)) * g.nodes[2] + (a.st.base[2] + k), r);
   };
-  p2gStencil(p, P, st, g.invDx, dt, toNode);
+  p2gStencil(a, toNode);
 }
 
 // Grid velocities of one node (Eq 3): v_old = p/m, v_new = (p + dt f)/m + dt g; an empty node
