@@ -22,6 +22,7 @@ struct CouplingStepInput {
   double dt;
   double stepSafety;                    // the SDEM time-step safety factor (approachStepBound)
   int historySlots;
+  unsigned historyStep;                 // HistoryView::step of this step
 };
 
 struct CouplingStepOutput {

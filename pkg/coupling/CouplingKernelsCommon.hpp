@@ -104,12 +104,24 @@ MPM_HD_INLINE T closingDistance(const Vec3T<T>& vp, const BlockState<T>& blk, T 
 // (block << 32 | feature kind << 28 | feature index, or -1 when empty) and xi, the elastic
 // tangential force F_el [N] of sdem::barrierCoulomb (not a displacement). Indexed
 // by particle id, so it follows the particle as long as particles keep their ids.
+// A particle's slots hold its contacts of the previous step only when that step wrote them
+// (written[id] == step - 1); otherwise they are empty. So a particle without contact writes
+// nothing: most points of a flow never touch a block, and clearing their slots every step was
+// a scattered read and write by particle number for each of them.
 template <typename T>
 struct HistoryView {
-  long long* key;   // slots per particle
-  T* xi;            // 3 x slots per particle
+  long long* key;      // slots per particle
+  T* xi;               // 3 x slots per particle
+  unsigned* written;   // per particle: the step that last wrote its slots
+  unsigned step;       // this step's number (wraps; only equality with step - 1 is used)
   int slots;
 };
+
+// Whether particle h's history slots hold the previous step's contacts.
+template <typename T>
+MPM_HD_INLINE bool historyCurrent(const HistoryView<T>& H, int h) {
+  return H.written[h] == H.step - 1u;
+}
 
 // One MP–block contact, handed to the caller's sink.
 template <typename T>
@@ -168,7 +180,7 @@ MPM_HD_INLINE T particleRadius(T volume0, CouplingLoopMemo<T>& memo) {
 }
 
 // Couple the particle in slot p with the blocks listed in its bin. Calls sink(const MpContact<T>&)
-// for each contact, adds the particle's forces into P.force, rewrites its history slots, and
+// for each contact, adds the particle's forces into P.force, rewrites its history slots if it touches a block, and
 // lowers *approach to the approachStepBound of each block it reaches within dt without
 // touching it now (with the SDEM time-step safety `safety`; pairs further apart than
 // bins.watch are not examined). Returns
@@ -191,12 +203,7 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
   const int bin = (bc[0] * bins.dims[1] + bc[1]) * bins.dims[2] + bc[2];
   const int h = particleNumber(P, p);
   const int b0 = bins.start[bin], b1 = bins.start[bin + 1];
-  if (b0 == b1) {
-    // no block near: forget stale histories so a later contact starts from rest
-    for (int k = 0; k < H.slots; ++k)
-      if (H.key[H.slots * h + k] >= 0) H.key[H.slots * h + k] = -1;
-    return kCoupleOk;
-  }
+  if (b0 == b1) return kCoupleOk;  // no block near; its history goes stale (HistoryView)
   constexpr int kMaxSlots = 4;
   long long oldKey[kMaxSlots];
   T oldXi[3 * kMaxSlots];
@@ -256,8 +263,9 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     const long long key = (static_cast<long long>(b) << 32) | (static_cast<long long>(q.featureKind) << 28) |
                           static_cast<long long>(q.featureIndex);
     if (!oldRead) {
+      const bool current = historyCurrent(H, h);
       for (int k = 0; k < slots; ++k) {
-        oldKey[k] = H.key[H.slots * h + k];
+        oldKey[k] = current ? H.key[H.slots * h + k] : -1;
         if (oldKey[k] >= 0)
           for (int d = 0; d < 3; ++d) oldXi[3 * k + d] = H.xi[3 * (H.slots * h + k) + d];
       }
@@ -288,8 +296,10 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     fsum = fsum + ct.force;
     sink(ct);
   }
-  for (int k = used; k < slots; ++k)  // forget the contacts that ended
-    if (H.key[H.slots * h + k] >= 0) H.key[H.slots * h + k] = -1;
+  if (used > 0) {  // without contact the slots go stale unwritten
+    for (int k = used; k < slots; ++k) H.key[H.slots * h + k] = -1;  // the contacts that ended
+    H.written[h] = H.step;
+  }
   for (int d = 0; d < 3; ++d) P.force[d][p] += fsum[d];
   return kCoupleOk;
 }

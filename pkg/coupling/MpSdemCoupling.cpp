@@ -75,6 +75,7 @@ void MpSdemCoupling::setHistories(const std::vector<long long>& keys, const std:
   for (double v : xi)
     if (!std::isfinite(v)) throw ParameterError("history xi: must be finite");
   key_ = keys;
+  written_.assign(keys.size() / slots_, historyStep_);  // current at the next step
   hostDouble_.xi = xi;
   hostFloat_.xi.assign(xi.begin(), xi.end());
   particleCount_ = keys.size() / slots_;
@@ -83,6 +84,14 @@ void MpSdemCoupling::setHistories(const std::vector<long long>& keys, const std:
 void MpSdemCoupling::restoreParticleApproachStep(double s) {
   if (!(s > 0)) throwParameter("particle approach step", s, "s", "> 0 (inf: no particle closing on a block)");
   minApproachStep_ = s;
+}
+
+std::vector<long long> MpSdemCoupling::historyKeys() const {
+  std::vector<long long> keys = key_;
+  for (std::size_t h = 0; h < written_.size(); ++h)
+    if (written_[h] != historyStep_)  // not written by the last step: empty
+      std::fill_n(keys.begin() + slots_ * h, slots_, -1LL);
+  return keys;
 }
 
 std::vector<double> MpSdemCoupling::historyXi() const {
@@ -134,7 +143,7 @@ void MpSdemCoupling::syncBlocks() {
 void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
   if (binSize_ == 0) {
     binWatch_ = g.dx;
-    binSize_ = 4 * g.dx;
+    binSize_ = 2 * g.dx;
     for (;;) {
       double count = 1;
       for (int d = 0; d < 3; ++d) count *= std::ceil(g.cells[d] * g.dx / binSize_);
@@ -209,6 +218,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
       (!view.device && xiSize != 3 * key_.size())) {  // a new particle set: no history yet
     particleCount_ = view.n;
     key_.assign(slots_ * view.n, -1);
+    written_.assign(view.n, historyStep_);
     if (hostFloat) {
       hostFloat_.xi.assign(3 * slots_ * view.n, 0.0f);
       hostDouble_.xi.clear();
@@ -240,6 +250,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   in.dt = dt;
   in.stepSafety = sdem_.timeStepSafety();
   in.historySlots = slots_;
+  in.historyStep = ++historyStep_;
   CouplingStepOutput& out = last_;
   out.sums.assign(static_cast<std::size_t>(kBlockSums) * blocks_.size(), 0.0);
   out.minParticleStep = out.minApproachStep = std::numeric_limits<double>::infinity();
@@ -311,7 +322,7 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
   P.mass = static_cast<const T*>(v.mass);
   P.vol0 = static_cast<const T*>(v.volume0);
   P.id = v.id;
-  const HistoryView<T> H{key_.data(), side.xi.data(), slots_};
+  const HistoryView<T> H{key_.data(), side.xi.data(), written_.data(), in.historyStep, slots_};
   const T dt = static_cast<T>(in.dt);
   const T safety = static_cast<T>(in.stepSafety);
   const long n = static_cast<long>(v.n);

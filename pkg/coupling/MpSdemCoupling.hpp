@@ -93,7 +93,7 @@ class MpSdemCoupling {
 
   // ---- checkpoint of the tangential histories (CPU backend): per particle `slots` keys and
   // 3 x slots xi values, elastic tangential forces [N] (a float run's converted to double).
-  const std::vector<long long>& historyKeys() const { return key_; }
+  std::vector<long long> historyKeys() const;
   std::vector<double> historyXi() const;
   // Component d of historyXi() for history slot k, without copying them all [N].
   double historyXiAt(std::size_t k, int d) const {
@@ -140,7 +140,9 @@ class MpSdemCoupling {
   int binDims_[3] = {0, 0, 0};
   std::vector<int> binStart_, binBlocks_, binCount_;
 
-  std::vector<long long> key_;  // CPU histories
+  std::vector<long long> key_;     // CPU histories (HistoryView)
+  std::vector<unsigned> written_;  // per particle
+  unsigned historyStep_ = 0;       // the last step's HistoryView::step
   HostSide<double> hostDouble_;
   HostSide<float> hostFloat_;
   bool hostFloatRun_ = false;  // the last host step ran in float (hostFloat_.xi is current)

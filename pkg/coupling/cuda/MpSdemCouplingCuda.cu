@@ -93,7 +93,9 @@ class CouplingCuda : public CouplingDeviceBackend {
     if (histCount_ != nh) {
       histKey_.reserve(nh);
       histXi_.reserve(3 * nh);
+      histWritten_.reserve(v.n);
       CUDA_CHECK(cudaMemset(histKey_.ptr, 0xff, std::max<std::size_t>(nh, 1) * sizeof(long long)));
+      CUDA_CHECK(cudaMemset(histWritten_.ptr, 0, std::max<std::size_t>(v.n, 1) * sizeof(unsigned)));
       CUDA_CHECK(cudaMemset(histXi_.ptr, 0, std::max<std::size_t>(3 * nh, 1) * sizeof(T)));
       histCount_ = nh;
     }
@@ -124,7 +126,7 @@ class CouplingCuda : public CouplingDeviceBackend {
     BinGridView bins = in.bins;
     bins.start = binStart_.ptr;
     bins.blocks = binBlocks_.ptr;
-    const HistoryView<T> H{histKey_.ptr, histXi_.ptr, in.historySlots};
+    const HistoryView<T> H{histKey_.ptr, histXi_.ptr, histWritten_.ptr, in.historyStep, in.historySlots};
     const int n = static_cast<int>(v.n);
     if (n > 0) {
       cudak::coupleKernel<T><<<(n + kThreads - 1) / kThreads, kThreads>>>(
@@ -158,6 +160,7 @@ class CouplingCuda : public CouplingDeviceBackend {
   DeviceArray<int> binStart_, binBlocks_;
   DeviceArray<long long> histKey_;
   DeviceArray<T> histXi_;
+  DeviceArray<unsigned> histWritten_;
   std::size_t histCount_ = 0;
   DeviceArray<double> sums_;
   DeviceArray<cudak::CouplingFlags> flags_;

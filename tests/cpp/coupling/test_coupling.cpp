@@ -451,6 +451,7 @@ TEST(CouplingKernels, LoopMemoGivesExactlyWhatAFreshMemoGives) {
   struct Run {
     std::vector<double> force[3], xi;
     std::vector<long long> key;
+    std::vector<unsigned> written;
     std::vector<double> contactForces;
     std::vector<double> approach;  // per particle and step
     int overflow = 0;
@@ -459,6 +460,7 @@ TEST(CouplingKernels, LoopMemoGivesExactlyWhatAFreshMemoGives) {
     std::vector<double> moved[3] = {x0[0], x0[1], x0[2]};
     for (int d = 0; d < 3; ++d) r.force[d].assign(n, 0.0);
     r.key.assign(slots * n, -1);
+    r.written.assign(n, 0);
     r.xi.assign(3 * slots * n, 0.0);
     CouplingParticles<double> P;
     for (int d = 0; d < 3; ++d) {
@@ -469,11 +471,11 @@ TEST(CouplingKernels, LoopMemoGivesExactlyWhatAFreshMemoGives) {
     P.mass = mass.data();
     P.vol0 = vol0.data();
     P.id = nullptr;
-    const HistoryView<double> H{r.key.data(), r.xi.data(), slots};
     auto sink = [&r](const MpContact<double>& c) {
       for (int d = 0; d < 3; ++d) r.contactForces.push_back(c.force[d]);
     };
     for (int step = 0; step < 2; ++step) {
+      const HistoryView<double> H{r.key.data(), r.xi.data(), r.written.data(), static_cast<unsigned>(step + 1), slots};
       CouplingLoopMemo<double> shared;
       for (int p = 0; p < n; ++p) {
         CouplingLoopMemo<double> fresh;
@@ -499,9 +501,77 @@ TEST(CouplingKernels, LoopMemoGivesExactlyWhatAFreshMemoGives) {
   EXPECT_EQ(a.contactForces, b.contactForces);
   for (int d = 0; d < 3; ++d) EXPECT_EQ(a.force[d], b.force[d]);
   EXPECT_EQ(a.key, b.key);
+  EXPECT_EQ(a.written, b.written);
   EXPECT_EQ(a.xi, b.xi);
   EXPECT_EQ(a.approach, b.approach);
   EXPECT_EQ(a.overflow, b.overflow);
+}
+
+// A contact's tangential memory lasts only while the contact does: a point sliding on a fixed
+// box builds its spring over consecutive steps (the third step's force differs from the
+// first's); once it has left the box for a step, in the box's bins or in a bin without blocks,
+// it comes back with a spring at rest: the first step's force to the last bit.
+TEST(CouplingKernels, TangentialHistoryEndsWithTheContact) {
+  sdem::ShapeTable table;
+  table.add(*testShapes()[0]);
+  const auto S = table.view();
+  BlockState<double> box{};
+  box.rot[0] = box.rot[4] = box.rot[8] = 1;
+  box.mass = 1;
+  box.reach = S.boundingRadius[0];
+  box.fixed = 1;
+  const sdem::BarrierCoulombPhys<double> phys{1e4, 0.5, 0.3, 0.0, 0.0};
+  // Bins of 0.2 m along x from -0.2: the first two list the box, the third none.
+  const int binStart[4] = {0, 1, 2, 2}, binBlocks[2] = {0, 0};
+  const BinGridView bins{{-0.2, -0.2, -0.2}, 5.0, {3, 1, 1}, binStart, binBlocks, 0.01};
+  const double vol0 = 1e-6, mass = 1.6e-3;
+  const double rp = std::cbrt(3 * vol0 / (4 * M_PI));
+  const double top = 1 - sdem::closestPointOnCore(S, 0, mpm::Vec3T<double>{0, 0, 1}).distance;
+  const double onTop = top + S.sweepRadius[0] + rp - 1e-3;  // 1 mm overlap
+  const double vx = 0.05, dt = 1e-3;  // the spring gains about 0.1 N a step, below mu F_n = 1.4 N
+  auto forcesAlong = [&](const std::vector<std::array<double, 3>>& path) {
+    double x[3], v[3] = {vx, 0, 0}, f[3];
+    std::vector<long long> key(2, -1);
+    std::vector<double> xi(6, 0.0);
+    std::vector<unsigned> written(1, 0);
+    CouplingParticles<double> P;
+    for (int d = 0; d < 3; ++d) {
+      P.x[d] = &x[d];
+      P.v[d] = &v[d];
+      P.force[d] = &f[d];
+    }
+    P.mass = &mass;
+    P.vol0 = &vol0;
+    P.id = nullptr;
+    std::vector<std::array<double, 3>> out;
+    for (std::size_t step = 0; step < path.size(); ++step) {
+      for (int d = 0; d < 3; ++d) {
+        x[d] = path[step][d];
+        f[d] = 0;
+      }
+      const HistoryView<double> H{key.data(), xi.data(), written.data(), static_cast<unsigned>(step + 1), 2};
+      auto sink = [](const MpContact<double>&) {};
+      int bad = -1, over = 0;
+      double approach = std::numeric_limits<double>::infinity();
+      CouplingLoopMemo<double> memo;
+      EXPECT_EQ(coupleParticle(0, P, &box, S, &phys, bins, H, dt, 0.5, sink, &bad, &over, &approach, memo),
+                kCoupleOk);
+      out.push_back({f[0], f[1], f[2]});
+    }
+    return out;
+  };
+  const std::array<double, 3> a{0.0, 0.0, onTop}, b{vx * dt, 0.0, onTop};
+  const auto kept = forcesAlong({a, b, a});
+  ASSERT_GT(kept[0][2], 1.0) << "no contact";  // the box pushes the point up (2.8 N at 1 mm)
+  ASSERT_LT(kept[0][0], 0.0) << "no tangential force";
+  EXPECT_LT(kept[2][0], kept[0][0] - 1e-3 * std::abs(kept[0][0])) << "the spring did not build up";
+  const std::array<double, 3> above{0.0, 0.0, onTop + 0.05}, farAway{0.3, 0.0, onTop};
+  for (const auto& away : {above, farAway}) {
+    const auto back = forcesAlong({a, b, away, a});
+    EXPECT_EQ(back[2][0], 0.0);
+    EXPECT_EQ(back[2][2], 0.0);
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(back[3][d], kept[0][d]) << "component " << d;
+  }
 }
 
 // Zero gravity: a granular blob thrown at a free cube. The particles' forces sum to minus the
