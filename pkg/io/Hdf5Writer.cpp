@@ -367,7 +367,7 @@ void writeSnapshotArrays(hid_t loc, mpm::ParticleSlices& particles, double time,
   }
   std::vector<double> density;
   mpm::forEachSlice(particles, [&](std::size_t first, const mpm::ParticleSet& p) {
-    p.validateSizes();
+    p.validateSizes(false);
     const std::size_t count = p.size();
     density.resize(count);
     for (std::size_t i = 0; i < count; ++i) density[i] = p.density(i);

@@ -286,7 +286,7 @@ void writeParticlesVtp(const std::string& path, mpm::ParticleSlices& particles, 
   std::vector<unsigned char> bytes;
   auto forSlices = [&](auto&& fn) {
     mpm::forEachSlice(particles, [&](std::size_t first, const mpm::ParticleSet& p) {
-      p.validateSizes();
+      p.validateSizes(false);
       for (int k = 0; k < kColumns; ++k) {
         particleColumnBytes(k, p, first, bytes);
         fn(k, first, bytes);

@@ -451,21 +451,7 @@ inline double blowUpSpeed(const MpmParams& prm) { return 1e3 * pWaveSpeed(prm.ma
 // particle first + p), adding their masses to massSum in order.
 inline void validateParticleSlice(const MpmParams& prm, const ParticleSet& ps, std::size_t first, double& massSum) {
   const std::size_t n = ps.size();
-  auto need = [&](const char* name, std::size_t got, std::size_t per) {
-    if (got != per * n) {
-      std::ostringstream os;
-      os << per << " x numParticles = " << per * n << " values";
-      throwParameter(std::string("ParticleSet.") + name + ".size()", got, "", os.str());
-    }
-  };
-  need("x", ps.x.size(), 3);
-  need("v", ps.v.size(), 3);
-  need("stress", ps.stress.size(), 6);
-  need("volume0", ps.volume0.size(), 1);
-  need("J", ps.J.size(), 1);
-  if (!ps.gammaDotP.empty()) need("gammaDotP", ps.gammaDotP.size(), 1);
-  if (!ps.phase.empty()) need("phase", ps.phase.size(), 1);
-  if (!ps.fext.empty()) need("fext", ps.fext.size(), 3);
+  ps.validateSizes(true);
   auto id = [first](std::size_t p) { return "[" + std::to_string(first + p) + "]"; };
   for (std::size_t p = 0; p < n; ++p) {
     if (!(ps.mass[p] > 0) || !std::isfinite(ps.mass[p])) throwParameter("mass" + id(p), ps.mass[p], "kg", "finite and > 0");

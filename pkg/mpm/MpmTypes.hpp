@@ -92,20 +92,38 @@ struct ParticleSet {
   std::size_t size() const { return mass.size(); }
   // Current density rho = m / (J V0) of particle i [kg/m^3].
   double density(std::size_t i) const { return mass[i] / (J[i] * volume0[i]); }
-  // Throw ParameterError naming the first array whose length does not match size().
-  void validateSizes() const {
+  // How an array may be absent: a kRequired array always holds values; a set handed to a
+  // solver may leave the others empty (the solver starts them: no plastic rate, dense elastic,
+  // no external force); a snapshot holds every array but kNotInSnapshot.
+  enum ArrayUse { kRequired, kOptional, kNotInSnapshot };
+  // Calls f(name, valuesPerParticle, use, s.member...) for every per-particle array, with the
+  // same member of each set given.
+  template <typename F, typename... Sets>
+  static void forEachArray(F&& f, Sets&... s) {
+    f("x", 3, kRequired, s.x...);
+    f("v", 3, kRequired, s.v...);
+    f("stress", 6, kRequired, s.stress...);
+    f("mass", 1, kRequired, s.mass...);
+    f("volume0", 1, kRequired, s.volume0...);
+    f("J", 1, kRequired, s.J...);
+    f("gammaDotP", 1, kOptional, s.gammaDotP...);
+    f("phase", 1, kOptional, s.phase...);
+    f("fext", 3, kNotInSnapshot, s.fext...);
+  }
+  // Throws ParameterError naming the first array whose length is not its values per particle
+  // times size() (the number of masses): for a set handed to a solver (forSolver: optional
+  // arrays may be empty) or for a snapshot (every array but the external force).
+  void validateSizes(bool forSolver) const {
     const std::size_t n = size();
-    const struct { const char* name; std::size_t got, per; } fields[] = {
-        {"x", x.size(), 3},       {"v", v.size(), 3},   {"stress", stress.size(), 6},
-        {"volume0", volume0.size(), 1}, {"J", J.size(), 1}, {"gammaDotP", gammaDotP.size(), 1},
-        {"phase", phase.size(), 1}};
-    for (const auto& f : fields) {
-      if (f.got != f.per * n) {
-        std::ostringstream range;
-        range << f.per << " x " << n << " (particle count from mass)";
-        throwParameter(std::string("ParticleSet.") + f.name + " size", f.got, "", range.str());
-      }
-    }
+    forEachArray(
+        [&](const char* name, std::size_t per, ArrayUse use, const auto& a) {
+          if (a.size() == per * n) return;
+          if (forSolver ? use != kRequired && a.empty() : use == kNotInSnapshot) return;
+          std::ostringstream range;
+          range << per << " x " << n << " values (" << n << " particles: the number of masses)";
+          throwParameter(std::string("ParticleSet.") + name + ".size()", a.size(), "", range.str());
+        },
+        *this);
   }
 };
 
@@ -134,21 +152,14 @@ inline constexpr ParticleColumn kParticleColumns[] = {
 // Particles [first, first + count) of `from` into `to` (an optional array left empty in `from`
 // stays empty); the range must lie within `from`.
 inline void copyParticleRange(const ParticleSet& from, std::size_t first, std::size_t count, ParticleSet& to) {
-  auto cut = [first, count](const auto& a, auto& b, std::size_t per) {
-    if (a.empty())
-      b.clear();
-    else
-      b.assign(a.begin() + per * first, a.begin() + per * (first + count));
-  };
-  cut(from.x, to.x, 3);
-  cut(from.v, to.v, 3);
-  cut(from.stress, to.stress, 6);
-  cut(from.mass, to.mass, 1);
-  cut(from.volume0, to.volume0, 1);
-  cut(from.J, to.J, 1);
-  cut(from.gammaDotP, to.gammaDotP, 1);
-  cut(from.fext, to.fext, 3);
-  cut(from.phase, to.phase, 1);
+  ParticleSet::forEachArray(
+      [first, count](const char*, std::size_t per, ParticleSet::ArrayUse, const auto& a, auto& b) {
+        if (a.empty())
+          b.clear();
+        else
+          b.assign(a.begin() + per * first, a.begin() + per * (first + count));
+      },
+      from, to);
 }
 
 // Particles handed out in slices by particle number, so that a writer needs a slice of the

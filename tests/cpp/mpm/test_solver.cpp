@@ -267,3 +267,41 @@ TEST(MpmSolver, RejectsBadParameters) {
   EXPECT_THROW(seedBox(q, {0.0, 0.03, 0.03}, {0.05, 0.05, 0.05}, 1, ps), ParameterError);
   EXPECT_THROW(seedBox(q, {0.03, 0.03, 0.03}, {0.05, 0.05, 0.05}, 4, ps), ParameterError);
 }
+
+// A set handed to a solver may leave the plastic rate, the phase and the external force empty;
+// an array of another length is refused by name, as a snapshot missing one of its arrays is.
+TEST(MpmSolver, ParticleArraysOfTheWrongLengthAreRefusedByName) {
+  MpmParams q;
+  ParticleSet full;
+  seedBox(q, {0.03, 0.03, 0.03}, {0.05, 0.05, 0.05}, 1, full);
+  ParticleSet lean = full;
+  lean.gammaDotP.clear();
+  lean.phase.clear();
+  lean.fext.clear();
+  EXPECT_NO_THROW(makeSolver(q)->setParticles(lean));
+  EXPECT_NO_THROW(full.validateSizes(false));
+  auto refusedNaming = [&](const ParticleSet& ps, bool forSolver, const std::string& name) {
+    try {
+      if (forSolver)
+        makeSolver(q)->setParticles(ps);
+      else
+        ps.validateSizes(false);
+      ADD_FAILURE() << name << " accepted";
+    } catch (const ParameterError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("ParticleSet." + name + ".size()", 0), 0u) << e.what();
+    }
+  };
+  ParticleSet bad = full;
+  bad.phase.pop_back();
+  refusedNaming(bad, true, "phase");
+  bad = full;
+  bad.fext.push_back(0.0);
+  refusedNaming(bad, true, "fext");
+  bad = full;
+  bad.stress.clear();
+  refusedNaming(bad, true, "stress");
+  refusedNaming(lean, false, "gammaDotP");  // a snapshot holds every array but the force
+  bad = full;
+  bad.fext.clear();
+  EXPECT_NO_THROW(bad.validateSizes(false));
+}
