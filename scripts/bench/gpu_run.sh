@@ -15,3 +15,14 @@ cmake --build build-gpu -j "$(nproc)" --target test_mpm test_coupling mpmsdem-ru
 build-gpu/test_mpm 2>&1 | tee "$out/test_mpm.log" | tail -25
 build-gpu/test_coupling 2>&1 | tee "$out/test_coupling.log" | tail -25
 python3 scripts/bench/bench_mpm.py --build build-gpu --cuda --markdown "$out/bench.md" 2>&1 | tee "$out/bench.log"
+# The coupled §3.2 flume at the paper's resolution (examples/scenes/flume_block_full.json,
+# written by examples/flume_block.py --full --driver-scene): the first 4,000 steps on the CPU
+# (every core) and on CUDA, for the ratio in one command, then the whole 2 s on CUDA (the
+# project's goal: at most 2 min on one H100); --bench: no outputs (HDF5 may be missing there).
+scene=examples/scenes/flume_block_full.json
+for backend in cpu cuda; do
+  OMP_NUM_THREADS=$(nproc) build-gpu/mpmsdem-run "$scene" --backend "$backend" --bench --steps 4000 \
+    2>"$out/flume_${backend}_4000.err" | tail -1 | tee "$out/flume_${backend}_4000.json"
+done
+build-gpu/mpmsdem-run "$scene" --backend cuda --bench 2>"$out/flume_full_cuda.err" | tail -1 \
+  | tee "$out/flume_full_cuda.json"

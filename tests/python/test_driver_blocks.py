@@ -6,6 +6,7 @@ import json
 import math
 import os
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -286,3 +287,37 @@ def test_bad_block_entries_are_refused_by_name(tmp_path):
     (tmp_path / "bad.json").write_text(json.dumps(s))
     r = subprocess.run([exe, str(tmp_path / "bad.json"), "--out", str(tmp_path / "o")], capture_output=True, text=True)
     assert r.returncode == 2 and "blocks[0]" in r.stderr and "core.faces" in r.stderr, r.stderr
+
+
+def same_values(a, b, path="scene"):
+    """Nested JSON values equal, numbers to 1e-12 relative; returns the first difference's path."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        if set(a) != set(b):
+            return "%s: keys %s" % (path, sorted(set(a) ^ set(b)))
+        return next((d for d in (same_values(a[k], b[k], "%s.%s" % (path, k)) for k in sorted(a)) if d), None)
+    if isinstance(a, list) and isinstance(b, list):
+        if len(a) != len(b):
+            return "%s: %d against %d entries" % (path, len(a), len(b))
+        return next((d for d in (same_values(x, y, "%s[%d]" % (path, i)) for i, (x, y) in enumerate(zip(a, b))) if d),
+                    None)
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
+        return None if a == pytest.approx(b, rel=1e-12, abs=1e-15) else "%s: %r against %r" % (path, a, b)
+    return None if a == b else "%s: %r against %r" % (path, a, b)
+
+
+@pytest.mark.parametrize("name, flags", [("flume_block.json", []), ("flume_block_full.json", ["--full"])])
+def test_stored_flume_scenes_are_what_the_example_writes(tmp_path, name, flags):
+    # examples/scenes holds the §3.2 flume as driver scenes (a GPU machine, which has no YADE, runs
+    # them): a change of examples/flume_block.py (its seeding, materials, step) must reach them.
+    repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+    stored = json.load(open(os.path.join(repo, "examples", "scenes", name)))
+    written = str(tmp_path / name)
+    proc = subprocess.run([sys.executable, os.path.join(repo, "examples", "flume_block.py"), *flags,
+                           "--driver-scene", written, "--out", stored["run"]["output_dir"]],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    stored.pop("description")
+    difference = same_values(json.load(open(written)), stored)
+    assert difference is None, ("examples/scenes/%s differs from what examples/flume_block.py %s--driver-scene "
+                                "writes (%s): write it again" % (name, " ".join(flags) + " " if flags else "",
+                                                                  difference))
