@@ -25,6 +25,21 @@ struct CouplingStepInput {
   unsigned historyStep;                 // HistoryView::step of this step
 };
 
+// The particles of the solver's view as the coupling reads them, in the view's precision T.
+template <typename T>
+CouplingParticles<T> couplingParticles(const mpm::ParticleView& v) {
+  CouplingParticles<T> P;
+  for (int d = 0; d < 3; ++d) {
+    P.x[d] = static_cast<const T*>(v.x[d]);
+    P.v[d] = static_cast<const T*>(v.v[d]);
+    P.force[d] = static_cast<T*>(v.force[d]);
+  }
+  P.mass = static_cast<const T*>(v.mass);
+  P.vol0 = static_cast<const T*>(v.volume0);
+  P.id = v.id;
+  return P;
+}
+
 struct CouplingStepOutput {
   std::vector<double> sums;   // kBlockSums per block
   double minParticleStep;     // min over contacts of sqrt(m_p / max(k_n, K_t)) [s] (inf: none)

@@ -313,15 +313,7 @@ template <typename T>
 void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableView<T>& S, const BlockState<T>* B,
                             const sdem::BarrierCoulombPhys<T>* phys, HostSide<T>& side, CouplingStepOutput& out) {
   const mpm::ParticleView& v = in.particles;
-  CouplingParticles<T> P;
-  for (int d = 0; d < 3; ++d) {
-    P.x[d] = static_cast<const T*>(v.x[d]);
-    P.v[d] = static_cast<const T*>(v.v[d]);
-    P.force[d] = static_cast<T*>(v.force[d]);
-  }
-  P.mass = static_cast<const T*>(v.mass);
-  P.vol0 = static_cast<const T*>(v.volume0);
-  P.id = v.id;
+  const CouplingParticles<T> P = couplingParticles<T>(v);
   const HistoryView<T> H{key_.data(), side.xi.data(), written_.data(), in.historyStep, slots_};
   const T dt = static_cast<T>(in.dt);
   const T safety = static_cast<T>(in.stepSafety);

@@ -225,13 +225,7 @@ void MpmCpu<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t co
 
 template <typename T>
 void MpmCpu<T>::setExternalForces(const std::vector<double>& f) {
-  if (f.size() != 3 * n_) {
-    std::ostringstream os;
-    os << "3 x numParticles = " << 3 * n_ << " values";
-    throwParameter("externalForces.size()", f.size(), "", os.str());
-  }
-  for (std::size_t i = 0; i < f.size(); ++i)
-    if (!std::isfinite(f[i])) throwParameter("externalForces[" + std::to_string(i) + "]", f[i], "N", "finite");
+  validateExternalForces(f, n_);
   for (int d = 0; d < 3; ++d) fext_[d].resize(n_);
   const std::vector<int>& id = state_[cur_].id;
   for (std::size_t q = 0; q < n_; ++q)
@@ -552,17 +546,13 @@ void MpmCpu<T>::step(double dt) {
   if (firstBad < n) {
     partlyAdvanced_ = inPlace;
     const long p = std::find(outId, outId + n, static_cast<int>(firstBad)) - outId;  // its slot
-    std::ostringstream os;
-    os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name() << "): particle " << firstBad
-       << " has a non-finite state, a speed above " << maxSpeedAllowed_
-       << " m/s (1e3 x P-wave speed) or a volume ratio J outside [" << kMinJ << ", " << kMaxJ
-       << "] (crushed or torn apart: no granular material does that; a step too large for the loading?): x = ("
-       << out.x[0][p] << ", " << out.x[1][p] << ", " << out.x[2][p] << ") m, v = (" << out.v[0][p] << ", "
-       << out.v[1][p] << ", " << out.v[2][p] << ") m/s, J = " << out.J[p]
-       << (inPlace ? ". The particles are partly advanced (keepLastGoodState is off): the last good state is the last "
-                     "one saved."
-                   : ". The particle state is kept at the start of this step.");
-    throw RuntimeFailure(os.str());
+    const double x[3] = {double(out.x[0][p]), double(out.x[1][p]), double(out.x[2][p])};
+    const double v[3] = {double(out.v[0][p]), double(out.v[1][p]), double(out.v[2][p])};
+    throw RuntimeFailure(badParticleMessage(
+        steps_ + 1, time_ + dt, name(), firstBad, maxSpeedAllowed_, x, v, out.J[p],
+        inPlace ? "The particles are partly advanced (keepLastGoodState is off): the last good state is the last "
+                  "one saved."
+                : "The particle state is kept at the start of this step."));
   }
   if (!inPlace)
     cur_ = 1 - cur_;

@@ -485,5 +485,33 @@ inline double validateParticles(const MpmParams& prm, const ParticleSet& ps) {
   return n ? sum / static_cast<double>(n) : 1.0;
 }
 
+// Checks the argument of MpmSolver::setExternalForces for n particles: 3 finite values [N] a
+// particle.
+inline void validateExternalForces(const std::vector<double>& f, std::size_t n) {
+  if (f.size() != 3 * n) {
+    std::ostringstream os;
+    os << "3 x numParticles = " << 3 * n << " values";
+    throwParameter("externalForces.size()", f.size(), "", os.str());
+  }
+  for (std::size_t i = 0; i < f.size(); ++i)
+    if (!std::isfinite(f[i])) throwParameter("externalForces[" + std::to_string(i) + "]", f[i], "N", "finite");
+}
+
+// The message of a step that particle `number` stopped (non-finite state, a speed above
+// maxSpeed, J outside [kMinJ, kMaxJ]) with its position x [m], velocity v [m/s] and J at the
+// end of the step, and what became of the particle state (`state`, a sentence).
+inline std::string badParticleMessage(long step, double time, const std::string& solver, long number,
+                                      double maxSpeed, const double x[3], const double v[3], double J,
+                                      const char* state) {
+  std::ostringstream os;
+  os << "MPM step " << step << " (t = " << time << " s, " << solver << "): particle " << number
+     << " has a non-finite state, a speed above " << maxSpeed
+     << " m/s (1e3 x P-wave speed) or a volume ratio J outside [" << kMinJ << ", " << kMaxJ
+     << "] (crushed or torn apart: no granular material does that; a step too large for the loading?): x = ("
+     << x[0] << ", " << x[1] << ", " << x[2] << ") m, v = (" << v[0] << ", " << v[1] << ", " << v[2]
+     << ") m/s, J = " << J << ". " << state;
+  return os.str();
+}
+
 }  // namespace mpm
 }  // namespace mpmsdem

@@ -109,15 +109,7 @@ class CouplingCuda : public CouplingDeviceBackend {
     init.overflow = 0;
     flags_.upload(&init, 1);
 
-    CouplingParticles<T> P;
-    for (int d = 0; d < 3; ++d) {
-      P.x[d] = static_cast<const T*>(v.x[d]);
-      P.v[d] = static_cast<const T*>(v.v[d]);
-      P.force[d] = static_cast<T*>(v.force[d]);
-    }
-    P.mass = static_cast<const T*>(v.mass);
-    P.vol0 = static_cast<const T*>(v.volume0);
-    P.id = v.id;
+    const CouplingParticles<T> P = couplingParticles<T>(v);
     const sdem::ShapeTableView<T> S{numShapes_,          vertex_.ptr,         faceNormal_.ptr,
                                     faceOffset_.ptr,     faceLoopStart_.ptr,  loopVertex_.ptr,
                                     loopEdge_.ptr,       shapeFaceStart_.ptr, shapeVertexStart_.ptr,

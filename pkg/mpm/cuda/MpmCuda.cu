@@ -153,13 +153,7 @@ void MpmCuda<T>::getParticles(ParticleSet& out) {
 
 template <typename T>
 void MpmCuda<T>::setExternalForces(const std::vector<double>& f) {
-  if (f.size() != 3 * n_) {
-    std::ostringstream os;
-    os << "3 x numParticles = " << 3 * n_ << " values";
-    throwParameter("externalForces.size()", f.size(), "", os.str());
-  }
-  for (std::size_t i = 0; i < f.size(); ++i)
-    if (!std::isfinite(f[i])) throwParameter("externalForces[" + std::to_string(i) + "]", f[i], "N", "finite");
+  validateExternalForces(f, n_);
   std::vector<T> buf;
   for (int d = 0; d < 3; ++d) {
     if (!fext_[d]) deviceAlloc(&fext_[d], n_, bytes_);
@@ -278,14 +272,10 @@ void MpmCuda<T>::step(double dt) {
     T xv[7];
     const T* src[7] = {out.x[0], out.x[1], out.x[2], out.v[0], out.v[1], out.v[2], out.J};
     for (int i = 0; i < 7; ++i) CUDA_CHECK(cudaMemcpy(&xv[i], src[i] + p, sizeof(T), cudaMemcpyDeviceToHost));
-    std::ostringstream os;
-    os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name() << "): particle " << p
-       << " has a non-finite state, a speed above " << maxSpeedAllowed_
-       << " m/s (1e3 x P-wave speed) or a volume ratio J outside [" << kMinJ << ", " << kMaxJ
-       << "] (crushed or torn apart: no granular material does that; a step too large for the loading?): x = ("
-       << xv[0] << ", " << xv[1] << ", " << xv[2] << ") m, v = (" << xv[3] << ", " << xv[4] << ", " << xv[5]
-       << ") m/s, J = " << xv[6] << ". The particle state is kept at the start of this step.";
-    throw RuntimeFailure(os.str());
+    const double x[3] = {double(xv[0]), double(xv[1]), double(xv[2])};
+    const double v[3] = {double(xv[3]), double(xv[4]), double(xv[5])};
+    throw RuntimeFailure(badParticleMessage(steps_ + 1, time_ + dt, name(), p, maxSpeedAllowed_, x, v, xv[6],
+                                            "The particle state is kept at the start of this step."));
   }
   float vmax;
   std::memcpy(&vmax, &res.maxSpeedBits, sizeof(float));
