@@ -202,6 +202,7 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
   }
   const int bin = (bc[0] * bins.dims[1] + bc[1]) * bins.dims[2] + bc[2];
   const int h = particleNumber(P, p);
+  const long long slot0 = static_cast<long long>(H.slots) * h;  // its first history slot (past 2^31 at 10^9 points)
   const int b0 = bins.start[bin], b1 = bins.start[bin + 1];
   if (b0 == b1) return kCoupleOk;  // no block near; its history goes stale (HistoryView)
   constexpr int kMaxSlots = 4;
@@ -265,9 +266,9 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     if (!oldRead) {
       const bool current = historyCurrent(H, h);
       for (int k = 0; k < slots; ++k) {
-        oldKey[k] = current ? H.key[H.slots * h + k] : -1;
+        oldKey[k] = current ? H.key[slot0 + k] : -1;
         if (oldKey[k] >= 0)
-          for (int d = 0; d < 3; ++d) oldXi[3 * k + d] = H.xi[3 * (H.slots * h + k) + d];
+          for (int d = 0; d < 3; ++d) oldXi[3 * k + d] = H.xi[3 * (slot0 + k) + d];
       }
       oldRead = true;
     }
@@ -278,8 +279,8 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     MpContact<T> ct;
     ct.law = sdem::barrierCoulomb(phys[blk.phys], cutoff, delta, n, vp - vb, meff, dt, xi);
     if (used < slots) {
-      H.key[H.slots * h + used] = key;
-      for (int d = 0; d < 3; ++d) H.xi[3 * (H.slots * h + used) + d] = xi[d];
+      H.key[slot0 + used] = key;
+      for (int d = 0; d < 3; ++d) H.xi[3 * (slot0 + used) + d] = xi[d];
       ++used;
     } else {
       ++*overflow;
@@ -297,7 +298,7 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     sink(ct);
   }
   if (used > 0) {  // without contact the slots go stale unwritten
-    for (int k = used; k < slots; ++k) H.key[H.slots * h + k] = -1;  // the contacts that ended
+    for (int k = used; k < slots; ++k) H.key[slot0 + k] = -1;  // the contacts that ended
     H.written[h] = H.step;
   }
   for (int d = 0; d < 3; ++d) P.force[d][p] += fsum[d];

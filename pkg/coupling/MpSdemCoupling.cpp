@@ -55,6 +55,7 @@ void MpSdemCoupling::setHistorySlots(int slots) {
   if (slots < 1 || slots > 4) throwParameter("historySlots", slots, "", "in [1, 4]");
   if (slots != slots_) {
     slots_ = slots;
+    heldKeys_ = 0;
     key_.clear();
     hostDouble_.xi.clear();
     hostFloat_.xi.clear();
@@ -74,6 +75,10 @@ void MpSdemCoupling::setHistories(const std::vector<long long>& keys, const std:
     throwParameter("history keys size", keys.size(), "", "a multiple of historySlots = " + std::to_string(slots_));
   for (double v : xi)
     if (!std::isfinite(v)) throw ParameterError("history xi: must be finite");
+  if (device_)
+    throw RuntimeFailure("MpSdemCoupling::setHistories: the CUDA coupling keeps its histories on the device; "
+                         "histories restore onto the CPU backend only");
+  heldKeys_ = keys.size();
   key_ = keys;
   written_.assign(keys.size() / slots_, historyStep_);  // current at the next step
   hostDouble_.xi = xi;
@@ -203,6 +208,9 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     device_ = makeCouplingDeviceBackend(view.precision);
     devicePrecision_ = view.precision;
     if (!device_) throw RuntimeFailure("MpSdemCoupling: the solver runs on CUDA but this build has no CUDA coupling");
+    if (std::any_of(key_.begin(), key_.end(), [](long long k) { return k >= 0; }))
+      throw RuntimeFailure("MpSdemCoupling: restored histories (setHistories) cannot go to the CUDA coupling, "
+                           "which keeps its own on the device; restore onto the CPU backend");
   }
   const bool hostFloat = !view.device && view.precision == mpm::Precision::Float;
   if (maxParticleRadius_ < 0) {
@@ -214,17 +222,21 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     maxParticleRadius_ = std::cbrt(3 * vmax / (4 * kPi));
   }
   const std::size_t xiSize = hostFloat ? hostFloat_.xi.size() : hostDouble_.xi.size();
-  if (view.n != particleCount_ || key_.size() != slots_ * view.n ||
-      (!view.device && xiSize != 3 * key_.size())) {  // a new particle set: no history yet
+  if (view.n != particleCount_ || heldKeys_ != slots_ * view.n ||
+      (!view.device && xiSize != 3 * heldKeys_)) {  // a new particle set: no history yet
     particleCount_ = view.n;
-    key_.assign(slots_ * view.n, -1);
-    written_.assign(view.n, historyStep_);
-    if (hostFloat) {
-      hostFloat_.xi.assign(3 * slots_ * view.n, 0.0f);
-      hostDouble_.xi.clear();
-    } else {
-      hostDouble_.xi.assign(3 * slots_ * view.n, 0.0);
-      hostFloat_.xi.clear();
+    heldKeys_ = slots_ * view.n;
+    key_.clear();
+    written_.clear();
+    hostDouble_.xi.clear();
+    hostFloat_.xi.clear();
+    if (!view.device) {  // (the device backend holds its own)
+      key_.assign(heldKeys_, -1);
+      written_.assign(view.n, historyStep_);
+      if (hostFloat)
+        hostFloat_.xi.assign(3 * heldKeys_, 0.0f);
+      else
+        hostDouble_.xi.assign(3 * heldKeys_, 0.0);
     }
     if (device_) device_->resetHistories();
   }
@@ -336,13 +348,13 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
       int bad = -1;
       if (coupleParticle(static_cast<int>(p), P, B, S, phys, in.bins, H, dt, safety, sink, &bad, &over,
                          &chunkApproach, memo) != kCoupleOk) {
+        // the step fails: the loop goes on to name the smallest particle number, as CUDA does
         const long number = particleNumber(P, static_cast<int>(p));
 #pragma omp critical(mpsdem_bad)
         if (number < firstBad) {
           firstBad = number;
           badBlock = bad;
         }
-        break;
       }
     }
     overflow += over;

@@ -140,6 +140,7 @@ class MpSdemCoupling {
   int binDims_[3] = {0, 0, 0};
   std::vector<int> binStart_, binBlocks_, binCount_;
 
+  std::size_t heldKeys_ = 0;       // history slots of the current particle set (host or device)
   std::vector<long long> key_;     // CPU histories (HistoryView)
   std::vector<unsigned> written_;  // per particle
   unsigned historyStep_ = 0;       // the last step's HistoryView::step

@@ -188,9 +188,7 @@ void MpmCpu<T>::getParticles(ParticleSet& out) {
 template <typename T>
 void MpmCpu<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t count) {
   requireLastGoodState("getParticles");
-  if (first > n_ || count > n_ - first)
-    throwParameter("particle slice", std::to_string(first) + " + " + std::to_string(count), "",
-                   "within the " + std::to_string(n_) + " particles");
+  validateSliceRange("particle slice", first, count, n_);
   const State& s = state_[cur_];
   const bool whole = first == 0 && count == n_;
   if (!whole && slotOf_.size() != n_) {

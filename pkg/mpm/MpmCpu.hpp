@@ -13,9 +13,9 @@
 // Storage order: G2P writes each particle into the slot of its place in that binning, so the
 // particles are stored sorted by block and the next step's P2G and G2P read them nearly in turn
 // (not through an index scattered over a set that outgrows the caches). A particle keeps its
-// number (its index in setParticles/getParticles, id[slot]); mass and volume0 never move and
-// are indexed by number. Blocks are filled by number, so the sums are those of number order:
-// results, snapshots and restarts do not depend on the storage order.
+// number (its index in setParticles/getParticles, id[slot]); its mass and volume0 move with it.
+// Blocks are filled by number, so the sums are those of number order: results, snapshots and
+// restarts do not depend on the storage order.
 //
 // Grid work follows the particles, not the box: the nodes are grouped in tiles of 3x3x3, and
 // the stencil of a particle in block b lies in tiles b and b + 1 per axis. A step zeroes,

@@ -85,10 +85,7 @@ void MpmSolver::setParticles(ParticleSlices& particles) {
 }
 
 void MpmSolver::getParticles(ParticleSet& out, std::size_t first, std::size_t count) {
-  const std::size_t n = numParticles();
-  if (first > n || count > n - first)
-    throwParameter("particle slice", std::to_string(first) + " + " + std::to_string(count), "",
-                   "within the " + std::to_string(n) + " particles");
+  validateSliceRange("particle slice", first, count, numParticles());
   ParticleSet all;
   getParticles(all);
   copyParticleRange(all, first, count, out);

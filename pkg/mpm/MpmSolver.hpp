@@ -21,11 +21,11 @@ enum class Precision { Float, Double };
 // for CUDA) and precision, and the external-force buffer of the next step. Arrays are
 // structure-of-arrays, one per component, numParticles() long; their element type is double
 // or float as `precision` says. A backend may store the particles in an order of its own (the
-// CPU backend keeps them sorted by grid block): x, v, J and force are indexed by storage slot,
+// CPU backend keeps them sorted by grid block): every array is indexed by storage slot, and
 // id[slot] is the number of the particle in that slot (its index in setParticles() and
-// getParticles(), which stays with it for the whole run), and mass and volume0 are indexed by
-// that number. id is null when slots and numbers are the same. The views stay valid until the
-// next step(), setParticles() or openForceBuffer().
+// getParticles(), which stays with it for the whole run). id is null when slots and numbers
+// are the same. The views stay valid until the next step(), setParticles() or
+// openForceBuffer().
 struct ParticleView {
   Precision precision = Precision::Double;
   bool device = false;             // true: CUDA device pointers

@@ -162,6 +162,14 @@ inline void copyParticleRange(const ParticleSet& from, std::size_t first, std::s
       from, to);
 }
 
+// Throws ParameterError unless particles [first, first + count) lie within the n particles of
+// `what` (e.g. "particle slice").
+inline void validateSliceRange(const char* what, std::size_t first, std::size_t count, std::size_t n) {
+  if (first > n || count > n - first)
+    throwParameter(what, std::to_string(first) + " + " + std::to_string(count), "",
+                   "within the " + std::to_string(n) + " particles");
+}
+
 // Particles handed out in slices by particle number, so that a writer needs a slice of the
 // set on the host at a time and not the whole set (an output of 10^6 particles would otherwise
 // add 145 B per particle to the solver's memory while it is written).

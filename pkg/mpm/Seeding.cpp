@@ -348,9 +348,7 @@ void SeededParticles::add(const double x[3], double mass, double volume0, const 
 }
 
 const ParticleSet& SeededParticles::slice(std::size_t first, std::size_t count) {
-  if (first > size() || count > size() - first)
-    throwParameter("seeded particle slice", std::to_string(first) + " + " + std::to_string(count), "",
-                   "within the " + std::to_string(size()) + " particles");
+  validateSliceRange("seeded particle slice", first, count, size());
   ParticleSet& p = buffer_;
   p.x.assign(x_.begin() + 3 * first, x_.begin() + 3 * (first + count));
   p.v.resize(3 * count);

@@ -85,70 +85,89 @@ void MpmCuda<T>::freeParticles() {
 template <typename T>
 void MpmCuda<T>::setParticles(const ParticleSet& ps) {
   const double meanMass = validateParticles(params_, ps);
+  if (!ps.fext.empty()) validateExternalForces(ps.fext, ps.size());
   grid_.massEps = static_cast<T>(1e-12 * meanMass);
   freeParticles();
+  n_ = 0;  // until every array is allocated and filled: a failure leaves an empty solver
+  try {
+    loadParticles(ps);
+  } catch (...) {
+    freeParticles();
+    throw;
+  }
   n_ = ps.size();
-  for (auto& st : state_) {
-    for (auto& a : st.x) deviceAlloc(&a, n_, bytes_);
-    for (auto& a : st.v) deviceAlloc(&a, n_, bytes_);
-    for (auto& a : st.s) deviceAlloc(&a, n_, bytes_);
-    deviceAlloc(&st.J, n_, bytes_);
-    deviceAlloc(&st.gdp, n_, bytes_);
-    deviceAlloc(&st.phase, n_, bytes_);
-  }
-  deviceAlloc(&mass_, n_, bytes_);
-  deviceAlloc(&vol0_, n_, bytes_);
-  cur_ = 0;
-  DeviceState& s = state_[0];
-  std::vector<T> buf;
-  for (int d = 0; d < 3; ++d) {
-    upload(s.x[d], ps.x, n_, 3, d, buf);
-    upload(s.v[d], ps.v, n_, 3, d, buf);
-  }
-  for (int k = 0; k < 6; ++k) upload(s.s[k], ps.stress, n_, 6, k, buf);
-  upload(s.J, ps.J, n_, 1, 0, buf);
-  upload(mass_, ps.mass, n_, 1, 0, buf);
-  upload(vol0_, ps.volume0, n_, 1, 0, buf);
-  if (ps.gammaDotP.empty())
-    CUDA_CHECK(cudaMemset(s.gdp, 0, std::max<std::size_t>(n_, 1) * sizeof(T)));
-  else
-    upload(s.gdp, ps.gammaDotP, n_, 1, 0, buf);
-  if (ps.phase.empty())
-    CUDA_CHECK(cudaMemset(s.phase, 0, std::max<std::size_t>(n_, 1)));
-  else if (n_)
-    CUDA_CHECK(cudaMemcpy(s.phase, ps.phase.data(), n_, cudaMemcpyHostToDevice));
-  maxSpeed_ = 0;
-  for (std::size_t p = 0; p < n_; ++p)
-    maxSpeed_ = std::max(maxSpeed_, std::sqrt(ps.v[3 * p] * ps.v[3 * p] + ps.v[3 * p + 1] * ps.v[3 * p + 1] +
-                                              ps.v[3 * p + 2] * ps.v[3 * p + 2]));
   if (!ps.fext.empty()) setExternalForces(ps.fext);
 }
 
 template <typename T>
-void MpmCuda<T>::getParticles(ParticleSet& out) {
-  const DeviceState& s = state_[cur_];
-  out.x.assign(3 * n_, 0.0);
-  out.v.assign(3 * n_, 0.0);
-  out.stress.assign(6 * n_, 0.0);
-  out.mass.assign(n_, 0.0);
-  out.volume0.assign(n_, 0.0);
-  out.J.assign(n_, 0.0);
-  out.gammaDotP.assign(n_, 0.0);
-  out.phase.assign(n_, 0);
-  out.fext.assign(3 * n_, 0.0);
-  if (n_ == 0) return;
+void MpmCuda<T>::loadParticles(const ParticleSet& ps) {
+  const std::size_t n = ps.size();
+  for (auto& st : state_) {
+    for (auto& a : st.x) deviceAlloc(&a, n, bytes_);
+    for (auto& a : st.v) deviceAlloc(&a, n, bytes_);
+    for (auto& a : st.s) deviceAlloc(&a, n, bytes_);
+    deviceAlloc(&st.J, n, bytes_);
+    deviceAlloc(&st.gdp, n, bytes_);
+    deviceAlloc(&st.phase, n, bytes_);
+  }
+  deviceAlloc(&mass_, n, bytes_);
+  deviceAlloc(&vol0_, n, bytes_);
+  cur_ = 0;
+  DeviceState& s = state_[0];
   std::vector<T> buf;
   for (int d = 0; d < 3; ++d) {
-    download(out.x, s.x[d], n_, 3, d, buf);
-    download(out.v, s.v[d], n_, 3, d, buf);
-    if (hasFext_) download(out.fext, fext_[d], n_, 3, d, buf);
+    upload(s.x[d], ps.x, n, 3, d, buf);
+    upload(s.v[d], ps.v, n, 3, d, buf);
   }
-  for (int k = 0; k < 6; ++k) download(out.stress, s.s[k], n_, 6, k, buf);
-  download(out.J, s.J, n_, 1, 0, buf);
-  download(out.gammaDotP, s.gdp, n_, 1, 0, buf);
-  download(out.mass, mass_, n_, 1, 0, buf);
-  download(out.volume0, vol0_, n_, 1, 0, buf);
-  CUDA_CHECK(cudaMemcpy(out.phase.data(), s.phase, n_, cudaMemcpyDeviceToHost));
+  for (int k = 0; k < 6; ++k) upload(s.s[k], ps.stress, n, 6, k, buf);
+  upload(s.J, ps.J, n, 1, 0, buf);
+  upload(mass_, ps.mass, n, 1, 0, buf);
+  upload(vol0_, ps.volume0, n, 1, 0, buf);
+  if (ps.gammaDotP.empty())
+    CUDA_CHECK(cudaMemset(s.gdp, 0, std::max<std::size_t>(n, 1) * sizeof(T)));
+  else
+    upload(s.gdp, ps.gammaDotP, n, 1, 0, buf);
+  if (ps.phase.empty())
+    CUDA_CHECK(cudaMemset(s.phase, 0, std::max<std::size_t>(n, 1)));
+  else if (n)
+    CUDA_CHECK(cudaMemcpy(s.phase, ps.phase.data(), n, cudaMemcpyHostToDevice));
+  maxSpeed_ = 0;
+  for (std::size_t p = 0; p < n; ++p)
+    maxSpeed_ = std::max(maxSpeed_, std::sqrt(ps.v[3 * p] * ps.v[3 * p] + ps.v[3 * p + 1] * ps.v[3 * p + 1] +
+                                              ps.v[3 * p + 2] * ps.v[3 * p + 2]));
+}
+
+template <typename T>
+void MpmCuda<T>::getParticles(ParticleSet& out) {
+  getParticles(out, 0, n_);
+}
+
+template <typename T>
+void MpmCuda<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t count) {
+  validateSliceRange("particle slice", first, count, n_);
+  const DeviceState& s = state_[cur_];
+  out.x.assign(3 * count, 0.0);
+  out.v.assign(3 * count, 0.0);
+  out.stress.assign(6 * count, 0.0);
+  out.mass.assign(count, 0.0);
+  out.volume0.assign(count, 0.0);
+  out.J.assign(count, 0.0);
+  out.gammaDotP.assign(count, 0.0);
+  out.phase.assign(count, 0);
+  out.fext.assign(3 * count, 0.0);
+  if (count == 0) return;
+  std::vector<T> buf;
+  for (int d = 0; d < 3; ++d) {
+    download(out.x, s.x[d] + first, count, 3, d, buf);
+    download(out.v, s.v[d] + first, count, 3, d, buf);
+    if (hasFext_) download(out.fext, fext_[d] + first, count, 3, d, buf);
+  }
+  for (int k = 0; k < 6; ++k) download(out.stress, s.s[k] + first, count, 6, k, buf);
+  download(out.J, s.J + first, count, 1, 0, buf);
+  download(out.gammaDotP, s.gdp + first, count, 1, 0, buf);
+  download(out.mass, mass_ + first, count, 1, 0, buf);
+  download(out.volume0, vol0_ + first, count, 1, 0, buf);
+  CUDA_CHECK(cudaMemcpy(out.phase.data(), s.phase + first, count, cudaMemcpyDeviceToHost));
 }
 
 template <typename T>

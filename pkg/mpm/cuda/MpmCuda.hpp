@@ -4,8 +4,9 @@
 //
 // Device memory (T = float, N particles, G grid nodes): particle state double-buffered
 // (x, v, stress, J, gammaDotP: 14 values, phase 1 byte, twice) plus mass and volume0
-// = 122 bytes/particle, + 12 bytes/particle once external forces are set, + 7 values per
-// grid node (28 bytes; at 8 particles per cell 3.5 bytes/particle for a fully filled grid).
+// = 122 bytes/particle, + 12 bytes/particle once external forces are set, + kNodeValues (8)
+// values per grid node (32 bytes; at 8 particles per cell 4 bytes/particle for a fully filled
+// grid). Particles are stored by number (no reordering: slot = number).
 // Double-buffering makes a failed step leave the previous state intact at no bandwidth cost.
 // P2G scatters with atomicAdd.
 #pragma once
@@ -31,7 +32,7 @@ class MpmCuda : public MpmSolver {
   void setParticles(const ParticleSet& particles) override;
   using MpmSolver::setParticles;  // slices gathered into a whole set
   void getParticles(ParticleSet& out) override;
-  using MpmSolver::getParticles;  // slices through a whole download
+  void getParticles(ParticleSet& out, std::size_t first, std::size_t count) override;
   std::size_t numParticles() const override { return n_; }
   void setExternalForces(const std::vector<double>& f) override;
   ParticleView openForceBuffer() override;
@@ -53,6 +54,7 @@ class MpmCuda : public MpmSolver {
     unsigned int maxSpeedBits;   // float bits of the largest particle speed (>= 0, so ordered as uint)
   };
   void freeParticles();
+  void loadParticles(const ParticleSet& ps);  // allocates and fills the particle arrays for ps
   ParticleIn<T> input() const;
   ParticleOut<T> output() const;
 
