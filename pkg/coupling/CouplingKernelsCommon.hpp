@@ -180,13 +180,12 @@ MPM_HD_INLINE T particleRadius(T volume0, CouplingLoopMemo<T>& memo) {
 }
 
 // Couple the particle in slot p with the blocks listed in its bin. Calls sink(const MpContact<T>&)
-// for each contact, adds the particle's forces into P.force, rewrites its history slots if it touches a block, and
-// lowers *approach to the approachStepBound of each block it reaches within dt without
-// touching it now (with the SDEM time-step safety `safety`; pairs further apart than
-// bins.watch are not examined). Returns
-// kCoupleOk, or kCoupleCoreReached with *badBlock set (the step is then invalid: the barrier
-// cannot act once the centre is at the core, which means the time step was too large or the
-// particle started inside the block). `overflow` counts contacts that found no free history
+// for each contact, adds the particle's forces into P.force, rewrites its history slots if it
+// touches a block, and lowers *approach to the approachStepBound of each block it reaches within
+// dt without touching it now (with the SDEM time-step safety `safety`; pairs further apart than
+// bins.watch are not examined). Returns kCoupleOk, or kCoupleCoreReached with *badBlock set (the
+// step is then invalid: the barrier cannot act once the centre is at the core, which means the
+// time step was too large or the particle started inside the block). `overflow` counts contacts that found no free history
 // slot (they act without tangential memory this step); `memo` is the caller's, kept across the
 // particles of its loop.
 template <typename T, typename Sink>
@@ -202,7 +201,8 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
   }
   const int bin = (bc[0] * bins.dims[1] + bc[1]) * bins.dims[2] + bc[2];
   const int h = particleNumber(P, p);
-  const long long slot0 = static_cast<long long>(H.slots) * h;  // its first history slot (past 2^31 at 10^9 points)
+  // its first history slot; 64-bit, as 3 x slots x number passes 2^31 at a few 10^8 points
+  const long long slot0 = static_cast<long long>(H.slots) * h;
   const int b0 = bins.start[bin], b1 = bins.start[bin + 1];
   if (b0 == b1) return kCoupleOk;  // no block near; its history goes stale (HistoryView)
   constexpr int kMaxSlots = 4;

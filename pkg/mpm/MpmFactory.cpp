@@ -71,15 +71,9 @@ std::unique_ptr<MpmSolver> withGate(std::unique_ptr<MpmSolver> solver, const Gat
 void MpmSolver::setParticles(ParticleSlices& particles) {
   ParticleSet all;
   forEachSlice(particles, [&all](std::size_t, const ParticleSet& p) {
-    all.x.insert(all.x.end(), p.x.begin(), p.x.end());
-    all.v.insert(all.v.end(), p.v.begin(), p.v.end());
-    all.stress.insert(all.stress.end(), p.stress.begin(), p.stress.end());
-    all.mass.insert(all.mass.end(), p.mass.begin(), p.mass.end());
-    all.volume0.insert(all.volume0.end(), p.volume0.begin(), p.volume0.end());
-    all.J.insert(all.J.end(), p.J.begin(), p.J.end());
-    all.gammaDotP.insert(all.gammaDotP.end(), p.gammaDotP.begin(), p.gammaDotP.end());
-    all.fext.insert(all.fext.end(), p.fext.begin(), p.fext.end());
-    all.phase.insert(all.phase.end(), p.phase.begin(), p.phase.end());
+    ParticleSet::forEachArray([](const char*, std::size_t, ParticleSet::ArrayUse, auto& to,
+                                 const auto& from) { to.insert(to.end(), from.begin(), from.end()); },
+                              all, p);
   });
   setParticles(all);
 }
