@@ -492,9 +492,7 @@ SnapshotSlices::~SnapshotSlices() {
 }
 
 const mpm::ParticleSet& SnapshotSlices::slice(std::size_t first, std::size_t count) {
-  if (first > n_ || count > n_ - first)
-    throwParameter("snapshot slice", std::to_string(first) + " + " + std::to_string(count), "",
-                   "within the " + std::to_string(n_) + " particles of /" + group_ + " in " + path_);
+  mpm::validateSliceRange("snapshot slice", first, count, n_, " of /" + group_ + " in " + path_);
   mpm::ParticleSet& p = buffer_;
   for (const mpm::ParticleColumn& c : kParticleColumns) {
     if (c.kind == ColumnKind::kDensity) continue;

@@ -162,12 +162,13 @@ inline void copyParticleRange(const ParticleSet& from, std::size_t first, std::s
       from, to);
 }
 
-// Throws ParameterError unless particles [first, first + count) lie within the n particles of
-// `what` (e.g. "particle slice").
-inline void validateSliceRange(const char* what, std::size_t first, std::size_t count, std::size_t n) {
+// Throws ParameterError, naming `what` (e.g. "particle slice"), unless particles
+// [first, first + count) lie within the n particles (of `whose`, e.g. " of /snapshots/3 in f.h5").
+inline void validateSliceRange(const char* what, std::size_t first, std::size_t count, std::size_t n,
+                               const std::string& whose = "") {
   if (first > n || count > n - first)
     throwParameter(what, std::to_string(first) + " + " + std::to_string(count), "",
-                   "within the " + std::to_string(n) + " particles");
+                   "within the " + std::to_string(n) + " particles" + whose);
 }
 
 // Particles handed out in slices by particle number, so that a writer needs a slice of the
