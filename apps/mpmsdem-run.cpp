@@ -23,7 +23,10 @@
 //   --bench                  write no files, take no diagnostics; print one JSON line on
 //                            stdout at the end: backend, precision, solver, particles,
 //                            steps, seconds (step loop wall time), particle_updates_per_s,
-//                            bytes_per_particle (solver memoryBytes()/particles), threads
+//                            bytes_per_particle (solver memoryBytes()/particles), threads;
+//                            with blocks also time, stage_seconds, contact_step_min(_time)
+//                            and moving_blocks (BlockRecord: travel, rotation, peak flow
+//                            force of each moving block)
 // Outputs (not with --bench), in the output folder:
 //   mpm.h5          HDF5 (pkg/io/Hdf5Writer.hpp): /series/{time, step, dt, kinetic_energy,
 //                   front_x, height_z, centre_of_mass (3), max_speed, flowing_fraction,
@@ -239,13 +242,56 @@ std::string stageSplit(const coupling::CoupledWorld& world, double loopSeconds) 
   return buf;
 }
 
+// What a benchmark run did to each moving block, so that backends and precisions can be
+// compared on physics as well as speed without output files: the start and end of its centroid,
+// its end velocity, the angle it turned, and the largest flow force on it (|F| and the x
+// component, the downstream force in a flume's frame) with when it came.
+class BlockRecord {
+ public:
+  explicit BlockRecord(const sdem::SdemEngine& e) {
+    for (int i = 0; i < e.numBodies(); ++i)
+      if (!e.isFixed(i)) blocks_.push_back({i, e.position(i), e.orientation(i)});
+  }
+  void afterStep(const coupling::CoupledWorld& w) {
+    for (Block& b : blocks_) {
+      const Vec3 f = w.coupling.force(b.index);
+      if (f.norm() > b.peak) b.peak = f.norm(), b.peakTime = w.time();
+      if (f.x() > b.peakX) b.peakX = f.x(), b.peakXTime = w.time();
+    }
+  }
+  nlohmann::json summary(const sdem::SdemEngine& e) const {
+    nlohmann::json out = nlohmann::json::array();
+    const auto vec = [](const Vec3& v) { return nlohmann::json{v.x(), v.y(), v.z()}; };
+    for (const Block& b : blocks_) {
+      const double turned = e.orientation(b.index).angularDistance(b.ori0);
+      out.push_back({{"block", b.index}, {"start", vec(b.pos0)}, {"end", vec(e.position(b.index))},
+                     {"velocity", vec(e.velocity(b.index))}, {"rotation_deg", turned * 180 / M_PI},
+                     {"peak_flow_force", b.peak}, {"peak_flow_force_time", b.peakTime},
+                     {"peak_flow_force_x", b.peakX}, {"peak_flow_force_x_time", b.peakXTime}});
+    }
+    return out;
+  }
+
+ private:
+  struct Block {
+    int index;
+    Vec3 pos0;
+    Quat ori0;
+    double peak = 0, peakTime = 0, peakX = 0, peakXTime = 0;
+  };
+  std::vector<Block> blocks_;
+};
+
 int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
   MpmSolver& solver = st.solver;
   const std::size_t n = solver.numParticles();
+  std::optional<BlockRecord> blocks;
+  if (st.coupled) blocks.emplace(st.coupled->world.engine);
   const auto t0 = Clock::now();
   double nextReport = 0.05;
   while (!finished(solver, scene.run, maxSteps)) {
     st.step(nextStep(st, scene.run, maxSteps == 0));
+    if (blocks) blocks->afterStep(*st.coupled);
     const double f = progressFraction(solver, scene.run, maxSteps);
     if (f >= nextReport) {
       const double el = since(t0);
@@ -272,6 +318,8 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
     const auto& low = st.coupled->contactStepLow();
     out["contact_step_min"] = std::isfinite(low.step) ? nlohmann::json(low.step) : nlohmann::json();
     out["contact_step_min_time"] = std::isfinite(low.step) ? nlohmann::json(low.time) : nlohmann::json();
+    out["moving_blocks"] = blocks->summary(st.coupled->world.engine);
+    out["time"] = solver.time();
   }
   std::cout << out.dump() << std::endl;
   return 0;

@@ -1,28 +1,95 @@
 #!/usr/bin/env bash
-# On a GPU machine (no YADE, no package registry; see scripts/bench/gpu_deps.sh): builds the
-# solvers and the driver with CUDA (MPMSDEM_DRIVER_ONLY), runs test_mpm and test_coupling (the
-# CPU vs CUDA agreement tests included) and the throughput benchmark, and leaves the logs and a
+# On a GPU machine (no YADE, no package registry): the CUDA tests, then CPU-vs-CUDA runs of the
+# coupled §3.2 flume and the MPM throughput benchmark, with logs, the runs' JSON lines and a
 # markdown table in $OUT (or ./gpu-out).
+#
+#   bash scripts/bench/gpu_run.sh                      # builds build-gpu first (needs .deps/:
+#                                                      # scripts/bench/gpu_deps.sh)
+#   bash scripts/bench/gpu_run.sh --prebuilt DIR       # test_mpm, test_coupling and mpmsdem-run
+#                                                      # built elsewhere (-DMPMSDEM_DRIVER_ONLY=ON
+#                                                      # -DMPMSDEM_NATIVE=OFF, sm_90); builds if
+#                                                      # they do not start here
+#   GPU_RUN_BUDGET=400 bash scripts/bench/gpu_run.sh   # seconds: a stage that would start later
+#                                                      # is skipped (and says so)
+#   GPU_RUN_STAGES='test_|coarse' bash ...             # only the stages whose names match this
+#                                                      # extended regular expression
+#
+# Stages, most telling first: the whole of test_mpm and test_coupling (the CPU-vs-CUDA
+# agreement tests are the ones a machine without a GPU skips); the coarse flume
+# (examples/scenes/flume_block.json) over its 2 s on the CPU (every core) and on CUDA in double
+# and float, and once more in double (CUDA's atomic sums make runs differ: by how much); the
+# flume at the paper's resolution (flume_block_full.json): 4,000 steps on the
+# CPU and on CUDA, then the whole 2 s on CUDA in double and float (the project's goal: at most
+# 2 min on one H100); bench_mpm.py --cuda. Every run is --bench (HDF5 may be missing there): its
+# JSON line holds the time, the stage split and each moving block's travel and peak flow force.
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 out=${OUT:-gpu-out}
+budget=${GPU_RUN_BUDGET:-100000}
+only=${GPU_RUN_STAGES:-.}
+prebuilt=""
+if [ "${1:-}" = "--prebuilt" ]; then prebuilt=${2:?"--prebuilt needs a folder"}; fi
 mkdir -p "$out"
+start=$SECONDS
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv | tee "$out/gpu.txt"
-cmake -S . -B build-gpu -DCMAKE_BUILD_TYPE=Release -DMPMSDEM_DRIVER_ONLY=ON -DMPMSDEM_DEPS="$PWD/.deps" \
-  > "$out/configure.log" 2>&1 || { tail -30 "$out/configure.log"; exit 1; }
-cmake --build build-gpu -j "$(nproc)" --target test_mpm test_coupling mpmsdem-run > "$out/build.log" 2>&1 \
-  || { tail -40 "$out/build.log"; exit 1; }
-build-gpu/test_mpm 2>&1 | tee "$out/test_mpm.log" | tail -25
-build-gpu/test_coupling 2>&1 | tee "$out/test_coupling.log" | tail -25
-python3 scripts/bench/bench_mpm.py --build build-gpu --cuda --markdown "$out/bench.md" 2>&1 | tee "$out/bench.log"
-# The coupled §3.2 flume at the paper's resolution (examples/scenes/flume_block_full.json,
-# written by examples/flume_block.py --full --driver-scene): the first 4,000 steps on the CPU
-# (every core) and on CUDA, for the ratio in one command, then the whole 2 s on CUDA (the
-# project's goal: at most 2 min on one H100); --bench: no outputs (HDF5 may be missing there).
-scene=examples/scenes/flume_block_full.json
-for backend in cpu cuda; do
-  OMP_NUM_THREADS=$(nproc) build-gpu/mpmsdem-run "$scene" --backend "$backend" --bench --steps 4000 \
-    2>"$out/flume_${backend}_4000.err" | tail -1 | tee "$out/flume_${backend}_4000.json"
+grep -m1 'model name' /proc/cpuinfo | tee -a "$out/gpu.txt"
+echo "cores: $(nproc); commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)" | tee -a "$out/gpu.txt"
+
+bin=build-gpu
+if [ -n "$prebuilt" ] && "$prebuilt/mpmsdem-run" --help > /dev/null 2>&1; then
+  bin=$prebuilt
+  echo "binaries: $prebuilt (built elsewhere)" | tee -a "$out/gpu.txt"
+else
+  [ -n "$prebuilt" ] && echo "binaries in $prebuilt do not start here: building" | tee -a "$out/gpu.txt"
+  cmake -S . -B build-gpu -DCMAKE_BUILD_TYPE=Release -DMPMSDEM_DRIVER_ONLY=ON -DMPMSDEM_DEPS="$PWD/.deps" \
+    > "$out/configure.log" 2>&1 || { tail -30 "$out/configure.log"; exit 1; }
+  cmake --build build-gpu -j "$(nproc)" --target test_mpm test_coupling mpmsdem-run > "$out/build.log" 2>&1 \
+    || { tail -40 "$out/build.log"; exit 1; }
+fi
+
+# stage NAME SECONDS CMD...: runs CMD under a time limit unless the budget is spent.
+stage() {
+  local name=$1 limit=$2
+  shift 2
+  [[ $name =~ $only ]] || return 0
+  if (( SECONDS - start + 5 > budget )); then
+    echo "== $name: skipped (budget of ${budget} s spent)"
+    return
+  fi
+  echo "== $name ($(( SECONDS - start )) s in)"
+  timeout "$limit" bash -c '"$@"' "$name" "$@"
+  local rc=$?
+  (( rc == 0 )) || echo "== $name: exit $rc$( (( rc == 124 )) && echo ' (time limit)')"
+}
+
+# tests: the failures in full, the summary of each
+for t in test_mpm test_coupling; do
+  stage "$t" 240 bash -c "'$bin/$t' --gtest_output=xml:'$out/$t.xml' > '$out/$t.log' 2>&1; rc=\$?; \
+    grep -E '^\[  (FAILED|PASSED|SKIPPED) +\] ([0-9]+ tests?|[^ ]+$)' '$out/$t.log'; grep -B30 '^\[  FAILED  \]' '$out/$t.log' | head -150; exit \$rc"
 done
-build-gpu/mpmsdem-run "$scene" --backend cuda --bench 2>"$out/flume_full_cuda.err" | tail -1 \
-  | tee "$out/flume_full_cuda.json"
+
+# flume_run NAME SCENE BACKEND PRECISION [ARGS...]: one --bench run, its JSON line in $out/NAME.json
+flume_run() {
+  local name=$1 scene=$2 backend=$3 precision=$4
+  shift 4
+  OMP_NUM_THREADS=$(nproc) "$bin/mpmsdem-run" "$scene" --backend "$backend" --precision "$precision" --bench "$@" \
+    2> "$out/$name.err" | tail -1 | tee "$out/$name.json"
+  local rc=${PIPESTATUS[0]}
+  (( rc == 0 )) || tail -5 "$out/$name.err"
+  return "$rc"
+}
+export -f flume_run
+export bin out
+coarse=examples/scenes/flume_block.json
+full=examples/scenes/flume_block_full.json
+stage coarse_cpu_double 120 flume_run coarse_cpu_double "$coarse" cpu double
+stage coarse_cuda_double 120 flume_run coarse_cuda_double "$coarse" cuda double
+stage coarse_cuda_float 120 flume_run coarse_cuda_float "$coarse" cuda float
+stage coarse_cuda_double_again 120 flume_run coarse_cuda_double_again "$coarse" cuda double
+stage full_cpu_4000 120 flume_run full_cpu_4000 "$full" cpu double --steps 4000
+stage full_cuda_4000 120 flume_run full_cuda_4000 "$full" cuda double --steps 4000
+stage full_cuda_double 150 flume_run full_cuda_double "$full" cuda double
+stage full_cuda_float 150 flume_run full_cuda_float "$full" cuda float
+stage bench_mpm 200 python3 scripts/bench/bench_mpm.py --exe "$bin/mpmsdem-run" --cuda --threads "$(nproc)" \
+  --gpu-updates 1e9 --markdown "$out/bench.md"
+echo "== done in $(( SECONDS - start )) s"

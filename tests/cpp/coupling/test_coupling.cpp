@@ -140,12 +140,11 @@ BlobHit blobHitsCube(mpm::Backend backend, mpm::Precision precision) {
   return r;
 }
 
-// The coupling with a CPU solver in both precisions (cpu-float: float contacts against float
-// copies of the blocks and shapes, block sums in double).
-class MpSdemCouplingInPrecision : public ::testing::TestWithParam<mpm::Precision> {};
-INSTANTIATE_TEST_SUITE_P(CpuBothPrecisions, MpSdemCouplingInPrecision,
-                         ::testing::Values(mpm::Precision::Double, mpm::Precision::Float),
-                         mpm::agreement::paramName);
+// The coupling with every backend's solver in both precisions (float: float contacts against
+// float copies of the blocks and shapes, block sums in double).
+class MpSdemCouplingInPrecision : public mpm::agreement::EveryBackend {};
+INSTANTIATE_TEST_SUITE_P(EveryBackend, MpSdemCouplingInPrecision, ::testing::ValuesIn(mpm::agreement::everyKind()),
+                         mpm::agreement::kindName);
 
 }  // namespace
 
@@ -577,7 +576,7 @@ TEST(CouplingKernels, TangentialHistoryEndsWithTheContact) {
 // Zero gravity: a granular blob thrown at a free cube. The particles' forces sum to minus the
 // block's at every step (Eqs 17-18), and the total momentum of particles + block is conserved.
 TEST_P(MpSdemCouplingInPrecision, ImpulseBalanceAndMomentumConservation) {
-  auto world = blobWorld(24, 1.0, mpm::Backend::Cpu, GetParam());
+  auto world = blobWorld(24, 1.0, backend(), precision());
   CoupledWorld& w = *world;
   const int cube = addCube(w, 0.02, 0.003, Vec3(0.125, 0.07, 0.07), 2000);
   w.coupling.setPair(0, pair(0.3));
@@ -598,7 +597,7 @@ TEST_P(MpSdemCouplingInPrecision, ImpulseBalanceAndMomentumConservation) {
   // of |v| <= 1 m/s, of the same sign for all in the worst case (the contact forces reach the
   // block in double): |dp| / |p0| <= steps eps / 2, 2.4e-4 over 4000 steps (measured 8e-7).
   // In double that is below the round-off of this check's own sums: 1e-9 there.
-  const double tol = std::max(1e-9, steps * 0.5 * mpm::agreement::roundOff(GetParam()));
+  const double tol = std::max(1e-9, steps * 0.5 * mpm::agreement::roundOff(precision()));
   std::printf("%s: momentum change %.3e of p0 after %d steps, tolerance %.2e\n", w.mpm().name().c_str(),
               (p1 - p0).norm() / p0.norm(), steps, tol);
   EXPECT_NEAR((p1 - p0).norm() / p0.norm(), 0.0, tol) << "p0 " << p0.transpose() << " p1 " << p1.transpose();
@@ -614,16 +613,16 @@ TEST_P(MpSdemCouplingInPrecision, ParticleForcesBalanceBlockForce) {
     ps.v[3 * p] = 1.5;
     ps.v[3 * p + 2] = 0.2 * (ps.x[3 * p + 1] - 0.07) / 0.02;
   }
-  auto solver = mpm::makeSolver(prm, mpm::Backend::Cpu, GetParam());
-  solver->setParticles(ps);
-  CoupledWorld w(std::move(solver));
+  auto flow = solver(prm);
+  flow->setParticles(ps);
+  CoupledWorld w(std::move(flow));
   w.world.gravity = Vec3::Zero();
   const int cube = addCube(w, 0.02, 0.003, Vec3(0.12, 0.07, 0.07), 2000, true);
   w.coupling.setPair(0, pair(0.5));
   // A particle's force is the sum of its contacts' forces rounded to T, at most twice (history
   // slots 2), and the block takes each contact's force in double: the balance holds to
   // 2 eps of the sum of |force| in float; in double to the round-off of this check's sums.
-  const double tol = std::max(1e-13, 2 * mpm::agreement::roundOff(GetParam()));
+  const double tol = std::max(1e-13, 2 * mpm::agreement::roundOff(precision()));
   int checked = 0;
   for (int s = 0; s < 3000 && checked < 200; ++s) {
     w.coupling.computeForces(w.mpm(), 1e-5);
@@ -843,6 +842,9 @@ TEST(MpSdemCoupling, CpuAndCudaAgree) {
   ASSERT_LT(cpu.minApproach, std::numeric_limits<double>::infinity());
   for (const auto& [prec, tol] : {std::make_pair(mpm::Precision::Double, 1e-9), std::make_pair(mpm::Precision::Float, 2e-3)}) {
     const BlobHit gpu = blobHitsCube(mpm::Backend::Cuda, prec);
+    std::printf("cuda-%s against cpu-double: cube position %.3e m (bound %.1e), impulse %.3e of %.4g N s (bound %.1e)\n",
+                ::testing::PrintToString(prec).c_str(), (gpu.position - cpu.position).norm(), tol * 0.1,
+                (gpu.impulse - cpu.impulse).norm(), cpu.impulse.norm(), tol * cpu.impulse.norm() * 10);
     if (prec == mpm::Precision::Double)  // the device reduces it in float
       EXPECT_NEAR(gpu.minApproach / cpu.minApproach, 1.0, 1e-6);
     EXPECT_NEAR((gpu.position - cpu.position).norm(), 0.0, tol * 0.1) << "precision " << ::testing::PrintToString(prec);

@@ -5,9 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <memory>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "mpm/MpmSolver.hpp"
 
@@ -24,8 +27,38 @@ inline double roundOff(Precision p) {
   return p == Precision::Float ? std::numeric_limits<float>::epsilon() : std::numeric_limits<double>::epsilon();
 }
 
-// Test name suffix of a precision parameter: "double", "float".
-inline std::string paramName(const ::testing::TestParamInfo<Precision>& info) { return ::testing::PrintToString(info.param); }
+// A backend in a precision: the parameter of the physics suites that every backend must pass.
+struct SolverKind {
+  Backend backend;
+  Precision precision;
+};
+inline void PrintTo(const SolverKind& k, std::ostream* os) {
+  *os << (k.backend == Backend::Cuda ? "cuda_" : "cpu_") << ::testing::PrintToString(k.precision);
+}
+// Test name suffix of a kind: "cpu_double", "cuda_float".
+inline std::string kindName(const ::testing::TestParamInfo<SolverKind>& info) {
+  return ::testing::PrintToString(info.param);
+}
+// Both precisions on the CPU and, in a build with the CUDA backend, on CUDA: a machine
+// without a GPU lists the CUDA cases as skipped (EveryBackend::SetUp).
+inline std::vector<SolverKind> everyKind() {
+  std::vector<SolverKind> k = {{Backend::Cpu, Precision::Double}, {Backend::Cpu, Precision::Float}};
+#ifdef MPMSDEM_WITH_CUDA
+  k.push_back({Backend::Cuda, Precision::Double});
+  k.push_back({Backend::Cuda, Precision::Float});
+#endif
+  return k;
+}
+// Fixture base of those suites: precision() and backend() of the case, makeSolver for it.
+class EveryBackend : public ::testing::TestWithParam<SolverKind> {
+ protected:
+  void SetUp() override {
+    if (backend() == Backend::Cuda && !cudaAvailable()) GTEST_SKIP() << "no CUDA device on this machine";
+  }
+  Backend backend() const { return GetParam().backend; }
+  Precision precision() const { return GetParam().precision; }
+  std::unique_ptr<MpmSolver> solver(const MpmParams& prm) const { return makeSolver(prm, backend(), precision()); }
+};
 
 // `slice` is particles [first, first + slice.size()) of `whole`, every field to the last bit.
 inline void expectRangeOf(const ParticleSet& slice, const ParticleSet& whole, std::size_t first) {
@@ -88,6 +121,8 @@ inline void runPair(MpmSolver& a, MpmSolver& b, const ParticleSet& particles, do
 inline void expectAgree(const ParticleSet& a, const ParticleSet& b, double tol, double length, double minStress,
                         const std::string& what) {
   const Agreement r = compare(a, b);
+  std::printf("%s against the reference: max |dx| = %.3e m (bound %.1e), max |dsigma| = %.3e Pa (bound %.1e)\n",
+              what.c_str(), r.position, tol * length, r.stress, tol * r.stressScale);
   EXPECT_LT(r.position, tol * length) << what << ": positions";
   EXPECT_LT(r.stress, tol * r.stressScale) << what << ": stresses (scale " << r.stressScale << " Pa)";
   EXPECT_GT(r.stressScale, minStress) << what << ": the reference run carries no stress";
