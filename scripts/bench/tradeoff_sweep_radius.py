@@ -5,6 +5,7 @@
         [--sizes 20,40] [--ratios 1/200,1/100,1/50,1/20,1/10,1/8] [--duration 1.2] [--window 0.4 0.7]
         [--engine yade|driver] [--exe PATH] [--jobs 1] [--threads 1] [--out results/tradeoff_sweep_radius]
         [--markdown docs/tradeoffs.md] [--plot docs/img/tradeoff_sweep_radius.png] [--report-only]
+        [--dx 0.02] [--backend cpu|cuda] [--precision double|float] [--prepare | --collect]
 
 The scene is examples/flume_block.py's coarse one (dx 0.02 m, 12,000 material points, the copper
 cube's upstream face at the column front + L0, elastic barrier, α 0.99 per step at the flume's
@@ -41,6 +42,14 @@ Results: ``--out``/h<mm>_r<ratio>/result.json per run, ``--out``/results.json fo
 on stdout, ``--markdown FILE`` replaces (or appends) the generated section of FILE between its
 markers, ``--plot PNG`` draws travel and peak force against R/h_b (log x, one line per size) and
 the cost ratio. ``--report-only`` redoes table, markdown and plot from ``--out``.
+
+``--dx 0.01`` is the paper's resolution (96,000 material points; its own generated section of
+``--markdown``). The driver runs the MPM on ``--backend`` in ``--precision``. Where the
+driver is to run on another machine (a GPU machine without YADE), ``--prepare`` writes each run's
+scene (``--out``/h<mm>_r<ratio>/scene.json, with prepared.json) and ``--out``/run_driver.sh, which
+runs them all there (``MPMSDEM_RUN``: the driver, ``JOBS``: runs at a time) and leaves each run's
+coupled.h5 and driver.log in its folder; with that folder back, ``--collect`` reads them into
+result.json files and reports as the other modes do.
 """
 import argparse
 import fractions
@@ -58,12 +67,18 @@ import time
 from bench_mpm import machine  # same folder: shared with the other benchmarks
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
-DX = 0.02
+DX = 0.02                   # grid spacing of the coarse scene [m] (--dx)
 SAMPLE = 0.002              # record interval [s], as flume_block.py's coupled records
 SMOOTH = 0.01               # moving mean of F_t for the peak [s] (docs/coupled-results.md)
 REFERENCE_RATIO = 1.0 / 20  # the paper's recommended R/h_b: the cost reference
-MARK_BEGIN = "<!-- tradeoff_sweep_radius.py: begin generated section -->"
-MARK_END = "<!-- tradeoff_sweep_radius.py: end generated section -->"
+DX_RANGE = (0.005, 0.02)    # m: coarser than the coarse scene leaves the 20 mm cube inside one cell
+
+
+def markers(dx):
+    """The generated section of one resolution in --markdown: the coarse one's, or tagged by dx."""
+    tag = "" if dx == DX else " --dx %g" % dx
+    return ("<!-- tradeoff_sweep_radius.py%s: begin generated section -->" % tag,
+            "<!-- tradeoff_sweep_radius.py%s: end generated section -->" % tag)
 SIZE_RANGE = (0.0, 100.0)   # mm: a cube wider than half the 0.2 m flume would be another scene
 RATIO_RANGE = (0.0, 0.5)    # R must stay below half the side (a box core of positive size)
 
@@ -118,6 +133,16 @@ def parse(argv):
     ap.add_argument("--plot", metavar="PNG", default=None, help="write the plot to PNG")
     ap.add_argument("--report-only", action="store_true",
                     help="no runs: table, --markdown and --plot from the result.json files in --out")
+    ap.add_argument("--dx", type=float, default=DX,
+                    help="grid spacing [m] (default 0.02, the coarse scene; 0.01: the paper's), in [0.005, 0.02]")
+    ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"), help="MPM backend of --engine driver")
+    ap.add_argument("--precision", default="double", choices=("double", "float"),
+                    help="MPM precision of --engine driver")
+    mode = ap.add_mutually_exclusive_group()
+    mode.add_argument("--prepare", action="store_true",
+                      help="write the driver scenes and run_driver.sh to run them elsewhere; no runs")
+    mode.add_argument("--collect", action="store_true",
+                      help="read the driver runs of run_driver.sh in --out into result.json files, then report")
     ap.add_argument("--one", nargs=2, metavar=("H_MM", "RATIO"), help=argparse.SUPPRESS)  # a child run
     a = ap.parse_args(argv)
     try:
@@ -137,7 +162,13 @@ def parse(argv):
             raise ValueError("--jobs = %d: must be in [1, %d] (the number of cores)" % (a.jobs, cores))
         if a.threads < 1:
             raise ValueError("--threads = %d: must be >= 1" % a.threads)
-        if a.engine == "driver" and not a.report_only:
+        if not (math.isfinite(a.dx) and DX_RANGE[0] <= a.dx <= DX_RANGE[1]):
+            raise ValueError("--dx = %g m: must be in [%g, %g]" % (a.dx, DX_RANGE[0], DX_RANGE[1]))
+        if (a.prepare or a.collect) and a.engine != "driver":
+            raise ValueError("--prepare and --collect are for --engine driver")
+        if (a.backend, a.precision) != ("cpu", "double") and a.engine != "driver":
+            raise ValueError("--backend and --precision are for --engine driver (YADE runs take the flume's own)")
+        if a.engine == "driver" and not (a.report_only or a.prepare or a.collect):
             a.exe = a.exe or shutil.which("mpmsdem-run") or os.path.join(ROOT, "build", "mpmsdem-run")
             if not (os.path.isfile(a.exe) and os.access(a.exe, os.X_OK)):
                 raise ValueError("--exe = %s: not an executable file (the mpmsdem-run driver, e.g. "
@@ -167,11 +198,11 @@ def loadExample():
     return mod
 
 
-def buildScene(ex, h, ratio, flipReferenceDt):
+def buildScene(ex, h, ratio, flipReferenceDt, dx):
     from mpmsdem.flume import Block, Flume
     cube = Block(half=(h / 2,) * 3, x=ex.COLUMN + ex.L0, sweepRadius=ratio * h, density=8900, friction=0.67,
                  flowFriction=0.21)
-    return Flume(dx=DX, blocks=[cube], verbose=False, flipReferenceDt=flipReferenceDt)
+    return Flume(dx=dx, blocks=[cube], verbose=False, flipReferenceDt=flipReferenceDt)
 
 
 def runYade(a, h, ratio, folder):
@@ -254,47 +285,76 @@ def runYade(a, h, ratio, folder):
         "max_rotation_step_deg": st["maxRot"], "max_rise_step": st["maxRise"]}
 
 
-def runDriver(a, h, ratio, folder):
-    import h5py
-    import numpy as np
+def prepareDriver(a, h, ratio, folder):
+    """Write the run's driver scene (folder/scene.json, its outputs to folder/driver) and
+    folder/prepared.json (what reading its outputs needs); returns the latter."""
     from yade import O
     import mpmsdem.driver
     ex = loadExample()
-    buildScene(ex, h, ratio, 0.0)
+    buildScene(ex, h, ratio, 0.0, a.dx)
     base = O.dt
-    sc = buildScene(ex, h, ratio, base)
-    cubeIndex = sc.sdem.ids.index(sc.blockIds[0])
-    mass = float(O.bodies[sc.blockIds[0]].state.mass)
-    scenePath = os.path.join(folder, "scene.json")
-    out = os.path.join(folder, "driver")
-    mpmsdem.driver.writeScene(scenePath, sc.coupled, duration=a.duration, dt=base, outputDir=out,
-                              outputEvery=a.duration, seriesEvery=SAMPLE, vtk="none")
-    env = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
-    import resource
-    cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    p = subprocess.run([a.exe, scenePath], capture_output=True, text=True, env=env)
-    cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    with open(os.path.join(folder, "driver.log"), "w") as f:
-        f.write(p.stdout + p.stderr)
-    done = re.search(r"done, t = (\S+) s, (\d+) steps, (\S+) s wall", p.stdout)
-    if p.returncode != 0 or not done:
-        msg = (p.stderr.strip().splitlines() or ["exit status %d" % p.returncode])[-1]
-        raise RuntimeError("mpmsdem-run exit %d: %s" % (p.returncode, msg))
-    with h5py.File(os.path.join(out, "coupled.h5"), "r") as f:
+    sc = buildScene(ex, h, ratio, base, a.dx)
+    prepared = {"cube_index": sc.sdem.ids.index(sc.blockIds[0]), "cube_mass": float(O.bodies[sc.blockIds[0]].state.mass),
+                "dt": base, "particles": int(sc.mpm.numParticles), "backend": a.backend, "precision": a.precision}
+    mpmsdem.driver.writeScene(os.path.join(folder, "scene.json"), sc.coupled, duration=a.duration, dt=base,
+                              outputDir="driver", outputEvery=a.duration, seriesEvery=SAMPLE, vtk="none",
+                              backend=a.backend, precision=a.precision)
+    with open(os.path.join(folder, "prepared.json"), "w") as f:
+        json.dump(prepared, f, indent=1)
+    return prepared
+
+
+def readDriver(folder, prepared, cpuSeconds=None):
+    """The series and run facts of a finished driver run in folder (driver.log, driver/coupled.h5)."""
+    import h5py
+    import numpy as np
+    logPath = os.path.join(folder, "driver.log")
+    if not os.path.exists(logPath):
+        raise RuntimeError("not run (no driver.log)")
+    with open(logPath) as f:
+        log = f.read()
+    done = re.search(r"done, t = (\S+) s, (\d+) steps, (\S+) s wall", log)
+    if not done:
+        lines = [line for line in log.strip().splitlines() if line.strip()]
+        raise RuntimeError("mpmsdem-run did not finish; its last line: %s" % (lines[-1] if lines else "(none)"))
+    low = re.search(r"smallest contact step (\S+) s at t = (\S+) s", log)
+    c = slice(3 * prepared["cube_index"], 3 * prepared["cube_index"] + 3)
+    with h5py.File(os.path.join(folder, "driver", "coupled.h5"), "r", locking=False) as f:
         g = f["series"]
-        c = slice(3 * cubeIndex, 3 * cubeIndex + 3)
         t = g["time"][:]
         pos = g["pos"][:, c]
         rot = np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))
         ft = g["flow_force"][:, c][:, 0]
     series = {"t": t.tolist(), "travel": (pos[:, 0] - pos[0, 0]).tolist(), "rise": (pos[:, 2] - pos[0, 2]).tolist(),
               "Ft": ft.tolist(), "rotation": rot.tolist()}
-    return series, {"engine": "driver", "dt_flume": base, "dt_min": base, "contact_limited_steps": 0,
-                    "dt_warnings": 0, "contact_step_min": None, "contact_step_min_time": None,
+    return series, {"engine": "driver", "backend": prepared.get("backend", "cpu"),
+                    "precision": prepared.get("precision", "double"), "dt_flume": prepared["dt"],
+                    "dt_min": prepared["dt"], "contact_limited_steps": 0, "dt_warnings": 0,
+                    "contact_step_min": float(low.group(1)) if low else None,
+                    "contact_step_min_time": float(low.group(2)) if low else None,
                     "steps": int(done.group(2)), "wall_s": float(done.group(3)),
                     # the whole driver process (seeding and output included), not only its step loop
-                    "cpu_s": (cpu1.ru_utime + cpu1.ru_stime) - (cpu0.ru_utime + cpu0.ru_stime),
-                    "particles": int(sc.mpm.numParticles), "cube_mass": mass, "end_time": float(done.group(1))}
+                    "cpu_s": cpuSeconds, "particles": prepared["particles"], "cube_mass": prepared["cube_mass"],
+                    "end_time": float(done.group(1))}
+
+
+def driverCommand(exe, a):
+    return [exe, "scene.json", "--backend", a.backend, "--precision", a.precision]
+
+
+def runDriver(a, h, ratio, folder):
+    import resource
+    prepared = prepareDriver(a, h, ratio, folder)
+    env = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
+    cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    p = subprocess.run(driverCommand(a.exe, a), capture_output=True, text=True, env=env, cwd=folder)
+    cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    with open(os.path.join(folder, "driver.log"), "w") as f:
+        f.write(p.stdout + p.stderr)
+    if p.returncode != 0:
+        msg = (p.stderr.strip().splitlines() or ["exit status %d" % p.returncode])[-1]
+        raise RuntimeError("mpmsdem-run exit %d: %s" % (p.returncode, msg))
+    return readDriver(folder, prepared, (cpu1.ru_utime + cpu1.ru_stime) - (cpu0.ru_utime + cpu0.ru_stime))
 
 
 def firstTurn(series, deg=45.0):
@@ -343,12 +403,19 @@ def child(a):
     hmm, ratio = float(a.one[0]), float(a.one[1])
     folder = os.path.join(a.out, runName(hmm, ratio))
     os.makedirs(folder, exist_ok=True)
+    if a.prepare:
+        prepareDriver(a, hmm / 1000.0, ratio, folder)
+        return
     load0 = os.getloadavg()
-    h = hmm / 1000.0
-    series, run = (runYade if a.engine == "yade" else runDriver)(a, h, ratio, folder)
-    result = {"h_mm": hmm, "ratio": ratio, "ratio_label": ratioLabel(ratio), "sweep_radius": ratio * h,
-              "duration": a.duration, "window": list(a.window), "threads": a.threads,
-              "load_before": list(load0), "load_after": list(os.getloadavg())}
+    series, run = (runYade if a.engine == "yade" else runDriver)(a, hmm / 1000.0, ratio, folder)
+    writeResult(a, hmm, ratio, folder, series, run, list(load0), list(os.getloadavg()))
+
+
+def writeResult(a, hmm, ratio, folder, series, run, loadBefore, loadAfter):
+    """folder/result.json and series.json of a finished run (loads: None where not known)."""
+    result = {"h_mm": hmm, "ratio": ratio, "ratio_label": ratioLabel(ratio), "sweep_radius": ratio * hmm / 1000.0,
+              "duration": a.duration, "window": list(a.window), "threads": a.threads, "dx": a.dx,
+              "load_before": loadBefore, "load_after": loadAfter}
     result.update(run)
     result.update(summarise(series, a.window))
     if "max_rotation_step_deg" in run:  # sampled every step, finer than the records
@@ -370,10 +437,31 @@ def commit():
 def childCommand(a, hmm, ratio):
     cmd = [sys.executable, os.path.abspath(__file__), "--one", repr(hmm), repr(ratio), "--duration", repr(a.duration),
            "--window", repr(a.window[0]), repr(a.window[1]), "--engine", a.engine, "--threads", str(a.threads),
-           "--out", a.out]
-    if a.engine == "driver":
+           "--out", a.out, "--dx", repr(a.dx), "--backend", a.backend, "--precision", a.precision]
+    if a.prepare:
+        cmd += ["--prepare"]
+    elif a.engine == "driver":
         cmd += ["--exe", a.exe]
     return cmd
+
+
+RUN_DRIVER_SH = """#!/usr/bin/env bash
+# Runs this sweep's prepared driver scenes (tradeoff_sweep_radius.py --prepare): MPMSDEM_RUN (the
+# driver, default mpmsdem-run on the PATH), JOBS runs at a time (default 1), OMP_NUM_THREADS each
+# (with JOBS > 1, at most the cores over JOBS: unset, every run takes every core). Runs sharing one
+# GPU take turns on it: four at once on one H200 took 219 s each, 55 s a run.
+# Each run leaves driver.log and driver/coupled.h5 in its folder; then, with YADE:
+#   tradeoff_sweep_radius.py --collect --out THIS_FOLDER (and the --sizes, --ratios, --dx given to --prepare)
+set -u
+run=$(readlink -f "$(command -v "${MPMSDEM_RUN:-mpmsdem-run}")") || { echo "no driver: set MPMSDEM_RUN"; exit 2; }
+cd "$(dirname "$0")"
+machine=$({ grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'; echo "$(getconf _NPROCESSORS_ONLN) cores";
+  nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null; } | paste -sd, - | sed 's/,/, /g; s/"//g')
+one='cd "$1" && "$0" scene.json --backend %(backend)s --precision %(precision)s > driver.log 2>&1 && echo "$1 done" || echo "$1 FAILED (see $1driver.log)"'
+start=$SECONDS
+ls -d h*_r*/ | xargs -P "${JOBS:-1}" -n 1 sh -c "$one" "$run"
+printf '{"machine": "%%s", "jobs": %%d, "threads": "%%s", "wall_total": %%d}\\n' "$machine" "${JOBS:-1}" "${OMP_NUM_THREADS:-all cores}" $((SECONDS - start)) > run_driver.json
+"""
 
 
 def runAll(a, runs):
@@ -385,7 +473,7 @@ def runAll(a, runs):
             hmm, ratio = pending.pop(0)
             folder = os.path.join(a.out, runName(hmm, ratio))
             os.makedirs(folder, exist_ok=True)
-            stale = os.path.join(folder, "result.json")
+            stale = os.path.join(folder, "prepared.json" if a.prepare else "result.json")
             if os.path.exists(stale):
                 os.remove(stale)
             log = open(os.path.join(folder, "run.log"), "w")
@@ -400,7 +488,7 @@ def runAll(a, runs):
             log.close()
             k += 1
             head = "[%d/%d] h_b %g mm, R/h_b %s (R %.3g mm)" % (k, len(runs), hmm, ratioLabel(ratio), ratio * hmm)
-            path = os.path.join(folder, "result.json")
+            path = os.path.join(folder, "prepared.json" if a.prepare else "result.json")
             if p.returncode != 0 or not os.path.exists(path):
                 with open(os.path.join(folder, "run.log")) as f:
                     lines = [line.strip() for line in f if line.strip()]
@@ -411,6 +499,9 @@ def runAll(a, runs):
                 continue
             with open(path) as f:
                 r = json.load(f)
+            if a.prepare:
+                print("%s: scene written, %d material points, dt %.4g s" % (head, r["particles"], r["dt"]), flush=True)
+                continue
             print("%s: travel %.4f m, peak F_t %.3f N at %.3f s, max rotation %.1f deg, dt %.3g s, %d steps, %.0f s "
                   "loop wall" % (head, r["travel"], r["peak_force"], r["peak_time"], r["max_rotation_deg"],
                                  r["dt_min"], r["steps"], r["wall_s"]), flush=True)
@@ -468,27 +559,35 @@ def table(results):
 
 
 def section(results, meta):
-    loads = [x for r in results for x in (r["load_before"][0], r["load_after"][0])]
-    lines = [MARK_BEGIN, "",
+    begin, end = markers(results[0].get("dx", DX))
+    loads = [x for r in results for x in (r["load_before"], r["load_after"]) if x]
+    load = ("1-minute load average %.2f–%.2f at the starts and ends of the runs" % (
+        min(x[0] for x in loads), max(x[0] for x in loads)) if loads else "load average not recorded")
+    r0 = results[0]
+    where = "engine: %s" % r0["engine"]
+    if r0["engine"] == "driver":
+        where += " (MPM %s-%s)" % (r0.get("backend", "cpu"), r0.get("precision", "double"))
+    lines = [begin, "",
              "Command: `%s`" % meta["command"], "",
-             "Commit %s; machine: %s; %d thread(s) per run, %d run(s) at a time; engine: %s; %g s simulated per run; "
-             "1-minute load average %.2f–%.2f at the starts and ends of the runs%s." % (
-                 meta["commit"], meta["machine"], results[0]["threads"], meta["jobs"], results[0]["engine"],
-                 results[0]["duration"], min(loads), max(loads),
+             "Commit %s; machine: %s; %d thread(s) per run, %d run(s) at a time; %s; dx %g m; %g s simulated per "
+             "run; %s%s." % (
+                 meta["commit"], meta["machine"], r0["threads"], meta["jobs"], where, r0.get("dx", DX),
+                 r0["duration"], load,
                  "; whole sweep %.1f min" % (meta["wall_total"] / 60) if meta.get("wall_total") else ""),
              "", table(results), ""]
     for hmm, ratio, why in meta.get("failed", []):
         lines.append("- h_b %g mm, R/h_b %s: **failed**: %s" % (hmm, ratioLabel(ratio), why))
     if meta.get("failed"):
         lines.append("")
-    lines.append(MARK_END)
+    lines.append(end)
     return "\n".join(lines)
 
 
-def writeMarkdown(path, text):
+def writeMarkdown(path, text, dx):
+    begin, end = markers(dx)
     old = open(path).read() if os.path.exists(path) else ""
-    if MARK_BEGIN in old and MARK_END in old:
-        i, j = old.index(MARK_BEGIN), old.index(MARK_END) + len(MARK_END)
+    if begin in old and end in old:
+        i, j = old.index(begin), old.index(end) + len(end)
         new = old[:i] + text + old[j:]
     else:
         new = old + ("\n" if old and not old.endswith("\n") else "") + ("\n" if old else "") + text + "\n"
@@ -525,10 +624,61 @@ def plot(results, path):
         a_.axvline(REFERENCE_RATIO, color="0.7", lw=0.8, zorder=0)
         a_.legend(fontsize=7)
     ax[2].axhline(1.0, color="0.5", lw=0.6)
-    fig.suptitle("Block sweep radius, coarse §3.2 flume (dx 0.02 m, %g s)" % results[0]["duration"], fontsize=10)
+    r0 = results[0]
+    fig.suptitle("Block sweep radius, %s §3.2 flume (dx %g m, %g s)" % (
+        "coarse" if r0.get("dx", DX) == DX else "paper-resolution", r0.get("dx", DX), r0["duration"]), fontsize=10)
     fig.tight_layout()
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig.savefig(path, dpi=72)
+
+
+def prepareAll(a, argv, metaPath):
+    """--prepare: every run's scene (a child process each, YADE builds it) and run_driver.sh."""
+    os.makedirs(a.out, exist_ok=True)
+    runs = [(h, r) for h in a.sizeList for r in a.ratioList]
+    failed = runAll(a, runs)
+    meta = {"command": "python3 %s, then %s/run_driver.sh" % (" ".join(
+                [os.path.relpath(os.path.abspath(__file__), ROOT)] + list(argv)), os.path.basename(a.out)),
+            "commit": commit(), "jobs": a.jobs}
+    with open(metaPath, "w") as f:
+        json.dump(meta, f, indent=1)
+    script = os.path.join(a.out, "run_driver.sh")
+    with open(script, "w") as f:
+        f.write(RUN_DRIVER_SH % {"backend": a.backend, "precision": a.precision})
+    os.chmod(script, 0o755)
+    print("%d scenes in %s; run them with MPMSDEM_RUN=... JOBS=... %s, then --collect" % (
+        len(runs) - len(failed), a.out, script))
+    return 1 if failed else 0
+
+
+def collectDriverRuns(a, metaPath):
+    """--collect: result.json of every run that run_driver.sh finished; the sweep's facts."""
+    meta = {"command": "(not recorded)", "commit": "?", "jobs": 1}
+    if os.path.exists(metaPath):
+        with open(metaPath) as f:
+            meta.update(json.load(f))
+    ran = os.path.join(a.out, "run_driver.json")
+    if not os.path.exists(ran):
+        raise SystemExit("--collect: no %s: run run_driver.sh in that folder first" % ran)
+    with open(ran) as f:
+        facts = json.load(f)
+    meta.update(machine=facts["machine"], jobs=facts["jobs"], wall_total=facts["wall_total"])
+    a.threads = int(facts["threads"]) if facts["threads"].isdigit() else os.cpu_count() or 1
+    meta["failed"] = []
+    for hmm in a.sizeList:
+        for ratio in a.ratioList:
+            folder = os.path.join(a.out, runName(hmm, ratio))
+            try:
+                with open(os.path.join(folder, "prepared.json")) as f:
+                    prepared = json.load(f)
+                series, run = readDriver(folder, prepared)
+            except (OSError, RuntimeError, KeyError) as e:
+                meta["failed"].append((hmm, ratio, str(e)))
+                continue
+            writeResult(a, hmm, ratio, folder, series, run, None, None)
+    with open(metaPath, "w") as f:
+        json.dump(meta, f, indent=1)
+    return meta
 
 
 def main(argv):
@@ -537,7 +687,11 @@ def main(argv):
         return child(a)
     a.out = os.path.abspath(a.out)
     metaPath = os.path.join(a.out, "sweep.json")
-    if a.report_only:
+    if a.prepare:
+        return prepareAll(a, argv, metaPath)
+    if a.collect:
+        meta = collectDriverRuns(a, metaPath)
+    elif a.report_only:
         # the facts of the sweep that made the results, not of this read-out
         meta = {"command": "(not recorded)", "commit": "?", "machine": "?", "jobs": a.jobs, "failed": []}
         if os.path.exists(metaPath):
@@ -567,7 +721,7 @@ def main(argv):
     if meta.get("wall_total"):
         print("whole sweep: %.1f min wall" % (meta["wall_total"] / 60))
     if a.markdown:
-        writeMarkdown(a.markdown, section(results, meta))
+        writeMarkdown(a.markdown, section(results, meta), a.dx)
         print("generated section written to %s" % a.markdown)
     if a.plot:
         plot(results, a.plot)

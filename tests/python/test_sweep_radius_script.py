@@ -1,0 +1,82 @@
+"""scripts/bench/tradeoff_sweep_radius.py run in two places: scenes prepared here, run by their
+run_driver.sh (as on a GPU machine without YADE), collected here, must give the results of the
+same runs made by the script's own driver path, and a run that never ran is reported as such."""
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+import mpmsdem
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCRIPT = os.path.join(ROOT, "scripts", "bench", "tradeoff_sweep_radius.py")
+COMMON = ["--engine", "driver", "--sizes", "20", "--ratios", "1/20,1/8", "--duration", "0.26", "--window", "0.2",
+          "0.25"]
+
+
+def driverExe():
+    exe = os.environ.get("MPMSDEM_RUN") or os.path.join(os.path.dirname(os.path.abspath(mpmsdem.__file__)),
+                                                         "..", "..", "mpmsdem-run")
+    if not os.path.exists(exe):
+        pytest.skip("mpmsdem-run not found next to the build's Python package (set MPMSDEM_RUN)")
+    return os.path.abspath(exe)
+
+
+def script(*args, **env):
+    p = subprocess.run([sys.executable, SCRIPT] + list(args), capture_output=True, text=True,
+                       env=dict(os.environ, OMP_NUM_THREADS="1", **env))
+    return p.returncode, p.stdout + p.stderr
+
+
+def results(out):
+    with open(os.path.join(out, "results.json")) as f:
+        return {r["ratio_label"]: r for r in json.load(f)}
+
+
+def test_prepared_runs_collected_equal_the_direct_driver_runs(tmp_path):
+    exe = driverExe()
+    direct, remote = str(tmp_path / "direct"), str(tmp_path / "remote")
+    rc, log = script(*COMMON, "--exe", exe, "--out", direct)
+    assert rc == 0, log
+    rc, log = script(*COMMON, "--prepare", "--out", remote)
+    assert rc == 0, log
+    run = subprocess.run([os.path.join(remote, "run_driver.sh")], capture_output=True, text=True,
+                         env=dict(os.environ, MPMSDEM_RUN=exe, JOBS="2", OMP_NUM_THREADS="1"))
+    assert run.returncode == 0 and run.stdout.count(" done") == 2, run.stdout + run.stderr
+    rc, log = script(*COMMON, "--collect", "--out", remote, "--markdown", str(tmp_path / "t.md"))
+    assert rc == 0, log
+    a, b = results(direct), results(remote)
+    assert sorted(a) == sorted(b) == ["1/20", "1/8"]
+    for k in a:
+        # the cube is hit at 0.24 s: the runs carry a peak force and a travel to compare
+        assert a[k]["peak_force"] > 1.0 and a[k]["first_touch"] == pytest.approx(0.24, abs=0.01)
+        for field in ("travel", "peak_force", "peak_time", "max_rotation_deg", "max_rise", "first_touch",
+                      "contact_step_min", "steps"):
+            assert b[k][field] == a[k][field], (k, field)  # same driver, same scene: same bits
+    with open(str(tmp_path / "t.md")) as f:
+        text = f.read()
+    assert "MPM cpu-double" in text and "dx 0.02 m" in text
+
+
+def test_a_run_that_never_ran_is_reported_not_invented(tmp_path):
+    exe = driverExe()
+    out = str(tmp_path / "remote")
+    rc, log = script(*COMMON, "--prepare", "--out", out)
+    assert rc == 0, log
+    subprocess.run([os.path.join(out, "run_driver.sh")], capture_output=True, text=True,
+                   env=dict(os.environ, MPMSDEM_RUN=exe, OMP_NUM_THREADS="1"), check=True)
+    os.remove(os.path.join(out, "h20_r1-8", "driver.log"))
+    rc, log = script(*COMMON, "--collect", "--out", out, "--markdown", str(tmp_path / "t.md"))
+    assert rc == 1, log  # a failed run fails the sweep
+    assert list(results(out)) == ["1/20"]
+    with open(str(tmp_path / "t.md")) as f:
+        assert "R/h_b 1/8: **failed**: not run (no driver.log)" in f.read()
+
+
+def test_prepare_refuses_the_yade_engine_and_a_grid_out_of_range(tmp_path):
+    rc, log = script("--prepare", "--out", str(tmp_path))
+    assert rc == 2 and "--prepare and --collect are for --engine driver" in log
+    rc, log = script("--engine", "driver", "--prepare", "--dx", "0.04", "--out", str(tmp_path))
+    assert rc == 2 and "--dx = 0.04 m: must be in [0.005, 0.02]" in log
