@@ -245,7 +245,7 @@ std::string stageSplit(const coupling::CoupledWorld& world, double loopSeconds) 
 // What a benchmark run did to each moving block, so that backends and precisions can be
 // compared on physics as well as speed without output files: the start and end of its centroid,
 // its end velocity, the angle it turned, and the largest flow force on it (|F| and the x
-// component, the downstream force in a flume's frame) with when it came.
+// component, the downstream force in a flume's frame) with when it came (null: no such force).
 class BlockRecord {
  public:
   explicit BlockRecord(const sdem::SdemEngine& e) {
@@ -262,12 +262,13 @@ class BlockRecord {
   nlohmann::json summary(const sdem::SdemEngine& e) const {
     nlohmann::json out = nlohmann::json::array();
     const auto vec = [](const Vec3& v) { return nlohmann::json{v.x(), v.y(), v.z()}; };
+    const auto when = [](double peak, double t) { return peak > 0 ? nlohmann::json(t) : nlohmann::json(); };
     for (const Block& b : blocks_) {
       const double turned = e.orientation(b.index).angularDistance(b.ori0);
       out.push_back({{"block", b.index}, {"start", vec(b.pos0)}, {"end", vec(e.position(b.index))},
                      {"velocity", vec(e.velocity(b.index))}, {"rotation_deg", turned * 180 / M_PI},
-                     {"peak_flow_force", b.peak}, {"peak_flow_force_time", b.peakTime},
-                     {"peak_flow_force_x", b.peakX}, {"peak_flow_force_x_time", b.peakXTime}});
+                     {"peak_flow_force", b.peak}, {"peak_flow_force_time", when(b.peak, b.peakTime)},
+                     {"peak_flow_force_x", b.peakX}, {"peak_flow_force_x_time", when(b.peakX, b.peakXTime)}});
     }
     return out;
   }

@@ -94,6 +94,20 @@ def test_driver_matches_yade_for_the_same_coupled_scene(tmp_path):
     assert np.abs(d["rotation"][:, 6:8]).max() == 0
     assert np.abs(d["rotation"][:, 8]).max() > 1e-4
     assert np.abs(d["pos"][:, 0:3] - d["pos"][0, 0:3]).max() == 0
+    # --bench writes nothing but sums each moving block up: the same steps, so the records'
+    # last pose and, over records taken every step, the largest flow force and its time
+    r = subprocess.run([exe, path, "--steps", str(steps), "--bench"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    bench = json.loads(r.stdout.strip().splitlines()[-1])
+    assert [b["block"] for b in bench["moving_blocks"]] == [1, 2]  # the fixed bed is left out
+    for b in bench["moving_blocks"]:
+        c = slice(3 * b["block"], 3 * b["block"] + 3)
+        assert b["start"] == d["pos"][0, c].tolist() and b["end"] == d["pos"][-1, c].tolist()
+        assert b["rotation_deg"] == pytest.approx(np.degrees(np.linalg.norm(d["rotation"][-1, c])), rel=1e-9)
+        f = np.linalg.norm(d["flow_force"][:, c], axis=1)
+        assert b["peak_flow_force"] == f.max() and b["peak_flow_force_time"] == d["time"][f.argmax()]
+        fx = d["flow_force"][:, c][:, 0]
+        assert b["peak_flow_force_x"] == fx.max() and b["peak_flow_force_x_time"] == d["time"][fx.argmax()]
 
 
 def test_driver_runs_a_coupled_scene_without_particles_as_yade_does(tmp_path):
