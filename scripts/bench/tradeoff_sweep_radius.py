@@ -72,6 +72,8 @@ SAMPLE = 0.002              # record interval [s], as flume_block.py's coupled r
 SMOOTH = 0.01               # moving mean of F_t for the peak [s] (docs/coupled-results.md)
 REFERENCE_RATIO = 1.0 / 20  # the paper's recommended R/h_b: the cost reference
 DX_RANGE = (0.005, 0.02)    # m: coarser than the coarse scene leaves the 20 mm cube inside one cell
+SIZE_RANGE = (0.0, 100.0)   # mm: a cube wider than half the 0.2 m flume would be another scene
+RATIO_RANGE = (0.0, 0.5)    # R must stay below half the side (a box core of positive size)
 
 
 def markers(dx):
@@ -79,8 +81,6 @@ def markers(dx):
     tag = "" if dx == DX else " --dx %g" % dx
     return ("<!-- tradeoff_sweep_radius.py%s: begin generated section -->" % tag,
             "<!-- tradeoff_sweep_radius.py%s: end generated section -->" % tag)
-SIZE_RANGE = (0.0, 100.0)   # mm: a cube wider than half the 0.2 m flume would be another scene
-RATIO_RANGE = (0.0, 0.5)    # R must stay below half the side (a box core of positive size)
 
 
 # ---------------------------------------------------------------------------------------- input
@@ -295,7 +295,8 @@ def prepareDriver(a, h, ratio, folder):
     base = O.dt
     sc = buildScene(ex, h, ratio, base, a.dx)
     prepared = {"cube_index": sc.sdem.ids.index(sc.blockIds[0]), "cube_mass": float(O.bodies[sc.blockIds[0]].state.mass),
-                "dt": base, "particles": int(sc.mpm.numParticles), "backend": a.backend, "precision": a.precision}
+                "dt": base, "particles": int(sc.mpm.numParticles), "backend": a.backend, "precision": a.precision,
+                "dx": a.dx, "duration": a.duration}
     mpmsdem.driver.writeScene(os.path.join(folder, "scene.json"), sc.coupled, duration=a.duration, dt=base,
                               outputDir="driver", outputEvery=a.duration, seriesEvery=SAMPLE, vtk="none",
                               backend=a.backend, precision=a.precision)
@@ -338,16 +339,12 @@ def readDriver(folder, prepared, cpuSeconds=None):
                     "end_time": float(done.group(1))}
 
 
-def driverCommand(exe, a):
-    return [exe, "scene.json", "--backend", a.backend, "--precision", a.precision]
-
-
 def runDriver(a, h, ratio, folder):
     import resource
     prepared = prepareDriver(a, h, ratio, folder)
     env = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
     cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    p = subprocess.run(driverCommand(a.exe, a), capture_output=True, text=True, env=env, cwd=folder)
+    p = subprocess.run([a.exe, "scene.json"], capture_output=True, text=True, env=env, cwd=folder)
     cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     with open(os.path.join(folder, "driver.log"), "w") as f:
         f.write(p.stdout + p.stderr)
@@ -671,6 +668,10 @@ def collectDriverRuns(a, metaPath):
             try:
                 with open(os.path.join(folder, "prepared.json")) as f:
                     prepared = json.load(f)
+                for name, value in (("dx", a.dx), ("duration", a.duration)):
+                    if prepared[name] != value:  # the results would be labelled with the wrong run's settings
+                        raise SystemExit("--collect: --%s = %g, but %s was prepared with %g: give the value of "
+                                         "--prepare" % (name, value, folder, prepared[name]))
                 series, run = readDriver(folder, prepared)
             except (OSError, RuntimeError, KeyError) as e:
                 meta["failed"].append((hmm, ratio, str(e)))

@@ -60,13 +60,16 @@ def test_prepared_runs_collected_equal_the_direct_driver_runs(tmp_path):
     assert "MPM cpu-double" in text and "dx 0.02 m" in text
 
 
-def test_a_run_that_never_ran_is_reported_not_invented(tmp_path):
+def test_a_run_that_never_ran_is_reported_not_invented_nor_relabelled(tmp_path):
     exe = driverExe()
     out = str(tmp_path / "remote")
     rc, log = script(*COMMON, "--prepare", "--out", out)
     assert rc == 0, log
     subprocess.run([os.path.join(out, "run_driver.sh")], capture_output=True, text=True,
                    env=dict(os.environ, MPMSDEM_RUN=exe, OMP_NUM_THREADS="1"), check=True)
+    other = [v if v != "0.26" else "0.3" for v in COMMON]
+    rc, log = script(*other, "--collect", "--out", out)
+    assert rc == 1 and "--collect: --duration = 0.3, but" in log and "prepared with 0.26" in log, log
     os.remove(os.path.join(out, "h20_r1-8", "driver.log"))
     rc, log = script(*COMMON, "--collect", "--out", out, "--markdown", str(tmp_path / "t.md"))
     assert rc == 1, log  # a failed run fails the sweep
