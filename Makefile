@@ -4,8 +4,9 @@
 PY       ?= /usr/bin/python3
 BUILD    ?= build
 JOBS     ?= $(shell nproc)
-YADE_PY  := $(shell ls -d /usr/lib/x86_64-linux-gnu/yade-double/py 2>/dev/null || ls -d /usr/lib/*/yade*/py 2>/dev/null | head -1)
-export PYTHONPATH := $(CURDIR)/$(BUILD)/python:$(YADE_PY)$(if $(PYTHONPATH),:$(PYTHONPATH))
+# The build's package comes first. YADE's folder is not added: `import mpmsdem` finds it, as in a
+# user's script (a folder computed here would be computed before `deps` installs YADE).
+export PYTHONPATH := $(CURDIR)/$(BUILD)/python$(if $(PYTHONPATH),:$(PYTHONPATH))
 export OMP_NUM_THREADS ?= $(JOBS)
 
 .PHONY: all deps configure build install demo test test-cpp test-py checks bench bench-peers bench-scene-needs bench-coupling bench-memory clean

@@ -63,8 +63,8 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=1.0, maxFre
     :param output: folder for the coupled run's HDF5 and ParaView files (default none).
     :param backend, precision: MPM backend ("cpu"/"cuda") and precision ("double"/"float").
     """
+    import mpmsdem  # before yade: it finds YADE's folder in a plain python3
     from yade import O
-    import mpmsdem
     from mpmsdem import analysis
     from mpmsdem.flume import Block, Flume
     if not (AR > 0 and L0_hb > 0):
@@ -130,6 +130,7 @@ def caseName(AR, L0_hb, full=0):
 
 def readTable(path):
     """The table's lines as parameter dicts (read as yade-batch reads them)."""
+    import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
     from yade.utils import TableParamReader
     rows = []
     for _, row in sorted(TableParamReader(path).paramDict().items()):
@@ -194,6 +195,7 @@ def main(argv):
     a = parse(argv)
     if a.sweep:
         return sweepMain(a)
+    import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
     from yade import utils
     # Table columns beyond AR, L0_hb and full are optional; 0 means runCase's default.
     utils.readParamsFromTable(AR=a.AR or 1.3, L0_hb=a.L0_hb or 4, full=1 if a.full else 0, dx=0, ppc=0, settle=1.5,

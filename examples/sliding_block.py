@@ -14,15 +14,14 @@ import json
 import math
 import os
 
+import mpmsdem  # first: it finds YADE's Python folder when run by a plain python3
+from mpmsdem import analysis
 from yade import O, utils
 from yade.minieigenHP import Vector3
 from yade.wrapper import ForceResetter, NewtonIntegrator
 
 utils.readParamsFromTable(theta=30.0, mu=0.1, duration=2.0, dt=5e-5, output=0, noTableOk=True)
 from yade.params import table  # noqa: E402
-
-import mpmsdem  # noqa: E402
-from mpmsdem import analysis  # noqa: E402
 
 H, R, RHO, KC = 0.1, 0.005, 3000.0, 1e4
 name = "sliding_theta=%g_mu=%g" % (table.theta, table.mu)

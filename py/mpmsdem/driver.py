@@ -17,6 +17,8 @@ tests/python/test_driver_blocks.py). Schema: pkg/coupling/CoupledScene.hpp.
 """
 import json
 import math
+import os
+import shutil
 
 from yade import O
 
@@ -99,6 +101,26 @@ def writeScene(path, coupled, duration, dt="auto", **run):
     with open(path, "w") as f:
         json.dump(scene, f, allow_nan=False)
     return path
+
+
+def executable():
+    """Path of the ``mpmsdem-run`` that belongs to this package: ``$MPMSDEM_RUN`` if set, else
+    the one beside the package in a build folder (``build/mpmsdem-run`` for
+    ``build/python/mpmsdem``), else the one on the PATH (``make install`` puts it in
+    /usr/local/bin). FileNotFoundError when there is none."""
+    env = os.environ.get("MPMSDEM_RUN")
+    if env:
+        if not (os.path.isfile(env) and os.access(env, os.X_OK)):
+            raise FileNotFoundError("MPMSDEM_RUN = %s: not an executable file (the mpmsdem-run driver)" % env)
+        return os.path.abspath(env)
+    beside = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "mpmsdem-run"))
+    if os.path.isfile(beside) and os.access(beside, os.X_OK):
+        return beside
+    found = shutil.which("mpmsdem-run")
+    if found:
+        return os.path.abspath(found)
+    raise FileNotFoundError("mpmsdem-run: not beside this package (%s) nor on the PATH; build and install it "
+                            "(`make install`) or set MPMSDEM_RUN" % beside)
 
 
 def _materialIndex(coupled, yadeId):

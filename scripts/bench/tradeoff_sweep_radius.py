@@ -206,9 +206,9 @@ def buildScene(ex, h, ratio, flipReferenceDt, dx):
 
 
 def runYade(a, h, ratio, folder):
+    import mpmsdem  # before yade: it finds YADE's folder in a plain python3
     from yade import O
     from yade.wrapper import PyRunner
-    import mpmsdem
     ex = loadExample()
     buildScene(ex, h, ratio, 0.0)
     base = O.dt  # the flume's step; the scene is rebuilt to blend α per that step
@@ -288,8 +288,8 @@ def runYade(a, h, ratio, folder):
 def prepareDriver(a, h, ratio, folder):
     """Write the run's driver scene (folder/scene.json, its outputs to folder/driver) and
     folder/prepared.json (what reading its outputs needs); returns the latter."""
+    import mpmsdem.driver  # before yade: it finds YADE's folder in a plain python3
     from yade import O
-    import mpmsdem.driver
     ex = loadExample()
     buildScene(ex, h, ratio, 0.0, a.dx)
     base = O.dt

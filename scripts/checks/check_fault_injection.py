@@ -109,11 +109,11 @@ def buildCoupled(out):
 
 
 def driverExe():
-    exe = os.environ.get("MPMSDEM_RUN") or os.path.join(os.path.dirname(os.path.abspath(mpmsdem.__file__)), "..",
-                                                         "..", "mpmsdem-run")
-    if not os.access(exe, os.X_OK):
-        sys.exit("check_fault_injection: no mpmsdem-run at %s (set MPMSDEM_RUN)" % exe)
-    return exe
+    import mpmsdem.driver
+    try:
+        return mpmsdem.driver.executable()
+    except FileNotFoundError as e:
+        sys.exit("check_fault_injection: %s" % e)
 
 
 def driverScene(root):

@@ -73,6 +73,7 @@ def test_recovers_sdem_block_friction_from_eq19_travel(tmp_path):
 
 
 def test_resume_after_kill_runs_only_the_rest_and_finds_the_same_optimum(tmp_path):
+    import children
     from mpmsdem import calibrate
     refLog = str(tmp_path / "ref.log")
     ref = calibrate.calibrate(task("launched"), store=str(tmp_path / "ref.jsonl"), fixed={"log": refLog},
@@ -85,7 +86,7 @@ def test_resume_after_kill_runs_only_the_rest_and_finds_the_same_optimum(tmp_pat
     code = ("from mpmsdem import calibrate\ncalibrate.calibrate(%r, store=%r, fixed={'log': %r}, progress=False, **%r)"
             % (task("launched"), store, log, SETTINGS))
     proc = subprocess.Popen([sys.executable, "-c", code], start_new_session=True, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE)
+                            stderr=subprocess.PIPE, env=children.env())
     deadline = time.time() + 60
     while lines(store) < n // 3 and proc.poll() is None and time.time() < deadline:
         time.sleep(0.02)
@@ -148,6 +149,7 @@ def test_bad_arguments_named(tmp_path):
 
 
 def test_flume_example_refuses_bad_arguments_before_running(tmp_path):
+    import children
     root = os.path.join(os.path.dirname(HERE), "..", "..")
     script = os.path.join(root, "examples", "calibrate_flume.py")
     for args, message in ((["--param", "mu_2=0.3:0.8"], "--target is required"),
@@ -155,6 +157,6 @@ def test_flume_example_refuses_bad_arguments_before_running(tmp_path):
                            "bounds: unknown parameter 'mu2' of task"),
                           (["--target", "travel"], "--target 'travel': must be NAME=VALUE")):
         proc = subprocess.run([sys.executable, script, "--out", str(tmp_path)] + args, capture_output=True, text=True,
-                              timeout=60)
+                              timeout=60, env=children.env())
         assert proc.returncode != 0 and message in proc.stderr, (args, proc.stderr[-1000:])
     assert not os.path.exists(os.path.join(tmp_path, "runs.jsonl"))

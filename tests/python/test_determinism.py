@@ -57,6 +57,7 @@ def coupledScene(out):
 
 
 def _child(kind, out):
+    import mpmsdem  # noqa: F401  (finds YADE, as a user's script does: no YADE folder on PYTHONPATH here)
     from yade import O
     os.makedirs(out, exist_ok=True)
     eng = {"sdem": sdemScene, "coupled": coupledScene}[kind](out)
@@ -74,8 +75,9 @@ def _child(kind, out):
 
 
 def _run(kind, out, threads):
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
-    r = subprocess.run([sys.executable, os.path.abspath(__file__), kind, str(out)], env=env, capture_output=True,
+    import children
+    r = subprocess.run([sys.executable, os.path.abspath(__file__), kind, str(out)],
+                       env=children.env(OMP_NUM_THREADS=threads), capture_output=True,
                        text=True, timeout=120)
     assert r.returncode == 0, r.stdout + r.stderr
 

@@ -16,6 +16,8 @@ from mpmsdem import driver
 from yade import O
 from yade.wrapper import ForceResetter, NewtonIntegrator
 
+import children
+
 h5py = pytest.importorskip("h5py")
 
 GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
@@ -23,11 +25,7 @@ G = (0, 0, -9.81)
 
 
 def driver_exe():
-    exe = os.environ.get("MPMSDEM_RUN") or os.path.join(os.path.dirname(os.path.abspath(mpmsdem.__file__)),
-                                                         "..", "..", "mpmsdem-run")
-    if not os.path.exists(exe):
-        pytest.skip("mpmsdem-run not found next to the build's Python package (set MPMSDEM_RUN)")
-    return exe
+    return mpmsdem.driver.executable()
 
 
 def scene(out, stiffness=None, velocity=(1.0, 0, 0), blob=True):
@@ -328,7 +326,7 @@ def test_stored_flume_scenes_are_what_the_example_writes(tmp_path, name, flags):
     written = str(tmp_path / name)
     proc = subprocess.run([sys.executable, os.path.join(repo, "examples", "flume_block.py"), *flags,
                            "--driver-scene", written, "--out", stored["run"]["output_dir"]],
-                          capture_output=True, text=True)
+                          capture_output=True, text=True, env=children.env())
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
     stored.pop("description")
     difference = same_values(json.load(open(written)), stored)

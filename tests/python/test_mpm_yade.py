@@ -147,10 +147,8 @@ def test_checkpoint_restart_reproduces_the_run_exactly(tmp_path):
 def test_driver_restart_appends_and_reproduces(tmp_path):
     import json
     import subprocess
-    exe = os.environ.get("MPMSDEM_RUN") or os.path.join(os.path.dirname(os.path.abspath(mpmsdem.__file__)),
-                                                         "..", "..", "mpmsdem-run")
-    if not os.path.exists(exe):
-        pytest.skip("mpmsdem-run not found next to the build's Python package (set MPMSDEM_RUN)")
+    import mpmsdem.driver
+    exe = mpmsdem.driver.executable()
     h5py = pytest.importorskip("h5py")
     scene = {"grid": {"dx": 0.02, "cells": [20, 6, 14], "origin": [-0.04, -0.04, -0.04]}, "walls": {"-z": 0.4},
              "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.38, "mu_2": 0.64},

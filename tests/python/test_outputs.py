@@ -158,7 +158,8 @@ def test_a_coupled_h5_damaged_by_a_kill_is_replaced_on_restore(tmp_path, before)
               "coupled, cube = test_outputs._coupledScene(%r)\nif %d: mpmsdem.run(%d, coupled)\n"
               "mpmsdem.saveCheckpoint(%r, coupled)\nmpmsdem.run(100, coupled)\nos._exit(0)\n"
               % (os.path.dirname(os.path.abspath(__file__)), str(out), before, before, str(ck)))
-    subprocess.run([sys.executable, "-c", killed], check=True, capture_output=True)
+    import children
+    subprocess.run([sys.executable, "-c", killed], check=True, capture_output=True, env=children.env())
     assert (out / "coupled.h5.restart").exists() == bool(before)
     h5 = out / "coupled.h5"
     with h5py.File(h5, "r", locking=False) as f:

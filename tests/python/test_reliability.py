@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import mpmsdem
+import mpmsdem.driver
 from yade import O
 from yade.minieigenHP import Vector3
 from yade.wrapper import ForceResetter, NewtonIntegrator
@@ -133,11 +134,7 @@ def test_checkpoint_restores_from_another_folder_without_the_mesh_file(tmp_path,
 
 # ---------------------------------------------------------------- 4. driver restart, same scene
 def _driver():
-    exe = os.environ.get("MPMSDEM_RUN") or os.path.join(os.path.dirname(os.path.abspath(mpmsdem.__file__)),
-                                                         "..", "..", "mpmsdem-run")
-    if not os.path.exists(exe):
-        pytest.skip("mpmsdem-run not found next to the build's Python package (set MPMSDEM_RUN)")
-    return exe
+    return mpmsdem.driver.executable()
 
 
 SCENE = {"grid": {"dx": 0.02, "cells": [12, 6, 10], "origin": [-0.04, -0.04, -0.04]},
@@ -281,7 +278,8 @@ def test_runner_of_a_scene_loaded_elsewhere_says_how_to_rebuild(tmp_path):
     O.save(str(tmp_path / "scene.yade.gz"))
     code = ("import mpmsdem\nfrom yade import O\nO.load(%r)\ntry:\n    O.run(1, True)\nexcept Exception as e:\n"
             "    print('ERROR', e)\n" % str(tmp_path / "scene.yade.gz"))
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    import children
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, env=children.env())
     text = r.stdout + r.stderr
     assert "not registered in this process" in text and "SdemEngine.restore" in text, text
     assert "NameError" not in text, text

@@ -210,6 +210,7 @@ def test_parametric_study_summary_on_known_data(tmp_path):
     """The summary script reads a sweep store and per-job JSON files (yade-batch), splits the
     cases by submersion, leaves a cube stopped by the flume's end out of the travel fits and
     reproduces the fits of runs made up from known laws."""
+    import children
     import numpy as np
     import pytest
     from mpmsdem import analysis, sweep
@@ -236,7 +237,7 @@ def test_parametric_study_summary_on_known_data(tmp_path):
         with open(out / ("AR=%g_L0hb=%g.json" % (r["AR"], r["L0_hb"])), "w") as f:
             json.dump(r, f)
     proc = subprocess.run([sys.executable, os.path.join(ROOT, "examples", "parametric_study_summary.py"),
-                           "--results", str(out)], capture_output=True, text=True, timeout=120)
+                           "--results", str(out)], capture_output=True, text=True, timeout=120, env=children.env())
     assert proc.returncode == 0, proc.stdout + proc.stderr
     fits = json.load(open(out / "fits.json"))
     assert fits["runs"] == 20 and fits["cube_at_end"] == 1 and os.path.getsize(out / "parametric_study.png") > 10000

@@ -9,6 +9,9 @@ import sys
 import pytest
 
 import mpmsdem
+import mpmsdem.driver
+
+import children
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCRIPT = os.path.join(ROOT, "scripts", "bench", "tradeoff_sweep_radius.py")
@@ -17,16 +20,12 @@ COMMON = ["--engine", "driver", "--sizes", "20", "--ratios", "1/20,1/8", "--dura
 
 
 def driverExe():
-    exe = os.environ.get("MPMSDEM_RUN") or os.path.join(os.path.dirname(os.path.abspath(mpmsdem.__file__)),
-                                                         "..", "..", "mpmsdem-run")
-    if not os.path.exists(exe):
-        pytest.skip("mpmsdem-run not found next to the build's Python package (set MPMSDEM_RUN)")
-    return os.path.abspath(exe)
+    return mpmsdem.driver.executable()
 
 
 def script(*args, **env):
     p = subprocess.run([sys.executable, SCRIPT] + list(args), capture_output=True, text=True,
-                       env=dict(os.environ, OMP_NUM_THREADS="1", **env))
+                       env=children.env(OMP_NUM_THREADS=1, **env))
     return p.returncode, p.stdout + p.stderr
 
 
