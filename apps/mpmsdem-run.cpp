@@ -312,6 +312,7 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
                         {"particle_updates_per_s", n * double(solver.steps()) / seconds},
                         {"bytes_per_particle", n ? double(solver.memoryBytes()) / n : 0.0},
                         {"threads", omp_get_max_threads()},
+                        {"flip_blend", mpm::describeFlipBlend(scene.params)},
                         {"blocks", st.coupled ? st.coupled->world.engine.numBodies() : 0}};
   if (st.coupled) {
     const auto& s = st.coupled->stageSeconds();
@@ -364,7 +365,21 @@ void checkRestartScene(const MpmScene& scene, const std::string& h5) {
   }
   std::vector<std::string> diff;
   sceneDifferences(nlohmann::json::parse(stored), nlohmann::json::parse(scene.sourceJson), "", diff);
-  if (diff.empty()) return;
+  if (diff.empty()) {
+    // The same scene text means the same blend only if the defaults are the same: a file from
+    // before the blend was recorded ran the per-step default when its scene named none.
+    std::string blend;
+    try {
+      blend = io::readStringAttribute(h5, "flip_blend");
+    } catch (const RuntimeFailure&) {
+      blend = "(not recorded: written before the FLIP/PIC blend became per unit time)";
+    }
+    if (blend != mpm::describeFlipBlend(scene.params))
+      throw ParameterError("--restart: the run in " + h5 + " blended FLIP/PIC as " + blend + ", this scene as " +
+                           mpm::describeFlipBlend(scene.params) + ": continuing it would glue two different flows " +
+                           "into one output. Start a new run in another output folder (--out).");
+    return;
+  }
   std::string changed, free;
   for (const auto& d : diff) changed += (changed.empty() ? "" : ", ") + d;
   for (const char* f : kRestartFree) free += (free.empty() ? "" : ", ") + std::string(f);
@@ -408,9 +423,8 @@ class OutputRun {
       }
       checkpoints_ = scene.run.backend == Backend::Cpu;
     }
-    h5_.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
-    h5_.setAttribute("parameters", scene.sourceJson);
-    h5_.setAttribute("solver", solver_.name());
+    io::writeMpmHeader(h5_, scene.sourceJson, scene.params, solver_.name());
+    if (coupled_) coupled_->h5().setAttribute("flip_blend", mpm::describeFlipBlend(scene.params));
   }
 
   int run(long maxSteps) {
@@ -430,6 +444,7 @@ class OutputRun {
     double nextReport = std::floor(progressFraction(solver_, run, maxSteps, firstStep) / 0.05 + 1) * 0.05;
     const auto t0 = Clock::now();
     const bool byTime = maxSteps == 0;
+    std::printf("mpmsdem-run: FLIP/PIC blend %s\n", mpm::describeFlipBlend(scene_.params).c_str());
     std::printf("mpmsdem-run: %s, %zu particles, %s, output in %s\n", solver_.name().c_str(), n,
                 byTime ? ("duration " + std::to_string(run.duration) + " s").c_str()
                        : (std::to_string(maxSteps) + " steps").c_str(),

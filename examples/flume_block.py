@@ -27,6 +27,7 @@ import mpmsdem
 import mpmsdem.driver
 from mpmsdem import analysis
 from mpmsdem.flume import Block, Flume
+from mpmsdem.mpm import PAPER_STEP
 
 HB = 0.02          # cube side h_b [m]
 L0 = 0.21          # from the column front (the gate) to the cube's upstream face [m] (our reading of §3.2)
@@ -51,6 +52,12 @@ def parse(argv):
     return ap.parse_known_args(argv)[0]
 
 
+def blend(a):
+    """The flow's blend reference step: the paper's (α 0.99 per 5e-6 s, 2010 /s) at the paper's
+    resolution, the scene default (201 /s) on the coarse grid (docs/physics.md)."""
+    return PAPER_STEP if a.full else None
+
+
 def settings(a):
     dx = a.dx or (0.01 if a.full else 0.02)
     duration = a.duration or (2.0 if a.full else 1.2)
@@ -62,7 +69,7 @@ def settings(a):
 def freeFlow(dx, a, verbose=True):
     """The flume without the cube until the front has passed the cube's station."""
     station = COLUMN + L0
-    scene = Flume(dx=dx, backend=a.backend, precision=a.precision, verbose=verbose)
+    scene = Flume(dx=dx, backend=a.backend, precision=a.precision, verbose=verbose, flipReferenceDt=blend(a))
     probe = analysis.FlowProbe(station, halfWidth=dx, bedZ=0.0, L0=L0, window=0.05)
     from yade import O
     while True:
@@ -77,7 +84,8 @@ def freeFlow(dx, a, verbose=True):
 
 def coupled(dx, duration, a, out, verbose=True):
     cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=0.67, flowFriction=0.21)
-    scene = Flume(dx=dx, blocks=[cube], backend=a.backend, precision=a.precision, output=out, outputEvery=0.01,
+    scene = Flume(dx=dx, blocks=[cube], backend=a.backend, precision=a.precision, flipReferenceDt=blend(a),
+                  output=out, outputEvery=0.01,
                   vtkEvery=0.05, verbose=verbose)
     scene.run(duration, sampleEvery=0.002)
     return scene
@@ -127,7 +135,8 @@ def driverScene(dx, duration, a):
     """Write the coupled scene as the C++ driver's JSON (mpmsdem.driver.writeScene)."""
     from yade import O
     cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=0.67, flowFriction=0.21)
-    scene = Flume(dx=dx, blocks=[cube], backend=a.backend, precision=a.precision, verbose=False)
+    scene = Flume(dx=dx, blocks=[cube], backend=a.backend, precision=a.precision, verbose=False,
+                  flipReferenceDt=blend(a))
     mpmsdem.driver.writeScene(a.driver_scene, scene.coupled, duration=duration, dt=O.dt, outputDir=a.out,
                               outputEvery=0.05, seriesEvery=0.002)
     print("driver scene for the cube in the flume (dx %g m, %d material points, O.dt %.3g s, %g s) written to %s: "
@@ -161,13 +170,15 @@ def fromDriver(a):
     """Plot and summarise a driver run of this scene (e.g. one made on a GPU machine)."""
     import numpy as np
     s, scene = driverSeries(a.from_driver)
+    import h5py
+    with h5py.File(os.path.join(a.from_driver, "mpm.h5"), "r") as f:
+        blend = f.attrs.get("flip_blend", "not recorded (written before the blend was recorded: alpha per step)")
     w = max(1, int(round(0.01 / np.median(np.diff(s["t"])))))
     smooth = np.convolve(s["Ft"], np.ones(w) / w, mode="same")
     j = int(np.argmax(smooth))
     summary = {"dx": scene["grid"]["dx"], "duration": float(s["t"][-1]), "travel": float(s["travel"][-1]),
                "peak_force": float(smooth[j]), "peak_time": float(s["t"][j]), "rotation_deg": float(s["rotation"][-1]),
-               "dt": scene["run"].get("dt"), "flip_alpha": scene.get("flip_alpha", 0.99),
-               "flip_reference_dt": scene.get("flip_reference_dt", 0)}
+               "dt": scene["run"].get("dt"), "flip_blend": blend}
     with open(os.path.join(a.from_driver, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     if not a.no_plots:
@@ -200,7 +211,9 @@ def main(argv):
     peak, tPeak = scene.peakForce(0, smooth=0.01)
     s = scene.series(0)
     A = min(ff["h_f"], HB) * HB
-    summary = {"dx": dx, "particles": scene.mpm.numParticles, "duration": duration, "free_flow": ff,
+    from yade import O
+    summary = {"dx": dx, "particles": scene.mpm.numParticles, "duration": duration, "dt": O.dt,
+               "flip_blend": scene.flipBlend(), "free_flow": ff,
                "travel": scene.travel(0), "peak_force": peak, "peak_time": tPeak,
                "rotation_deg": float(s["rotation"][-1]),
                "eq20_force": analysis.hydrodynamicForce(1600.0, ff["v_f"], ff["h_f"], A),

@@ -56,6 +56,7 @@ import time
 import mpmsdem
 from mpmsdem import analysis
 from mpmsdem.flume import Block, Flume
+from mpmsdem.mpm import PAPER_STEP, flipReferenceArg
 
 LENGTH, WIDTH = 0.6, 0.2                  # flume [m]
 COLUMN_L, COLUMN_H = 0.1, 0.2             # L_i, H_i [m]
@@ -81,7 +82,11 @@ def parse(argv):
     ap.add_argument("--ppc", type=int, default=None, help="material points per cell (default 1, --full 8)")
     ap.add_argument("--duration", type=float, default=1.0, help="coupled run [s] (default 1.0)")
     ap.add_argument("--flow-friction", type=float, default=0.13, help="flow-block friction (default 0.13)")
-    ap.add_argument("--flip-alpha", type=float, default=0.99, help="FLIP/PIC blend of the flow, Eq 4 (default 0.99)")
+    ap.add_argument("--flip-alpha", type=float, default=0.99,
+                    help="FLIP/PIC blend of the flow, Eq 4, kept per --flip-reference-dt (default 0.99)")
+    ap.add_argument("--flip-reference-dt", type=flipReferenceArg, default=None,
+                    help="reference step of the blend [s] > 0 (default: the scene default, 5e-5 s, 201 /s of PIC "
+                         "damping; with --full the paper's 5e-6 s, 2010 /s), or 'step' (alpha per step, Eq 4)")
     ap.add_argument("--out", default="results/liu2018_blocks", help="output folder")
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"))
     ap.add_argument("--precision", default="double", choices=("double", "float"))
@@ -114,6 +119,7 @@ def stackedBlocks(flowFriction=0.13):
 def scene(dx, ppc, a, blocks=(), output=None, verbose=True):
     s = Flume(inclineDeg=0.0, length=LENGTH, width=WIDTH, columnLength=COLUMN_L, columnHeight=COLUMN_H, dx=dx,
               ppc=ppc, granular=GRANULAR, basalFriction=0.13, blocks=blocks, backend=a.backend, flipAlpha=a.flip_alpha,
+              flipReferenceDt=a.flip_reference_dt or (PAPER_STEP if a.full else None),
               precision=a.precision, output=output, outputEvery=0.01, vtkEvery=0.05 if output else None,
               verbose=verbose)
     from yade import O
@@ -239,7 +245,7 @@ def main(argv):
     tCoupled = time.time() - t1
     ev = events(s)
     from yade import O
-    summary = {"dx": dx, "ppc": ppc, "flip_alpha": a.flip_alpha, "precision": a.precision,
+    summary = {"dx": dx, "ppc": ppc, "flip_blend": s.flipBlend(), "precision": a.precision,
                "particles": s.mpm.numParticles, "duration": duration,
                "dt_min": s.extra["dtMin"], "steps": O.iter,
                "flow_friction": a.flow_friction, "free_flow": ff, "eq20_bottom": eq20, "blocks": ev,

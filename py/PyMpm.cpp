@@ -20,6 +20,11 @@ void exportMpm() {
       .def("step", &PyMpm::step, (bp::arg("dt")))
       .def("run", &PyMpm::run, (bp::arg("steps"), bp::arg("dt")))
       .def("stableTimeStep", &PyMpm::stableTimeStep)
+      .def("flipDampingRate", &PyMpm::flipDampingRate, (bp::arg("dt")),
+           "PIC damping rate of a step of length dt [1/s], -ln(blend)/dt: the same at every dt unless the blend is "
+           "per step (flip_reference_dt \"step\").")
+      .add_property("flipBlend", &PyMpm::flipBlend,
+                    "The FLIP/PIC blend in words, e.g. 'alpha 0.99 per 5e-06 s (PIC damping 2010 /s)'.")
       .def("setExternalForces", &PyMpm::setExternalForces, (bp::arg("forces")))
       .def("gateImpulse", &PyMpm::gateImpulse,
            "Impulse the scene's gate has given the material since the solver was built [N s] (x: minus the push of "

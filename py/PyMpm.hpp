@@ -41,6 +41,8 @@ class PyMpm {
   }
   bool holdsLastGoodState() const { return solver_->holdsLastGoodState(); }
   double stableTimeStep() { return solver_->stableTimeStep(); }
+  std::string flipBlend() const { return mpm::describeFlipBlend(scene_.params); }
+  double flipDampingRate(double dt) const { return scene_.params.flipDampingRate(dt); }
   double time() const { return solver_->time(); }
   long steps() const { return solver_->steps(); }
   std::size_t numParticles() const { return solver_->numParticles(); }
@@ -166,9 +168,7 @@ class PyMpm {
     return *g;
   }
   void writeHeader(io::Hdf5Writer& w) const {
-    w.setAttribute("parameters", scene_.sourceJson);
-    w.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
-    w.setAttribute("solver", solver_->name());
+    io::writeMpmHeader(w, scene_.sourceJson, scene_.params, solver_->name());
   }
   void requireOutput() const {
     if (!h5_) throw ParameterError("output: call openOutput(dir) before writing outputs");

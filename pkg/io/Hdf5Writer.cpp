@@ -1,6 +1,7 @@
 #include "io/Hdf5Writer.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -9,6 +10,7 @@
 #include <sstream>
 
 #include "common/Error.hpp"
+#include "mpm/MpmScene.hpp"
 
 namespace mpmsdem {
 namespace io {
@@ -511,6 +513,18 @@ const mpm::ParticleSet& SnapshotSlices::slice(std::size_t first, std::size_t cou
   }
   p.fext.assign(3 * count, 0.0);
   return p;
+}
+
+void writeMpmHeader(Hdf5Writer& w, const std::string& sceneJson, const mpm::MpmParams& params,
+                    const std::string& solverName) {
+  w.setAttribute("parameters", sceneJson);
+  w.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
+  w.setAttribute("solver", solverName);
+  w.setAttribute("flip_alpha", params.flipAlpha);
+  w.setAttribute("flip_reference_dt", params.flipReferenceDt);
+  w.setAttribute("flip_damping_rate", params.flipReferenceDt > 0 ? params.flipDampingRate(params.flipReferenceDt)
+                                                                 : std::numeric_limits<double>::quiet_NaN());
+  w.setAttribute("flip_blend", mpm::describeFlipBlend(params));
 }
 
 std::string readStringAttribute(const std::string& path, const std::string& name) {

@@ -118,6 +118,14 @@ std::string restartCopyPath(const std::string& path);
 // no copy (no commit yet, or a file of a version without commits).
 bool resumeFromCommit(const std::string& path);
 
+// The root attributes of an MPM output or checkpoint: "parameters" (the scene JSON), "units",
+// "solver", and the FLIP/PIC blend it ran with (the damping per second is a model quantity,
+// docs/physics.md): "flip_alpha", "flip_reference_dt" [s] (0: per step), "flip_damping_rate"
+// [1/s] (NaN per step: it then follows the step, see /series/dt) and "flip_blend"
+// (mpm::describeFlipBlend).
+void writeMpmHeader(Hdf5Writer& w, const std::string& sceneJson, const mpm::MpmParams& params,
+                    const std::string& solverName);
+
 // Readers (used for restart and by tests). All throw RuntimeFailure naming the path and
 // the object when the file or the object does not exist.
 

@@ -37,7 +37,7 @@ void validate(const MpmParams& p) {
                    "", "small enough that " + std::to_string(kNodeValues) + " x number of nodes < 2^31");
   if (!(p.flipAlpha >= 0 && p.flipAlpha <= 1)) throwParameter("flipAlpha", p.flipAlpha, "", "in [0, 1]");
   if (!(p.flipReferenceDt >= 0 && std::isfinite(p.flipReferenceDt)))
-    throwParameter("flipReferenceDt", p.flipReferenceDt, "s", ">= 0 and finite (0: alpha per step, Eq 4)");
+    throwParameter("flipReferenceDt", p.flipReferenceDt, "s", "> 0 and finite, or 0 for alpha per step (Eq 4)");
   if (!(p.cfl > 0 && p.cfl <= 1)) throwParameter("cfl", p.cfl, "", "in (0, 1]");
   for (int w = 0; w < 6; ++w)
     if (!std::isfinite(p.walls[w].friction))

@@ -62,6 +62,23 @@ void parseGravity(const json& root, MpmParams& p) {
   p.gravity = {mag * std::sin(a), 0.0, -mag * std::cos(a)};
 }
 
+// A reference step in seconds, or "step" for the blend per step. A bare 0 is refused: it meant
+// "per step" before the default became a reference step, and a scene should say which it wants.
+void parseFlipReferenceDt(const json& root, MpmParams& p) {
+  if (!root.contains("flip_reference_dt")) return;
+  const json& v = root.at("flip_reference_dt");
+  if (v.is_string() && v.get<std::string>() == "step") {
+    p.flipReferenceDt = 0;
+    return;
+  }
+  if (!v.is_number() || !(v.get<double>() > 0) || !std::isfinite(v.get<double>()))
+    throwParameter("flip_reference_dt", v.dump(), "s",
+                   "a step > 0 (flip_alpha is kept per that much simulated time; default 5e-5; the paper's "
+                   "blend is 0.99 per 5e-6) or \"step\" (flip_alpha per step, Eq 4 as written: the damping then "
+                   "changes with the step)");
+  p.flipReferenceDt = v.get<double>();
+}
+
 void parseWalls(const json& root, MpmParams& p) {
   if (!root.contains("walls")) return;
   const json& w = root.at("walls");
@@ -337,8 +354,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   parseGravity(root, s.params);
   s.params.flipAlpha = optNumber(root, "", "flip_alpha", s.params.flipAlpha);
   checkRange("flip_alpha", s.params.flipAlpha, "", 0, false, 1, false);
-  s.params.flipReferenceDt = optNumber(root, "", "flip_reference_dt", s.params.flipReferenceDt);
-  checkRange("flip_reference_dt", s.params.flipReferenceDt, "s", 0, false, kInf, true);
+  parseFlipReferenceDt(root, s.params);
   s.params.cfl = optNumber(root, "", "cfl", s.params.cfl);
   checkRange("cfl", s.params.cfl, "", 0, true, 1, false);
   if (root.contains("keep_last_good_state")) {
@@ -419,6 +435,17 @@ SeededParticles seedParticleSlices(const MpmScene& scene) {
 
 const char* backendName(Backend backend) { return backend == Backend::Cuda ? "cuda" : "cpu"; }
 const char* precisionName(Precision precision) { return precision == Precision::Float ? "float" : "double"; }
+
+std::string describeFlipBlend(const MpmParams& p) {
+  std::ostringstream s;
+  s << "alpha " << p.flipAlpha;
+  if (p.flipReferenceDt > 0)
+    s << " per " << p.flipReferenceDt << " s (PIC damping " << std::lround(p.flipDampingRate(p.flipReferenceDt))
+      << " /s)";
+  else
+    s << " per step (PIC damping -ln(alpha)/dt: it changes with the step)";
+  return s.str();
+}
 
 }  // namespace mpm
 }  // namespace mpmsdem

@@ -15,11 +15,12 @@
 //   "gravity": [0, 0, -9.81]        [m/s^2], or {"g": 9.81, "incline_deg": 10}: a flume
 //                                   inclined by incline_deg in [0, 90) about y, descending
 //                                   toward +x: gravity = g (sin a, 0, -cos a); g >= 0.
-//   "flip_alpha": 0.99,             FLIP/PIC blend, in [0, 1]
-//   "flip_reference_dt": 0,         [s] >= 0: when > 0 a step of length dt blends with
-//                                   flip_alpha^(dt / flip_reference_dt), so the PIC damping per
-//                                   second does not depend on dt (MpmParams::flipReferenceDt);
-//                                   0 (default): flip_alpha per step, as in Eq 4
+//   "flip_alpha": 0.99,             FLIP/PIC blend, in [0, 1]: kept per flip_reference_dt
+//   "flip_reference_dt": 5e-5,      [s] > 0 (MpmParams::flipReferenceDt): a step of length dt
+//                                   blends with flip_alpha^(dt / flip_reference_dt), so the PIC
+//                                   damping per second does not depend on dt
+//                                   (MpmParams::flipReferenceDt); "step": flip_alpha per step, as
+//                                   Eq 4 is written (the damping then changes with the step)
 //   "cfl": 0.3,                     CFL number of the stable-step estimate, in (0, 1]
 //   "keep_last_good_state": true,   false: one copy of the particles, 109 (double) or 57
 //                                   (float) bytes per particle less; a failed step then leaves
@@ -171,6 +172,9 @@ ParticleSet seedParticles(const MpmScene& scene);
 // The same points held compactly, for MpmSolver::setParticles(ParticleSlices&).
 SeededParticles seedParticleSlices(const MpmScene& scene);
 
+// The FLIP/PIC blend in words, e.g. "alpha 0.99 per 5e-06 s (PIC damping 2010 /s)": what
+// outputs and progress lines record (the damping per second is a model quantity).
+std::string describeFlipBlend(const MpmParams& params);
 const char* backendName(Backend backend);
 const char* precisionName(Precision precision);
 

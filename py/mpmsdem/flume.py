@@ -78,9 +78,12 @@ class Flume:
         (default 0: smooth)}``. The column settles behind it until t_open; no material above
         the edge passes it (the grid resolves the edge: the opening the flow sees lags the
         edge by about 1.5 dx). None (default): no gate, the column starts free at t = 0.
-    :param flipAlpha: FLIP/PIC blend α of the flow, Eq 4, in [0, 1] (0.99, Table 1).
-    :param flipReferenceDt: Δt_ref of the FLIP/PIC blend [s] (see :class:`MpmEngine`; 0: the
-        blend α per step, Eq 4);
+    :param flipAlpha: FLIP/PIC blend α of the flow, Eq 4, in [0, 1] (0.99, Table 1), kept per
+        ``flipReferenceDt`` of simulated time;
+    :param flipReferenceDt: Δt_ref of the blend [s] > 0, None (the scene default, 201 /s of
+        PIC damping at any step), ``mpmsdem.mpm.PAPER_STEP`` (the paper's blend, 2010 /s: the
+        paper's examples use it at the paper's resolution) or ``"step"`` (α per step, Eq 4 as
+        written); see :class:`MpmEngine`. ``flipBlend()`` names the blend a run used;
     :param backend, precision: MPM backend; :param output: folder for all outputs (None: none),
         :param outputEvery: record interval [s]; :param vtkEvery: ParaView interval [s].
     """
@@ -88,7 +91,7 @@ class Flume:
     def __init__(self, length=1.8, width=0.2, inclineDeg=10.0, columnLength=0.3, columnHeight=0.2, dx=0.01, ppc=8,
                  granular=None, basalFriction=0.21, sideWallFriction=0.0, blocks=(), bedSweep=0.005,
                  bedBarrierStiffness=1e4, dtFactor=0.5, backend="cpu", precision="double", output=None,
-                 outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None, flipReferenceDt=0.0,
+                 outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None, flipReferenceDt=None,
                  dtAuto=None, dtCheck="raise", flipAlpha=0.99):
         if gate is not None and (not isinstance(gate, dict) or set(gate) - {"speed", "open_at", "friction"}):
             raise ValueError("gate = %r: must be None or a dict with keys among speed [m/s], open_at [s], friction"
@@ -183,6 +186,11 @@ class Flume:
         """Height of the gate's lower edge above the bed at time t (default: now) [m], inf once
         removed; ValueError without a gate."""
         return self.mpm.solver.gateEdgeHeight(self.mpm.time if t is None else t)
+
+    def flipBlend(self):
+        """The flow's FLIP/PIC blend in words (e.g. 'alpha 0.99 per 5e-06 s (PIC damping 2010 /s)'):
+        the damping per second is a model quantity, stated with every result."""
+        return self.mpm.solver.flipBlend
 
     def travel(self, k):
         """Travel distance of block k along the flume so far, S_b [m]."""

@@ -29,6 +29,25 @@ from . import _mpmsdem
 from .sdem import _bindStep
 
 
+# The step of the paper's coupled runs (§3.1, Appendix D) [s]: with flipReferenceDt=PAPER_STEP the
+# flow is blended as the paper blends it, alpha 0.99 once per 5e-6 s (2010 /s of PIC damping).
+PAPER_STEP = 5e-6
+
+
+def flipReferenceArg(text):
+    """argparse type of a ``--flip-reference-dt`` option: a reference step [s] > 0, or ``step``
+    (the blend per step, Eq 4 as written)."""
+    if text == "step":
+        return "step"
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not (v > 0 and math.isfinite(v)):
+        raise ValueError("--flip-reference-dt %r: must be a step [s] > 0 or 'step'" % text)
+    return v
+
+
 class MpmEngine:
     """Explicit MPM with the μ(I) granular model (paper §2.1, Appendices A–B).
 
@@ -49,10 +68,15 @@ class MpmEngine:
         material–gate Coulomb μ ≥ 0 (default 0)}``; edge height z_0 + speed·max(0, t − t_open).
         It acts on the grid before the walls; ``solver.gateImpulse()`` is the impulse it has
         given the flow [N s]. None (default): no gate.
-    :param flipAlpha: FLIP/PIC blend α of Eq 4, in [0, 1] (default 0.99).
-    :param flipReferenceDt: Δt_ref [s] ≥ 0 (default 0: α per step, Eq 4 as written). With
-        Δt_ref > 0 a step of length Δt blends with α^(Δt/Δt_ref), so the PIC damping per
-        second, and with it the flow, does not change with the time step (docs/physics.md).
+    :param flipAlpha: FLIP/PIC blend α of Eq 4, in [0, 1] (default 0.99, Table 1): the FLIP
+        fraction kept per ``flipReferenceDt`` of simulated time.
+    :param flipReferenceDt: Δt_ref [s] > 0: a step of length Δt blends with α^(Δt/Δt_ref), so
+        the PIC damping per second, −ln α/Δt_ref, and with it the flow, does not change with the
+        time step. None (default): the scene default, 5e-5 s (201 /s; ``MpmParams::flipReferenceDt``,
+        chosen against the column collapse of Lube et al.); :data:`PAPER_STEP` (5e-6 s): the
+        paper's blend, α 0.99 once per its step (§3.1, Appendix D), 2010 /s. ``"step"``: α per
+        step, Eq 4 as written (the damping per second then grows as the step shrinks).
+        ``solver.flipBlend`` names the blend in force; docs/physics.md.
     :param cfl: CFL number of :meth:`stableTimeStep`, in (0, 1].
     :param keepLastGoodState: True (default): the solver keeps a second copy of the particles,
         so that a step that fails (NaN, blow-up) leaves them as they were at its start, and they
@@ -70,12 +94,14 @@ class MpmEngine:
 
     def __init__(self, grid, material, particles, gravity=(0, 0, -9.81), walls=None, flipAlpha=0.99, cfl=0.3,
                  backend="cpu", precision="double", output=None, outputEvery=None, label="mpm", verbose=True,
-                 gate=None, flipReferenceDt=0.0, keepLastGoodState=True):
+                 gate=None, flipReferenceDt=None, keepLastGoodState=True):
         scene = {"grid": grid, "material": material, "particles": list(particles),
                  "gravity": list(gravity) if not isinstance(gravity, dict) else gravity,
-                 "flip_alpha": flipAlpha, "flip_reference_dt": flipReferenceDt, "cfl": cfl,
+                 "flip_alpha": flipAlpha, "cfl": cfl,
                  "keep_last_good_state": keepLastGoodState,
                  "run": {"duration": 1.0, "backend": backend, "precision": precision}}
+        if flipReferenceDt is not None:
+            scene["flip_reference_dt"] = flipReferenceDt
         if walls:
             scene["walls"] = walls
         if gate is not None:

@@ -32,7 +32,7 @@ stiffness k_n of Eq 10 at the current overlap, times the SDEM safety factor (the
 same function, pkg/coupling/CoupledWorld.cpp). With ``--engine yade`` (default) the run reads it
 after every step and takes min(O.dt of the flume, 0.9 × that step) for the next one, so a radius
 that forces a smaller step gets it and pays for it; the flow keeps its PIC damping per second
-(flipReferenceDt = the flume's O.dt: at that step the blend is exactly α, as in the example).
+(``--flip-reference-dt``: default the scene's 5e-5 s, 201 /s; 5e-6 for the paper's 2010 /s).
 ``--engine driver`` runs the same scene through mpmsdem-run (``--exe``) with the flume's fixed
 O.dt, which the driver checks against the same critical step every step (a run whose step is too
 large stops and is reported as failed); it is faster per step but does not report the critical
@@ -133,6 +133,9 @@ def parse(argv):
     ap.add_argument("--plot", metavar="PNG", default=None, help="write the plot to PNG")
     ap.add_argument("--report-only", action="store_true",
                     help="no runs: table, --markdown and --plot from the result.json files in --out")
+    ap.add_argument("--flip-reference-dt", default=None,
+                    help="reference step of the flow's FLIP/PIC blend [s] > 0 (default: the scene default, 5e-5 s, "
+                         "201 /s of PIC damping; 5e-6: the paper's blend, 2010 /s), or 'step' (alpha per step, Eq 4)")
     ap.add_argument("--dx", type=float, default=DX,
                     help="grid spacing [m] (default 0.02, the coarse scene; 0.01: the paper's), in [0.005, 0.02]")
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"), help="MPM backend of --engine driver")
@@ -146,6 +149,9 @@ def parse(argv):
     ap.add_argument("--one", nargs=2, metavar=("H_MM", "RATIO"), help=argparse.SUPPRESS)  # a child run
     a = ap.parse_args(argv)
     try:
+        from mpmsdem.mpm import flipReferenceArg
+        if a.flip_reference_dt is not None:
+            a.flip_reference_dt = flipReferenceArg(a.flip_reference_dt)
         a.sizeList = [parseSize(s) for s in a.sizes.split(",") if s.strip()]
         a.ratioList = [parseRatio(s) for s in a.ratios.split(",") if s.strip()]
         if not a.sizeList:
@@ -210,11 +216,8 @@ def runYade(a, h, ratio, folder):
     from yade import O
     from yade.wrapper import PyRunner
     ex = loadExample()
-    buildScene(ex, h, ratio, 0.0)
-    base = O.dt  # the flume's step; the scene is rebuilt to blend α per that step
-    sc = buildScene(ex, h, ratio, base)
-    if abs(O.dt - base) > 1e-15 * base:
-        raise RuntimeError("O.dt changed between two builds of the same flume (%r, %r)" % (base, O.dt))
+    sc = buildScene(ex, h, ratio, a.flip_reference_dt, a.dx)
+    base = O.dt  # the flume's step
     coupled = sc.coupled
     # "warn" lets a step that outgrows the contact step finish and be counted.
     coupled.dtCheck = "warn"
@@ -278,7 +281,7 @@ def runYade(a, h, ratio, folder):
     t, travel, rise, ft, rot = (list(c) for c in zip(*st["rows"]))
     return {"t": t, "travel": travel, "rise": rise, "Ft": ft, "rotation": rot, "step_t": st["stepT"],
             "step_impulse": st["stepI"]}, {
-        "engine": "yade", "dt_flume": base, "dt_min": st["minDt"], "contact_limited_steps": st["limited"],
+        "engine": "yade", "flip_blend": sc.flipBlend(), "dt_flume": base, "dt_min": st["minDt"], "contact_limited_steps": st["limited"],
         "dt_warnings": int(coupled.timeStepWarnings), "contact_step_min": st["minContact"],
         "contact_step_min_time": st["tMinContact"], "steps": int(O.iter), "wall_s": wall, "cpu_s": cpu,
         "particles": int(sc.mpm.numParticles), "cube_mass": float(body.state.mass), "end_time": float(sc.mpm.time),
@@ -291,10 +294,9 @@ def prepareDriver(a, h, ratio, folder):
     import mpmsdem.driver  # before yade: it finds YADE's folder in a plain python3
     from yade import O
     ex = loadExample()
-    buildScene(ex, h, ratio, 0.0, a.dx)
+    sc = buildScene(ex, h, ratio, a.flip_reference_dt, a.dx)
     base = O.dt
-    sc = buildScene(ex, h, ratio, base, a.dx)
-    prepared = {"cube_index": sc.sdem.ids.index(sc.blockIds[0]), "cube_mass": float(O.bodies[sc.blockIds[0]].state.mass),
+    prepared = {"flip_blend": sc.flipBlend(), "cube_index": sc.sdem.ids.index(sc.blockIds[0]), "cube_mass": float(O.bodies[sc.blockIds[0]].state.mass),
                 "dt": base, "particles": int(sc.mpm.numParticles), "backend": a.backend, "precision": a.precision,
                 "dx": a.dx, "duration": a.duration}
     mpmsdem.driver.writeScene(os.path.join(folder, "scene.json"), sc.coupled, duration=a.duration, dt=base,
@@ -330,6 +332,7 @@ def readDriver(folder, prepared, cpuSeconds=None):
               "Ft": ft.tolist(), "rotation": rot.tolist()}
     return series, {"engine": "driver", "backend": prepared.get("backend", "cpu"),
                     "precision": prepared.get("precision", "double"), "dt_flume": prepared["dt"],
+                    "flip_blend": prepared.get("flip_blend", "alpha 0.99 per step (prepared before it was recorded)"),
                     "dt_min": prepared["dt"], "contact_limited_steps": 0, "dt_warnings": 0,
                     "contact_step_min": float(low.group(1)) if low else None,
                     "contact_step_min_time": float(low.group(2)) if low else None,
@@ -434,7 +437,8 @@ def commit():
 def childCommand(a, hmm, ratio):
     cmd = [sys.executable, os.path.abspath(__file__), "--one", repr(hmm), repr(ratio), "--duration", repr(a.duration),
            "--window", repr(a.window[0]), repr(a.window[1]), "--engine", a.engine, "--threads", str(a.threads),
-           "--out", a.out, "--dx", repr(a.dx), "--backend", a.backend, "--precision", a.precision]
+           "--out", a.out, "--dx", repr(a.dx), "--backend", a.backend, "--precision", a.precision,
+           ] + ([] if a.flip_reference_dt is None else ["--flip-reference-dt", str(a.flip_reference_dt)])
     if a.prepare:
         cmd += ["--prepare"]
     elif a.engine == "driver":

@@ -66,7 +66,14 @@ def load_scene(path):
             ppc = [k, k, k]
         boxes.append((b["lo"], b["hi"], ppc, b.get("velocity", [0, 0, 0])))
     return dict(dx=dx, cells=cells, origin=origin, gravity=[float(x) for x in grav], friction=friction,
-                alpha=float(s.get("flip_alpha", 0.99)), mat=mat, dt=float(dt), boxes=boxes)
+                alpha=stepBlend(s, float(dt)), mat=mat, dt=float(dt), boxes=boxes)
+
+
+def stepBlend(s, dt):
+    """The blend of one step of length dt: flip_alpha per flip_reference_dt (default 5e-5 s) of
+    simulated time, or per step with "step" (pkg/mpm/MpmTypes.hpp, MpmParams::flipAlphaFor)."""
+    alpha, ref = float(s.get("flip_alpha", 0.99)), s.get("flip_reference_dt", 5e-5)
+    return alpha if ref == "step" else alpha ** (dt / float(ref))
 
 
 def seed(sc):

@@ -43,8 +43,18 @@ double kineticEnergyAfter(const MpmParams& prm, double dt, double duration) {
 
 TEST(FlipBlend, ReferenceStepRule) {
   MpmParams p;
+  // default: alpha 0.99 per 5e-5 s, 201 /s at any step
+  EXPECT_EQ(p.flipAlphaFor(5e-5), 0.99);
+  EXPECT_NEAR(p.flipAlphaFor(5e-6), std::pow(0.99, 0.1), 1e-15);
+  EXPECT_NEAR(p.flipDampingRate(5e-6), -std::log(0.99) / 5e-5, 1e-9);
+  EXPECT_NEAR(p.flipDampingRate(1e-4), 201.0067, 1e-4);
+  // the paper's blend, alpha 0.99 once per its 5e-6 s step (Table 1, Appendix D): 2010 /s
+  p.flipReferenceDt = MpmParams::kPaperStep;
+  EXPECT_NEAR(p.flipDampingRate(5e-5), 2010.067, 1e-3);
   p.flipAlpha = 0.9;
-  EXPECT_EQ(p.flipAlphaFor(1e-4), 0.9);  // default: Eq 4 as written, whatever the step
+  p.flipReferenceDt = 0;
+  EXPECT_EQ(p.flipAlphaFor(1e-4), 0.9);  // per step: Eq 4 as written, whatever the step
+  EXPECT_NEAR(p.flipDampingRate(1e-4), 10 * p.flipDampingRate(1e-3), 1e-9);  // ten times the rate at dt/10
   p.flipReferenceDt = 1e-4;
   EXPECT_DOUBLE_EQ(p.flipAlphaFor(1e-4), 0.9);
   EXPECT_NEAR(p.flipAlphaFor(2.5e-5), std::pow(0.9, 0.25), 1e-15);
