@@ -261,3 +261,41 @@ def test_float_on_the_cpu_backend_falls_freely_to_float_round_off():
     vmax = np.sqrt((p1["v"] ** 2).sum(axis=1)).max()
     tol = n_steps * 0.5 * eps * M * vmax
     assert np.allclose(dP, [0.0, 0.0, -9.81 * M * t], rtol=0, atol=tol)
+
+
+def test_outputs_record_the_flip_blend_and_a_restart_across_blends_is_refused(tmp_path):
+    # The damping per second is a model quantity: every mpm.h5 names it, and a run written with
+    # another blend (here: a file from before it was recorded) is not continued.
+    import json
+    import math
+    import subprocess
+    import mpmsdem.driver
+    exe = mpmsdem.driver.executable()
+    h5py = pytest.importorskip("h5py")
+    scene = {"grid": {"dx": 0.02, "cells": [20, 6, 14], "origin": [-0.04, -0.04, -0.04]}, "walls": {"-z": 0.4},
+             "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.38, "mu_2": 0.64},
+             "particles": [{"lo": [0, 0, 0], "hi": [0.1, 0.04, 0.2], "ppc": 1}],
+             "run": {"duration": 0.1, "dt": 2e-4, "output_every": 0.02, "vtk": "none"}}
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(scene))
+    out = tmp_path / "out"
+    r = subprocess.run([exe, str(path), "--out", str(out), "--steps", "20"], capture_output=True, text=True)
+    assert r.returncode == 0 and "FLIP/PIC blend alpha 0.99 per 5e-05 s (PIC damping 201 /s)" in r.stdout, r.stdout
+    for name in ("mpm.h5", "mpm.h5.restart"):  # the file and the copy a restart goes back to
+        with h5py.File(out / name, "r+") as f:
+            assert f.attrs["flip_alpha"] == 0.99 and f.attrs["flip_reference_dt"] == 5e-5
+            assert f.attrs["flip_damping_rate"] == pytest.approx(-math.log(0.99) / 5e-5, rel=1e-12)  # 201.007 /s
+            del f.attrs["flip_blend"]
+    r = subprocess.run([exe, str(path), "--out", str(out), "--steps", "20", "--restart"], capture_output=True, text=True)
+    assert r.returncode == 2 and "not recorded" in r.stderr and "201 /s" in r.stderr, r.stderr
+    # the YADE engine records the same, and the paper's blend reads 2010 /s
+    eng = mpmsdem.MpmEngine(grid=scene["grid"], material=scene["material"], particles=scene["particles"],
+                            flipReferenceDt=mpmsdem.mpm.PAPER_STEP, output=str(tmp_path / "yade"), outputEvery=0.01,
+                            verbose=False)
+    assert eng.solver.flipBlend == "alpha 0.99 per 5e-06 s (PIC damping 2010 /s)"
+    assert eng.solver.flipDampingRate(1e-4) == pytest.approx(-math.log(0.99) / 5e-6, rel=1e-12)
+    with h5py.File(tmp_path / "yade" / "mpm.h5", "r", locking=False) as f:  # the engine still writes it
+        assert f.attrs["flip_blend"] == eng.solver.flipBlend and f.attrs["flip_damping_rate"] == pytest.approx(2010.07, abs=0.01)
+    with pytest.raises(ValueError, match="flip_reference_dt"):
+        mpmsdem.MpmEngine(grid=scene["grid"], material=scene["material"], particles=scene["particles"],
+                          flipReferenceDt=0, verbose=False)

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "common/Error.hpp"
+#include "mpm/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "mpm/Seeding.hpp"
 
@@ -94,4 +95,30 @@ TEST(FlipBlend, ReferenceStepMakesTheFlowIndependentOfTheStep) {
   EXPECT_LT(perStepFine / perStepCoarse, 0.6);
   EXPECT_GT(perStepFine / perStepCoarse, 0.1);
   EXPECT_NEAR(refFine / refCoarse, 1.0, 0.06);
+}
+
+// The scene file names the blend: a reference step in seconds, or "step" for Eq 4 as written;
+// the bare 0 that meant "per step" before the default became a reference step is refused,
+// naming the key and both ways to say it.
+TEST(FlipBlend, SceneKeyTakesAStepOrTheWordStep) {
+  const std::string head = R"({"grid": {"dx": 0.01, "cells": [8, 8, 8]},
+      "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.3, "mu_2": 0.6},
+      "particles": [{"lo": [0.02, 0.02, 0.02], "hi": [0.04, 0.04, 0.04], "ppc": 1}], "run": {"duration": 0.1})";
+  EXPECT_EQ(parseScene(head + "}").params.flipReferenceDt, 5e-5);
+  EXPECT_EQ(parseScene(head + R"(, "flip_reference_dt": 5e-6})").params.flipReferenceDt, MpmParams::kPaperStep);
+  const MpmScene perStep = parseScene(head + R"(, "flip_reference_dt": "step"})");
+  EXPECT_EQ(perStep.params.flipReferenceDt, 0.0);
+  EXPECT_EQ(perStep.params.flipAlphaFor(1e-3), 0.99);
+  EXPECT_EQ(describeFlipBlend(perStep.params), "alpha 0.99 per step (PIC damping -ln(alpha)/dt: it changes with the step)");
+  EXPECT_EQ(describeFlipBlend(MpmParams{}), "alpha 0.99 per 5e-05 s (PIC damping 201 /s)");
+  for (const char* bad : {"0", "-1e-5", "\"steps\"", "null"}) {
+    try {
+      parseScene(head + R"(, "flip_reference_dt": )" + bad + "}");
+      ADD_FAILURE() << "flip_reference_dt " << bad << " accepted";
+    } catch (const ParameterError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("flip_reference_dt"), std::string::npos) << m;
+      EXPECT_NE(m.find("\"step\""), std::string::npos) << m;
+    }
+  }
 }
