@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""Validation study (opt-in, minutes per case): the §3.2 copper-cube flume at the paper's
+resolution (dx 0.01 m, 8 points per cell, 96,000 material points) under one-at-a-time changes
+of the flow's numerics and friction, against the paper's §3.2 numbers. It maps which knob
+moves which target before a joint calibration (examples/calibrate_flume.py) spends hundreds of
+runs on them.
+
+Every case is ``examples/calibrate_flume.py:flumeRun`` with dx 0.01 m: the coupled YADE scene
+of examples/flume_block.py, run as its own process by mpmsdem.sweep; finished cases are kept
+in ``--out``/runs.jsonl, so the same command after an interruption (or in a later session)
+runs only the cases not yet done. Cases (``--cases`` picks a comma-separated subset):
+
+    paper        the paper's blend, 2010 /s (α 0.99 per its 5e-6 s step), Table 1 frictions
+    default      the scene default, 201 /s
+    damping4000  twice the paper's damping per second
+    basal030     basal friction 0.30 (Table 1: 0.21), paper blend
+    mu2_080      μ₂ 0.80 (Table 1: 0.65; Appendix C range up to 0.8), paper blend
+    walls021     side-wall friction 0.21 (smooth in the paper's scene), paper blend
+    flow040      flow–cube friction 0.40 (0.21), paper blend
+
+Targets (paper §3.2, Figs 8–9): first touch ~0.25 s (experiment 0.3 s), F_t 0.32 N at 0.4 s,
+~0.20 N plateau, 45° at 0.72 s and then at rest. Prints the table with each case's Δx, step
+and damping per second, and writes it to ``--out``/design.md.
+
+    OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/paper_flume_design.py [--cases paper,basal030]
+        [--duration 0.8] [--out results/paper_flume_design]
+"""
+import argparse
+import math
+import os
+import sys
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+PAPER_RATE = -math.log(0.99) / 5e-6  # 2010.07 /s
+CASES = {
+    "paper": {"flipDampingRate": PAPER_RATE},
+    "default": {},
+    "damping4000": {"flipDampingRate": 2 * PAPER_RATE},
+    "basal030": {"flipDampingRate": PAPER_RATE, "basalFriction": 0.30},
+    "mu2_080": {"flipDampingRate": PAPER_RATE, "mu_2": 0.80},
+    "walls021": {"flipDampingRate": PAPER_RATE, "sideWallFriction": 0.21},
+    "flow040": {"flipDampingRate": PAPER_RATE, "flowFriction": 0.40},
+}
+# (result key, label, paper's value or None, format)
+COLUMNS = [("first_touch", "first touch [s]", 0.25, "%.3f"), ("force_04", "F_t at 0.4 s [N]", 0.32, "%.2f"),
+           ("force_mean", "F_t 0.4–0.7 s [N]", 0.20, "%.2f"), ("rotation_04", "rot 0.4 s [°]", None, "%.0f"),
+           ("rotation_05", "rot 0.5 s [°]", None, "%.0f"), ("rotation_07", "rot 0.7 s [°]", None, "%.0f"),
+           ("t45", "45° at [s]", 0.72, "%.3f"), ("max_rotation_deg", "max rot [°]", 45, "%.0f"),
+           ("travel", "travel [m]", None, "%.3f"), ("speed_end", "speed at end [m/s]", 0.0, "%.3f")]
+
+
+def parse(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0], epilog=__doc__.split("\n", 1)[1],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cases", default=",".join(CASES), help="comma-separated subset of: " + ", ".join(CASES))
+    ap.add_argument("--duration", type=float, default=0.8, help="simulated time per case [s], in [0.7, 3] (0.8)")
+    ap.add_argument("--dx", type=float, default=0.01, help="grid spacing [m] (0.01, the paper's)")
+    ap.add_argument("--workers", type=int, default=1, help="cases at a time (1)")
+    ap.add_argument("--out", default=os.path.join("results", "paper_flume_design"), help="results folder")
+    a = ap.parse_args(argv)
+    a.caseList = [c.strip() for c in a.cases.split(",") if c.strip()]
+    unknown = [c for c in a.caseList if c not in CASES]
+    if unknown or not a.caseList:
+        ap.error("--cases %r: give names among %s" % (a.cases, ", ".join(CASES)))
+    if not 0.7 <= a.duration <= 3:
+        ap.error("--duration %g s: must be in [0.7, 3] (the targets run to 0.7 s)" % a.duration)
+    if not 0.005 <= a.dx <= 0.02:
+        ap.error("--dx %g m: must be in [0.005, 0.02]" % a.dx)
+    return a
+
+
+def table(names, records, a):
+    head = "| case | damping [1/s] | " + " | ".join(c[1] for c in COLUMNS) + " |"
+    rows = [head, "|" + "---|" * (len(COLUMNS) + 2),
+            "| paper | 2010 (α 0.99 per 5e-6 s) | " + " | ".join("—" if c[2] is None else "%g" % c[2] for c in COLUMNS)
+            + " |"]
+    for name, r in zip(names, records):
+        if r["status"] != "ok":
+            rows.append("| %s | **failed**: %s |" % (name, r.get("error", "?").splitlines()[-1][:120]))
+            continue
+        v = r["result"]
+        cells = [(fmt % v[k]) if k in v else "—" for k, _, _, fmt in COLUMNS]
+        rows.append("| %s | %s | %s |" % (name, v.get("flip_blend", "?"), " | ".join(cells)))
+    return "\n".join(rows)
+
+
+def main(argv):
+    a = parse(argv)
+    import mpmsdem  # noqa: F401  (finds YADE for the sweep's children)
+    from mpmsdem import sweep
+    os.makedirs(a.out, exist_ok=True)
+    cases = [dict(CASES[c], dx=a.dx, duration=a.duration) for c in a.caseList]
+    task = "%s:flumeRun" % os.path.join(ROOT, "examples", "calibrate_flume.py")
+    records = sweep.runAll(task, cases, os.path.join(a.out, "runs.jsonl"), workers=a.workers,
+                           describe=lambda rec: "first touch %.3f s, F_t(0.4 s) %.2f N, 45° at %.3f s" % (
+                               rec["result"]["first_touch"], rec["result"].get("force_04", math.nan),
+                               rec["result"]["t45"]) if rec["status"] == "ok" else "")
+    text = ("§3.2 flume, dx %g m, 8 points per cell, the flume's step 0.5 × the CFL step at rest (5.17e-5 s at dx "
+            "0.01 m), %g s per case; commit and machine: see the command's caller.\n\n" % (a.dx, a.duration)
+            + table(a.caseList, records, a) + "\n")
+    with open(os.path.join(a.out, "design.md"), "w") as f:
+        f.write(text)
+    print(text)
+    return 1 if sweep.failed(records) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
