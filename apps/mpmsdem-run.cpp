@@ -44,7 +44,13 @@
 //                   of the MPM step and the contact step (CoupledWorld::criticalTimeStep).
 //                   On the CPU backend, coupled.checkpoint.json after every snapshot: what
 //                   --restart needs besides the particles (block states, contact histories).
-// Progress lines go to stdout (stderr with --bench) every 5 % of the run. A coupled run ends
+// Progress lines go to stdout (stderr with --bench) every 5 % of the run and at least every
+// run.progress_every seconds of wall time (10), with the step and what sets it (the flow's CFL
+// step, a contact, a block's approach naming the block). With "dt": "auto" a step below
+// run.min_step_fraction of the flow's CFL step stops the run (exit 3, the last good state
+// saved), naming what forced it. At load, a block faster than run.max_block_speed or more than
+// 100 grid diagonals from the grid is refused (exit 2); one that lies wholly outside the grid
+// is a warning on stderr and in the outputs' "warnings" attribute. A coupled run ends
 // with the split of the step loop's wall time (MPM step, MP-block coupling, blocks, the rest)
 // and the smallest contact step of the run and when it occurred, also in --bench's JSON as
 // "stage_seconds" and "contact_step_min" / "contact_step_min_time" (null while nothing touched).
@@ -66,6 +72,7 @@
 #include <iostream>
 #include <new>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -171,6 +178,15 @@ struct Stepper {
   // The longest next step within the contact step of the particles that reached a block's
   // barrier in the last step (MpSdemCoupling::particleApproachStep) [s]
   double particleApproachStep() { return coupled->coupling.particleApproachStep(); }
+  // The last automatic step nextStep chose, before any shortening to the end of the run (0
+  // while the step is fixed), and with blocks the terms it was chosen from
+  double autoDt = 0;
+  coupling::AutoStepTerms terms;
+  // What set the step chosen last, in words
+  std::string limit() const {
+    if (autoDt == 0) return "the fixed run.dt";
+    return coupled ? coupling::describeStepLimit(terms, autoDt) : "the flow's CFL step";
+  }
 };
 
 using Clock = std::chrono::steady_clock;
@@ -214,6 +230,19 @@ double nextStep(Stepper& st, const RunSettings& run, bool byTime) {
     dt = st.coupled ? coupling::coupledAutoStep(run.dtFactor, st.stableStep(), st.approachStep(),
                                                 st.particleApproachStep(), st.lastDt)
                     : run.dtFactor * st.stableStep();
+    st.autoDt = dt;
+    if (st.coupled) st.terms = coupling::autoStepTerms(*st.coupled, run.dtFactor, st.lastDt);
+    const double cfl = solver.stableTimeStep();
+    if (dt < run.minStepFraction * cfl) {
+      std::ostringstream m;
+      m.precision(4);
+      m << "the automatic step fell to " << dt << " s at t = " << solver.time() << " s (step " << solver.steps()
+        << "), below run.min_step_fraction = " << run.minStepFraction << " of the flow's CFL step " << cfl
+        << " s: the rest of the run would take " << (run.duration - solver.time()) / dt
+        << " steps or more. It is set by " << st.limit()
+        << ". Check the scene (block velocities, barrier stiffness), or lower run.min_step_fraction (0: no floor)";
+      throw RuntimeFailure(m.str());
+    }
   }
   if (byTime) dt = std::min(dt, run.duration - solver.time());
   return dt;
@@ -289,16 +318,19 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
   std::optional<BlockRecord> blocks;
   if (st.coupled) blocks.emplace(st.coupled->world.engine);
   const auto t0 = Clock::now();
+  auto lastReport = t0;
   double nextReport = 0.05;
   while (!finished(solver, scene.run, maxSteps)) {
     st.step(nextStep(st, scene.run, maxSteps == 0));
     if (blocks) blocks->afterStep(*st.coupled);
     const double f = progressFraction(solver, scene.run, maxSteps);
-    if (f >= nextReport) {
+    if (f >= nextReport || since(lastReport) >= scene.run.progressEvery) {
       const double el = since(t0);
-      std::fprintf(stderr, "[%5.1f%%] t=%.5g s step=%ld rate=%.3g upd/s ETA=%s\n", 100 * f, solver.time(),
-                   solver.steps(), n * double(solver.steps()) / el, formatDuration(el * (1 - f) / f).c_str());
+      std::fprintf(stderr, "[%5.1f%%] t=%.5g s step=%ld dt=%.3g s (%s) rate=%.3g upd/s ETA=%s\n", 100 * f,
+                   solver.time(), solver.steps(), st.lastDt, st.limit().c_str(), n * double(solver.steps()) / el,
+                   formatDuration(f > 0 ? el * (1 - f) / f : 0).c_str());
       nextReport = std::floor(f / 0.05 + 1) * 0.05;
+      lastReport = Clock::now();
     }
   }
   solver.stableTimeStep();  // a reduction over all particles: waits for outstanding device work
@@ -443,6 +475,7 @@ class OutputRun {
     double nextOutput = (std::floor(t0sim / run.outputEvery * (1 + 1e-12)) + 1) * run.outputEvery;
     double nextReport = std::floor(progressFraction(solver_, run, maxSteps, firstStep) / 0.05 + 1) * 0.05;
     const auto t0 = Clock::now();
+    auto lastReport = t0;
     const bool byTime = maxSteps == 0;
     std::printf("mpmsdem-run: FLIP/PIC blend %s\n", mpm::describeFlipBlend(scene_.params).c_str());
     std::printf("mpmsdem-run: %s, %zu particles, %s, output in %s\n", solver_.name().c_str(), n,
@@ -458,7 +491,7 @@ class OutputRun {
         const double t = solver_.time();
         const bool series = t >= nextSeries * (1 - 1e-12), output = t >= nextOutput * (1 - 1e-12);
         const double f = progressFraction(solver_, run, maxSteps, firstStep);
-        const bool report = f >= nextReport || finished(solver_, run, maxSteps);
+        const bool report = f >= nextReport || finished(solver_, run, maxSteps) || since(lastReport) >= run.progressEvery;
         // one pass over the particles serves the series record and the progress line
         std::optional<mpm::Diagnostics> d;
         if (series || report) d = diagnose();
@@ -472,12 +505,13 @@ class OutputRun {
         }
         if (report) {
           const double el = since(t0);
-          std::printf("[%5.1f%%] t=%.5g s step=%ld dt=%.3g s KE=%.5g J front=%.5g m rate=%.3g upd/s ETA=%s\n",
-                      100 * f, t, solver_.steps(), dt, d->kineticEnergy, d->frontX,
+          std::printf("[%5.1f%%] t=%.5g s step=%ld dt=%.3g s (%s) KE=%.5g J front=%.5g m rate=%.3g upd/s ETA=%s\n",
+                      100 * f, t, solver_.steps(), dt, stepper_.limit().c_str(), d->kineticEnergy, d->frontX,
                       n * double(solver_.steps() - firstStep) / el,
                       formatDuration(f > 0 ? el * (1 - f) / f : 0).c_str());
           std::fflush(stdout);
           nextReport = std::floor(f / 0.05 + 1) * 0.05;
+          lastReport = Clock::now();
         }
       }
     } catch (const RuntimeFailure& e) {
@@ -517,6 +551,16 @@ class OutputRun {
         std::printf("mpmsdem-run: no contact in this run\n");
     }
     return 0;
+  }
+
+  // Load-time warnings (e.g. a block that can never touch the flow) as the root attribute
+  // "warnings" of mpm.h5 and coupled.h5, one per line; none: no attribute.
+  void recordWarnings(const std::vector<std::string>& warnings) {
+    if (warnings.empty()) return;
+    std::string text;
+    for (const std::string& w : warnings) text += (text.empty() ? "" : "\n") + w;
+    h5_.setAttribute("warnings", text);
+    if (coupled_) coupled_->h5().setAttribute("warnings", text);
   }
 
  private:
@@ -655,9 +699,12 @@ int main(int argc, char** argv) {
     }
     MpmSolver& mpm = *solver;
     std::optional<coupling::CoupledWorld> coupled;
+    std::vector<std::string> warnings;
     if (!blocks.empty()) {
       coupled.emplace(std::move(solver));
       coupling::addBlocks(blocks, *coupled);
+      warnings = coupling::checkBlockStates(blocks, *coupled, scene.run.maxBlockSpeed);
+      for (const std::string& w : warnings) std::fprintf(stderr, "mpmsdem-run: warning: %s\n", w.c_str());
       if (checkpoint) coupling::restoreCheckpoint(*checkpoint, *coupled);
     }
     Stepper stepper{mpm, coupled ? &*coupled : nullptr};
@@ -671,6 +718,7 @@ int main(int argc, char** argv) {
 #ifdef MPMSDEM_WITH_HDF5
     if (opt.bench) return runBench(stepper, scene, maxSteps);
     OutputRun out(stepper, scene, opt.restart, checkpoint ? &*checkpoint : nullptr);
+    out.recordWarnings(warnings);
     return out.run(maxSteps);
 #else
     return runBench(stepper, scene, maxSteps);  // other runs were refused above

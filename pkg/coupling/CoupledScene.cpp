@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include "common/Error.hpp"
 #include "common/SceneJson.hpp"
@@ -201,6 +202,49 @@ SceneBlocks parseBlocks(const std::string& sceneJson) {
     out.blocks.push_back(s);
   }
   return out;
+}
+
+std::vector<std::string> checkBlockStates(const SceneBlocks& scene, CoupledWorld& world, double maxBlockSpeed) {
+  const sdem::SdemEngine& engine = world.world.engine;
+  const mpm::MpmParams& p = world.mpm().params();
+  Vec3 lo, hi;
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = p.origin[d];
+    hi[d] = p.origin[d] + p.cells[d] * p.dx;
+  }
+  const double diagonal = (hi - lo).norm();
+  std::vector<std::string> warnings;
+  for (int i = 0; i < engine.numBodies(); ++i) {
+    const std::string name = "blocks[" + std::to_string(i) + "] (id " + std::to_string(scene.blocks[i].id) + ")";
+    const double r = engine.shape(i).boundingRadius;
+    const double speed = engine.velocity(i).norm() + engine.angularVelocity(i).norm() * r;
+    if (!(speed <= maxBlockSpeed)) {
+      std::ostringstream m;
+      m << name << ": speed " << speed << " m/s (|velocity| + |angular_velocity| x bounding radius " << r
+        << " m) exceeds run.max_block_speed = " << maxBlockSpeed
+        << " m/s (default: ten times the flow's P-wave speed): no flow or wave of the scene reaches it, and the "
+           "step that follows it (the block moves its sweep radius in ten steps) would crawl. Give a physical "
+           "velocity, or raise run.max_block_speed";
+      throw ParameterError(m.str());
+    }
+    const Vec3 c = engine.position(i);
+    const Vec3 outside = (lo - c).cwiseMax(c - hi).cwiseMax(Vec3::Zero());  // distance to the box per axis
+    const double away = outside.norm() - r;
+    if (away > 100 * diagonal) {
+      std::ostringstream m;
+      m << name << ".position: its rounded body lies " << away << " m from the MPM grid box, more than 100 grid "
+        << "diagonals (" << 100 * diagonal << " m): no scene places a block there (a unit mistake?)";
+      throw ParameterError(m.str());
+    }
+    if (away > 0) {
+      std::ostringstream m;
+      m << name << " can never touch the flow: its rounded body (centre [" << c.x() << ", " << c.y() << ", "
+        << c.z() << "] m, bounding radius " << r << " m) lies wholly outside the MPM grid [" << lo.x() << ", "
+        << hi.x() << "] x [" << lo.y() << ", " << hi.y() << "] x [" << lo.z() << ", " << hi.z() << "] m";
+      warnings.push_back(m.str());
+    }
+  }
+  return warnings;
 }
 
 void addBlocks(const SceneBlocks& scene, CoupledWorld& world) {

@@ -81,5 +81,12 @@ SceneBlocks parseBlocks(const std::string& sceneJson);
 // index = position in `blocks`), with their states, fixed flags and blocked DOFs.
 void addBlocks(const SceneBlocks& scene, CoupledWorld& world);
 
+// States no physical scene starts from, checked once the blocks are in `world`: a ParameterError
+// for a block faster than maxBlockSpeed [m/s] (|v| + |w| times its bounding radius; the scene's
+// run.max_block_speed) or whose bounding sphere lies more than 100 grid diagonals away from
+// the grid box. Returns a warning for each block whose bounding sphere lies wholly outside the
+// grid box: it can never touch the flow (legal: blocks may meet only blocks).
+std::vector<std::string> checkBlockStates(const SceneBlocks& scene, CoupledWorld& world, double maxBlockSpeed);
+
 }  // namespace coupling
 }  // namespace mpmsdem

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "common/Error.hpp"
 
@@ -63,6 +64,47 @@ double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& co
 
 double coupledAutoStep(double factor, double critical, double blockApproach, double particleApproach, double lastDt) {
   return std::min(sdem::autoTimeStep(factor, critical, blockApproach, lastDt), particleApproach);
+}
+
+AutoStepTerms autoStepTerms(CoupledWorld& w, double factor, double lastDt) {
+  const sdem::SdemEngine& e = w.world.engine;
+  AutoStepTerms t;
+  t.cfl = factor * w.mpm().stableTimeStep();
+  t.contact = factor * w.contactStep();
+  t.approach = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < e.numBodies(); ++i) {
+    const double v = e.velocity(i).norm() + e.angularVelocity(i).norm() * e.shape(i).boundingRadius;
+    if (v > 0 && sdem::kApproachFraction * e.shape(i).sweepRadius / v < t.approach) {
+      t.approach = sdem::kApproachFraction * e.shape(i).sweepRadius / v;
+      t.block = e.externalId(i);
+      t.blockSpeed = v;
+      t.blockSweep = e.shape(i).sweepRadius;
+    }
+  }
+  t.particleApproach = w.coupling.particleApproachStep();
+  t.growth = lastDt > 0 ? sdem::kAutoStepGrowth * lastDt : 0;
+  return t;
+}
+
+std::string describeStepLimit(const AutoStepTerms& t, double dt) {
+  const auto near = [dt](double term) { return std::abs(term - dt) <= 1e-9 * dt; };
+  std::ostringstream s;
+  s.precision(4);
+  if (near(t.cfl)) return "the flow's CFL step";
+  if (near(t.contact)) {
+    s << "the contacts' critical step sqrt(m/k)";
+  } else if (t.block >= 0 && near(t.approach)) {
+    s << "block " << t.block << "'s approach: it moves at " << t.blockSpeed << " m/s and may cross its sweep radius "
+      << t.blockSweep << " m in no fewer than " << 1 / sdem::kApproachFraction << " steps";
+  } else if (near(t.particleApproach)) {
+    s << "a material point closing on a block's barrier (the contact step it will have on arrival)";
+  } else if (near(t.growth)) {
+    s << "the growth cap (1 % a step)";
+  } else {
+    s << "none of the terms (" << t.cfl << ", " << t.contact << ", " << t.approach << ", " << t.particleApproach
+      << ", " << t.growth << " s)";
+  }
+  return s.str();
 }
 
 void CoupledWorld::restoreContactSteps(double contactStep, const ContactStepLow& low) {

@@ -10,6 +10,7 @@
 #pragma once
 #include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "coupling/MpSdemCoupling.hpp"
@@ -85,6 +86,22 @@ double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& co
 // contact step of contacts that are known only once the step has begun, and the step check
 // allows twice it.
 double coupledAutoStep(double factor, double critical, double blockApproach, double particleApproach, double lastDt);
+
+// The terms of coupledAutoStep as they are when a step is chosen (the contacts and speeds
+// change within the step), for saying later what set it.
+struct AutoStepTerms {
+  double cfl = 0, contact = 0;  // factor x the flow's CFL step, factor x the contacts' critical step [s]
+  double approach = 0;          // kApproachFraction x the fastest block's approach step [s] (inf: none moves)
+  int block = -1;               // that block's external id; its speed [m/s] and sweep radius [m]
+  double blockSpeed = 0, blockSweep = 0;
+  double particleApproach = 0;  // MpSdemCoupling::particleApproachStep [s]
+  double growth = 0;            // kAutoStepGrowth x the last step [s] (0: first step)
+};
+AutoStepTerms autoStepTerms(CoupledWorld& w, double factor, double lastDt);
+// Which term sets the step dt, in words (progress lines, the step-floor refusal): the flow's CFL
+// step, the contacts' critical step, a block's approach (naming the block and its speed), a
+// material point closing on a barrier, or the growth cap.
+std::string describeStepLimit(const AutoStepTerms& terms, double dt);
 
 }  // namespace coupling
 }  // namespace mpmsdem

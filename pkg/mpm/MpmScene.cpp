@@ -13,6 +13,7 @@
 #include "common/SceneJson.hpp"
 #include "io/MeshReader.hpp"
 #include "mpm/GridBoundary.hpp"
+#include "mpm/MpmKernelsCommon.hpp"
 #include "mpm/Seeding.hpp"
 
 namespace mpmsdem {
@@ -288,7 +289,7 @@ void parseParticles(const json& root, MpmScene& s, const std::string& baseDir) {
 void parseRun(const json& root, RunSettings& r) {
   const json& j = requireObject(root, "", "run");
   checkKeys(j, "run", {"duration", "dt", "dt_factor", "output_every", "series_every", "output_dir", "vtk", "backend",
-                       "precision"});
+                       "precision", "min_step_fraction", "max_block_speed", "progress_every"});
   r.duration = requireNumber(j, "run", "duration");
   checkRange("run.duration", r.duration, "s", 0, true, kInf, true);
   if (j.contains("dt")) {
@@ -304,6 +305,14 @@ void parseRun(const json& root, RunSettings& r) {
   }
   r.dtFactor = optNumber(j, "run", "dt_factor", 0.9);
   checkRange("run.dt_factor", r.dtFactor, "", 0, true, 1, false);
+  r.minStepFraction = optNumber(j, "run", "min_step_fraction", r.minStepFraction);
+  checkRange("run.min_step_fraction", r.minStepFraction, "", 0, false, 1, true);
+  if (j.contains("max_block_speed")) {
+    r.maxBlockSpeed = requireNumber(j, "run", "max_block_speed");
+    checkRange("run.max_block_speed", r.maxBlockSpeed, "m/s", 0, true, kInf, true);
+  }
+  r.progressEvery = optNumber(j, "run", "progress_every", r.progressEvery);
+  checkRange("run.progress_every", r.progressEvery, "s", 0, true, kInf, true);
   r.outputEvery = optNumber(j, "run", "output_every", r.duration / 20);
   checkRange("run.output_every", r.outputEvery, "s", 0, true, kInf, true);
   r.seriesEvery = optNumber(j, "run", "series_every", r.outputEvery / 10);
@@ -367,6 +376,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   parseMaterial(root, s.params);
   parseParticles(root, s, baseDir);
   parseRun(root, s.run);
+  if (s.run.maxBlockSpeed == 0) s.run.maxBlockSpeed = 10 * pWaveSpeed(s.params.material);
   s.sourceJson = root.dump();
   return s;
 }

@@ -84,6 +84,16 @@
 //                                   a material point may start a step in a barrier it has just
 //                                   reached, and how fast the step grows)
 //     "dt_factor": 0.9,             in (0, 1]; only with "dt": "auto"
+//     "min_step_fraction": 1e-4,    with "dt": "auto", the run stops (last good state saved,
+//                                   exit 3) when the step falls below this fraction of the
+//                                   flow's CFL step, naming what forces it (a block's speed, a
+//                                   contact): a run at such steps crawls. In [0, 1); 0: never
+//     "max_block_speed": 10 c_p,    [m/s] > 0: a block whose speed (|v| + |w| times its bounding
+//                                   radius) exceeds it at load is refused, naming it. Default ten
+//                                   times the flow's P-wave speed c_p = sqrt((K + 4G/3)/rho_0),
+//                                   far beyond any speed the scene's waves or flows reach
+//     "progress_every": 10,         [s] of wall time, > 0: a progress line at least this often
+//                                   (and every 5 % of the run), with the step and what limits it
 //     "output_every": duration/20,  snapshot interval [s], > 0 (HDF5 snapshot + VTK file)
 //     "series_every": output_every/10,  time-series interval [s], > 0
 //     "output_dir": "out",          created when absent
@@ -133,6 +143,9 @@ struct RunSettings {
   double duration = 0;            // simulated time [s], > 0
   double dt = 0;                  // fixed step [s]; 0 means "auto"
   double dtFactor = 0.9;          // auto step = dtFactor * stableTimeStep(), in (0, 1]
+  double minStepFraction = 1e-4;  // auto step floor, a fraction of the CFL step, in [0, 1)
+  double maxBlockSpeed = 0;       // [m/s] > 0; 0: 10 x the flow's P-wave speed (set by parseScene)
+  double progressEvery = 10;      // wall-time interval of progress lines [s], > 0
   double outputEvery = 0;         // snapshot interval [s], > 0
   double seriesEvery = 0;         // time-series record interval [s], > 0
   std::string outputDir = "out";  // output folder

@@ -776,7 +776,14 @@ TEST(MpSdemCoupling, ParticleApproachStepIsTheHandDerivedBound) {
               1e-12);
   EXPECT_EQ(approach(1e-5, Vec3(-0.5, 0, 0), 1e4, 1e-3), inf);  // receding
   EXPECT_EQ(approach(1e-5, Vec3(0, 0.5, 0), 1e4, 1e-3), inf);   // sliding along the face
-  EXPECT_EQ(approach(5.1e-4, Vec3(0.5, 0, 0), 1e4, 1e-3), inf);  // short of the barrier by 1e-5 m
+  // short of the barrier by 1e-5 m at the end of this step: it may arrive during the next one,
+  // whose step is then bounded by the overlap it could reach by its end (firstContactStepBound):
+  // dt <= (m R / (6 k_c vn))^(1/3), 3.78e-4 s here; with k_c 1e15 N/m 1.75e-7 s
+  EXPECT_NEAR(approach(5.1e-4, Vec3(0.5, 0, 0), 1e4, 1e-3), std::cbrt(m * R / (6 * 1e4 * 0.5)), 1e-15);
+  EXPECT_NEAR(approach(5.1e-4, Vec3(0.5, 0, 0), 1e15, 1e-3), std::cbrt(m * R / (6 * 1e15 * 0.5)), 1e-18);
+  EXPECT_NEAR(approach(9.9e-4, Vec3(0.5, 0, 0), 1e4, 1e-3), std::cbrt(m * R / (6 * 1e4 * 0.5)), 1e-15);
+  // beyond what this step and the next can close (2.01 x 5e-4 m): not examined
+  EXPECT_EQ(approach(1.1e-3, Vec3(0.5, 0, 0), 1e4, 1e-3), inf);
 }
 
 // A granular blob thrown at 1 m/s at a fixed cube behind a stiff barrier (k_c 1e7 N/m), the
@@ -813,6 +820,46 @@ TEST(MpSdemCoupling, ParticleApproachStepKeepsAStiffFirstTouchWithinTheStepCheck
   EXPECT_GT(with, 0.5);  // contacts did set the step
   EXPECT_LE(with, 1.05);
   EXPECT_GT(without, 2.0);
+}
+
+// A blob thrown at 2 m/s at a fixed cube behind a barrier of k_c 1e10 N/m, gravity off, the
+// step set by coupledAutoStep (factor 0.9) every step. The step that brings a point into the
+// barrier must already be short: the points that may arrive during the next step bound it
+// (firstContactStepBound). Without that the step that first touched was a CFL step and the
+// flow's kinetic energy grew about tenfold (measured with k_c 1e9 on a driver scene); with it
+// the blob only loses energy: to friction, to the barrier's stored energy and to the flow.
+TEST(MpSdemCoupling, StiffBarrierShortensTheStepBeforeTheFirstContact) {
+  auto world = blobWorld(24, 2.0);
+  CoupledWorld& w = *world;
+  const int cube = addCube(w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000, true);
+  sdem::BarrierPhys ph = pair(0.3);
+  ph.barrierStiffness = 1e10;
+  w.coupling.setPair(0, ph);
+  auto kinetic = [&w] {
+    mpm::ParticleSet ps;
+    w.mpm().getParticles(ps);
+    double e = 0;
+    for (std::size_t p = 0; p < 3 * ps.size(); ++p) e += 0.5 * ps.mass[p / 3] * ps.v[p] * ps.v[p];
+    return e;
+  };
+  const double e0 = kinetic();
+  double lastDt = 0, highest = e0, stepBeforeContact = 0;
+  int firstContact = -1;
+  for (int s = 0; s < 3000 && w.time() < 0.03; ++s) {
+    const double dt = coupledAutoStep(0.9, w.criticalTimeStep(), w.world.engine.approachTimeStep(),
+                                      w.coupling.particleApproachStep(), lastDt);
+    w.step(dt);
+    lastDt = dt;
+    if (firstContact < 0 && w.coupling.contactCount(cube) > 0) firstContact = s;
+    if (firstContact < 0) stepBeforeContact = dt;
+    highest = std::max(highest, kinetic());
+  }
+  ASSERT_GT(firstContact, 0) << "the blob never reached the cube";
+  // the step before the first contact is at most the first-contact bound of the fastest point,
+  // cbrt(m R / (6 k_c vn)) with m = 1600 dx^3/8, R = R_p0 + 0.003 m, vn = 2 m/s: 5.8e-7 s
+  const double m = 1600 * 1e-6 / 8, R = std::cbrt(3 * 1e-6 / 8 / (4 * M_PI)) + 0.003;
+  EXPECT_LE(stepBeforeContact, std::cbrt(m * R / (6 * 1e10 * 2.0)) * 1.000001);
+  EXPECT_LE(highest, e0 * (1 + 1e-9)) << "the flow gained kinetic energy at the barrier";
 }
 
 // A block added between steps joins the coupling (its shape enters the table) and is hit.
