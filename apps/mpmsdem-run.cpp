@@ -231,7 +231,9 @@ double nextStep(Stepper& st, const RunSettings& run, bool byTime) {
                                                 st.particleApproachStep(), st.lastDt)
                     : run.dtFactor * st.stableStep();
     st.autoDt = dt;
-    if (st.coupled) st.terms = coupling::autoStepTerms(*st.coupled, run.dtFactor, st.lastDt);
+    if (st.coupled)
+      st.terms = coupling::autoStepTerms(st.coupled->world.engine, run.dtFactor, solver.stableTimeStep(),
+                                         st.coupled->contactStep(), st.particleApproachStep(), st.lastDt);
     const double cfl = solver.stableTimeStep();
     if (dt < run.minStepFraction * cfl) {
       std::ostringstream m;

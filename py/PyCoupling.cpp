@@ -199,8 +199,13 @@ class PyCoupling {
   // coupling::coupledAutoStep with this scene's approach steps (critical: the caller's, which may
   // hold a restored contact step).
   double autoStep(const bp::object& bodies, double factor, double critical, double lastDt) {
-    return coupling::coupledAutoStep(factor, critical, approachStep(bodies), particleApproachStep(), lastDt);
+    const double dt = coupling::coupledAutoStep(factor, critical, approachStep(bodies), particleApproachStep(), lastDt);
+    terms_ = coupling::autoStepTerms(sdem_.engine(), factor, critical, contactStep(), particleApproachStep(), lastDt);
+    autoDt_ = dt;
+    return dt;
   }
+  // What set the last autoStep, in words (coupling::describeStepLimit); "" before the first.
+  std::string stepLimit() const { return autoDt_ > 0 ? coupling::describeStepLimit(terms_, autoDt_) : ""; }
   // MpSdemCoupling::particleApproachStep of the last step, or the value a checkpoint restored
   // until the next step computes its own.
   double particleApproachStep() const {
@@ -228,6 +233,8 @@ class PyCoupling {
   bool strict_ = true;
   double checkFactor_ = 1;
   double restoredApproach_ = std::numeric_limits<double>::quiet_NaN();
+  coupling::AutoStepTerms terms_;  // of the last autoStep
+  double autoDt_ = 0;
   long warnings_ = 0;
   long steps_ = 0;
   double couplingSeconds_ = 0, mpmSeconds_ = 0;
@@ -272,6 +279,7 @@ void exportCoupling() {
       .add_property("checkFactor", &PyCoupling::checkFactor, &PyCoupling::setCheckFactor)
       .def("approachStep", &PyCoupling::approachStep)
       .def("autoStep", &PyCoupling::autoStep)
+      .add_property("stepLimit", &PyCoupling::stepLimit)
       .add_property("particleApproachStep", &PyCoupling::particleApproachStep, &PyCoupling::setParticleApproachStep)
       .add_property("timeStepWarnings", &PyCoupling::warnings);
 }

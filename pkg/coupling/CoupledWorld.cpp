@@ -66,11 +66,11 @@ double coupledAutoStep(double factor, double critical, double blockApproach, dou
   return std::min(sdem::autoTimeStep(factor, critical, blockApproach, lastDt), particleApproach);
 }
 
-AutoStepTerms autoStepTerms(CoupledWorld& w, double factor, double lastDt) {
-  const sdem::SdemEngine& e = w.world.engine;
+AutoStepTerms autoStepTerms(const sdem::SdemEngine& e, double factor, double critical, double contact,
+                            double particleApproach, double lastDt) {
   AutoStepTerms t;
-  t.cfl = factor * w.mpm().stableTimeStep();
-  t.contact = factor * w.contactStep();
+  t.cfl = factor * critical;
+  t.contact = factor * contact;
   t.approach = std::numeric_limits<double>::infinity();
   for (int i = 0; i < e.numBodies(); ++i) {
     const double v = e.velocity(i).norm() + e.angularVelocity(i).norm() * e.shape(i).boundingRadius;
@@ -81,7 +81,7 @@ AutoStepTerms autoStepTerms(CoupledWorld& w, double factor, double lastDt) {
       t.blockSweep = e.shape(i).sweepRadius;
     }
   }
-  t.particleApproach = w.coupling.particleApproachStep();
+  t.particleApproach = particleApproach;
   t.growth = lastDt > 0 ? sdem::kAutoStepGrowth * lastDt : 0;
   return t;
 }
@@ -90,9 +90,10 @@ std::string describeStepLimit(const AutoStepTerms& t, double dt) {
   const auto near = [dt](double term) { return std::abs(term - dt) <= 1e-9 * dt; };
   std::ostringstream s;
   s.precision(4);
-  if (near(t.cfl)) return "the flow's CFL step";
   if (near(t.contact)) {
     s << "the contacts' critical step sqrt(m/k)";
+  } else if (near(t.cfl)) {
+    s << "the flow's CFL step";
   } else if (t.block >= 0 && near(t.approach)) {
     s << "block " << t.block << "'s approach: it moves at " << t.blockSpeed << " m/s and may cross its sweep radius "
       << t.blockSweep << " m in no fewer than " << 1 / sdem::kApproachFraction << " steps";

@@ -97,7 +97,9 @@ struct AutoStepTerms {
   double particleApproach = 0;  // MpSdemCoupling::particleApproachStep [s]
   double growth = 0;            // kAutoStepGrowth x the last step [s] (0: first step)
 };
-AutoStepTerms autoStepTerms(CoupledWorld& w, double factor, double lastDt);
+// critical: the flow's CFL step or a bound on it [s]; contact: the contacts' critical step [s].
+AutoStepTerms autoStepTerms(const sdem::SdemEngine& sdem, double factor, double critical, double contact,
+                            double particleApproach, double lastDt);
 // Which term sets the step dt, in words (progress lines, the step-floor refusal): the flow's CFL
 // step, the contacts' critical step, a block's approach (naming the block and its speed), a
 // material point closing on a barrier, or the growth cap.

@@ -69,6 +69,10 @@ class CoupledEngine(_AutoStep):
         to 1e-6. May be changed between steps.
     :param dtMax: with ``dtAuto``, the largest ``O.dt`` it may set [s] (None: no bound), e.g.
         to sample a fast transient finely.
+    :param minStepFraction: with ``dtAuto``, a step below this fraction of the flow's CFL step
+        stops the run (the last good state saved, as for a blow-up), naming what forces it (a
+        block's speed, a contact): a run at such steps crawls. In [0, 1) (default 1e-4; 0: no
+        floor). The progress line says what sets the step at any time (:attr:`stepLimit`).
     :param historySlots: simultaneous block contacts per material point that keep their
         tangential history, in [1, 4] (default 2: a point between a block and the bed).
     :param output: folder for ``coupled.h5`` (per block every ``outputEvery`` s: ``pos``,
@@ -81,11 +85,13 @@ class CoupledEngine(_AutoStep):
         block id ``Ft_<id>``, ``Ff_<id>``, ``Fe_<id>`` [N], ``x_<id>`` [m], ``vx_<id>``
         [m/s], ``rot_<id>`` [deg]), so ``plot.plots``/``plot.saveDataTxt`` work as with any
         YADE engine. Needs ``outputEvery``.
-    :param verbose: progress line on stderr every 10 s of wall time.
+    :param verbose: progress line on stderr every 10 s of wall time: time, step, contacts, the
+        critical step and ``O.dt`` with what sets it.
     """
 
     def __init__(self, sdem, mpm, pairs, dtCheck="raise", historySlots=2, output=None, outputEvery=None,
-                 vtkEvery=None, plot=False, label="coupled", verbose=True, dtAuto=None, dtMax=None):
+                 vtkEvery=None, plot=False, label="coupled", verbose=True, dtAuto=None, dtMax=None,
+                 minStepFraction=1e-4):
         from .mpm import MpmEngine
         from .sdem import SdemEngine
         if not isinstance(sdem, SdemEngine):
@@ -102,6 +108,10 @@ class CoupledEngine(_AutoStep):
         self.dtCheck = dtCheck
         self.dtAuto = dtAuto
         self.dtMax = dtMax
+        if not (isinstance(minStepFraction, (int, float)) and 0 <= minStepFraction < 1):
+            raise ValueError("minStepFraction = %r: must be in [0, 1) (0: no floor on the automatic step)"
+                             % (minStepFraction,))
+        self.minStepFraction = float(minStepFraction)
         self._pairs = {}
         if not isinstance(pairs, dict) or not pairs:
             raise ValueError("pairs = %r: must be a non-empty dict {SdemMat: {...}} of flow-block contact "
@@ -220,6 +230,14 @@ class CoupledEngine(_AutoStep):
             if self._restoredContactStep is not None:
                 crit = min(crit, self._restoredContactStep)
             self._setAutoStep(crit, self._contactsKnown)
+            cfl = self.mpm.solver.stableTimeStep()
+            if self._contactsKnown and O.dt < self.minStepFraction * cfl:
+                e = RuntimeError("the automatic step fell to %.4g s, below minStepFraction = %g of the flow's CFL step "
+                                 "%.4g s: the run would crawl. It is set by %s. Check the scene (block velocities, "
+                                 "barrier stiffness), or lower minStepFraction (0: no floor)"
+                                 % (O.dt, self.minStepFraction, cfl, self.stepLimit))
+                self._fail(e)
+                raise e
         # Records are taken here, before the step: NewtonIntegrator has moved the blocks to the
         # flow's time, so blocks and particles are both at t (after the MPM step they would be a
         # step apart). The forces recorded are those of the step that led to t; finish() records
@@ -242,9 +260,18 @@ class CoupledEngine(_AutoStep):
             self._warned = self._bridge.timeStepWarnings
         if self.verbose and _time.time() - self._lastReport > 10.0:
             self._lastReport = now = _time.time()
-            print("mpmsdem.CoupledEngine: t = %.4f s, step %d, %d MP-block contacts, critical step %.3g s (O.dt %.3g s)"
-                  ", %.1f ms/step" % (t, O.iter, self._bridge.totalContacts, self._bridge.contactStep, O.dt,
-                                      1e3 * (now - self._wall0) / max(O.iter, 1)), file=sys.stderr, flush=True)
+            print("mpmsdem.CoupledEngine: t = %.4f s, step %d, %d MP-block contacts, critical step %.3g s (O.dt %.3g s, "
+                  "%s), %.1f ms/step" % (t, O.iter, self._bridge.totalContacts, self._bridge.contactStep, O.dt,
+                                         self.stepLimit, 1e3 * (now - self._wall0) / max(O.iter, 1)),
+                  file=sys.stderr, flush=True)
+
+    @property
+    def stepLimit(self):
+        """What sets ``O.dt`` now, in words: with ``dtAuto`` the term of the automatic step (the
+        flow's CFL step, the contacts' critical step, a block's approach naming the block and its
+        speed, a material point closing on a barrier, the growth cap); otherwise "set by the
+        script"."""
+        return (self._bridge.stepLimit or "not chosen yet") if self._dtAuto is not None else "set by the script"
 
     def _recordDue(self, t, final=False, files=False):
         # t is a sum of steps: it may fall a rounding error short of a record time
@@ -355,7 +382,7 @@ class CoupledEngine(_AutoStep):
         mats = {k: m for m, k in self.sdem._materials}
         data = {"format": "mpmsdem-coupled-2", "time": O.time, "iter": O.iter, "mpmTime": self.mpm.time,
                 "mpmSteps": self.mpm.solver.steps, "dtCheck": self.dtCheck, "historySlots": slots,
-                "dtAuto": self.dtAuto, "dtMax": self.dtMax,
+                "dtAuto": self.dtAuto, "dtMax": self.dtMax, "minStepFraction": self.minStepFraction,
                 # what dtAuto's next step reads (None: not known yet; a string keeps inf JSON-clean)
                 "contactStep": repr(self._bridge.contactStep) if self._contactsKnown else None,
                 "particleApproachStep": repr(self._bridge.particleApproachStep) if self._contactsKnown else None,
@@ -418,6 +445,7 @@ class CoupledEngine(_AutoStep):
             pairs[mat] = entry["pair"]
         eng = cls(sdem, mpm, pairs, dtCheck=kw.pop("dtCheck", data["dtCheck"]),
                   dtAuto=kw.pop("dtAuto", data.get("dtAuto")), dtMax=kw.pop("dtMax", data.get("dtMax")),
+                  minStepFraction=kw.pop("minStepFraction", data.get("minStepFraction", 1e-4)),
                   historySlots=data["historySlots"], output=output, outputEvery=outputEvery, vtkEvery=vtkEvery,
                   plot=plot, **kw)
         if data.get("contactStep") is not None:  # the first step's dtAuto sees what it would have seen

@@ -207,8 +207,9 @@ class MpmEngine:
         if self.verbose and now - self._lastReport > 10.0:
             self._lastReport = now
             rate = self.solver.steps * self.solver.numParticles / max(now - self._wall0, 1e-9)
-            print("mpmsdem.MpmEngine: t = %.4f s, step %d, %.3g particle-updates/s"
-                  % (t, self.solver.steps, rate), file=sys.stderr, flush=True)
+            print("mpmsdem.MpmEngine: t = %.4f s, step %d, O.dt %.3g s (the flow's CFL step %.3g s), %.3g "
+                  "particle-updates/s" % (t, self.solver.steps, dt, self.solver.stableTimeStep(), rate),
+                  file=sys.stderr, flush=True)
 
     def _checkEngines(self):
         """ValueError unless this engine's runner is in O.engines (the flow needs no other
