@@ -15,6 +15,7 @@
 #include "PyMpm.hpp"
 #include "PySdem.hpp"
 #include "coupling/CoupledOutput.hpp"
+#include "coupling/CoupledScene.hpp"
 #include "coupling/CoupledWorld.hpp"
 #include "coupling/MpSdemCoupling.hpp"
 
@@ -117,6 +118,23 @@ class PyCoupling {
   void openOutput(const std::string& dir, bool append) {
     output_ = std::make_unique<coupling::CoupledOutput>(dir, append, sdem_.engine());
     if (!ori0_.empty()) output_->setReferenceOrientations(ori0_);
+  }
+  // One warning per block (YADE id) whose rounded body lies wholly outside the MPM grid (it can
+  // never touch the flow), from the states in `bodies`; also the output's "warnings" attribute.
+  bp::list outsideGridWarnings(const bp::object& bodies) {
+    sdem_.readStates(bodies);
+    const sdem::SdemEngine& e = sdem_.engine();
+    bp::list out;
+    std::string all;
+    for (int i = 0; i < e.numBodies(); ++i) {
+      if (!(coupling::distanceFromGrid(e, i, mpm_.solver().params()) > 0)) continue;
+      const std::string w = "body " + std::to_string(e.externalId(i)) + " " +
+                            coupling::outsideGridMessage(e, i, mpm_.solver().params());
+      out.append(w);
+      all += (all.empty() ? "" : "\n") + w;
+    }
+    if (output_ && !all.empty()) output_->h5().setAttribute("warnings", all);
+    return out;
   }
   // A checkpoint is being taken: what a restart from it goes back to (Hdf5Writer::commit).
   void commitOutput() {
@@ -261,6 +279,7 @@ void exportCoupling() {
       .def("timings", &PyCoupling::timings)
       .def("resetTimings", &PyCoupling::resetTimings)
       .def("openOutput", &PyCoupling::openOutput)
+      .def("outsideGridWarnings", &PyCoupling::outsideGridWarnings)
       .def("commitOutput", &PyCoupling::commitOutput)
       .def("record", &PyCoupling::record)
       .def("appendSeries", &PyCoupling::appendSeries)

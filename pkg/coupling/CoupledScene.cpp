@@ -204,15 +204,33 @@ SceneBlocks parseBlocks(const std::string& sceneJson) {
   return out;
 }
 
-std::vector<std::string> checkBlockStates(const SceneBlocks& scene, CoupledWorld& world, double maxBlockSpeed) {
-  const sdem::SdemEngine& engine = world.world.engine;
-  const mpm::MpmParams& p = world.mpm().params();
+double distanceFromGrid(const sdem::SdemEngine& engine, int i, const mpm::MpmParams& p) {
   Vec3 lo, hi;
   for (int d = 0; d < 3; ++d) {
     lo[d] = p.origin[d];
     hi[d] = p.origin[d] + p.cells[d] * p.dx;
   }
-  const double diagonal = (hi - lo).norm();
+  const Vec3 c = engine.position(i);
+  return (lo - c).cwiseMax(c - hi).cwiseMax(Vec3::Zero()).norm() - engine.shape(i).boundingRadius;
+}
+
+std::string outsideGridMessage(const sdem::SdemEngine& engine, int i, const mpm::MpmParams& p) {
+  const Vec3 c = engine.position(i);
+  std::ostringstream m;
+  m << "can never touch the flow: its rounded body (centre [" << c.x() << ", " << c.y() << ", " << c.z()
+    << "] m, bounding radius " << engine.shape(i).boundingRadius << " m) lies wholly outside the MPM grid";
+  for (int d = 0; d < 3; ++d)
+    m << (d ? " x [" : " [") << p.origin[d] << ", " << p.origin[d] + p.cells[d] * p.dx << "]";
+  m << " m";
+  return m.str();
+}
+
+std::vector<std::string> checkBlockStates(const SceneBlocks& scene, CoupledWorld& world, double maxBlockSpeed) {
+  const sdem::SdemEngine& engine = world.world.engine;
+  const mpm::MpmParams& p = world.mpm().params();
+  double diagonal = 0;
+  for (int d = 0; d < 3; ++d) diagonal += (p.cells[d] * p.dx) * (p.cells[d] * p.dx);
+  diagonal = std::sqrt(diagonal);
   std::vector<std::string> warnings;
   for (int i = 0; i < engine.numBodies(); ++i) {
     const std::string name = "blocks[" + std::to_string(i) + "] (id " + std::to_string(scene.blocks[i].id) + ")";
@@ -227,22 +245,14 @@ std::vector<std::string> checkBlockStates(const SceneBlocks& scene, CoupledWorld
            "velocity, or raise run.max_block_speed";
       throw ParameterError(m.str());
     }
-    const Vec3 c = engine.position(i);
-    const Vec3 outside = (lo - c).cwiseMax(c - hi).cwiseMax(Vec3::Zero());  // distance to the box per axis
-    const double away = outside.norm() - r;
+    const double away = distanceFromGrid(engine, i, p);
     if (away > 100 * diagonal) {
       std::ostringstream m;
       m << name << ".position: its rounded body lies " << away << " m from the MPM grid box, more than 100 grid "
         << "diagonals (" << 100 * diagonal << " m): no scene places a block there (a unit mistake?)";
       throw ParameterError(m.str());
     }
-    if (away > 0) {
-      std::ostringstream m;
-      m << name << " can never touch the flow: its rounded body (centre [" << c.x() << ", " << c.y() << ", "
-        << c.z() << "] m, bounding radius " << r << " m) lies wholly outside the MPM grid [" << lo.x() << ", "
-        << hi.x() << "] x [" << lo.y() << ", " << hi.y() << "] x [" << lo.z() << ", " << hi.z() << "] m";
-      warnings.push_back(m.str());
-    }
+    if (away > 0) warnings.push_back(name + " " + outsideGridMessage(engine, i, p));
   }
   return warnings;
 }

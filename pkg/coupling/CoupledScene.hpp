@@ -81,6 +81,11 @@ SceneBlocks parseBlocks(const std::string& sceneJson);
 // index = position in `blocks`), with their states, fixed flags and blocked DOFs.
 void addBlocks(const SceneBlocks& scene, CoupledWorld& world);
 
+// How far the bounding sphere of body i lies outside the MPM grid box [m] (<= 0: it reaches
+// into it), and the warning for one that lies wholly outside ("can never touch the flow: ...").
+double distanceFromGrid(const sdem::SdemEngine& engine, int i, const mpm::MpmParams& p);
+std::string outsideGridMessage(const sdem::SdemEngine& engine, int i, const mpm::MpmParams& p);
+
 // States no physical scene starts from, checked once the blocks are in `world`: a ParameterError
 // for a block faster than maxBlockSpeed [m/s] (|v| + |w| times its bounding radius; the scene's
 // run.max_block_speed) or whose bounding sphere lies more than 100 grid diagonals away from

@@ -222,6 +222,8 @@ class CoupledEngine(_AutoStep):
             self._nextRecord = self._nextVtk = O.time
             if self.output is not None:
                 self._openOutput()
+            for w in self._bridge.outsideGridWarnings(O.bodies):
+                warnings.warn("mpmsdem.CoupledEngine: " + w, RuntimeWarning)
             self._wall0 = self._lastReport = _time.time()
         if self._dtAuto is not None:
             # Set before this step's forces, so that the coupling, NewtonIntegrator and O.time

@@ -167,3 +167,24 @@ def test_yade_coupled_engine_floors_its_automatic_step_and_names_the_block(tmp_p
     assert "last snapshot in" in coupled.error  # the particles of the last good step were saved
     with pytest.raises(ValueError, match="minStepFraction"):
         mpmsdem.CoupledEngine(sdem, mpm, pairs={steel: {"friction": 0.3}}, minStepFraction=1.0)
+
+
+def test_yade_coupled_engine_warns_of_a_block_outside_the_grid(tmp_path):
+    from yade import O
+    from yade.wrapper import ForceResetter, NewtonIntegrator
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    steel = mpmsdem.material(density=7800, friction=0.3)
+    near = sdem.box((0.02, 0.02, 0.02), 0.002, steel, pos=(0.15, 0.05, 0.05))
+    far = sdem.box((0.02, 0.02, 0.02), 0.002, steel, pos=(5.0, 0.05, 0.05))
+    sc = scene()
+    mpm = mpmsdem.MpmEngine(grid=sc["grid"], material=sc["material"], particles=sc["particles"], gravity=(0, 0, 0),
+                            verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={steel: {"friction": 0.3}}, output=str(tmp_path / "out"),
+                                    outputEvery=1e-3, verbose=False)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    O.dt = 1e-5
+    with pytest.warns(RuntimeWarning, match="body %d can never touch the flow" % far) as record:
+        mpmsdem.run(3, coupled)
+    assert not any("body %d can" % near in str(w.message) for w in record)
+    with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:
+        assert f.attrs["warnings"].startswith("body %d can never touch the flow" % far)
