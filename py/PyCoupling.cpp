@@ -16,6 +16,7 @@
 #include "PySdem.hpp"
 #include "coupling/CoupledOutput.hpp"
 #include "coupling/CoupledScene.hpp"
+#include "mpm/MpmKernelsCommon.hpp"
 #include "coupling/CoupledWorld.hpp"
 #include "coupling/MpSdemCoupling.hpp"
 
@@ -119,6 +120,15 @@ class PyCoupling {
     output_ = std::make_unique<coupling::CoupledOutput>(dir, append, sdem_.engine());
     if (!ori0_.empty()) output_->setReferenceOrientations(ori0_);
   }
+  // ParameterError (ValueError) naming the first block (YADE id) faster than maxSpeed [m/s].
+  void checkBlockSpeeds(const bp::object& bodies, double maxSpeed) {
+    sdem_.readStates(bodies);
+    const sdem::SdemEngine& e = sdem_.engine();
+    for (int i = 0; i < e.numBodies(); ++i)
+      coupling::checkBlockSpeed(e, i, maxSpeed, "body " + std::to_string(e.externalId(i)), "maxBlockSpeed");
+  }
+  // Ten times the flow's P-wave speed [m/s]: the default block speed limit (run.max_block_speed).
+  double defaultMaxBlockSpeed() const { return 10 * mpm::pWaveSpeed(mpm_.solver().params().material); }
   // One warning per block (YADE id) whose rounded body lies wholly outside the MPM grid (it can
   // never touch the flow), from the states in `bodies`; also the output's "warnings" attribute.
   bp::list outsideGridWarnings(const bp::object& bodies) {
@@ -280,6 +290,8 @@ void exportCoupling() {
       .def("resetTimings", &PyCoupling::resetTimings)
       .def("openOutput", &PyCoupling::openOutput)
       .def("outsideGridWarnings", &PyCoupling::outsideGridWarnings)
+      .def("checkBlockSpeeds", &PyCoupling::checkBlockSpeeds)
+      .add_property("defaultMaxBlockSpeed", &PyCoupling::defaultMaxBlockSpeed)
       .def("commitOutput", &PyCoupling::commitOutput)
       .def("record", &PyCoupling::record)
       .def("appendSeries", &PyCoupling::appendSeries)

@@ -204,6 +204,21 @@ SceneBlocks parseBlocks(const std::string& sceneJson) {
   return out;
 }
 
+void checkBlockSpeed(const sdem::SdemEngine& engine, int i, double maxSpeed, const std::string& name,
+                     const std::string& key) {
+  const double r = engine.shape(i).boundingRadius;
+  const double speed = engine.velocity(i).norm() + engine.angularVelocity(i).norm() * r;
+  if (speed <= maxSpeed) return;
+  std::ostringstream m;
+  m << name << ": speed " << speed << " m/s (|velocity| + |angular_velocity| x bounding radius " << r
+    << " m) exceeds " << key << " = " << maxSpeed
+    << " m/s (default: ten times the flow's P-wave speed): no flow or wave of the scene reaches it, and the step "
+       "that follows it (the block moves its sweep radius in ten steps) would crawl. Give a physical velocity, or "
+       "raise "
+    << key;
+  throw ParameterError(m.str());
+}
+
 double distanceFromGrid(const sdem::SdemEngine& engine, int i, const mpm::MpmParams& p) {
   Vec3 lo, hi;
   for (int d = 0; d < 3; ++d) {
@@ -234,17 +249,7 @@ std::vector<std::string> checkBlockStates(const SceneBlocks& scene, CoupledWorld
   std::vector<std::string> warnings;
   for (int i = 0; i < engine.numBodies(); ++i) {
     const std::string name = "blocks[" + std::to_string(i) + "] (id " + std::to_string(scene.blocks[i].id) + ")";
-    const double r = engine.shape(i).boundingRadius;
-    const double speed = engine.velocity(i).norm() + engine.angularVelocity(i).norm() * r;
-    if (!(speed <= maxBlockSpeed)) {
-      std::ostringstream m;
-      m << name << ": speed " << speed << " m/s (|velocity| + |angular_velocity| x bounding radius " << r
-        << " m) exceeds run.max_block_speed = " << maxBlockSpeed
-        << " m/s (default: ten times the flow's P-wave speed): no flow or wave of the scene reaches it, and the "
-           "step that follows it (the block moves its sweep radius in ten steps) would crawl. Give a physical "
-           "velocity, or raise run.max_block_speed";
-      throw ParameterError(m.str());
-    }
+    checkBlockSpeed(engine, i, maxBlockSpeed, name, "run.max_block_speed");
     const double away = distanceFromGrid(engine, i, p);
     if (away > 100 * diagonal) {
       std::ostringstream m;

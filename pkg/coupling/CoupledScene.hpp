@@ -81,6 +81,10 @@ SceneBlocks parseBlocks(const std::string& sceneJson);
 // index = position in `blocks`), with their states, fixed flags and blocked DOFs.
 void addBlocks(const SceneBlocks& scene, CoupledWorld& world);
 
+// ParameterError naming the block (`name`) and the limit's key when body i moves faster than
+// maxSpeed [m/s] (|v| + |w| times its bounding radius).
+void checkBlockSpeed(const sdem::SdemEngine& engine, int i, double maxSpeed, const std::string& name,
+                     const std::string& key);
 // How far the bounding sphere of body i lies outside the MPM grid box [m] (<= 0: it reaches
 // into it), and the warning for one that lies wholly outside ("can never touch the flow: ...").
 double distanceFromGrid(const sdem::SdemEngine& engine, int i, const mpm::MpmParams& p);

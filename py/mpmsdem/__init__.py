@@ -77,9 +77,11 @@ def run(steps, *engines):
     when a script runs in short chunks to sample its scene (docs/benchmarks.md). An
     ``O.pause()`` from an engine therefore does not end this call early; use ``O.run`` for that."""
     from yade import O
-    for e in engines:  # a misplaced or missing runner: say so now, not after a silent run
+    for e in engines:  # a misplaced or missing runner, a block state no scene has: say so now
         if isinstance(e, (SdemEngine, MpmEngine)):
             e._checkEngines()
+        elif isinstance(e, CoupledEngine) and not e._started:
+            e._checkBlockSpeeds()
     try:
         for _ in range(int(steps)):
             O.step()

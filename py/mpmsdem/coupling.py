@@ -73,6 +73,10 @@ class CoupledEngine(_AutoStep):
         stops the run (the last good state saved, as for a blow-up), naming what forces it (a
         block's speed, a contact): a run at such steps crawls. In [0, 1) (default 1e-4; 0: no
         floor). The progress line says what sets the step at any time (:attr:`stepLimit`).
+    :param maxBlockSpeed: a block faster than this at the first step [m/s] (|v| + |ω| times its
+        bounding radius) is refused with a ValueError naming it: no scene starts so. None
+        (default): ten times the flow's P-wave speed (290 m/s for Table 1's glass beads), as the
+        driver's ``run.max_block_speed``.
     :param historySlots: simultaneous block contacts per material point that keep their
         tangential history, in [1, 4] (default 2: a point between a block and the bed).
     :param output: folder for ``coupled.h5`` (per block every ``outputEvery`` s: ``pos``,
@@ -91,7 +95,7 @@ class CoupledEngine(_AutoStep):
 
     def __init__(self, sdem, mpm, pairs, dtCheck="raise", historySlots=2, output=None, outputEvery=None,
                  vtkEvery=None, plot=False, label="coupled", verbose=True, dtAuto=None, dtMax=None,
-                 minStepFraction=1e-4):
+                 minStepFraction=1e-4, maxBlockSpeed=None):
         from .mpm import MpmEngine
         from .sdem import SdemEngine
         if not isinstance(sdem, SdemEngine):
@@ -112,6 +116,10 @@ class CoupledEngine(_AutoStep):
             raise ValueError("minStepFraction = %r: must be in [0, 1) (0: no floor on the automatic step)"
                              % (minStepFraction,))
         self.minStepFraction = float(minStepFraction)
+        if maxBlockSpeed is not None and not (isinstance(maxBlockSpeed, (int, float)) and maxBlockSpeed > 0):
+            raise ValueError("maxBlockSpeed = %r m/s: must be > 0 (None: ten times the flow's P-wave speed)"
+                             % (maxBlockSpeed,))
+        self.maxBlockSpeed = maxBlockSpeed
         self._pairs = {}
         if not isinstance(pairs, dict) or not pairs:
             raise ValueError("pairs = %r: must be a non-empty dict {SdemMat: {...}} of flow-block contact "
@@ -214,10 +222,15 @@ class CoupledEngine(_AutoStep):
             raise ValueError("NewtonIntegrator.gravity = %s differs from the MPM gravity %s: blocks and flow must "
                              "fall the same way" % (tuple(g), tuple(gm)))
 
+    def _checkBlockSpeeds(self):
+        """ValueError naming a block faster than maxBlockSpeed: no scene starts so."""
+        self._bridge.checkBlockSpeeds(O.bodies, self.maxBlockSpeed or self._bridge.defaultMaxBlockSpeed)
+
     def _step(self):
         if not self._started:
-            self._started = True
             self._checkEngines()
+            self._checkBlockSpeeds()
+            self._started = True
             self.sdem._beforeFirstStep()
             self._nextRecord = self._nextVtk = O.time
             if self.output is not None:
@@ -385,6 +398,7 @@ class CoupledEngine(_AutoStep):
         data = {"format": "mpmsdem-coupled-2", "time": O.time, "iter": O.iter, "mpmTime": self.mpm.time,
                 "mpmSteps": self.mpm.solver.steps, "dtCheck": self.dtCheck, "historySlots": slots,
                 "dtAuto": self.dtAuto, "dtMax": self.dtMax, "minStepFraction": self.minStepFraction,
+                "maxBlockSpeed": self.maxBlockSpeed,
                 # what dtAuto's next step reads (None: not known yet; a string keeps inf JSON-clean)
                 "contactStep": repr(self._bridge.contactStep) if self._contactsKnown else None,
                 "particleApproachStep": repr(self._bridge.particleApproachStep) if self._contactsKnown else None,
@@ -448,6 +462,7 @@ class CoupledEngine(_AutoStep):
         eng = cls(sdem, mpm, pairs, dtCheck=kw.pop("dtCheck", data["dtCheck"]),
                   dtAuto=kw.pop("dtAuto", data.get("dtAuto")), dtMax=kw.pop("dtMax", data.get("dtMax")),
                   minStepFraction=kw.pop("minStepFraction", data.get("minStepFraction", 1e-4)),
+                  maxBlockSpeed=kw.pop("maxBlockSpeed", data.get("maxBlockSpeed")),
                   historySlots=data["historySlots"], output=output, outputEvery=outputEvery, vtkEvery=vtkEvery,
                   plot=plot, **kw)
         if data.get("contactStep") is not None:  # the first step's dtAuto sees what it would have seen

@@ -159,6 +159,11 @@ def test_yade_coupled_engine_floors_its_automatic_step_and_names_the_block(tmp_p
                                     verbose=False)
     O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
     O.dt = 1e-5
+    # 500 m/s is beyond ten times the flow's P-wave speed (290 m/s): refused before the first step
+    with pytest.raises(ValueError, match=r"body %d: speed 500 m/s .* exceeds maxBlockSpeed = 290.06" % cube):
+        mpmsdem.run(1, coupled)
+    assert O.iter == 0
+    coupled.maxBlockSpeed = 1e4  # allowed, the floor stops it instead
     with pytest.raises(RuntimeError) as e:
         mpmsdem.run(20, coupled)
     text = str(e.value)
