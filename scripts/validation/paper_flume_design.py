@@ -17,6 +17,8 @@ runs only the cases not yet done. Cases (``--cases`` picks a comma-separated sub
     mu2_080      μ₂ 0.80 (Table 1: 0.65; Appendix C range up to 0.8), paper blend
     walls021     side-wall friction 0.21 (smooth in the paper's scene), paper blend
     flow040      flow–cube friction 0.40 (0.21), paper blend
+    flow067      flow–cube friction 0.67 (the cube–bed value), paper blend
+    basal015     basal friction 0.15, paper blend
 
 Targets (paper §3.2, Figs 8–9): first touch ~0.25 s (experiment 0.3 s), F_t 0.32 N at 0.4 s,
 ~0.20 N plateau, 45° at 0.72 s and then at rest. Prints the table with each case's Δx, step
@@ -40,6 +42,8 @@ CASES = {
     "mu2_080": {"flipDampingRate": PAPER_RATE, "mu_2": 0.80},
     "walls021": {"flipDampingRate": PAPER_RATE, "sideWallFriction": 0.21},
     "flow040": {"flipDampingRate": PAPER_RATE, "flowFriction": 0.40},
+    "flow067": {"flipDampingRate": PAPER_RATE, "flowFriction": 0.67},
+    "basal015": {"flipDampingRate": PAPER_RATE, "basalFriction": 0.15},
 }
 # (result key, label, paper's value or None, format)
 COLUMNS = [("first_touch", "first touch [s]", 0.25, "%.3f"), ("force_04", "F_t at 0.4 s [N]", 0.32, "%.2f"),
