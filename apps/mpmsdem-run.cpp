@@ -173,19 +173,13 @@ struct Stepper {
   }
   // MPM CFL step, and with blocks the contact step of the last step's contacts [s]
   double stableStep() { return coupled ? coupled->criticalTimeStep() : solver.stableTimeStep(); }
-  // The step in which a moving block travels its sweep radius (SdemEngine::approachTimeStep) [s]
-  double approachStep() { return coupled->world.engine.approachTimeStep(); }
-  // The longest next step within the contact step of the particles that reached a block's
-  // barrier in the last step (MpSdemCoupling::particleApproachStep) [s]
-  double particleApproachStep() { return coupled->coupling.particleApproachStep(); }
-  // The last automatic step nextStep chose, before any shortening to the end of the run (0
-  // while the step is fixed), and with blocks the terms it was chosen from
-  double autoDt = 0;
+  // Whether nextStep chooses the step, and with blocks the terms of its last choice
+  bool automatic = false;
   coupling::AutoStepTerms terms;
   // What set the step chosen last, in words
   std::string limit() const {
-    if (autoDt == 0) return "the fixed run.dt";
-    return coupled ? coupling::describeStepLimit(terms, autoDt) : "the flow's CFL step";
+    if (!automatic) return "the fixed run.dt";
+    return coupled ? terms.describe() : "the flow's CFL step";
   }
 };
 
@@ -227,14 +221,15 @@ double nextStep(Stepper& st, const RunSettings& run, bool byTime) {
                     solver.time(), solver.steps(), st.lastDt, st.coupled->contactStep(), run.dtFactor);
       throw RuntimeFailure(msg);
     }
-    dt = st.coupled ? coupling::coupledAutoStep(run.dtFactor, st.stableStep(), st.approachStep(),
-                                                st.particleApproachStep(), st.lastDt)
-                    : run.dtFactor * st.stableStep();
-    st.autoDt = dt;
-    if (st.coupled)
-      st.terms = coupling::autoStepTerms(st.coupled->world.engine, run.dtFactor, solver.stableTimeStep(),
-                                         st.coupled->contactStep(), st.particleApproachStep(), st.lastDt);
     const double cfl = solver.stableTimeStep();
+    st.automatic = true;
+    if (st.coupled) {
+      st.terms = coupling::autoStepTerms(st.coupled->world.engine, run.dtFactor, cfl, st.coupled->contactStep(),
+                                         st.coupled->coupling.particleApproachStep(), st.lastDt);
+      dt = st.terms.step();
+    } else {
+      dt = run.dtFactor * cfl;
+    }
     if (dt < run.minStepFraction * cfl) {
       std::ostringstream m;
       m.precision(4);
@@ -408,9 +403,10 @@ void checkRestartScene(const MpmScene& scene, const std::string& h5) {
     } catch (const RuntimeFailure&) {
       blend = "(not recorded: written before the FLIP/PIC blend became per unit time)";
     }
-    if (blend != mpm::describeFlipBlend(scene.params))
+    const std::string ours = mpm::describeFlipBlend(scene.params);
+    if (blend != ours)
       throw ParameterError("--restart: the run in " + h5 + " blended FLIP/PIC as " + blend + ", this scene as " +
-                           mpm::describeFlipBlend(scene.params) + ": continuing it would glue two different flows " +
+                           ours + ": continuing it would glue two different flows " +
                            "into one output. Start a new run in another output folder (--out).");
     return;
   }

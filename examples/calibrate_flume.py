@@ -146,12 +146,13 @@ def parse(argv):
         ap.error("--target is required: the measured value to fit, e.g. --target travel=0.085 [m]")
     a.targets = _pairs(a.target, "--target", "NAME=VALUE, e.g. travel=0.085", float)
     from mpmsdem.calibrate import APPENDIX_C_BOUNDS
+    from mpmsdem.mpm import PAPER_STEP
     a.bounds = _pairs(a.param, "--param", "NAME=LOW:HIGH, e.g. mu_2=0.3:0.8", _range) or dict(APPENDIX_C_BOUNDS)
     a.fixed = _pairs(a.fix, "--fix", "NAME=VALUE, e.g. dx=0.01", float)
     if a.full:
         a.fixed["dx"] = 0.01
         if "flipDampingRate" not in a.fixed and "flipDampingRate" not in a.bounds:
-            a.fixed["flipDampingRate"] = -math.log(0.99) / 5e-6  # the paper's blend at its resolution
+            a.fixed["flipDampingRate"] = -math.log(0.99) / PAPER_STEP  # the paper's blend at its resolution
     if "ppc" in a.fixed:
         a.fixed["ppc"] = int(a.fixed["ppc"])
     if "mu_2" in a.bounds and not a.bounds["mu_2"][0] > a.fixed.get("mu_s", 0.24):

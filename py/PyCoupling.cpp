@@ -227,13 +227,13 @@ class PyCoupling {
   // coupling::coupledAutoStep with this scene's approach steps (critical: the caller's, which may
   // hold a restored contact step).
   double autoStep(const bp::object& bodies, double factor, double critical, double lastDt) {
-    const double dt = coupling::coupledAutoStep(factor, critical, approachStep(bodies), particleApproachStep(), lastDt);
+    sdem_.readStates(bodies);
     terms_ = coupling::autoStepTerms(sdem_.engine(), factor, critical, contactStep(), particleApproachStep(), lastDt);
-    autoDt_ = dt;
-    return dt;
+    chosen_ = true;
+    return terms_.step();
   }
-  // What set the last autoStep, in words (coupling::describeStepLimit); "" before the first.
-  std::string stepLimit() const { return autoDt_ > 0 ? coupling::describeStepLimit(terms_, autoDt_) : ""; }
+  // What set the last autoStep, in words (AutoStepTerms::describe); "" before the first.
+  std::string stepLimit() const { return chosen_ ? terms_.describe() : ""; }
   // MpSdemCoupling::particleApproachStep of the last step, or the value a checkpoint restored
   // until the next step computes its own.
   double particleApproachStep() const {
@@ -262,7 +262,7 @@ class PyCoupling {
   double checkFactor_ = 1;
   double restoredApproach_ = std::numeric_limits<double>::quiet_NaN();
   coupling::AutoStepTerms terms_;  // of the last autoStep
-  double autoDt_ = 0;
+  bool chosen_ = false;
   long warnings_ = 0;
   long steps_ = 0;
   double couplingSeconds_ = 0, mpmSeconds_ = 0;

@@ -129,6 +129,14 @@ std::shared_ptr<const sdem::SpheroPolyhedron> readShape(const json& b, const std
   }
 }
 
+// The corners of the MPM grid box [m].
+void gridBox(const mpm::MpmParams& p, Vec3& lo, Vec3& hi) {
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = p.origin[d];
+    hi[d] = p.origin[d] + p.cells[d] * p.dx;
+  }
+}
+
 }  // namespace
 
 SceneBlocks parseBlocks(const std::string& sceneJson) {
@@ -206,11 +214,11 @@ SceneBlocks parseBlocks(const std::string& sceneJson) {
 
 void checkBlockSpeed(const sdem::SdemEngine& engine, int i, double maxSpeed, const std::string& name,
                      const std::string& key) {
-  const double r = engine.shape(i).boundingRadius;
-  const double speed = engine.velocity(i).norm() + engine.angularVelocity(i).norm() * r;
+  const double speed = engine.pointSpeedBound(i);
   if (speed <= maxSpeed) return;
   std::ostringstream m;
-  m << name << ": speed " << speed << " m/s (|velocity| + |angular_velocity| x bounding radius " << r
+  m << name << ": speed " << speed << " m/s (|velocity| + |angular_velocity| x bounding radius "
+    << engine.shape(i).boundingRadius
     << " m) exceeds " << key << " = " << maxSpeed
     << " m/s (default: ten times the flow's P-wave speed): no flow or wave of the scene reaches it, and the step "
        "that follows it (the block moves its sweep radius in ten steps) would crawl. Give a physical velocity, or "
@@ -221,21 +229,19 @@ void checkBlockSpeed(const sdem::SdemEngine& engine, int i, double maxSpeed, con
 
 double distanceFromGrid(const sdem::SdemEngine& engine, int i, const mpm::MpmParams& p) {
   Vec3 lo, hi;
-  for (int d = 0; d < 3; ++d) {
-    lo[d] = p.origin[d];
-    hi[d] = p.origin[d] + p.cells[d] * p.dx;
-  }
+  gridBox(p, lo, hi);
   const Vec3 c = engine.position(i);
   return (lo - c).cwiseMax(c - hi).cwiseMax(Vec3::Zero()).norm() - engine.shape(i).boundingRadius;
 }
 
 std::string outsideGridMessage(const sdem::SdemEngine& engine, int i, const mpm::MpmParams& p) {
   const Vec3 c = engine.position(i);
+  Vec3 lo, hi;
+  gridBox(p, lo, hi);
   std::ostringstream m;
   m << "can never touch the flow: its rounded body (centre [" << c.x() << ", " << c.y() << ", " << c.z()
     << "] m, bounding radius " << engine.shape(i).boundingRadius << " m) lies wholly outside the MPM grid";
-  for (int d = 0; d < 3; ++d)
-    m << (d ? " x [" : " [") << p.origin[d] << ", " << p.origin[d] + p.cells[d] * p.dx << "]";
+  for (int d = 0; d < 3; ++d) m << (d ? " x [" : " [") << lo[d] << ", " << hi[d] << "]";
   m << " m";
   return m.str();
 }
@@ -243,9 +249,9 @@ std::string outsideGridMessage(const sdem::SdemEngine& engine, int i, const mpm:
 std::vector<std::string> checkBlockStates(const SceneBlocks& scene, CoupledWorld& world, double maxBlockSpeed) {
   const sdem::SdemEngine& engine = world.world.engine;
   const mpm::MpmParams& p = world.mpm().params();
-  double diagonal = 0;
-  for (int d = 0; d < 3; ++d) diagonal += (p.cells[d] * p.dx) * (p.cells[d] * p.dx);
-  diagonal = std::sqrt(diagonal);
+  Vec3 lo, hi;
+  gridBox(p, lo, hi);
+  const double diagonal = (hi - lo).norm();
   std::vector<std::string> warnings;
   for (int i = 0; i < engine.numBodies(); ++i) {
     const std::string name = "blocks[" + std::to_string(i) + "] (id " + std::to_string(scene.blocks[i].id) + ")";

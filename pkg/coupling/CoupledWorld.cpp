@@ -66,44 +66,44 @@ double coupledAutoStep(double factor, double critical, double blockApproach, dou
   return std::min(sdem::autoTimeStep(factor, critical, blockApproach, lastDt), particleApproach);
 }
 
-AutoStepTerms autoStepTerms(const sdem::SdemEngine& e, double factor, double critical, double contact,
+AutoStepTerms autoStepTerms(const sdem::SdemEngine& e, double factor, double cfl, double contact,
                             double particleApproach, double lastDt) {
   AutoStepTerms t;
-  t.cfl = factor * critical;
-  t.contact = factor * contact;
-  t.approach = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < e.numBodies(); ++i) {
-    const double v = e.velocity(i).norm() + e.angularVelocity(i).norm() * e.shape(i).boundingRadius;
-    if (v > 0 && sdem::kApproachFraction * e.shape(i).sweepRadius / v < t.approach) {
-      t.approach = sdem::kApproachFraction * e.shape(i).sweepRadius / v;
-      t.block = e.externalId(i);
-      t.blockSpeed = v;
-      t.blockSweep = e.shape(i).sweepRadius;
-    }
+  t.factor = factor;
+  t.cfl = cfl;
+  t.contact = contact;
+  int body;
+  t.approach = e.approachTimeStep(&body);
+  if (body >= 0) {
+    t.block = e.externalId(body);
+    t.blockSpeed = e.pointSpeedBound(body);
+    t.blockSweep = e.shape(body).sweepRadius;
   }
   t.particleApproach = particleApproach;
-  t.growth = lastDt > 0 ? sdem::kAutoStepGrowth * lastDt : 0;
+  t.lastDt = lastDt;
   return t;
 }
 
-std::string describeStepLimit(const AutoStepTerms& t, double dt) {
+double AutoStepTerms::step() const {
+  return coupledAutoStep(factor, std::min(cfl, contact), approach, particleApproach, lastDt);
+}
+
+std::string AutoStepTerms::describe() const {
+  const double dt = step();
   const auto near = [dt](double term) { return std::abs(term - dt) <= 1e-9 * dt; };
   std::ostringstream s;
   s.precision(4);
-  if (near(t.contact)) {
+  if (near(factor * contact)) {
     s << "the contacts' critical step sqrt(m/k)";
-  } else if (near(t.cfl)) {
+  } else if (near(factor * cfl)) {
     s << "the flow's CFL step";
-  } else if (t.block >= 0 && near(t.approach)) {
-    s << "block " << t.block << "'s approach: it moves at " << t.blockSpeed << " m/s and may cross its sweep radius "
-      << t.blockSweep << " m in no fewer than " << 1 / sdem::kApproachFraction << " steps";
-  } else if (near(t.particleApproach)) {
+  } else if (block >= 0 && near(sdem::kApproachFraction * approach)) {
+    s << "block " << block << "'s approach: it moves at " << blockSpeed << " m/s and may cross its sweep radius "
+      << blockSweep << " m in no fewer than " << 1 / sdem::kApproachFraction << " steps";
+  } else if (near(particleApproach)) {
     s << "a material point closing on a block's barrier (the contact step it will have on arrival)";
-  } else if (near(t.growth)) {
+  } else if (lastDt > 0 && near(sdem::kAutoStepGrowth * lastDt)) {
     s << "the growth cap (1 % a step)";
-  } else {
-    s << "none of the terms (" << t.cfl << ", " << t.contact << ", " << t.approach << ", " << t.particleApproach
-      << ", " << t.growth << " s)";
   }
   return s.str();
 }

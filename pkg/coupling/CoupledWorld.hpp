@@ -87,23 +87,24 @@ double coupledContactStep(const sdem::SdemEngine& sdem, const MpSdemCoupling& co
 // allows twice it.
 double coupledAutoStep(double factor, double critical, double blockApproach, double particleApproach, double lastDt);
 
-// The terms of coupledAutoStep as they are when a step is chosen (the contacts and speeds
-// change within the step), for saying later what set it.
+// The inputs of coupledAutoStep as they are when a step is chosen (the contacts and speeds
+// change within the step): step() is that step, describe() says which term set it.
 struct AutoStepTerms {
-  double cfl = 0, contact = 0;  // factor x the flow's CFL step, factor x the contacts' critical step [s]
-  double approach = 0;          // kApproachFraction x the fastest block's approach step [s] (inf: none moves)
-  int block = -1;               // that block's external id; its speed [m/s] and sweep radius [m]
-  double blockSpeed = 0, blockSweep = 0;
-  double particleApproach = 0;  // MpSdemCoupling::particleApproachStep [s]
-  double growth = 0;            // kAutoStepGrowth x the last step [s] (0: first step)
+  double factor = 1;             // dt factor, in (0, 1]
+  double cfl = 0, contact = 0;   // the flow's CFL step (or a bound on it), the contacts' critical step [s]
+  double approach = 0;           // SdemEngine::approachTimeStep [s] (inf: no block moves)
+  int block = -1;                // the block that sets it (external id), its point speed bound [m/s]
+  double blockSpeed = 0, blockSweep = 0;  // and its sweep radius [m]
+  double particleApproach = 0;   // MpSdemCoupling::particleApproachStep [s]
+  double lastDt = 0;             // the step before [s] (0: first step)
+  double step() const;
+  // In words, for progress lines and the step-floor refusal: the flow's CFL step, the contacts'
+  // critical step, a block's approach (naming the block and its speed), a material point closing
+  // on a barrier, or the growth cap.
+  std::string describe() const;
 };
-// critical: the flow's CFL step or a bound on it [s]; contact: the contacts' critical step [s].
-AutoStepTerms autoStepTerms(const sdem::SdemEngine& sdem, double factor, double critical, double contact,
+AutoStepTerms autoStepTerms(const sdem::SdemEngine& sdem, double factor, double cfl, double contact,
                             double particleApproach, double lastDt);
-// Which term sets the step dt, in words (progress lines, the step-floor refusal): the flow's CFL
-// step, the contacts' critical step, a block's approach (naming the block and its speed), a
-// material point closing on a barrier, or the growth cap.
-std::string describeStepLimit(const AutoStepTerms& terms, double dt);
 
 }  // namespace coupling
 }  // namespace mpmsdem

@@ -123,11 +123,20 @@ void SdemEngine::setTimeStepCheckFactor(Real f) {
   checkFactor_ = f;
 }
 
-Real SdemEngine::approachTimeStep() const {
+Real SdemEngine::pointSpeedBound(int i) const {
+  checkBody(i, "body");
+  return vel_[i].norm() + angVel_[i].norm() * shapes_[i]->boundingRadius;
+}
+
+Real SdemEngine::approachTimeStep(int* body) const {
   Real dt = std::numeric_limits<Real>::infinity();
+  if (body) *body = -1;
   for (int i = 0; i < numBodies(); ++i) {
-    const Real speed = vel_[i].norm() + angVel_[i].norm() * shapes_[i]->boundingRadius;
-    if (speed > 0) dt = std::min(dt, shapes_[i]->sweepRadius / speed);
+    const Real speed = pointSpeedBound(i);
+    if (speed > 0 && shapes_[i]->sweepRadius / speed < dt) {
+      dt = shapes_[i]->sweepRadius / speed;
+      if (body) *body = i;
+    }
   }
   return dt;
 }

@@ -157,8 +157,11 @@ class SdemEngine {
   // moves. Within f times this step no body moves by more than f R_i, so two bodies apart
   // enter their barrier by at most f (R_i + R_j) in one step, and none crosses another (cores
   // are R_i + R_j apart at first touch). Not a stability limit: criticalTimeStep() sees only the
-  // contacts there are, and a body about to land has none; autoTimeStep() takes both.
-  Real approachTimeStep() const;
+  // contacts there are, and a body about to land has none; autoTimeStep() takes both. With
+  // `body`, the index of the body that sets it (-1 when nothing moves).
+  Real approachTimeStep(int* body = nullptr) const;
+  // |v_i| + |w_i| rho_i [m/s]: no point of body i moves faster (rho_i its bounding radius).
+  Real pointSpeedBound(int i) const;
 
   // ---- energies [J]
   Real barrierEnergy() const { return barrierEnergy_; }          // sum of b(d), current
