@@ -358,7 +358,7 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
 
 #ifdef MPMSDEM_WITH_HDF5
 // Scene keys a restart may change: how long to run and what to write, where, and on which
-// backend. Everything else (grid, material, particles, gravity, walls, flip_alpha, cfl,
+// backend. Everything else (grid, material, particles, gravity, walls, the FLIP/PIC blend, cfl,
 // run.dt, run.dt_factor) defines the run being continued: changing it would silently glue
 // two different simulations into one output.
 const char* const kRestartFree[] = {"description", "run.duration", "run.output_every", "run.series_every",

@@ -29,7 +29,7 @@ import sys
 
 def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFriction=0.0, blockFriction=0.67,
              flowFriction=0.21, inclineDeg=10.0, dx=0.02, ppc=8, duration=1.2, backend="cpu", precision="double",
-             flipDampingRate=None):
+             flipDampingRate=None, flipViscosity=None):
     """One coupled run of the §3.2 flume with the copper cube; returns the measured quantities.
 
     :param basalFriction: flow–bed friction [-] (Table 1: 0.21; Appendix C range 0.01–0.5).
@@ -44,58 +44,42 @@ def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFrictio
     :param dx: grid spacing [m] (coarse 0.02; the paper 0.01); :param ppc: points per cell (8).
     :param duration: simulated time [s] (1.2; the cube has stopped by then in the coarse scene).
     :param backend, precision: MPM backend and precision.
-    :param flipDampingRate: PIC damping of the flow per second [1/s] > 0: the FLIP/PIC blend
-        0.99 per −ln(0.99)/rate of simulated time (the paper's: 2010 /s, 0.99 per its 5e-6 s
-        step); None: the scene default (201 /s). docs/physics.md.
+    :param flipViscosity: PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0 (the paper's,
+        mpmsdem.mpm.PAPER_VISCOSITY: 0.0503, α 0.99 per its 5e-6 s step at dx 0.01 m); None:
+        the scene default (0.005). docs/physics.md.
+    :param flipDampingRate: instead, the PIC damping per second [1/s] > 0 at this dx (α 0.99 per
+        −ln(0.99)/rate of simulated time; the paper's: 2010 /s at dx 0.01 m).
     :returns: dict(travel [m], runout [m], rotation_deg (at the end), peak_force [N] (10 ms
         mean), first_touch [s] (first flow force on the cube; the duration if never),
         force_04 [N] (F_t, 10 ms mean, at 0.4 s), force_mean [N] (mean F_t over 0.4–0.7 s),
         rotation_04, rotation_05, rotation_07 [deg], t45 [s] (first time the cube has turned
-        45°; the duration if never), max_rotation_deg, speed_end [m/s] (the cube's at the end),
+        45°; the duration if never), max_rotation_deg, tilt_04, tilt_05, tilt_07, max_tilt_deg
+        (tipping: the lean of the cube's up axis) and max_yaw_deg (turning on the bed, largest
+        |yaw|) [deg] (mpmsdem.analysis.tiltAndYaw), speed_end [m/s] (the cube's at the end),
         flip_blend, particles); the quantities at times past the duration are left out.
     """
     if not mu_2 > mu_s:
         raise ValueError("mu_2 = %r: must be > mu_s = %r (the mu(I) model's friction rises from mu_s to mu_2)"
                          % (mu_2, mu_s))
     from mpmsdem.flume import GLASS_BEADS, Block, Flume
-    from flume_block import COLUMN, HB, L0
+    from flume_block import COLUMN, HB, L0, blockEvents
     granular = dict(GLASS_BEADS, mu_s=mu_s, mu_2=mu_2, I0=I0)
     cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=blockFriction, flowFriction=flowFriction)
     if flipDampingRate is not None and not (flipDampingRate > 0 and math.isfinite(flipDampingRate)):
         raise ValueError("flipDampingRate = %r /s: must be > 0 and finite (the paper's: 2010)" % (flipDampingRate,))
+    if flipViscosity is not None and flipDampingRate is not None:
+        raise ValueError("flipViscosity = %r and flipDampingRate = %r: give one (both set the blend)"
+                         % (flipViscosity, flipDampingRate))
     ref = None if flipDampingRate is None else -math.log(0.99) / flipDampingRate
     scene = Flume(dx=dx, ppc=ppc, inclineDeg=inclineDeg, granular=granular, basalFriction=basalFriction,
                   sideWallFriction=sideWallFriction, blocks=[cube], backend=backend, precision=precision,
-                  verbose=False, flipReferenceDt=ref)
+                  verbose=False, flipReferenceDt=ref, flipViscosity=flipViscosity)
     scene.run(duration, sampleEvery=0.002)
     peak, _ = scene.peakForce(0, smooth=0.01)
     front = float(scene.mpm.particles()["x"][:, 0].max())
     out = {"travel": scene.travel(0), "runout": front - COLUMN, "peak_force": peak,
            "particles": scene.mpm.numParticles, "flip_blend": scene.flipBlend()}
     out.update(blockEvents(scene.series(0), duration))
-    return out
-
-
-def blockEvents(s, duration):
-    """The §3.2 targets of a cube's series (keys of Flume.series): first touch, F_t at 0.4 s and
-    over 0.4–0.7 s (10 ms means), rotation at 0.4/0.5/0.7 s, when it reaches 45°."""
-    import numpy as np
-    t, ft, rot = s["t"], s["Ft"], s["rotation"]
-    w = max(1, int(round(0.01 / np.median(np.diff(t))))) if len(t) > 1 else 1
-    smooth = np.convolve(ft, np.ones(w) / w, mode="same")
-    touched = np.nonzero(np.abs(ft) > 0)[0]
-    turned = np.nonzero(rot >= 45.0)[0]
-    out = {"first_touch": float(t[touched[0]]) if len(touched) else duration,
-           "t45": float(t[turned[0]]) if len(turned) else duration,
-           "rotation_deg": float(rot[-1]), "max_rotation_deg": float(rot.max()), "speed_end": float(abs(s["vx"][-1]))}
-    for label, at in (("04", 0.4), ("05", 0.5), ("07", 0.7)):
-        if duration >= at:
-            out["rotation_" + label] = float(np.interp(at, t, rot))
-    if duration >= 0.4:
-        out["force_04"] = float(np.interp(0.4, t, smooth))
-    if duration >= 0.7:
-        window = (t >= 0.4) & (t <= 0.7)
-        out["force_mean"] = float(ft[window].mean())
     return out
 
 
@@ -128,7 +112,7 @@ def parse(argv):
                          "Appendix C)")
     ap.add_argument("--fix", action="append", metavar="NAME=VALUE", help="a parameter held at a value, e.g. dx=0.01")
     ap.add_argument("--full", action="store_true",
-                    help="the paper's resolution (dx 0.01 m) and blend (flipDampingRate 2010 /s) for every candidate")
+                    help="the paper's resolution (dx 0.01 m) and blend (flipViscosity 0.0503 m^2/s) for every candidate")
     ap.add_argument("--popsize", type=int, default=8, help="candidates per generation per fitted parameter (8)")
     ap.add_argument("--maxiter", type=int, default=20, help="generations after the first (20)")
     ap.add_argument("--threshold", type=float, default=1e-4,
@@ -146,13 +130,13 @@ def parse(argv):
         ap.error("--target is required: the measured value to fit, e.g. --target travel=0.085 [m]")
     a.targets = _pairs(a.target, "--target", "NAME=VALUE, e.g. travel=0.085", float)
     from mpmsdem.calibrate import APPENDIX_C_BOUNDS
-    from mpmsdem.mpm import PAPER_STEP
+    from mpmsdem.mpm import PAPER_VISCOSITY
     a.bounds = _pairs(a.param, "--param", "NAME=LOW:HIGH, e.g. mu_2=0.3:0.8", _range) or dict(APPENDIX_C_BOUNDS)
     a.fixed = _pairs(a.fix, "--fix", "NAME=VALUE, e.g. dx=0.01", float)
     if a.full:
         a.fixed["dx"] = 0.01
-        if "flipDampingRate" not in a.fixed and "flipDampingRate" not in a.bounds:
-            a.fixed["flipDampingRate"] = -math.log(0.99) / PAPER_STEP  # the paper's blend at its resolution
+        if not {"flipDampingRate", "flipViscosity"} & (set(a.fixed) | set(a.bounds)):
+            a.fixed["flipViscosity"] = PAPER_VISCOSITY  # the paper's blend
     if "ppc" in a.fixed:
         a.fixed["ppc"] = int(a.fixed["ppc"])
     if "mu_2" in a.bounds and not a.bounds["mu_2"][0] > a.fixed.get("mu_s", 0.24):

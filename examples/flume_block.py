@@ -27,7 +27,7 @@ import mpmsdem
 import mpmsdem.driver
 from mpmsdem import analysis
 from mpmsdem.flume import Block, Flume
-from mpmsdem.mpm import PAPER_STEP
+from mpmsdem.mpm import PAPER_VISCOSITY
 
 HB = 0.02          # cube side h_b [m]
 L0 = 0.21          # from the column front (the gate) to the cube's upstream face [m] (our reading of §3.2)
@@ -39,6 +39,12 @@ def parse(argv):
     ap.add_argument("--full", action="store_true", help="paper resolution: dx 0.01 m, 96,000 material points")
     ap.add_argument("--dx", type=float, default=None, help="grid spacing [m] (default 0.02, --full 0.01)")
     ap.add_argument("--duration", type=float, default=None, help="coupled run [s] (default 1.2, --full 2.0)")
+    ap.add_argument("--width", type=float, default=0.2,
+                    help="flume width [m] (0.2, the experiment's); the cube stays on the centre line between the "
+                         "smooth side walls, so a narrower flume is a slice of the wide one (0.1 m gives the same cube "
+                         "motion at half the cost: docs/coupled-results.md)")
+    ap.add_argument("--no-free-flow", action="store_true",
+                    help="skip the run without the cube (the front's arrival, h_f, v_f, Fr and the Eq 20 line)")
     ap.add_argument("--out", default="results/flume_block", help="output folder")
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"))
     ap.add_argument("--precision", default="double", choices=("double", "float"))
@@ -53,9 +59,10 @@ def parse(argv):
 
 
 def blend(a):
-    """The flow's blend reference step: the paper's (α 0.99 per 5e-6 s, 2010 /s) at the paper's
-    resolution, the scene default (201 /s) on the coarse grid (docs/physics.md)."""
-    return PAPER_STEP if a.full else None
+    """The flow's FLIP/PIC blend as Flume keywords: the paper's (α 0.99 per its 5e-6 s step at
+    dx 0.01 m, a PIC viscosity of 0.0503 m²/s, which keeps that flow at any --dx) with --full,
+    the scene default (0.005 m²/s) on the coarse grid (docs/physics.md)."""
+    return {"flipViscosity": PAPER_VISCOSITY} if a.full else {}
 
 
 def settings(a):
@@ -69,7 +76,7 @@ def settings(a):
 def freeFlow(dx, a, verbose=True):
     """The flume without the cube until the front has passed the cube's station."""
     station = COLUMN + L0
-    scene = Flume(dx=dx, backend=a.backend, precision=a.precision, verbose=verbose, flipReferenceDt=blend(a))
+    scene = Flume(dx=dx, width=a.width, backend=a.backend, precision=a.precision, verbose=verbose, **blend(a))
     probe = analysis.FlowProbe(station, halfWidth=dx, bedZ=0.0, L0=L0, window=0.05)
     from yade import O
     while True:
@@ -84,7 +91,7 @@ def freeFlow(dx, a, verbose=True):
 
 def coupled(dx, duration, a, out, verbose=True):
     cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=0.67, flowFriction=0.21)
-    scene = Flume(dx=dx, blocks=[cube], backend=a.backend, precision=a.precision, flipReferenceDt=blend(a),
+    scene = Flume(dx=dx, width=a.width, blocks=[cube], backend=a.backend, precision=a.precision, **blend(a),
                   output=out, outputEvery=0.01,
                   vtkEvery=0.05, verbose=verbose)
     scene.run(duration, sampleEvery=0.002)
@@ -123,20 +130,52 @@ def plot(s, title, ff, path):
     ax[1, 0].set_ylim(-0.2, 1.2)
     ax[1, 0].set_xlabel("t [s]")
     ax[1, 0].set_ylabel("F_f / F_t")
-    ax[1, 1].plot(t, s["rotation"])
+    ax[1, 1].plot(t, s["rotation"], label="rotation (whole angle)")
+    if "tilt" in s:
+        ax[1, 1].plot(t, s["tilt"], "--", label="tilt (tipping)")
+        ax[1, 1].plot(t, s["yaw"], ":", label="yaw (turning on the bed)")
+        ax[1, 1].legend(fontsize=8)
     ax[1, 1].set_xlabel("t [s]")
-    ax[1, 1].set_ylabel("rotation [deg]")
+    ax[1, 1].set_ylabel("angle [deg]")
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
+
+
+def blockEvents(s, duration):
+    """The §3.2 targets of a cube's series (keys of Flume.series): first touch, F_t at 0.4 s and
+    over 0.4–0.7 s (10 ms means), rotation (and, where the series has them, tilt and yaw) at
+    0.4/0.5/0.7 s, when the rotation reaches 45°; the keys of calibrate_flume.flumeRun."""
+    import numpy as np
+    t, ft, rot = s["t"], s["Ft"], s["rotation"]
+    w = max(1, int(round(0.01 / np.median(np.diff(t))))) if len(t) > 1 else 1
+    smooth = np.convolve(ft, np.ones(w) / w, mode="same")
+    touched = np.nonzero(np.abs(ft) > 0)[0]
+    turned = np.nonzero(rot >= 45.0)[0]
+    out = {"first_touch": float(t[touched[0]]) if len(touched) else duration,
+           "t45": float(t[turned[0]]) if len(turned) else duration,
+           "rotation_deg": float(rot[-1]), "max_rotation_deg": float(rot.max()), "speed_end": float(abs(s["vx"][-1]))}
+    if "tilt" in s:
+        out.update(max_tilt_deg=float(s["tilt"].max()), max_yaw_deg=float(np.abs(s["yaw"]).max()))
+    for label, at in (("04", 0.4), ("05", 0.5), ("07", 0.7)):
+        if duration >= at:
+            out["rotation_" + label] = float(np.interp(at, t, rot))
+            if "tilt" in s:
+                out["tilt_" + label] = float(np.interp(at, t, s["tilt"]))
+    if duration >= 0.4:
+        out["force_04"] = float(np.interp(0.4, t, smooth))
+    if duration >= 0.7:
+        window = (t >= 0.4) & (t <= 0.7)
+        out["force_mean"] = float(ft[window].mean())
+    return out
 
 
 def driverScene(dx, duration, a):
     """Write the coupled scene as the C++ driver's JSON (mpmsdem.driver.writeScene)."""
     from yade import O
     cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=0.67, flowFriction=0.21)
-    scene = Flume(dx=dx, blocks=[cube], backend=a.backend, precision=a.precision, verbose=False,
-                  flipReferenceDt=blend(a))
+    scene = Flume(dx=dx, width=a.width, blocks=[cube], backend=a.backend, precision=a.precision, verbose=False,
+                  **blend(a))
     mpmsdem.driver.writeScene(a.driver_scene, scene.coupled, duration=duration, dt=O.dt, outputDir=a.out,
                               outputEvery=0.05, seriesEvery=0.002)
     print("driver scene for the cube in the flume (dx %g m, %d material points, O.dt %.3g s, %g s) written to %s: "
@@ -162,6 +201,8 @@ def driverSeries(folder):
         s = {"t": t, "travel": pos[:, c][:, 0] - pos[0, c][0], "vx": vel[:, c][:, 0],
              "Ft": g["flow_force"][:, c][:, 0], "Ff": g["face_force"][:, c][:, 0], "Fe": g["edge_force"][:, c][:, 0],
              "rotation": np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))}
+        turns = np.array([analysis.tiltAndYaw(np.linalg.norm(r), r) for r in g["rotation"][:, c]]).reshape(-1, 2)
+        s["tilt"], s["yaw"] = turns[:, 0], turns[:, 1]
         scene = json.loads(f.attrs["parameters"])
     return s, scene
 
@@ -201,31 +242,34 @@ def main(argv):
     out = os.path.abspath(a.out)
     os.makedirs(out, exist_ok=True)
     t0 = time.time()
-    ff = freeFlow(dx, a)
+    ff = None if a.no_free_flow else freeFlow(dx, a)
     tFree = time.time() - t0
-    print("free flow at x = %.2f m: front at %.3f s, h_f = %.4f m, v_f = %.3f m/s, Fr = %.2f, Fr1 = %.2f"
-          % (COLUMN + L0, ff["arrival"], ff["h_f"], ff["v_f"], ff["Fr"], ff["Fr1"]))
+    if ff:
+        print("free flow at x = %.2f m: front at %.3f s, h_f = %.4f m, v_f = %.3f m/s, Fr = %.2f, Fr1 = %.2f"
+              % (COLUMN + L0, ff["arrival"], ff["h_f"], ff["v_f"], ff["Fr"], ff["Fr1"]))
     t1 = time.time()
     scene = coupled(dx, duration, a, out)
     tCoupled = time.time() - t1
     peak, tPeak = scene.peakForce(0, smooth=0.01)
     s = scene.series(0)
-    A = min(ff["h_f"], HB) * HB
     from yade import O
-    summary = {"dx": dx, "particles": scene.mpm.numParticles, "duration": duration, "dt": O.dt,
+    summary = {"dx": dx, "width": a.width, "particles": scene.mpm.numParticles, "duration": duration, "dt": O.dt,
                "flip_blend": scene.flipBlend(), "free_flow": ff,
                "travel": scene.travel(0), "peak_force": peak, "peak_time": tPeak,
-               "rotation_deg": float(s["rotation"][-1]),
-               "eq20_force": analysis.hydrodynamicForce(1600.0, ff["v_f"], ff["h_f"], A),
+               "rotation_deg": float(s["rotation"][-1]), "tilt_deg": float(s["tilt"][-1]),
+               "yaw_deg": float(s["yaw"][-1]), "events": blockEvents(s, duration),
+               "eq20_force": analysis.hydrodynamicForce(1600.0, ff["v_f"], ff["h_f"], min(ff["h_f"], HB) * HB)
+               if ff else None,
                "wall_seconds": {"free_flow": tFree, "coupled": tCoupled}, "timings": scene.coupled.timings()}
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     if not a.no_plots:
         plot(scene.series(0), "Copper cube in a glass-bead flume (paper §3.2), dx = %g m, %d material points"
              % (scene.dx, scene.mpm.numParticles), ff, os.path.join(out, "flume_block.png"))
-    print("copper cube after %.2f s: travel distance %.4f m, rotation %.1f deg; peak downstream impact force "
-          "%.3f N (10 ms mean) at %.3f s; Eq 20: %.3f N" % (duration, summary["travel"], summary["rotation_deg"],
-                                                            peak, tPeak, summary["eq20_force"]))
+    print("copper cube after %.2f s: travel distance %.4f m, rotation %.1f deg (tilt %.1f, yaw %.1f); peak downstream "
+          "impact force %.3f N (10 ms mean) at %.3f s%s" % (
+              duration, summary["travel"], summary["rotation_deg"], summary["tilt_deg"], summary["yaw_deg"], peak, tPeak,
+              "; Eq 20: %.3f N" % summary["eq20_force"] if ff else ""))
     print("outputs in %s (coupled.h5, scene.pvd, flume_block.png, summary.json); wall time %.0f s + %.0f s"
           % (out, tFree, tCoupled))
     return summary

@@ -56,7 +56,7 @@ import time
 import mpmsdem
 from mpmsdem import analysis
 from mpmsdem.flume import Block, Flume
-from mpmsdem.mpm import PAPER_STEP, flipReferenceArg
+from mpmsdem.mpm import PAPER_VISCOSITY, flipReferenceArg
 
 LENGTH, WIDTH = 0.6, 0.2                  # flume [m]
 COLUMN_L, COLUMN_H = 0.1, 0.2             # L_i, H_i [m]
@@ -82,11 +82,15 @@ def parse(argv):
     ap.add_argument("--ppc", type=int, default=None, help="material points per cell (default 1, --full 8)")
     ap.add_argument("--duration", type=float, default=1.0, help="coupled run [s] (default 1.0)")
     ap.add_argument("--flow-friction", type=float, default=0.13, help="flow-block friction (default 0.13)")
-    ap.add_argument("--flip-alpha", type=float, default=0.99,
-                    help="FLIP/PIC blend of the flow, Eq 4, kept per --flip-reference-dt (default 0.99)")
+    ap.add_argument("--flip-viscosity", type=float, default=None,
+                    help="PIC viscosity of the flow's FLIP/PIC blend [m^2/s] > 0 (default: the scene default, 0.005; "
+                         "with --full the paper's blend, 0.0503)")
+    ap.add_argument("--flip-alpha", type=float, default=None,
+                    help="instead: the FLIP/PIC blend alpha of Eq 4, kept per --flip-reference-dt (0.99 if only that "
+                         "is given)")
     ap.add_argument("--flip-reference-dt", type=flipReferenceArg, default=None,
-                    help="reference step of the blend [s] > 0 (default: the scene default, 5e-5 s, 201 /s of PIC "
-                         "damping; with --full the paper's 5e-6 s, 2010 /s), or 'step' (alpha per step, Eq 4)")
+                    help="with --flip-alpha: its reference step [s] > 0 (the paper's 5e-6 s: 2010 /s of PIC damping), "
+                         "or 'step' (alpha per step, Eq 4 as written)")
     ap.add_argument("--out", default="results/liu2018_blocks", help="output folder")
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"))
     ap.add_argument("--precision", default="double", choices=("double", "float"))
@@ -116,10 +120,17 @@ def stackedBlocks(flowFriction=0.13):
     return [Block(z=0.0, blockedDOFs="xyzXYZ", **common), Block(z=zMiddle, **common), Block(z=zTop, **common)]
 
 
+def flipViscosity(a):
+    """--flip-viscosity, or with --full and no other blend the paper's (docs/physics.md)."""
+    if a.flip_viscosity is not None or a.flip_alpha is not None or a.flip_reference_dt is not None:
+        return a.flip_viscosity
+    return PAPER_VISCOSITY if a.full else None
+
+
 def scene(dx, ppc, a, blocks=(), output=None, verbose=True):
     s = Flume(inclineDeg=0.0, length=LENGTH, width=WIDTH, columnLength=COLUMN_L, columnHeight=COLUMN_H, dx=dx,
               ppc=ppc, granular=GRANULAR, basalFriction=0.13, blocks=blocks, backend=a.backend, flipAlpha=a.flip_alpha,
-              flipReferenceDt=a.flip_reference_dt or (PAPER_STEP if a.full else None),
+              flipReferenceDt=a.flip_reference_dt, flipViscosity=flipViscosity(a),
               precision=a.precision, output=output, outputEvery=0.01, vtkEvery=0.05 if output else None,
               verbose=verbose)
     from yade import O

@@ -67,7 +67,7 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=1.0, maxFre
     from yade import O
     from mpmsdem import analysis
     from mpmsdem.flume import Block, Flume
-    from mpmsdem.mpm import PAPER_STEP
+    from mpmsdem.mpm import PAPER_VISCOSITY
     if not (AR > 0 and L0_hb > 0):
         raise ValueError("AR = %r, L0_hb = %r: both must be > 0" % (AR, L0_hb))
     dx, ppc = resolution(full, dx, ppc)
@@ -77,7 +77,7 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=1.0, maxFre
     length = COLUMN + L0 + HB + margin
     # the paper's blend (α 0.99 per 5e-6 s, 2010 /s) at the paper's resolution (docs/physics.md)
     common = dict(length=length, columnLength=COLUMN, columnHeight=H, dx=dx, ppc=ppc, backend=backend,
-                  precision=precision, verbose=verbose, flipReferenceDt=PAPER_STEP if full else None)
+                  precision=precision, verbose=verbose, flipViscosity=PAPER_VISCOSITY if full else None)
     out = {"AR": round(H / COLUMN, 6), "AR_nominal": AR, "L0_hb": L0_hb, "L0": L0, "h_b": HB, "H_i": H, "L_i": COLUMN,
            "dx": dx, "ppc": ppc, "flume_length": length}
 

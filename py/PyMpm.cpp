@@ -23,8 +23,11 @@ void exportMpm() {
       .def("flipDampingRate", &PyMpm::flipDampingRate, (bp::arg("dt")),
            "PIC damping rate of a step of length dt [1/s], -ln(blend)/dt: the same at every dt unless the blend is "
            "per step (flip_reference_dt \"step\").")
+      .def("flipViscosity", &PyMpm::flipViscosity, (bp::arg("dt")),
+           "PIC viscosity of the blend at a step of length dt [m^2/s]: its damping rate times dx^2/4, the same at "
+           "every dt unless the blend is per step.")
       .add_property("flipBlend", &PyMpm::flipBlend,
-                    "The FLIP/PIC blend in words, e.g. 'alpha 0.99 per 5e-06 s (PIC damping 2010 /s)'.")
+                    "The FLIP/PIC blend in words, e.g. 'PIC viscosity 0.005 m^2/s (PIC damping 200 /s at dx 0.01 m)'.")
       .def("setExternalForces", &PyMpm::setExternalForces, (bp::arg("forces")))
       .def("gateImpulse", &PyMpm::gateImpulse,
            "Impulse the scene's gate has given the material since the solver was built [N s] (x: minus the push of "

@@ -43,6 +43,7 @@ class PyMpm {
   double stableTimeStep() { return solver_->stableTimeStep(); }
   std::string flipBlend() const { return mpm::describeFlipBlend(scene_.params); }
   double flipDampingRate(double dt) const { return scene_.params.flipDampingRate(dt); }
+  double flipViscosity(double dt) const { return scene_.params.flipViscosityFor(dt); }
   double time() const { return solver_->time(); }
   long steps() const { return solver_->steps(); }
   std::size_t numParticles() const { return solver_->numParticles(); }

@@ -520,10 +520,13 @@ void writeMpmHeader(Hdf5Writer& w, const std::string& sceneJson, const mpm::MpmP
   w.setAttribute("parameters", sceneJson);
   w.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
   w.setAttribute("solver", solverName);
-  w.setAttribute("flip_alpha", params.flipAlpha);
-  w.setAttribute("flip_reference_dt", params.flipReferenceDt);
-  w.setAttribute("flip_damping_rate", params.flipReferenceDt > 0 ? params.flipDampingRate(params.flipReferenceDt)
-                                                                 : std::numeric_limits<double>::quiet_NaN());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const bool viscosity = params.flipViscosity > 0, perStep = params.flipBlendPerStep();
+  const double unit = viscosity ? 1.0 : params.flipReferenceDt;  // unless per step, the rate is the same at any step
+  w.setAttribute("flip_viscosity", perStep ? nan : params.flipViscosityFor(unit));
+  w.setAttribute("flip_damping_rate", perStep ? nan : params.flipDampingRate(unit));
+  w.setAttribute("flip_alpha", viscosity ? nan : params.flipAlpha);
+  w.setAttribute("flip_reference_dt", viscosity ? nan : params.flipReferenceDt);
   w.setAttribute("flip_blend", mpm::describeFlipBlend(params));
 }
 

@@ -120,9 +120,9 @@ bool resumeFromCommit(const std::string& path);
 
 // The root attributes of an MPM output or checkpoint: "parameters" (the scene JSON), "units",
 // "solver", and the FLIP/PIC blend it ran with (the damping per second is a model quantity,
-// docs/physics.md): "flip_alpha", "flip_reference_dt" [s] (0: per step), "flip_damping_rate"
-// [1/s] (NaN per step: it then follows the step, see /series/dt) and "flip_blend"
-// (mpm::describeFlipBlend).
+// docs/physics.md): "flip_viscosity" [m^2/s] and "flip_damping_rate" [1/s] (NaN per step: they
+// then follow the step, see /series/dt), "flip_alpha" and "flip_reference_dt" [s] (0: per step;
+// both NaN when a viscosity set the blend) and "flip_blend" (mpm::describeFlipBlend).
 void writeMpmHeader(Hdf5Writer& w, const std::string& sceneJson, const mpm::MpmParams& params,
                     const std::string& solverName);
 

@@ -63,10 +63,30 @@ void parseGravity(const json& root, MpmParams& p) {
   p.gravity = {mag * std::sin(a), 0.0, -mag * std::cos(a)};
 }
 
-// A reference step in seconds, or "step" for the blend per step. A bare 0 is refused: it meant
-// "per step" before the default became a reference step, and a scene should say which it wants.
-void parseFlipReferenceDt(const json& root, MpmParams& p) {
-  if (!root.contains("flip_reference_dt")) return;
+// The blend (MpmParams::flipViscosity): "flip_viscosity" [m^2/s], or "flip_alpha" per
+// "flip_reference_dt" (a step in seconds, or "step" for Eq 4 as written). A bare 0 reference
+// is refused: it meant "per step" before the blend had a reference, and a scene should say which
+// it wants. flip_alpha alone is refused: without a reference it has no time scale.
+void parseFlipBlend(const json& root, MpmParams& p) {
+  const bool viscosity = root.contains("flip_viscosity"), reference = root.contains("flip_reference_dt");
+  if (viscosity && (reference || root.contains("flip_alpha")))
+    throwParameter(reference ? "flip_reference_dt" : "flip_alpha",
+                   root.at(reference ? "flip_reference_dt" : "flip_alpha").dump(), "",
+                   "absent when flip_viscosity is given (the viscosity alone sets the blend)");
+  if (root.contains("flip_alpha") && !reference)
+    throwParameter("flip_alpha", root.at("flip_alpha").dump(), "",
+                   "given with flip_reference_dt (alpha per that much simulated time, e.g. the paper's 0.99 per "
+                   "5e-6 s, or \"step\": per step, Eq 4 as written); without it the blend is flip_viscosity "
+                   "[m^2/s] (default 0.005)");
+  if (viscosity) {
+    p.flipViscosity = optNumber(root, "", "flip_viscosity", p.flipViscosity);
+    checkRange("flip_viscosity", p.flipViscosity, "m^2/s", 0, true, kInf, true);
+    return;
+  }
+  if (!reference) return;
+  p.flipViscosity = 0;
+  p.flipAlpha = optNumber(root, "", "flip_alpha", p.flipAlpha);
+  checkRange("flip_alpha", p.flipAlpha, "", 0, false, 1, false);
   const json& v = root.at("flip_reference_dt");
   if (v.is_string() && v.get<std::string>() == "step") {
     p.flipReferenceDt = 0;
@@ -74,9 +94,9 @@ void parseFlipReferenceDt(const json& root, MpmParams& p) {
   }
   if (!v.is_number() || !(v.get<double>() > 0) || !std::isfinite(v.get<double>()))
     throwParameter("flip_reference_dt", v.dump(), "s",
-                   "a step > 0 (flip_alpha is kept per that much simulated time; default 5e-5; the paper's "
-                   "blend is 0.99 per 5e-6) or \"step\" (flip_alpha per step, Eq 4 as written: the damping then "
-                   "changes with the step)");
+                   "a step > 0 (flip_alpha is kept per that much simulated time; the paper's blend is 0.99 per "
+                   "5e-6) or \"step\" (flip_alpha per step, Eq 4 as written: the damping then changes with the "
+                   "step)");
   p.flipReferenceDt = v.get<double>();
 }
 
@@ -354,16 +374,14 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   }
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
   // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
-  checkKeys(root, "", {"description", "grid", "gravity", "flip_alpha", "flip_reference_dt", "cfl", "keep_last_good_state", "walls", "gate", "material", "particles",
+  checkKeys(root, "", {"description", "grid", "gravity", "flip_viscosity", "flip_alpha", "flip_reference_dt", "cfl", "keep_last_good_state", "walls", "gate", "material", "particles",
                        "run", "blocks", "block_materials"});
   if (root.contains("description") && !root.at("description").is_string())
     throwParameter("description", root.at("description").dump(), "", "a string");
   MpmScene s;
   parseGrid(root, s.params);
   parseGravity(root, s.params);
-  s.params.flipAlpha = optNumber(root, "", "flip_alpha", s.params.flipAlpha);
-  checkRange("flip_alpha", s.params.flipAlpha, "", 0, false, 1, false);
-  parseFlipReferenceDt(root, s.params);
+  parseFlipBlend(root, s.params);
   s.params.cfl = optNumber(root, "", "cfl", s.params.cfl);
   checkRange("cfl", s.params.cfl, "", 0, true, 1, false);
   if (root.contains("keep_last_good_state")) {
@@ -448,12 +466,15 @@ const char* precisionName(Precision precision) { return precision == Precision::
 
 std::string describeFlipBlend(const MpmParams& p) {
   std::ostringstream s;
-  s << "alpha " << p.flipAlpha;
-  if (p.flipReferenceDt > 0)
-    s << " per " << p.flipReferenceDt << " s (PIC damping " << std::lround(p.flipDampingRate(p.flipReferenceDt))
-      << " /s)";
+  if (p.flipViscosity > 0)
+    s << "PIC viscosity " << p.flipViscosity << " m^2/s (PIC damping " << std::lround(p.flipDampingRate(1.0))
+      << " /s at dx " << p.dx << " m)";
+  else if (p.flipReferenceDt > 0)
+    s << "alpha " << p.flipAlpha << " per " << p.flipReferenceDt << " s (PIC damping "
+      << std::lround(p.flipDampingRate(p.flipReferenceDt)) << " /s, PIC viscosity "
+      << p.flipViscosityFor(p.flipReferenceDt) << " m^2/s at dx " << p.dx << " m)";
   else
-    s << " per step (PIC damping -ln(alpha)/dt: it changes with the step)";
+    s << "alpha " << p.flipAlpha << " per step (PIC damping -ln(alpha)/dt: it changes with the step)";
   return s.str();
 }
 

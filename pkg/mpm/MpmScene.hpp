@@ -15,12 +15,13 @@
 //   "gravity": [0, 0, -9.81]        [m/s^2], or {"g": 9.81, "incline_deg": 10}: a flume
 //                                   inclined by incline_deg in [0, 90) about y, descending
 //                                   toward +x: gravity = g (sin a, 0, -cos a); g >= 0.
-//   "flip_alpha": 0.99,             FLIP/PIC blend, in [0, 1]: kept per flip_reference_dt
-//   "flip_reference_dt": 5e-5,      [s] > 0 (MpmParams::flipReferenceDt): a step of length dt
-//                                   blends with flip_alpha^(dt / flip_reference_dt), so the PIC
-//                                   damping per second does not depend on dt
-//                                   (MpmParams::flipReferenceDt); "step": flip_alpha per step, as
-//                                   Eq 4 is written (the damping then changes with the step)
+//   "flip_viscosity": 0.005,        PIC viscosity of the FLIP/PIC blend (Eq 4) [m^2/s] > 0
+//                                   (MpmParams::flipViscosity): a step of length dt blends with
+//                                   exp(-4 nu dt / dx^2), the same flow at any step and grid
+//   "flip_alpha": 0.99,             instead of flip_viscosity: alpha in [0, 1] kept per
+//   "flip_reference_dt": 5e-6,      flip_reference_dt [s] > 0 of simulated time, or "step":
+//                                   alpha per step, as Eq 4 is written (the damping then
+//                                   changes with the step); flip_alpha needs flip_reference_dt
 //   "cfl": 0.3,                     CFL number of the stable-step estimate, in (0, 1]
 //   "keep_last_good_state": true,   false: one copy of the particles, 109 (double) or 57
 //                                   (float) bytes per particle less; a failed step then leaves

@@ -88,6 +88,23 @@ def equilibriumOverlap(load, R, kc, contacts=1):
     return 0.5 * (lo + hi)
 
 
+def tiltAndYaw(angle, axis):
+    """A block's turn from its start split about the bed normal z (swing-twist): ``tilt`` [deg],
+    the angle its own z axis leans from z (tipping, in [0, 180]), and ``yaw`` [deg], its twist
+    about z (turning while it slides flat, in (−180, 180]). ``angle`` [rad] and ``axis`` (need
+    not be unit) are the rotation from the start (YADE's ``ori.toAngleAxis()``). A cube tipped
+    forward 30° has tilt 30, yaw 0; one turned 30° on the bed, tilt 0, yaw 30."""
+    n = math.sqrt(sum(float(c) ** 2 for c in axis))
+    if n == 0 or angle == 0:
+        return 0.0, 0.0
+    s, w = math.sin(0.5 * angle), math.cos(0.5 * angle)
+    x, y, z = (float(c) / n * s for c in axis)
+    tilt = math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y)))))
+    yaw = math.degrees(2.0 * math.atan2(z, w))
+    yaw = yaw - 360.0 if yaw > 180.0 else (yaw + 360.0 if yaw <= -180.0 else yaw)
+    return tilt, yaw
+
+
 def runoutLube(a):
     """Normalised runout ΔL/L_i of a quasi-2D granular column collapse of aspect ratio a:
     ≈ 1.2 a for a ≲ 1.8, ≈ 1.9 a^(2/3) above (Lube et al. 2005; Lajeunesse et al. 2005 report

@@ -21,6 +21,7 @@ from yade.minieigenHP import Vector3
 from yade.wrapper import ForceResetter, NewtonIntegrator
 
 from . import analysis
+from .analysis import tiltAndYaw
 from .coupling import CoupledEngine
 from .mpm import MpmEngine
 from .sdem import SdemEngine
@@ -78,12 +79,12 @@ class Flume:
         (default 0: smooth)}``. The column settles behind it until t_open; no material above
         the edge passes it (the grid resolves the edge: the opening the flow sees lags the
         edge by about 1.5 dx). None (default): no gate, the column starts free at t = 0.
-    :param flipAlpha: FLIP/PIC blend α of the flow, Eq 4, in [0, 1] (0.99, Table 1), kept per
-        ``flipReferenceDt`` of simulated time;
-    :param flipReferenceDt: Δt_ref of the blend [s] > 0, None (the scene default, 201 /s of
-        PIC damping at any step), ``mpmsdem.mpm.PAPER_STEP`` (the paper's blend, 2010 /s: the
-        paper's examples use it at the paper's resolution) or ``"step"`` (α per step, Eq 4 as
-        written); see :class:`MpmEngine`. ``flipBlend()`` names the blend a run used;
+    :param flipViscosity: PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0, None (the
+        scene default, 0.005 m²/s: 200 /s at dx 0.01 m) or ``mpmsdem.mpm.PAPER_VISCOSITY`` (the
+        paper's blend, 0.0503 m²/s: the paper's examples use it); :param flipAlpha,
+        flipReferenceDt: instead, α per Δt_ref [s] (``mpmsdem.mpm.PAPER_STEP``: the paper's
+        α 0.99 per 5e-6 s) or per ``"step"``; see :class:`MpmEngine`. ``flipBlend()`` names the
+        blend a run used;
     :param backend, precision: MPM backend; :param output: folder for all outputs (None: none),
         :param outputEvery: record interval [s]; :param vtkEvery: ParaView interval [s].
     """
@@ -92,7 +93,7 @@ class Flume:
                  granular=None, basalFriction=0.21, sideWallFriction=0.0, blocks=(), bedSweep=0.005,
                  bedBarrierStiffness=1e4, dtFactor=0.5, backend="cpu", precision="double", output=None,
                  outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None, flipReferenceDt=None,
-                 dtAuto=None, dtCheck="raise", flipAlpha=0.99):
+                 dtAuto=None, dtCheck="raise", flipAlpha=None, flipViscosity=None):
         if gate is not None and (not isinstance(gate, dict) or set(gate) - {"speed", "open_at", "friction"}):
             raise ValueError("gate = %r: must be None or a dict with keys among speed [m/s], open_at [s], friction"
                              % (gate,))
@@ -102,6 +103,11 @@ class Flume:
         th = math.radians(inclineDeg)
         self.gravity = (9.81 * math.sin(th), 0.0, -9.81 * math.cos(th))
         granular = dict(GLASS_BEADS if granular is None else granular)
+        if not (dx > 0 and abs(width / dx - round(width / dx)) < 1e-6 * width / dx and round(width / dx) >= 1):
+            raise ValueError("dx = %r m: must divide the flume width %r m into whole cells (the side walls lie on "
+                             "grid planes), e.g. %r or %r m" % (dx, width, width / max(1, math.floor(width / dx)),
+                                                                 width / math.ceil(width / dx)) if dx > 0 else
+                             "dx = %r m: must be > 0" % (dx,))
         n = round(ppc ** (1.0 / 3.0))
         if n ** 3 != ppc:
             raise ValueError("ppc = %r: must be a perfect cube (1, 8, 27, ...)" % (ppc,))
@@ -142,6 +148,7 @@ class Flume:
             walls={"-x": "free", "+x": "free", "-y": sideWallFriction, "+y": sideWallFriction, "-z": "free",
                    "+z": "free"},
             backend=backend, precision=precision, verbose=verbose, flipAlpha=flipAlpha, flipReferenceDt=flipReferenceDt,
+            flipViscosity=flipViscosity,
             gate=None if gate is None else dict(gate, x=columnLength, bottom=0.0),
             output=os.path.join(output, "mpm") if output else None, outputEvery=vtkEvery or outputEvery)
         self.coupled = CoupledEngine(self.sdem, self.mpm, pairs=pairs, output=output, outputEvery=outputEvery,
@@ -150,7 +157,7 @@ class Flume:
         O.engines = [ForceResetter(), self.coupled.runner, NewtonIntegrator(gravity=Vector3(*self.gravity), damping=0)]
         O.dt = dtFactor * self.mpm.stableTimeStep()
         self.x0 = [O.bodies[i].state.pos[0] for i in self.blockIds]
-        self.history = []  # (t, [x], [vx], [Fx], [Ffx], [Fex], [rotation deg]) per sample
+        self.history = []  # (t, [x], [vx], [Fx], [Ffx], [Fex], [rotation], [tilt], [yaw] deg) per sample
 
     def sample(self):
         """Append the blocks' state and flow forces (downstream components) to ``history``."""
@@ -161,7 +168,10 @@ class Flume:
         row.append([self.coupled.force(i)[0] for i in self.blockIds])
         row.append([self.coupled.faceForce(i)[0] for i in self.blockIds])
         row.append([self.coupled.edgeForce(i)[0] for i in self.blockIds])
+        turns = [tiltAndYaw(*b.state.ori.toAngleAxis()) for b in bodies]
         row.append([math.degrees(b.state.ori.toAngleAxis()[0]) for b in bodies])
+        row.append([t[0] for t in turns])
+        row.append([t[1] for t in turns])
         self.history.append(row)
 
     def run(self, duration, sampleEvery=None):
@@ -197,12 +207,13 @@ class Flume:
         return O.bodies[self.blockIds[k]].state.pos[0] - self.x0[k]
 
     def series(self, k):
-        """numpy arrays of block k: t, travel S_b, v_x, F_t, F_f, F_e (downstream, N), rotation (deg)."""
+        """numpy arrays of block k: t, travel S_b, v_x, F_t, F_f, F_e (downstream, N), rotation
+        (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`)."""
         import numpy as np
         t = np.array([r[0] for r in self.history])
-        cols = [np.array([r[j][k] for r in self.history]) for j in range(1, 7)]
+        cols = [np.array([r[j][k] for r in self.history]) for j in range(1, 9)]
         return {"t": t, "travel": cols[0] - self.x0[k], "vx": cols[1], "Ft": cols[2], "Ff": cols[3], "Fe": cols[4],
-                "rotation": cols[5]}
+                "rotation": cols[5], "tilt": cols[6], "yaw": cols[7]}
 
     def peakForce(self, k, smooth=None):
         """Peak downstream flow force on block k [N] and its time [s]; with ``smooth`` [s] the

@@ -32,6 +32,10 @@ from .sdem import _bindStep
 # The step of the paper's coupled runs (§3.1, Appendix D) [s]: with flipReferenceDt=PAPER_STEP the
 # flow is blended as the paper blends it, alpha 0.99 once per 5e-6 s (2010 /s of PIC damping).
 PAPER_STEP = 5e-6
+# The paper's blend as a PIC viscosity [m²/s]: 2010 /s at its dx 0.01 m times dx²/4 (0.0503). With
+# flipViscosity=PAPER_VISCOSITY a scene at any dx and step has the flow of the paper's numerics
+# (docs/physics.md, "The blend as a viscosity").
+PAPER_VISCOSITY = -math.log(0.99) / PAPER_STEP * 0.01 ** 2 / 4.0
 
 
 def flipReferenceArg(text):
@@ -68,15 +72,20 @@ class MpmEngine:
         material–gate Coulomb μ ≥ 0 (default 0)}``; edge height z_0 + speed·max(0, t − t_open).
         It acts on the grid before the walls; ``solver.gateImpulse()`` is the impulse it has
         given the flow [N s]. None (default): no gate.
-    :param flipAlpha: FLIP/PIC blend α of Eq 4, in [0, 1] (default 0.99, Table 1): the FLIP
-        fraction kept per ``flipReferenceDt`` of simulated time.
-    :param flipReferenceDt: Δt_ref [s] > 0: a step of length Δt blends with α^(Δt/Δt_ref), so
-        the PIC damping per second, −ln α/Δt_ref, and with it the flow, does not change with the
-        time step. None (default): the scene default, 5e-5 s (201 /s; ``MpmParams::flipReferenceDt``,
-        chosen against the column collapse of Lube et al.); :data:`PAPER_STEP` (5e-6 s): the
-        paper's blend, α 0.99 once per its step (§3.1, Appendix D), 2010 /s. ``"step"``: α per
-        step, Eq 4 as written (the damping per second then grows as the step shrinks).
-        ``solver.flipBlend`` names the blend in force; docs/physics.md.
+    :param flipViscosity: PIC viscosity ν of the FLIP/PIC blend of Eq 4 [m²/s] > 0: a step of
+        length Δt blends with exp(−4 ν Δt/Δx²) of FLIP. The PIC part smooths the velocity by
+        (Δx²/4) ∇²v, so a blend per unit time acts as a viscosity that grows with Δx²; ν keeps
+        the flow when the step or the grid changes. None (default, with no ``flipReferenceDt``):
+        the scene default, 0.005 m²/s (200 /s at Δx 0.01 m; ``MpmParams::flipViscosity``, chosen
+        against the column collapse of Lube et al.); :data:`PAPER_VISCOSITY` (0.0503 m²/s): the
+        paper's blend, α 0.99 once per its 5e-6 s step at its Δx 0.01 m (§3.1, Appendix D).
+    :param flipAlpha, flipReferenceDt: instead of ``flipViscosity``: α in [0, 1] (Table 1: 0.99;
+        default 0.99) kept per Δt_ref [s] > 0 of simulated time (the same damping per second at
+        any step, not at any Δx; :data:`PAPER_STEP`, 5e-6 s: the paper's blend), or
+        ``flipReferenceDt="step"``: α per step, Eq 4 as written (the damping per second then
+        grows as the step shrinks). ``flipAlpha`` needs ``flipReferenceDt``.
+        ``solver.flipBlend`` names the blend in force, ``solver.flipViscosity(dt)`` and
+        ``solver.flipDampingRate(dt)`` give it as numbers; docs/physics.md.
     :param cfl: CFL number of :meth:`stableTimeStep`, in (0, 1].
     :param keepLastGoodState: True (default): the solver keeps a second copy of the particles,
         so that a step that fails (NaN, blow-up) leaves them as they were at its start, and they
@@ -92,16 +101,17 @@ class MpmEngine:
     :param label: label of the PyRunner for ``O.engines``.
     """
 
-    def __init__(self, grid, material, particles, gravity=(0, 0, -9.81), walls=None, flipAlpha=0.99, cfl=0.3,
+    def __init__(self, grid, material, particles, gravity=(0, 0, -9.81), walls=None, flipAlpha=None, cfl=0.3,
                  backend="cpu", precision="double", output=None, outputEvery=None, label="mpm", verbose=True,
-                 gate=None, flipReferenceDt=None, keepLastGoodState=True):
+                 gate=None, flipReferenceDt=None, keepLastGoodState=True, flipViscosity=None):
         scene = {"grid": grid, "material": material, "particles": list(particles),
                  "gravity": list(gravity) if not isinstance(gravity, dict) else gravity,
-                 "flip_alpha": flipAlpha, "cfl": cfl,
-                 "keep_last_good_state": keepLastGoodState,
+                 "cfl": cfl, "keep_last_good_state": keepLastGoodState,
                  "run": {"duration": 1.0, "backend": backend, "precision": precision}}
-        if flipReferenceDt is not None:
-            scene["flip_reference_dt"] = flipReferenceDt
+        for key, value in (("flip_viscosity", flipViscosity), ("flip_alpha", flipAlpha),
+                           ("flip_reference_dt", flipReferenceDt)):
+            if value is not None:
+                scene[key] = value
         if walls:
             scene["walls"] = walls
         if gate is not None:

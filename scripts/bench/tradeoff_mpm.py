@@ -57,6 +57,7 @@ def scene_for(base, s):
     sc["grid"] = {"dx": dx, "origin": [-margin * dx] * 3,
                   "cells": [int(round(e / dx)) + 2 * margin for e in extent]}
     sc["flip_alpha"] = s["alpha"]
+    sc["flip_reference_dt"] = "step"  # the study measured alpha per step (py/mpmsdem/tradeoffs.json)
     sc["particles"][0]["ppc"] = s["ppc"]
     sc["run"]["precision"] = s["precision"]
     sc["run"]["vtk"] = "none"

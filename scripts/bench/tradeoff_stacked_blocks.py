@@ -8,7 +8,7 @@
 docs/tradeoffs.md measures grid spacing, points per cell, FLIP/PIC alpha and precision on the
 column collapse, whose output is a runout. A user of the coupling reads forces and block motions
 instead; this script measures the same knobs on them. Each setting runs
-``examples/liu2018_blocks.py --dx --ppc --flip-alpha --precision --duration --no-plots`` in its
+``examples/liu2018_blocks.py --dx --ppc --flip-alpha --flip-reference-dt step --precision --duration --no-plots`` in its
 own process on one thread (free flow first, then the coupled run with ``dtAuto``) and reads its
 ``summary.json``:
 
@@ -79,6 +79,7 @@ def runOne(s, folder, duration, timeout):
             return row, True
     os.makedirs(folder, exist_ok=True)
     cmd = [sys.executable, EXAMPLE, "--dx", repr(s["dx"]), "--ppc", str(s["ppc"]), "--flip-alpha", repr(s["alpha"]),
+           "--flip-reference-dt", "step",
            "--precision", s["precision"], "--duration", repr(duration), "--no-plots", "--out", folder]
     env = dict(os.environ, OMP_NUM_THREADS="1")
     before = resource.getrusage(resource.RUSAGE_CHILDREN)

@@ -19,6 +19,9 @@ runs only the cases not yet done. Cases (``--cases`` picks a comma-separated sub
     flow040      flow–cube friction 0.40 (0.21), paper blend
     flow067      flow–cube friction 0.67 (the cube–bed value), paper blend
     basal015     basal friction 0.15, paper blend
+    flow000      a smooth cube (flow–cube friction 0), paper blend
+    flow067_basal015   flow–cube friction 0.67 and basal friction 0.15, paper blend
+    half_flow067       half the paper's damping (1005 /s) with flow–cube friction 0.67
 
 Targets (paper §3.2, Figs 8–9): first touch ~0.25 s (experiment 0.3 s), F_t 0.32 N at 0.4 s,
 ~0.20 N plateau, 45° at 0.72 s and then at rest. Prints the table with each case's Δx, step
@@ -44,6 +47,9 @@ CASES = {
     "flow040": {"flipDampingRate": PAPER_RATE, "flowFriction": 0.40},
     "flow067": {"flipDampingRate": PAPER_RATE, "flowFriction": 0.67},
     "basal015": {"flipDampingRate": PAPER_RATE, "basalFriction": 0.15},
+    "flow000": {"flipDampingRate": PAPER_RATE, "flowFriction": 0.0},
+    "flow067_basal015": {"flipDampingRate": PAPER_RATE, "flowFriction": 0.67, "basalFriction": 0.15},
+    "half_flow067": {"flipDampingRate": PAPER_RATE / 2, "flowFriction": 0.67},
 }
 # (result key, label, paper's value or None, format)
 COLUMNS = [("first_touch", "first touch [s]", 0.25, "%.3f"), ("force_04", "F_t at 0.4 s [N]", 0.32, "%.2f"),

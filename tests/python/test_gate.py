@@ -27,7 +27,8 @@ def test_gate_holds_a_column_on_an_incline_and_its_impulse_balances_the_momentum
     g = (9.81 * math.sin(a), 0, -9.81 * math.cos(a))
     mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [16, 5, 12], "origin": [0, 0, 0]}, material=GLASS,
                             particles=[{"lo": [0.05, 0.02, 0.02], "hi": [0.11, 0.03, 0.08], "ppc": [2, 1, 2]}],
-                            gravity=g, gate={"x": 0.11, "open_at": 100}, flipAlpha=0.0, verbose=False)
+                            gravity=g, gate={"x": 0.11, "open_at": 100}, flipAlpha=0.0, flipReferenceDt="step",
+                            verbose=False)
     p = mpm.particles()
     M, p0 = p["mass"].sum(), (p["mass"] * p["v"][:, 0]).sum()
     dt = 0.5 * mpm.stableTimeStep()
@@ -117,3 +118,14 @@ def test_flume_gate_holds_the_column_then_releases_it_from_the_bed_up():
 def test_flume_gate_rejects_unknown_keys():
     with pytest.raises(ValueError, match="gate"):
         flume({"speed": 1, "x": 0.2})
+
+
+@pytest.mark.parametrize("dx", [0.015, 0.03, -0.01])
+def test_flume_refuses_a_spacing_that_does_not_divide_its_width(dx):
+    """The side walls lie on grid planes: a dx that leaves part of a cell across the width is a
+    ValueError naming dx (and, for a positive dx, the two nearest spacings that fit)."""
+    with pytest.raises(ValueError, match=r"dx = %r m: must" % dx) as err:
+        Flume(length=0.5, width=0.2, columnLength=0.1, columnHeight=0.1, dx=dx, ppc=8, verbose=False)
+    if dx > 0:
+        near = sorted(0.2 / n for n in (math.floor(0.2 / dx), math.ceil(0.2 / dx)))
+        assert all(repr(v) in str(err.value) for v in near)

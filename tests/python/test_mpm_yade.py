@@ -280,22 +280,33 @@ def test_outputs_record_the_flip_blend_and_a_restart_across_blends_is_refused(tm
     path.write_text(json.dumps(scene))
     out = tmp_path / "out"
     r = subprocess.run([exe, str(path), "--out", str(out), "--steps", "20"], capture_output=True, text=True)
-    assert r.returncode == 0 and "FLIP/PIC blend alpha 0.99 per 5e-05 s (PIC damping 201 /s)" in r.stdout, r.stdout
+    # the default: a PIC viscosity of 0.005 m^2/s, 4 nu/dx^2 = 50 /s at this dx of 0.02 m
+    assert r.returncode == 0 and "FLIP/PIC blend PIC viscosity 0.005 m^2/s (PIC damping 50 /s at dx 0.02 m)" in r.stdout, \
+        r.stdout
     for name in ("mpm.h5", "mpm.h5.restart"):  # the file and the copy a restart goes back to
         with h5py.File(out / name, "r+") as f:
-            assert f.attrs["flip_alpha"] == 0.99 and f.attrs["flip_reference_dt"] == 5e-5
-            assert f.attrs["flip_damping_rate"] == pytest.approx(-math.log(0.99) / 5e-5, rel=1e-12)  # 201.007 /s
+            assert f.attrs["flip_viscosity"] == 0.005 and f.attrs["flip_damping_rate"] == pytest.approx(50, rel=1e-12)
+            assert math.isnan(f.attrs["flip_alpha"]) and math.isnan(f.attrs["flip_reference_dt"])
             del f.attrs["flip_blend"]
     r = subprocess.run([exe, str(path), "--out", str(out), "--steps", "20", "--restart"], capture_output=True, text=True)
-    assert r.returncode == 2 and "not recorded" in r.stderr and "201 /s" in r.stderr, r.stderr
-    # the YADE engine records the same, and the paper's blend reads 2010 /s
+    assert r.returncode == 2 and "not recorded" in r.stderr and "50 /s" in r.stderr, r.stderr
+    # the YADE engine records the same; the paper's blend reads 2010 /s at its dx of 0.01 m, and
+    # as a viscosity it is the same at any dx
     eng = mpmsdem.MpmEngine(grid=scene["grid"], material=scene["material"], particles=scene["particles"],
                             flipReferenceDt=mpmsdem.mpm.PAPER_STEP, output=str(tmp_path / "yade"), outputEvery=0.01,
                             verbose=False)
-    assert eng.solver.flipBlend == "alpha 0.99 per 5e-06 s (PIC damping 2010 /s)"
+    assert eng.solver.flipBlend == "alpha 0.99 per 5e-06 s (PIC damping 2010 /s, PIC viscosity 0.201007 m^2/s at dx 0.02 m)"
     assert eng.solver.flipDampingRate(1e-4) == pytest.approx(-math.log(0.99) / 5e-6, rel=1e-12)
     with h5py.File(tmp_path / "yade" / "mpm.h5", "r", locking=False) as f:  # the engine still writes it
         assert f.attrs["flip_blend"] == eng.solver.flipBlend and f.attrs["flip_damping_rate"] == pytest.approx(2010.07, abs=0.01)
+        assert f.attrs["flip_viscosity"] == pytest.approx(2010.07 * 0.02 ** 2 / 4, abs=1e-5)
+    eng = mpmsdem.MpmEngine(grid=scene["grid"], material=scene["material"], particles=scene["particles"],
+                            flipViscosity=mpmsdem.mpm.PAPER_VISCOSITY, verbose=False)
+    assert eng.solver.flipViscosity(1e-4) == pytest.approx(0.0502517, abs=1e-7)
+    assert eng.solver.flipDampingRate(1e-4) == pytest.approx(2010.07 / 4, abs=0.01)
     with pytest.raises(ValueError, match="flip_reference_dt"):
         mpmsdem.MpmEngine(grid=scene["grid"], material=scene["material"], particles=scene["particles"],
                           flipReferenceDt=0, verbose=False)
+    with pytest.raises(ValueError, match="flip_alpha.*flip_reference_dt"):
+        mpmsdem.MpmEngine(grid=scene["grid"], material=scene["material"], particles=scene["particles"],
+                          flipAlpha=0.95, verbose=False)

@@ -1,6 +1,8 @@
-// The FLIP/PIC blend per step (paper Eq 4) and per reference step (MpmParams::flipReferenceDt):
-// Eq 4's PIC part damps the flow (1 - alpha)/dt times per second, so the same scene run at a
-// smaller step is damped more; alpha^(dt/dt_ref) keeps the damping per second.
+// The FLIP/PIC blend per step (paper Eq 4), per reference step (MpmParams::flipReferenceDt) and
+// as a viscosity (MpmParams::flipViscosity): Eq 4's PIC part damps the flow (1 - alpha)/dt
+// times per second, so the same scene run at a smaller step is damped more; alpha^(dt/dt_ref)
+// keeps the damping per second, and the damping acts on the flow as a viscosity r dx^2/4, so
+// exp(-4 nu dt/dx^2) keeps the flow when the grid changes too.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,6 +22,7 @@ namespace {
 // A granular column collapsing on a rough base (quasi-2D, dx 1 cm, 4 points per cell).
 MpmParams collapse(double alpha, double referenceDt) {
   MpmParams p = testing_scenes::granularColumnParams(0.01, {40, 5, 20}, 2e5);
+  p.flipViscosity = 0;
   p.flipAlpha = alpha;
   p.flipReferenceDt = referenceDt;
   return p;
@@ -42,18 +45,42 @@ double kineticEnergyAfter(const MpmParams& prm, double dt, double duration) {
 
 }  // namespace
 
+TEST(FlipBlend, ViscosityRule) {
+  MpmParams p;
+  // default: a PIC viscosity of 0.005 m^2/s, 4 nu / dx^2 = 200 /s at dx 0.01 m, at any step
+  EXPECT_EQ(p.flipViscosity, 0.005);
+  EXPECT_NEAR(p.flipAlphaFor(5e-5), std::exp(-0.01), 1e-15);
+  EXPECT_NEAR(p.flipDampingRate(5e-6), 200.0, 1e-9);
+  EXPECT_NEAR(p.flipDampingRate(1e-3), 200.0, 1e-9);
+  EXPECT_EQ(p.flipViscosityFor(1e-4), 0.005);
+  EXPECT_FALSE(p.flipBlendPerStep());
+  // twice the spacing, a quarter of the rate: the same viscosity
+  p.dx = 0.02;
+  EXPECT_NEAR(p.flipDampingRate(1e-4), 50.0, 1e-9);
+  EXPECT_NEAR(p.flipAlphaFor(5e-5) * p.flipAlphaFor(5e-5), p.flipAlphaFor(1e-4), 1e-15);
+  // the paper's blend at its dx 0.01 m: alpha 0.99 per 5e-6 s is nu = 2010 /s x dx^2/4
+  p.dx = 0.01;
+  p.flipViscosity = -std::log(0.99) / MpmParams::kPaperStep * 1e-4 / 4;
+  EXPECT_NEAR(p.flipViscosity, 0.050252, 1e-6);
+  EXPECT_NEAR(p.flipAlphaFor(MpmParams::kPaperStep), 0.99, 1e-15);
+  EXPECT_NEAR(p.flipDampingRate(5e-5), 2010.067, 1e-3);
+}
+
 TEST(FlipBlend, ReferenceStepRule) {
   MpmParams p;
-  // default: alpha 0.99 per 5e-5 s, 201 /s at any step
+  p.flipViscosity = 0;
+  p.flipReferenceDt = 5e-5;  // alpha 0.99 per 5e-5 s, 201 /s at any step
   EXPECT_EQ(p.flipAlphaFor(5e-5), 0.99);
   EXPECT_NEAR(p.flipAlphaFor(5e-6), std::pow(0.99, 0.1), 1e-15);
   EXPECT_NEAR(p.flipDampingRate(5e-6), -std::log(0.99) / 5e-5, 1e-9);
   EXPECT_NEAR(p.flipDampingRate(1e-4), 201.0067, 1e-4);
+  EXPECT_NEAR(p.flipViscosityFor(1e-4), 201.0067 * 1e-4 / 4, 1e-8);
   // the paper's blend, alpha 0.99 once per its 5e-6 s step (Table 1, Appendix D): 2010 /s
   p.flipReferenceDt = MpmParams::kPaperStep;
   EXPECT_NEAR(p.flipDampingRate(5e-5), 2010.067, 1e-3);
   p.flipAlpha = 0.9;
   p.flipReferenceDt = 0;
+  EXPECT_TRUE(p.flipBlendPerStep());
   EXPECT_EQ(p.flipAlphaFor(1e-4), 0.9);  // per step: Eq 4 as written, whatever the step
   EXPECT_NEAR(p.flipDampingRate(1e-4), 10 * p.flipDampingRate(1e-3), 1e-9);  // ten times the rate at dt/10
   p.flipReferenceDt = 1e-4;
@@ -65,8 +92,34 @@ TEST(FlipBlend, ReferenceStepRule) {
   EXPECT_EQ(p.flipAlphaFor(2.5e-5), 0.0);
 }
 
+// A blend set two ways, or an alpha the viscosity would ignore, is refused (a C++ caller who
+// sets flipAlpha or flipReferenceDt must also clear flipViscosity).
+TEST(FlipBlend, ConflictingBlendsAreRefused) {
+  const auto refused = [](const MpmParams& p, const char* name) {
+    try {
+      makeSolver(p);
+      ADD_FAILURE() << name << " accepted";
+    } catch (const ParameterError& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("flipViscosity"), std::string::npos) << e.what();
+    }
+  };
+  MpmParams p;
+  p.flipReferenceDt = 5e-6;
+  refused(p, "flipReferenceDt");
+  p = MpmParams();
+  p.flipAlpha = 0;
+  refused(p, "flipAlpha");
+  p = MpmParams();
+  p.flipViscosity = -1e-3;
+  refused(p, "flipViscosity");
+  p.flipViscosity = 0;  // alpha 0.99 per step
+  EXPECT_NO_THROW(makeSolver(p));
+}
+
 TEST(FlipBlend, NegativeReferenceStepIsRefused) {
   MpmParams p;
+  p.flipViscosity = 0;
   p.flipReferenceDt = -1e-4;
   try {
     makeSolver(p);
@@ -97,28 +150,117 @@ TEST(FlipBlend, ReferenceStepMakesTheFlowIndependentOfTheStep) {
   EXPECT_NEAR(refFine / refCoarse, 1.0, 0.06);
 }
 
-// The scene file names the blend: a reference step in seconds, or "step" for Eq 4 as written;
-// the bare 0 that meant "per step" before the default became a reference step is refused,
-// naming the key and both ways to say it.
-TEST(FlipBlend, SceneKeyTakesAStepOrTheWordStep) {
+// The scene file names the blend: a viscosity in m^2/s (the default), or flip_alpha per a
+// reference step in seconds or per "step" (Eq 4 as written); the bare 0 that once meant "per
+// step" is refused, naming the key and both ways to say it, and so are two blends at once and a
+// flip_alpha without a reference (it has no time scale).
+TEST(FlipBlend, SceneKeysTakeAViscosityOrAlphaPerAStepOrTheWordStep) {
   const std::string head = R"({"grid": {"dx": 0.01, "cells": [8, 8, 8]},
       "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.3, "mu_2": 0.6},
       "particles": [{"lo": [0.02, 0.02, 0.02], "hi": [0.04, 0.04, 0.04], "ppc": 1}], "run": {"duration": 0.1})";
-  EXPECT_EQ(parseScene(head + "}").params.flipReferenceDt, 5e-5);
-  EXPECT_EQ(parseScene(head + R"(, "flip_reference_dt": 5e-6})").params.flipReferenceDt, MpmParams::kPaperStep);
+  const MpmScene byDefault = parseScene(head + "}");
+  EXPECT_EQ(byDefault.params.flipViscosity, 0.005);
+  EXPECT_EQ(describeFlipBlend(byDefault.params), "PIC viscosity 0.005 m^2/s (PIC damping 200 /s at dx 0.01 m)");
+  const MpmScene paper = parseScene(head + R"(, "flip_viscosity": 0.0502517})");
+  EXPECT_NEAR(paper.params.flipDampingRate(1e-4), 2010.07, 1e-2);
+  const MpmScene perTime = parseScene(head + R"(, "flip_alpha": 0.99, "flip_reference_dt": 5e-6})");
+  EXPECT_EQ(perTime.params.flipViscosity, 0.0);
+  EXPECT_EQ(perTime.params.flipReferenceDt, MpmParams::kPaperStep);
+  EXPECT_EQ(parseScene(head + R"(, "flip_reference_dt": 5e-6})").params.flipAlpha, 0.99);
+  EXPECT_EQ(describeFlipBlend(perTime.params),
+            "alpha 0.99 per 5e-06 s (PIC damping 2010 /s, PIC viscosity 0.0502517 m^2/s at dx 0.01 m)");
   const MpmScene perStep = parseScene(head + R"(, "flip_reference_dt": "step"})");
   EXPECT_EQ(perStep.params.flipReferenceDt, 0.0);
   EXPECT_EQ(perStep.params.flipAlphaFor(1e-3), 0.99);
   EXPECT_EQ(describeFlipBlend(perStep.params), "alpha 0.99 per step (PIC damping -ln(alpha)/dt: it changes with the step)");
-  EXPECT_EQ(describeFlipBlend(MpmParams{}), "alpha 0.99 per 5e-05 s (PIC damping 201 /s)");
-  for (const char* bad : {"0", "-1e-5", "\"steps\"", "null"}) {
+  const auto refused = [&](const std::string& keys, const char* name, const char* hint) {
     try {
-      parseScene(head + R"(, "flip_reference_dt": )" + bad + "}");
-      ADD_FAILURE() << "flip_reference_dt " << bad << " accepted";
+      parseScene(head + ", " + keys + "}");
+      ADD_FAILURE() << keys << " accepted";
     } catch (const ParameterError& e) {
       const std::string m = e.what();
-      EXPECT_NE(m.find("flip_reference_dt"), std::string::npos) << m;
-      EXPECT_NE(m.find("\"step\""), std::string::npos) << m;
+      EXPECT_NE(m.find(name), std::string::npos) << m;
+      EXPECT_NE(m.find(hint), std::string::npos) << m;
     }
-  }
+  };
+  for (const char* bad : {"0", "-1e-5", "\"steps\"", "null"})
+    refused(std::string(R"("flip_reference_dt": )") + bad, "flip_reference_dt", "\"step\"");
+  refused(R"("flip_viscosity": 0)", "flip_viscosity", "(0, inf)");
+  refused(R"("flip_viscosity": 0.01, "flip_reference_dt": 5e-6)", "flip_reference_dt", "flip_viscosity");
+  refused(R"("flip_viscosity": 0.01, "flip_alpha": 0.9)", "flip_alpha", "flip_viscosity");
+  refused(R"("flip_alpha": 0.95)", "flip_alpha", "flip_reference_dt");
+}
+
+namespace {
+
+// The decay rate [1/s] of a shear wave v_x = A sin(k z) in a stress-free material (density
+// below rho_c: no stress, so the blend alone changes the velocity), three wavelengths deep, at
+// spacing dx and fixed step dt: fitted from the amplitude in the middle wavelength, far from the
+// free surfaces (where the blend diffuses as if through a wall without flux) and from the x walls
+// (which hold v_x at their nodes); the 1.2 cm the blend diffuses over the run reaches neither.
+double shearWaveDecay(double dx, const MpmParams& blend, double wavelength, double duration, double dt) {
+  MpmParams p = blend;
+  p.dx = dx;
+  const double lx = 0.12;
+  const double lz = 3 * wavelength;
+  p.cells = {static_cast<int>(std::lround(lx / dx)) + 4, 5, static_cast<int>(std::lround(lz / dx)) + 4};
+  p.origin = {-2 * dx, -2 * dx, -2 * dx};
+  p.gravity = {0, 0, 0};
+  p.material.density = 1000;
+  p.material.criticalDensity = 2000;  // gasified: stress-free
+  p.material.youngModulus = 1e4;
+  ParticleSet ps;
+  seedBox(p, {0, 0, 0}, {lx, dx, lz}, {2, 2, 2}, ps);
+  const double k = 2 * M_PI / wavelength, amplitude = 0.01;
+  for (std::size_t q = 0; q < ps.size(); ++q) ps.v[3 * q] = amplitude * std::sin(k * ps.x[3 * q + 2]);
+  const auto measured = [&](const ParticleSet& s) {
+    double num = 0, den = 0;
+    for (std::size_t q = 0; q < s.size(); ++q) {
+      const double x = s.x[3 * q], z = s.x[3 * q + 2];
+      if (std::fabs(x - lx / 2) > 0.01 || z < wavelength || z > 2 * wavelength || std::fabs(std::sin(k * z)) < 0.7)
+        continue;
+      num += s.v[3 * q] * std::sin(k * z);
+      den += std::sin(k * z) * std::sin(k * z);
+    }
+    return num / den;
+  };
+  auto solver = makeSolver(p);
+  solver->setParticles(ps);
+  const long steps = std::lround(duration / dt);
+  for (long i = 0; i < steps; ++i) solver->step(dt);
+  solver->getParticles(ps);
+  return -std::log(measured(ps) / amplitude) / duration;
+}
+
+}  // namespace
+
+// The blend damps a shear wave of wavenumber k at r (1 - sinc^6(k dx/2)) per second: the
+// quadratic B-spline's transfer to the grid and back multiplies a mode by sinc^6, so for
+// k dx << 1 the blend is a viscosity nu = r dx^2/4 (decay nu k^2). Hand-derived values at
+// 16 and 32 cells per wavelength (the step's finite share of PIC taken into account): a
+// viscosity of 0.005 m^2/s decays the wave at 7.50 and 7.38 /s (nu k^2 = 7.71 /s) on both
+// grids; the same rate per second, 200 /s, decays it four times slower on the finer grid
+// (1.90 /s).
+TEST(FlipBlend, TheBlendIsAViscosityOnTheFlow) {
+  const double wavelength = 0.16, k = 2 * M_PI / wavelength, duration = 0.03, dt = 1e-4;
+  const auto expected = [&](double rate, double dx) {  // a step keeps a + (1 - a) sinc^6, a = exp(-rate dt)
+    const double u = 0.5 * k * dx, sinc = std::sin(u) / u, a = std::exp(-rate * dt);
+    return -std::log(a + (1 - a) * std::pow(sinc, 6)) / dt;
+  };
+  MpmParams viscous;  // the default, 0.005 m^2/s
+  MpmParams perTime;
+  perTime.flipViscosity = 0;
+  perTime.flipReferenceDt = -std::log(0.99) / 200.0;  // 200 /s at any dx
+  const double coarseNu = shearWaveDecay(0.01, viscous, wavelength, duration, dt);
+  const double fineNu = shearWaveDecay(0.005, viscous, wavelength, duration, dt);
+  const double finePerTime = shearWaveDecay(0.005, perTime, wavelength, duration, dt);
+  std::printf("shear wave decay [1/s]: nu 0.005 m^2/s: dx 0.01 %.4g (expected %.4g), dx 0.005 %.4g (%.4g); "
+              "200 /s at dx 0.005: %.4g (%.4g); nu k^2 = %.4g\n",
+              coarseNu, expected(200, 0.01), fineNu, expected(800, 0.005), finePerTime, expected(200, 0.005),
+              0.005 * k * k);
+  EXPECT_NEAR(coarseNu / expected(200, 0.01), 1.0, 0.03);
+  EXPECT_NEAR(fineNu / expected(800, 0.005), 1.0, 0.03);
+  EXPECT_NEAR(finePerTime / expected(200, 0.005), 1.0, 0.03);
+  EXPECT_NEAR(fineNu / coarseNu, 1.0, 0.03);
+  EXPECT_NEAR(fineNu / finePerTime, 4.0, 0.3);
 }

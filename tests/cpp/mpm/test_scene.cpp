@@ -25,6 +25,7 @@ json goodScene() {
     "grid": {"dx": 0.01, "cells": [40, 10, 20], "origin": [0, 0, 0]},
     "gravity": {"g": 9.81, "incline_deg": 10},
     "flip_alpha": 0.95,
+    "flip_reference_dt": "step",
     "cfl": 0.4,
     "walls": {"-z": 0.21, "+x": "noslip", "-x": "free"},
     "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65,
@@ -62,6 +63,8 @@ TEST(MpmScene, GoodSceneGivesParameters) {
   EXPECT_NEAR(p.gravity[2], -9.81 * std::cos(a), 1e-12);
   EXPECT_NEAR(p.gravity[2], -9.660965, 1e-6);
   EXPECT_EQ(p.flipAlpha, 0.95);
+  EXPECT_EQ(p.flipViscosity, 0.0);
+  EXPECT_EQ(p.flipReferenceDt, 0.0);
   EXPECT_EQ(p.cfl, 0.4);
   EXPECT_EQ(p.walls[4].friction, 0.21);  // -z
   EXPECT_LT(p.walls[1].friction, 0.0);   // +x no-slip
@@ -133,11 +136,12 @@ TEST(MpmScene, DefaultsAndPlainGravity) {
   j["gravity"] = {0.0, -1.0, -9.0};
   j.erase("walls");
   j.erase("flip_alpha");
+  j.erase("flip_reference_dt");
   j["run"] = {{"duration", 2.0}, {"dt", 1e-4}};
   const MpmScene s = parseScene(j.dump());
   EXPECT_EQ(s.params.gravity[1], -1.0);
   EXPECT_EQ(s.params.gravity[2], -9.0);
-  EXPECT_EQ(s.params.flipAlpha, 0.99);
+  EXPECT_EQ(s.params.flipViscosity, 0.005);
   for (const WallSpec& w : s.params.walls) EXPECT_EQ(w.friction, 0.0);
   EXPECT_EQ(s.run.dt, 1e-4);
   EXPECT_EQ(s.run.outputEvery, 0.1);
