@@ -133,6 +133,7 @@ void MpmCpu<T>::load(ParticleSlices& particles, bool checked) {
   maxSpeed_ = 0;
   double massSum = 0;
   hasFext_ = false;
+  forcesIncomplete_ = false;
   for (auto& a : fext_) std::vector<T>().swap(a);
   forEachSlice(particles, [&](std::size_t first, const ParticleSet& ps) {
     const std::size_t count = ps.size();
@@ -224,11 +225,13 @@ void MpmCpu<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t co
 template <typename T>
 void MpmCpu<T>::setExternalForces(const std::vector<double>& f) {
   validateExternalForces(f, n_);
+  forcesIncomplete_ = true;
   for (int d = 0; d < 3; ++d) fext_[d].resize(n_);
   const std::vector<int>& id = state_[cur_].id;
   for (std::size_t q = 0; q < n_; ++q)
     for (int d = 0; d < 3; ++d) fext_[d][q] = static_cast<T>(f[3 * id[q] + d]);
   hasFext_ = true;
+  forcesIncomplete_ = false;
 }
 
 template <typename T>
@@ -240,6 +243,7 @@ ParticleView MpmCpu<T>::openForceBuffer() {
   v.n = n_;
   const State& s = state_[cur_];
   v.id = s.id.data();
+  forcesIncomplete_ = true;
   for (int d = 0; d < 3; ++d) {
     fext_[d].assign(n_, T(0));
     v.x[d] = s.x[d].data();
@@ -250,6 +254,7 @@ ParticleView MpmCpu<T>::openForceBuffer() {
   v.volume0 = s.vol0.data();
   v.J = s.J.data();
   hasFext_ = true;
+  forcesIncomplete_ = false;
   return v;
 }
 
@@ -461,6 +466,7 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
 template <typename T>
 void MpmCpu<T>::step(double dt) {
   requireLastGoodState("step");
+  requireCompleteForces("step");
   std::vector<int>().swap(slotOf_);  // the particles move in storage
   if (steps_ % 100 == 0) checkTimeStep(dt);
   const T dtT = static_cast<T>(dt);

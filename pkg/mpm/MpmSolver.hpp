@@ -92,7 +92,9 @@ class MpmSolver {
   virtual std::size_t numParticles() const = 0;
 
   // External forces on particles for the NEXT step only [N], 3 per particle (paper Eq 14:
-  // spread to the grid with the P2G weights). Cleared after each step.
+  // spread to the grid with the P2G weights). Cleared after each step. Invalid forces throw
+  // ParameterError and leave the solver as it was; a failure while storing them (out of
+  // memory) makes step() refuse to run until forces or particles are set again.
   virtual void setExternalForces(const std::vector<double>& f) = 0;
 
   // Zero the external-force buffer, arm it for the next step() (which spreads it to the grid
@@ -179,9 +181,19 @@ class MpmSolver {
                            "is off, so no copy of their state was kept); load the last snapshot with setParticles()");
   }
 
+  // Throws RuntimeFailure naming `what` when the last setExternalForces or openForceBuffer
+  // failed before the whole force buffer was in place (e.g. out of memory): a step would run
+  // without the forces the caller meant, so none runs until the buffer is set again.
+  void requireCompleteForces(const char* what) const {
+    if (forcesIncomplete_)
+      throw RuntimeFailure(std::string(what) + ": the last setExternalForces or openForceBuffer failed before all "
+                           "forces were in place (e.g. out of memory); call it again, or setParticles(), first");
+  }
+
   double time_ = 0;
   long steps_ = 0;
   bool partlyAdvanced_ = false;
+  bool forcesIncomplete_ = false;  // set while a force buffer is being replaced; see requireCompleteForces
   std::vector<std::shared_ptr<GridHook>> hooks_;
 };
 

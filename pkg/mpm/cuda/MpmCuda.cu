@@ -80,6 +80,7 @@ void MpmCuda<T>::freeParticles() {
   for (auto& a : fext_) deviceFree(a);
   bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags);
   hasFext_ = false;
+  forcesIncomplete_ = false;
 }
 
 template <typename T>
@@ -173,12 +174,14 @@ void MpmCuda<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t c
 template <typename T>
 void MpmCuda<T>::setExternalForces(const std::vector<double>& f) {
   validateExternalForces(f, n_);
+  forcesIncomplete_ = true;
   std::vector<T> buf;
   for (int d = 0; d < 3; ++d) {
     if (!fext_[d]) deviceAlloc(&fext_[d], n_, bytes_);
     upload(fext_[d], f, n_, 3, d, buf);
   }
   hasFext_ = true;
+  forcesIncomplete_ = false;
 }
 
 template <typename T>
@@ -188,6 +191,7 @@ ParticleView MpmCuda<T>::openForceBuffer() {
   v.device = true;
   v.n = n_;
   const DeviceState& s = state_[cur_];
+  forcesIncomplete_ = true;
   for (int d = 0; d < 3; ++d) {
     if (!fext_[d]) deviceAlloc(&fext_[d], n_, bytes_);
     CUDA_CHECK(cudaMemset(fext_[d], 0, std::max<std::size_t>(n_, 1) * sizeof(T)));
@@ -199,6 +203,7 @@ ParticleView MpmCuda<T>::openForceBuffer() {
   v.volume0 = vol0_;
   v.J = s.J;
   hasFext_ = true;
+  forcesIncomplete_ = false;
   return v;
 }
 
@@ -246,6 +251,7 @@ ParticleOut<T> MpmCuda<T>::output() const {
 
 template <typename T>
 void MpmCuda<T>::step(double dt) {
+  requireCompleteForces("step");
   if (steps_ % 100 == 0) checkTimeStep(dt);
   const int n = static_cast<int>(n_);
   const T dtT = static_cast<T>(dt);

@@ -1,10 +1,17 @@
-// Runs that go wrong must stop with a clear failure, not finish with a non-physical state
-// (issue 8): material points crushed to a vanishing volume by a loading the step cannot
-// follow are a run failure naming J, like the other blow-ups.
+// Runs that go wrong must stop with a clear failure, not finish with a non-physical state:
+// material points crushed to a vanishing volume by a loading the step cannot follow are a run
+// failure naming J, like the other blow-ups; a force buffer that could not be stored stops the
+// next step.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
 #include <algorithm>
+#include <cstdlib>
+#include <fstream>
 #include <functional>
+#include <limits>
+#include <new>
 #include <string>
 
 #include "common/Error.hpp"
@@ -124,4 +131,73 @@ TEST_P(MpmReliability, WithOneCopyAFailedStepLeavesNothingToMisuse) {
   lean->setParticles(good);
   EXPECT_TRUE(lean->holdsLastGoodState());
   EXPECT_GE(minJ(*lean), kMinJ);
+}
+
+namespace {
+
+// Virtual memory of this process [bytes] (VmSize of /proc/self/status).
+std::size_t virtualMemory() {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  while (status >> key) {
+    if (key == "VmSize:") {
+      std::size_t kb = 0;
+      status >> kb;
+      return kb * 1024;
+    }
+    status.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+  }
+  return 0;
+}
+
+// In a child process: forces for 64,000 points (three 512 kB arrays on the CPU) set under an
+// address-space limit that leaves room for less than two of them. Exits 0 when the allocation
+// failed and the next step refused to run, naming setExternalForces; 2-5 otherwise.
+[[noreturn]] void setForcesOutOfMemoryThenStep() {
+  MpmParams prm;
+  prm.dx = 0.01;
+  prm.cells = {24, 24, 24};
+  ParticleSet ps;
+  seedBox(prm, {0.02, 0.02, 0.02}, {0.22, 0.22, 0.22}, 8, ps);
+  auto solver = makeSolver(prm);
+  solver->setParticles(ps);
+  solver->step(1e-4);  // the thread pool and every step buffer exist before the limit
+  const std::vector<double> forces(3 * ps.size(), 1e-3);
+  const rlimit limit{virtualMemory() + 768 * 1024, RLIM_INFINITY};
+  if (setrlimit(RLIMIT_AS, &limit) != 0) std::_Exit(2);
+  try {
+    solver->setExternalForces(forces);
+    std::_Exit(3);  // the limit did not bite
+  } catch (const std::bad_alloc&) {
+  }
+  try {
+    solver->step(1e-4);
+    std::_Exit(4);  // it ran without the forces
+  } catch (const RuntimeFailure& e) {
+    std::_Exit(std::string(e.what()).find("setExternalForces") != std::string::npos ? 0 : 5);
+  }
+}
+
+}  // namespace
+
+// A setExternalForces that runs out of memory after a good setParticles leaves the solver
+// refusing to step (a step would silently drop the forces the caller set), not running.
+TEST(MpmReliabilityDeathTest, AFailedSetExternalForcesIsRefusedNotRun) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(setForcesOutOfMemoryThenStep(), ::testing::ExitedWithCode(0), "");
+}
+
+// The refusal ends when the forces are set again.
+TEST(MpmReliability, ForcesSetAgainAfterAFailureStep) {
+  MpmParams prm;
+  prm.dx = 0.01;
+  prm.cells = {10, 10, 10};
+  ParticleSet ps;
+  seedBox(prm, {0.03, 0.03, 0.03}, {0.05, 0.05, 0.05}, 8, ps);
+  auto solver = makeSolver(prm);
+  solver->setParticles(ps);
+  EXPECT_THROW(solver->setExternalForces(std::vector<double>(5, 0.0)), ParameterError);  // wrong length
+  EXPECT_NO_THROW(solver->step(1e-4));  // an invalid argument leaves the solver as it was
+  solver->setExternalForces(std::vector<double>(3 * ps.size(), 0.0));
+  EXPECT_NO_THROW(solver->step(1e-4));
 }
