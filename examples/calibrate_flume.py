@@ -133,6 +133,9 @@ def parse(argv):
     from mpmsdem.mpm import PAPER_VISCOSITY
     a.bounds = _pairs(a.param, "--param", "NAME=LOW:HIGH, e.g. mu_2=0.3:0.8", _range) or dict(APPENDIX_C_BOUNDS)
     a.fixed = _pairs(a.fix, "--fix", "NAME=VALUE, e.g. dx=0.01", float)
+    blends = sorted({"flipDampingRate", "flipViscosity"} & (set(a.fixed) | set(a.bounds)))
+    if len(blends) > 1:
+        raise SystemExit("--fix/--param %s: give one (both set the flow's FLIP/PIC blend)" % " and ".join(blends))
     if a.full:
         a.fixed["dx"] = 0.01
         if not {"flipDampingRate", "flipViscosity"} & (set(a.fixed) | set(a.bounds)):

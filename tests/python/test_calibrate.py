@@ -155,7 +155,9 @@ def test_flume_example_refuses_bad_arguments_before_running(tmp_path):
     for args, message in ((["--param", "mu_2=0.3:0.8"], "--target is required"),
                           (["--target", "travel=0.08", "--param", "mu2=0.3:0.8"],
                            "bounds: unknown parameter 'mu2' of task"),
-                          (["--target", "travel"], "--target 'travel': must be NAME=VALUE")):
+                          (["--target", "travel"], "--target 'travel': must be NAME=VALUE"),
+                          (["--target", "travel=0.08", "--fix", "flipViscosity=0.05", "--fix", "flipDampingRate=2000"],
+                           "flipDampingRate and flipViscosity: give one")):
         proc = subprocess.run([sys.executable, script, "--out", str(tmp_path)] + args, capture_output=True, text=True,
                               timeout=60, env=children.env())
         assert proc.returncode != 0 and message in proc.stderr, (args, proc.stderr[-1000:])
