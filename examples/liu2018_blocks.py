@@ -95,7 +95,12 @@ def parse(argv):
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"))
     ap.add_argument("--precision", default="double", choices=("double", "float"))
     ap.add_argument("--no-plots", action="store_true", help="skip the PNG")
-    return ap.parse_known_args(argv)[0]
+    a = ap.parse_known_args(argv)[0]
+    if a.flip_alpha is not None and a.flip_reference_dt is None:
+        ap.error("--flip-alpha %g needs --flip-reference-dt (its reference step [s], or 'step')" % a.flip_alpha)
+    if a.flip_viscosity is not None and (a.flip_alpha is not None or a.flip_reference_dt is not None):
+        ap.error("--flip-viscosity: give it alone (--flip-alpha/--flip-reference-dt set the blend another way)")
+    return a
 
 
 def settings(a):
