@@ -80,12 +80,18 @@ struct BinGridView {
 // safety sqrt(m R / (6 k_c delta max(1, 1 / (2 (1 + nu))))); +inf when the point does not
 // reach the barrier within dt.
 template <typename T>
+MPM_HD_INLINE T barrierStiffnessFactor(const sdem::BarrierCoulombPhys<T>& phys) {
+  // max(1, K_t / k_n): the stiffer of the normal barrier and the tangential spring sets the step
+  const T tangential = T(1) / (T(2) * (T(1) + phys.nu));
+  return tangential > T(1) ? tangential : T(1);
+}
+
+template <typename T>
 MPM_HD_INLINE T approachStepBound(T gap, T vn, T dt, T mass, T reach, const sdem::BarrierCoulombPhys<T>& phys,
                                   T safety) {
   const T delta = vn * dt - gap;
   if (!(delta > T(0))) return T(INFINITY);
-  const T tangential = T(1) / (T(2) * (T(1) + phys.nu));
-  return safety * mpm::hdSqrt(mass * reach / (T(6) * phys.kc * delta * (tangential > T(1) ? tangential : T(1))));
+  return safety * mpm::hdSqrt(mass * reach / (T(6) * phys.kc * delta * barrierStiffnessFactor(phys)));
 }
 
 // Stable-step bound for a particle closing at normal speed vn > 0 on a barrier it has not
@@ -100,9 +106,7 @@ MPM_HD_INLINE T approachStepBound(T gap, T vn, T dt, T mass, T reach, const sdem
 // k_c 1e4 N/m it lies above the CFL step of the paper's scenes (0.25 ms at dx 0.01 m, 1 m/s).
 template <typename T>
 MPM_HD_INLINE T firstContactStepBound(T vn, T mass, T reach, const sdem::BarrierCoulombPhys<T>& phys, T safety) {
-  const T tangential = T(1) / (T(2) * (T(1) + phys.nu));
-  return mpm::hdCbrt(safety * safety * mass * reach /
-                     (T(6) * phys.kc * vn * (tangential > T(1) ? tangential : T(1))));
+  return mpm::hdCbrt(safety * safety * mass * reach / (T(6) * phys.kc * vn * barrierStiffnessFactor(phys)));
 }
 
 // How many of the current step a non-touching pair is examined over: this step and the next,
