@@ -115,6 +115,19 @@ std::unique_ptr<CoupledWorld> blobWorld(int cellsX, double vx, mpm::Backend back
   return w;
 }
 
+// blobWorld(24, vx) with a 2 cm cube (R 3 mm, rho 2000) 0.0144 m ahead of the blob, free or
+// fixed, coupled by pair(0.3) at barrier stiffness kc [N/m]; *cube is its index.
+std::unique_ptr<CoupledWorld> blobAtCube(double vx, bool fixed, double kc, int* cube,
+                                         mpm::Backend backend = mpm::Backend::Cpu,
+                                         mpm::Precision precision = mpm::Precision::Double) {
+  auto w = blobWorld(24, vx, backend, precision);
+  *cube = addCube(*w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000, fixed);
+  sdem::BarrierPhys ph = pair(0.3);
+  ph.barrierStiffness = kc;
+  w->coupling.setPair(0, ph);
+  return w;
+}
+
 // A blob thrown at 1 m/s at a free cube 0.0144 m ahead, 1500 steps of 1e-5 s: where the cube
 // is, the impulse the flow gave it, the first step with a contact and the smallest particle
 // approach step of the run.
@@ -124,10 +137,9 @@ struct BlobHit {
   double minApproach = std::numeric_limits<double>::infinity();
 };
 BlobHit blobHitsCube(mpm::Backend backend, mpm::Precision precision) {
-  auto world = blobWorld(24, 1.0, backend, precision);
+  int cube;
+  auto world = blobAtCube(1.0, false, 1e4, &cube, backend, precision);
   CoupledWorld& w = *world;
-  const int cube = addCube(w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000);
-  w.coupling.setPair(0, pair(0.3));
   BlobHit r;
   r.impulse = Vec3::Zero();
   for (int s = 0; s < 1500; ++s) {
@@ -263,10 +275,9 @@ TEST(CoupledCheckpoint, BadFilesAreRefusedByName) {
 // time it was reached: inf before the blob reaches the cube, then finite and never above the
 // step of the first contact.
 TEST(CoupledWorld, RecordsTheLowestContactStepOfTheRun) {
-  auto world = blobWorld(24, 1.0);
+  int cube;
+  auto world = blobAtCube(1.0, false, 1e4, &cube);
   CoupledWorld& w = *world;
-  const int cube = addCube(w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000);
-  w.coupling.setPair(0, pair(0.3));
   double low = std::numeric_limits<double>::infinity(), lowTime = 0, first = 0;
   for (int s = 0; s < 1500; ++s) {
     w.step(1e-5);
@@ -794,12 +805,9 @@ TEST(MpSdemCoupling, ParticleApproachStepIsTheHandDerivedBound) {
 // pressed into the barrier overshot twice that.
 TEST(MpSdemCoupling, ParticleApproachStepKeepsAStiffFirstTouchWithinTheStepCheck) {
   auto worstRatio = [](bool particleApproach, int* firstContactStep) {
-    auto world = blobWorld(24, 1.0);
+    int cube;
+    auto world = blobAtCube(1.0, true, 1e7, &cube);
     CoupledWorld& w = *world;
-    const int cube = addCube(w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000, true);
-    sdem::BarrierPhys ph = pair(0.3);
-    ph.barrierStiffness = 1e7;
-    w.coupling.setPair(0, ph);
     double lastDt = 0, worst = 0;
     *firstContactStep = -1;
     for (int s = 0; s < 400; ++s) {
@@ -829,12 +837,9 @@ TEST(MpSdemCoupling, ParticleApproachStepKeepsAStiffFirstTouchWithinTheStepCheck
 // flow's kinetic energy grew about tenfold (measured with k_c 1e9 on a driver scene); with it
 // the blob only loses energy: to friction, to the barrier's stored energy and to the flow.
 TEST(MpSdemCoupling, StiffBarrierShortensTheStepBeforeTheFirstContact) {
-  auto world = blobWorld(24, 2.0);
+  int cube;
+  auto world = blobAtCube(2.0, true, 1e10, &cube);
   CoupledWorld& w = *world;
-  const int cube = addCube(w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000, true);
-  sdem::BarrierPhys ph = pair(0.3);
-  ph.barrierStiffness = 1e10;
-  w.coupling.setPair(0, ph);
   auto kinetic = [&w] {
     mpm::ParticleSet ps;
     w.mpm().getParticles(ps);

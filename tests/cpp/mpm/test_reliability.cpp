@@ -150,20 +150,28 @@ std::size_t virtualMemory() {
   return 0;
 }
 
-// In a child process: forces for 64,000 points (three 512 kB arrays on the CPU) set under an
-// address-space limit that leaves room for less than two of them. Exits 0 when the allocation
-// failed and the next step refused to run, naming setExternalForces; 2-5 otherwise.
-[[noreturn]] void setForcesOutOfMemoryThenStep() {
+// A CPU solver of dx 0.01 m holding 8 points per cell in the box [lo, hi] of a cube grid of
+// `cells` cells a side.
+std::unique_ptr<MpmSolver> seededSolver(int cells, double lo, double hi) {
   MpmParams prm;
   prm.dx = 0.01;
-  prm.cells = {24, 24, 24};
+  prm.cells = {cells, cells, cells};
   ParticleSet ps;
-  seedBox(prm, {0.02, 0.02, 0.02}, {0.22, 0.22, 0.22}, 8, ps);
+  seedBox(prm, {lo, lo, lo}, {hi, hi, hi}, 8, ps);
   auto solver = makeSolver(prm);
   solver->setParticles(ps);
+  return solver;
+}
+
+// In a child process: forces for 64,000 points (three 512 kB arrays on the CPU) set under an
+// address-space limit that leaves room for less than two of them, then again without it.
+// Exits 0 when the allocation failed, the next step refused to run naming setExternalForces,
+// and forces set again let it run; 2-6 otherwise.
+[[noreturn]] void setForcesOutOfMemoryThenStep() {
+  auto solver = seededSolver(24, 0.02, 0.22);
   solver->step(1e-4);  // the thread pool and every step buffer exist before the limit
-  const std::vector<double> forces(3 * ps.size(), 1e-3);
-  const rlimit limit{virtualMemory() + 768 * 1024, RLIM_INFINITY};
+  const std::vector<double> forces(3 * solver->numParticles(), 1e-3);
+  rlimit limit{virtualMemory() + 768 * 1024, RLIM_INFINITY};
   if (setrlimit(RLIMIT_AS, &limit) != 0) std::_Exit(2);
   try {
     solver->setExternalForces(forces);
@@ -174,30 +182,34 @@ std::size_t virtualMemory() {
     solver->step(1e-4);
     std::_Exit(4);  // it ran without the forces
   } catch (const RuntimeFailure& e) {
-    std::_Exit(std::string(e.what()).find("setExternalForces") != std::string::npos ? 0 : 5);
+    if (std::string(e.what()).find("setExternalForces") == std::string::npos) std::_Exit(5);
   }
+  limit.rlim_cur = RLIM_INFINITY;
+  if (setrlimit(RLIMIT_AS, &limit) != 0) std::_Exit(2);
+  try {
+    solver->setExternalForces(forces);
+    solver->step(1e-4);
+  } catch (const std::exception&) {
+    std::_Exit(6);  // still refused once the forces are in place
+  }
+  std::_Exit(0);
 }
 
 }  // namespace
 
 // A setExternalForces that runs out of memory after a good setParticles leaves the solver
-// refusing to step (a step would silently drop the forces the caller set), not running.
+// refusing to step (a step would silently drop the forces the caller set), not running; the
+// refusal ends when the forces are set again.
 TEST(MpmReliabilityDeathTest, AFailedSetExternalForcesIsRefusedNotRun) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   EXPECT_EXIT(setForcesOutOfMemoryThenStep(), ::testing::ExitedWithCode(0), "");
 }
 
-// The refusal ends when the forces are set again.
-TEST(MpmReliability, ForcesSetAgainAfterAFailureStep) {
-  MpmParams prm;
-  prm.dx = 0.01;
-  prm.cells = {10, 10, 10};
-  ParticleSet ps;
-  seedBox(prm, {0.03, 0.03, 0.03}, {0.05, 0.05, 0.05}, 8, ps);
-  auto solver = makeSolver(prm);
-  solver->setParticles(ps);
-  EXPECT_THROW(solver->setExternalForces(std::vector<double>(5, 0.0)), ParameterError);  // wrong length
-  EXPECT_NO_THROW(solver->step(1e-4));  // an invalid argument leaves the solver as it was
-  solver->setExternalForces(std::vector<double>(3 * ps.size(), 0.0));
+// Invalid forces (the wrong length) are a ParameterError that leaves the solver as it was.
+TEST(MpmReliability, InvalidForcesLeaveTheSolverAsItWas) {
+  auto solver = seededSolver(10, 0.03, 0.05);
+  EXPECT_THROW(solver->setExternalForces(std::vector<double>(5, 0.0)), ParameterError);
+  EXPECT_NO_THROW(solver->step(1e-4));
+  solver->setExternalForces(std::vector<double>(3 * solver->numParticles(), 0.0));
   EXPECT_NO_THROW(solver->step(1e-4));
 }
