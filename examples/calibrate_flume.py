@@ -61,10 +61,10 @@ def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFrictio
     if not mu_2 > mu_s:
         raise ValueError("mu_2 = %r: must be > mu_s = %r (the mu(I) model's friction rises from mu_s to mu_2)"
                          % (mu_2, mu_s))
-    from mpmsdem.flume import GLASS_BEADS, Block, Flume
-    from flume_block import COLUMN, HB, L0, blockEvents
+    from mpmsdem.flume import GLASS_BEADS, Flume
+    from flume_block import COLUMN, blockEvents, copperCube
     granular = dict(GLASS_BEADS, mu_s=mu_s, mu_2=mu_2, I0=I0)
-    cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=blockFriction, flowFriction=flowFriction)
+    cube = copperCube(friction=blockFriction, flowFriction=flowFriction)
     if flipDampingRate is not None and not (flipDampingRate > 0 and math.isfinite(flipDampingRate)):
         raise ValueError("flipDampingRate = %r /s: must be > 0 and finite (the paper's: 2010)" % (flipDampingRate,))
     if flipViscosity is not None and flipDampingRate is not None:

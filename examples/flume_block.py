@@ -58,6 +58,13 @@ def parse(argv):
     return ap.parse_known_args(argv)[0]
 
 
+def copperCube(y=None, friction=0.67, flowFriction=0.21):
+    """The §3.2 copper cube (h_b 0.02 m, ρ 8900, Table 1) with its upstream face L0 from the
+    column front, on the flume's centre line unless ``y`` [m]; ``friction`` cube–bed (Table 1:
+    0.67), ``flowFriction`` flow–cube (our reading: 0.21)."""
+    return Block(half=(HB / 2,) * 3, x=COLUMN + L0, y=y, density=8900, friction=friction, flowFriction=flowFriction)
+
+
 def blend(a):
     """The flow's FLIP/PIC blend as Flume keywords: the paper's (α 0.99 per its 5e-6 s step at
     dx 0.01 m, a PIC viscosity of 0.0503 m²/s, which keeps that flow at any --dx) with --full,
@@ -90,7 +97,7 @@ def freeFlow(dx, a, verbose=True):
 
 
 def coupled(dx, duration, a, out, verbose=True):
-    cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=0.67, flowFriction=0.21)
+    cube = copperCube()
     scene = Flume(dx=dx, width=a.width, blocks=[cube], backend=a.backend, precision=a.precision, **blend(a),
                   output=out, outputEvery=0.01,
                   vtkEvery=0.05, verbose=verbose)
@@ -173,7 +180,7 @@ def blockEvents(s, duration):
 def driverScene(dx, duration, a):
     """Write the coupled scene as the C++ driver's JSON (mpmsdem.driver.writeScene)."""
     from yade import O
-    cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, density=8900, friction=0.67, flowFriction=0.21)
+    cube = copperCube()
     scene = Flume(dx=dx, width=a.width, blocks=[cube], backend=a.backend, precision=a.precision, verbose=False,
                   **blend(a))
     mpmsdem.driver.writeScene(a.driver_scene, scene.coupled, duration=duration, dt=O.dt, outputDir=a.out,

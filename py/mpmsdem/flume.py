@@ -103,11 +103,13 @@ class Flume:
         th = math.radians(inclineDeg)
         self.gravity = (9.81 * math.sin(th), 0.0, -9.81 * math.cos(th))
         granular = dict(GLASS_BEADS if granular is None else granular)
-        if not (dx > 0 and abs(width / dx - round(width / dx)) < 1e-6 * width / dx and round(width / dx) >= 1):
+        if not dx > 0:
+            raise ValueError("dx = %r m: must be > 0" % (dx,))
+        cellsAcross = width / dx
+        if not (round(cellsAcross) >= 1 and abs(cellsAcross - round(cellsAcross)) < 1e-6 * cellsAcross):
             raise ValueError("dx = %r m: must divide the flume width %r m into whole cells (the side walls lie on "
-                             "grid planes), e.g. %r or %r m" % (dx, width, width / max(1, math.floor(width / dx)),
-                                                                 width / math.ceil(width / dx)) if dx > 0 else
-                             "dx = %r m: must be > 0" % (dx,))
+                             "grid planes), e.g. %r or %r m" % (dx, width, width / max(1, math.floor(cellsAcross)),
+                                                                 width / math.ceil(cellsAcross)))
         n = round(ppc ** (1.0 / 3.0))
         if n ** 3 != ppc:
             raise ValueError("ppc = %r: must be a perfect cube (1, 8, 27, ...)" % (ppc,))
@@ -168,10 +170,11 @@ class Flume:
         row.append([self.coupled.force(i)[0] for i in self.blockIds])
         row.append([self.coupled.faceForce(i)[0] for i in self.blockIds])
         row.append([self.coupled.edgeForce(i)[0] for i in self.blockIds])
-        turns = [tiltAndYaw(*b.state.ori.toAngleAxis()) for b in bodies]
-        row.append([math.degrees(b.state.ori.toAngleAxis()[0]) for b in bodies])
-        row.append([t[0] for t in turns])
-        row.append([t[1] for t in turns])
+        turns = [b.state.ori.toAngleAxis() for b in bodies]
+        row.append([math.degrees(angle) for angle, _ in turns])
+        split = [tiltAndYaw(angle, axis) for angle, axis in turns]
+        row.append([tilt for tilt, _ in split])
+        row.append([yaw for _, yaw in split])
         self.history.append(row)
 
     def run(self, duration, sampleEvery=None):

@@ -48,13 +48,12 @@ def main(argv):
     a = parse(argv)
     sys.path.insert(0, os.path.join(ROOT, "examples"))
     import numpy as np
-    from flume_block import COLUMN, HB, L0
+    from flume_block import copperCube
     from mpmsdem.analysis import tiltAndYaw
-    from mpmsdem.flume import Block, Flume
+    from mpmsdem.flume import Flume
     from yade import O
     from yade.minieigenHP import Quaternion, Vector3
-    cube = Block(half=(HB / 2,) * 3, x=COLUMN + L0, y=a.width / 2 + a.dy, density=8900, friction=0.67,
-                 flowFriction=0.21)
+    cube = copperCube(y=a.width / 2 + a.dy)
     scene = Flume(dx=a.dx, width=a.width, blocks=[cube], flipViscosity=a.viscosity, verbose=False)
     body = scene.blockIds[0]
     if a.yaw0:
