@@ -18,8 +18,7 @@
 //                            except for kRestartFree below (exit 2 naming what changed).
 //                            With blocks, from the snapshot that coupled.checkpoint.json
 //                            names (pkg/coupling/CoupledCheckpoint.hpp): the same run, bit
-//                            for bit; the CPU backend only (the CUDA coupling keeps its
-//                            contact histories on the device)
+//                            for bit, on the CPU and on CUDA (whose sums have a fixed order)
 //   --bench                  write no files, take no diagnostics; print one JSON line on
 //                            stdout at the end: backend, precision, solver, particles,
 //                            steps, seconds (step loop wall time), particle_updates_per_s,
@@ -42,8 +41,8 @@
 //                   run.series_every) and scene.pvd (particles and blocks, every
 //                   run.output_every) in place of particles.pvd. The time step is the smaller
 //                   of the MPM step and the contact step (CoupledWorld::criticalTimeStep).
-//                   On the CPU backend, coupled.checkpoint.json after every snapshot: what
-//                   --restart needs besides the particles (block states, contact histories).
+//                   coupled.checkpoint.json after every snapshot: what --restart needs
+//                   besides the particles (block states, contact histories).
 // Progress lines go to stdout (stderr with --bench) every 5 % of the run and at least every
 // run.progress_every seconds of wall time (10), with the step and what sets it (the flow's CFL
 // step, a contact, a block's approach naming the block). With "dt": "auto" a step below
@@ -451,7 +450,7 @@ class OutputRun {
         coupled_->dropAfter(solver_.time() * (1 + 1e-12));
         coupled_->setReferenceOrientations(checkpoint->referenceOrientations);
       }
-      checkpoints_ = scene.run.backend == Backend::Cpu;
+      checkpoints_ = true;
     }
     io::writeMpmHeader(h5_, scene.sourceJson, scene.params, solver_.name());
     if (coupled_) coupled_->h5().setAttribute("flip_blend", mpm::describeFlipBlend(scene.params));
@@ -623,7 +622,7 @@ class OutputRun {
   io::Hdf5Writer h5_;
   std::optional<io::PvdCollection> pvd_;
   std::optional<coupling::CoupledOutput> coupled_;
-  bool checkpoints_ = false;  // coupled.checkpoint.json with every snapshot (CPU backend)
+  bool checkpoints_ = false;  // coupled.checkpoint.json with every snapshot (a coupled run)
   // Outputs read the particles in slices: a whole host copy would add 145 B per particle to
   // the solver's memory while it is written.
   mpm::SolverParticleSlices slices_{solver_, 1 << 16};
@@ -644,10 +643,6 @@ int main(int argc, char** argv) {
     if (opt.precision) scene.run.precision = *opt.precision;
     if (opt.out) scene.run.outputDir = *opt.out;
     const coupling::SceneBlocks blocks = coupling::parseBlocks(scene.sourceJson);
-    if (opt.restart && !blocks.empty() && scene.run.backend != Backend::Cpu)
-      throw ParameterError("--restart: a coupled run on the CUDA backend writes no checkpoint (its MP-block contact "
-                           "histories stay on the device): run the scene again from the start, or run it with "
-                           "--backend cpu");
     auto solver = makeSolver(scene.params, scene.run.backend, scene.run.precision);
     long maxSteps = opt.steps;
     std::optional<coupling::CoupledCheckpoint> checkpoint;

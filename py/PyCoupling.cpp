@@ -170,10 +170,8 @@ class PyCoupling {
   // ---- checkpoint: tangential histories as raw bytes (int64 keys, float64 xi; the restart
   // is bit-for-bit), the cumulative dissipations, and each block's orientation at the first
   // record (the origin of the `rotation` series).
-  bp::tuple histories() const {
-    if (mpm_.solver().name().find("cuda") != std::string::npos || mpm_.solver().name().find("CUDA") != std::string::npos)
-      throw ParameterError("checkpoint: the MP-block histories of the CUDA backend stay on the device; coupled "
-                           "checkpoints need MpmEngine(backend=\"cpu\")");
+  bp::tuple histories() {
+    coupling_.pullHistories();
     const auto& k = coupling_.historyKeys();
     const auto& x = coupling_.historyXi();
     return bp::make_tuple(bytes(k.data(), k.size() * sizeof(long long)), bytes(x.data(), x.size() * sizeof(double)),

@@ -56,6 +56,7 @@ CoupledCheckpoint captureCheckpoint(CoupledWorld& w, long snapshot, double lastD
   c.sdemFriction = e.frictionDissipation();
   c.sdemDamping = e.dampingDissipation();
   c.historySlots = w.coupling.historySlots();
+  w.coupling.pullHistories();
   const std::vector<long long>& keys = w.coupling.historyKeys();
   c.historyParticles = static_cast<long>(keys.size() / std::max(c.historySlots, 1));
   for (std::size_t k = 0; k < keys.size(); ++k) {

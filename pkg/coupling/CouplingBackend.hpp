@@ -55,6 +55,12 @@ class CouplingDeviceBackend {
   virtual ~CouplingDeviceBackend() = default;
   virtual void run(const CouplingStepInput& in, CouplingStepOutput& out) = 0;
   virtual void resetHistories() = 0;
+  // The tangential histories (HistoryView: keys and 3 xi per slot, the step each particle's
+  // were written) to and from the host, for checkpoints; xi in double either way.
+  virtual void downloadHistories(std::vector<long long>& keys, std::vector<double>& xi,
+                                 std::vector<unsigned>& written) = 0;
+  virtual void uploadHistories(const std::vector<long long>& keys, const std::vector<double>& xi,
+                               const std::vector<unsigned>& written) = 0;
   // Largest initial particle volume of the view [m^3].
   virtual double maxVolume0(const mpm::ParticleView& v) = 0;
 };

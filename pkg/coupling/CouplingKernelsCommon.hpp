@@ -350,28 +350,40 @@ constexpr int kSumFriction = 17;  // slip work of this step [J]
 constexpr int kSumDamping = 18;   // dashpot work of this step [J]
 constexpr int kBlockSums = 19;
 
-// Add contact c's share to its block's sums with add(double* slot, double value) (a plain +=
-// on the CPU, an atomic add on the GPU).
-template <typename T, typename Add>
-MPM_HD_INLINE void addBlockShare(const MpContact<T>& c, const BlockState<T>& b, double* sums, const Add& add) {
+// Contact c's share of its block's sums (kBlockSums values; the sums are added up in double).
+template <typename T>
+MPM_HD_INLINE void blockShare(const MpContact<T>& c, const BlockState<T>& b, double share[kBlockSums]) {
   const Vec3T<T> rc{c.point.x - b.pos[0], c.point.y - b.pos[1], c.point.z - b.pos[2]};
   const Vec3T<T> f{-c.force.x, -c.force.y, -c.force.z};
   const Vec3T<T> tq = sdem::cross(rc, f);
-  double* s = sums + kBlockSums * c.block;
   const int split = c.featureKind == sdem::kFeatureFace ? kSumFace : kSumEdge;
+  const int other = split == kSumFace ? kSumEdge : kSumFace;
   for (int d = 0; d < 3; ++d) {
-    add(s + kSumForce + d, static_cast<double>(f[d]));
-    add(s + kSumTorque + d, static_cast<double>(tq[d]));
-    add(s + split + d, static_cast<double>(f[d]));
+    share[kSumForce + d] = static_cast<double>(f[d]);
+    share[kSumTorque + d] = static_cast<double>(tq[d]);
+    share[split + d] = static_cast<double>(f[d]);
+    share[other + d] = 0.0;
   }
   const Vec3T<T> rn = sdem::cross(rc, c.normal);
-  add(s + kSumK, static_cast<double>(c.law.kn > c.law.kt ? c.law.kn : c.law.kt));
-  add(s + kSumKr, static_cast<double>(c.law.kn * mpm::dot(rn, rn) + c.law.kt * mpm::dot(rc, rc)));
-  add(s + kSumCount, 1.0);
-  add(s + kSumBarrier, static_cast<double>(c.law.barrierEnergy));
-  add(s + kSumSpring, static_cast<double>(c.law.springEnergy));
-  add(s + kSumFriction, static_cast<double>(c.law.frictionWork));
-  add(s + kSumDamping, static_cast<double>(c.law.dampingWork));
+  share[kSumK] = static_cast<double>(c.law.kn > c.law.kt ? c.law.kn : c.law.kt);
+  share[kSumKr] = static_cast<double>(c.law.kn * mpm::dot(rn, rn) + c.law.kt * mpm::dot(rc, rc));
+  share[kSumCount] = 1.0;
+  share[kSumBarrier] = static_cast<double>(c.law.barrierEnergy);
+  share[kSumSpring] = static_cast<double>(c.law.springEnergy);
+  share[kSumFriction] = static_cast<double>(c.law.frictionWork);
+  share[kSumDamping] = static_cast<double>(c.law.dampingWork);
+}
+
+// Add contact c's share to its block's sums with add(double* slot, double value) (a plain +=
+// on the CPU, an atomic add on the GPU); the F_f/F_e sum the contact is not part of is left alone.
+template <typename T, typename Add>
+MPM_HD_INLINE void addBlockShare(const MpContact<T>& c, const BlockState<T>& b, double* sums, const Add& add) {
+  double share[kBlockSums];
+  blockShare(c, b, share);
+  double* s = sums + kBlockSums * c.block;
+  const int other = c.featureKind == sdem::kFeatureFace ? kSumEdge : kSumFace;
+  for (int k = 0; k < kBlockSums; ++k)
+    if (k < other || k >= other + 3) add(s + k, share[k]);
 }
 
 // Stable-step bound of the particle side of a contact: sqrt(m_p / max(k_n, K_t)) [s].

@@ -75,15 +75,19 @@ void MpSdemCoupling::setHistories(const std::vector<long long>& keys, const std:
     throwParameter("history keys size", keys.size(), "", "a multiple of historySlots = " + std::to_string(slots_));
   for (double v : xi)
     if (!std::isfinite(v)) throw ParameterError("history xi: must be finite");
-  if (device_)
-    throw RuntimeFailure("MpSdemCoupling::setHistories: the CUDA coupling keeps its histories on the device; "
-                         "histories restore onto the CPU backend only");
   heldKeys_ = keys.size();
   key_ = keys;
   written_.assign(keys.size() / slots_, historyStep_);  // current at the next step
   hostDouble_.xi = xi;
   hostFloat_.xi.assign(xi.begin(), xi.end());
   particleCount_ = keys.size() / slots_;
+  historiesToDevice_ = true;
+}
+
+void MpSdemCoupling::pullHistories() {
+  if (!device_ || historiesToDevice_) return;  // the host copies are the current ones
+  device_->downloadHistories(key_, hostDouble_.xi, written_);
+  hostFloatRun_ = false;
 }
 
 void MpSdemCoupling::restoreParticleApproachStep(double s) {
@@ -208,9 +212,6 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     device_ = makeCouplingDeviceBackend(view.precision);
     devicePrecision_ = view.precision;
     if (!device_) throw RuntimeFailure("MpSdemCoupling: the solver runs on CUDA but this build has no CUDA coupling");
-    if (std::any_of(key_.begin(), key_.end(), [](long long k) { return k >= 0; }))
-      throw RuntimeFailure("MpSdemCoupling: restored histories (setHistories) cannot go to the CUDA coupling, "
-                           "which keeps its own on the device; restore onto the CPU backend");
   }
   const bool hostFloat = !view.device && view.precision == mpm::Precision::Float;
   if (maxParticleRadius_ < 0) {
@@ -239,7 +240,10 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
         hostDouble_.xi.assign(3 * heldKeys_, 0.0);
     }
     if (device_) device_->resetHistories();
+    historiesToDevice_ = false;
   }
+  if (view.device && historiesToDevice_) device_->uploadHistories(key_, hostDouble_.xi, written_);
+  historiesToDevice_ = false;
   if (!view.device) hostFloatRun_ = hostFloat;
   buildBins(g);
   CouplingStepInput in;

@@ -91,8 +91,11 @@ class MpSdemCoupling {
   double dampingDissipation() const { return dampingWork_; }
   void setDissipation(double friction, double damping);  // continue counters after a restart
 
-  // ---- checkpoint of the tangential histories (CPU backend): per particle `slots` keys and
-  // 3 x slots xi values, elastic tangential forces [N] (a float run's converted to double).
+  // ---- checkpoint of the tangential histories: per particle `slots` keys and 3 x slots xi
+  // values, elastic tangential forces [N] (a float run's converted to double). On CUDA they
+  // live on the device: pullHistories() brings them to the host before these are read (a no-op
+  // on the CPU), and setHistories() sends them to the device at the next step.
+  void pullHistories();
   std::vector<long long> historyKeys() const;
   std::vector<double> historyXi() const;
   // Component d of historyXi() for history slot k, without copying them all [N].
@@ -147,6 +150,7 @@ class MpSdemCoupling {
   HostSide<double> hostDouble_;
   HostSide<float> hostFloat_;
   bool hostFloatRun_ = false;  // the last host step ran in float (hostFloat_.xi is current)
+  bool historiesToDevice_ = false;  // setHistories() since the last step: the device takes them
   // Float copies for a float host solver: the shape table's real arrays (its index arrays are
   // shared), the blocks and the pair physics of the step.
   std::vector<float> vertexF_, faceNormalF_, faceOffsetF_, sweepRadiusF_, boundingRadiusF_;

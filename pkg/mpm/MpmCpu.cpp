@@ -10,12 +10,10 @@ namespace mpmsdem {
 namespace mpm {
 
 namespace {
-constexpr int kBlockNodes = 5;  // nodes per axis reached from one 3x3x3 block of stencil bases
 // With one copy of the particles, G2P leaves them where they are; they are put back in block
 // order every this many steps, before they have drifted far from it (docs/benchmarks.md).
 constexpr int kReorderEvery = 8;
 constexpr int kG2PBatch = 32;  // particles per vector loop of the G2P update
-constexpr int kBlockCells = 27;  // stencil bases per 3x3x3 block
 // Particles of one stencil base whose G2P grid sums share vector instructions: 8 in float, 4 in
 // double (one AVX2 register; wider groups ran slower, from register spills and half-empty groups
 // at 8 particles per cell).
@@ -95,7 +93,7 @@ MpmCpu<T>::MpmCpu(const MpmParams& params)
   nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
   nodes_.assign(static_cast<std::size_t>(kNodeValues) * nNodes_, T(0));
   for (int d = 0; d < 3; ++d) {
-    blocks_[d] = params.cells[d] / 3 + 1;
+    blocks_[d] = blocksAlong(params.cells[d]);
     tiles_[d] = (grid_.nodes[d] + 2) / 3;
   }
   blockStart_.assign(static_cast<std::size_t>(blocks_[0]) * blocks_[1] * blocks_[2] + 1, 0);
@@ -358,13 +356,7 @@ void MpmCpu<T>::bin(const ParticleIn<T>& in) {
   for (long p = 0; p < n; ++p) {
     T g[3];
     gridCoordinate(in, static_cast<int>(p), grid_, g);
-    int b[3], c = 0;
-    for (int d = 0; d < 3; ++d) {
-      const int base = static_cast<int>(hdFloor(g[d] - T(0.5)));  // >= 1 inside the admissible box
-      b[d] = base / 3;
-      c = 3 * c + base % 3;
-    }
-    cellOf_[p] = kBlockCells * ((b[0] * blocks_[1] + b[1]) * blocks_[2] + b[2]) + c;
+    cellOf_[p] = blockCellOf(g, blocks_);
   }
   std::fill(blockStart_.begin(), blockStart_.end(), 0);
   for (long p = 0; p < n; ++p) ++blockStart_[cellOf_[p] / kBlockCells + 1];

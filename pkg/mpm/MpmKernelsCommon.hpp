@@ -156,6 +156,74 @@ MPM_HD_INLINE void p2gParticle(int p, const ParticleIn<T>& P, const GridConst<T>
   p2gStencil(a, toNode);
 }
 
+// ---------------------------------------------------------------- P2G by blocks of bases
+// Both backends sum P2G by blocks of 3x3x3 stencil-base cells: a particle whose base lies in
+// block b reaches nodes 3b .. 3b + 4 per axis (the block's 5x5x5 tile), so blocks whose indices
+// differ by 2 or more along some axis share no node. A block's particles are summed in the
+// order (base, number) into its tile, which is then added to the grid, the blocks of one parity
+// colour at a time. The CPU scatters each particle into a private copy of the tile; CUDA
+// gathers, one thread per tile node summing the particles' shares in that same order
+// (p2gTileNodeAdd). Either way a node's sum does not depend on thread timing or on the order
+// the particles are stored in.
+constexpr int kBlockCells = 27;  // stencil bases per block
+constexpr int kBlockNodes = 5;   // nodes per axis of a block's tile
+
+// Blocks along an axis of `cells` cells (stencil bases run up to cells - 1).
+MPM_HD_INLINE int blocksAlong(int cells) { return cells / 3 + 1; }
+
+// kBlockCells b + c for a point at grid coordinate gc: b its block in a grid of nb blocks per
+// axis, c the place of its stencil base (Stencil::compute's floor) in the block.
+template <typename T>
+MPM_HD_INLINE int blockCellOf(const T gc[3], const int nb[3]) {
+  int b[3], c = 0;
+  for (int d = 0; d < 3; ++d) {
+    const int base = static_cast<int>(hdFloor(gc[d] - T(0.5)));  // >= 1 inside the admissible box
+    b[d] = base / 3;
+    c = 3 * c + base % 3;
+  }
+  return kBlockCells * ((b[0] * nb[1] + b[1]) * nb[2] + b[2]) + c;
+}
+
+// A prepared particle as the gather keeps it: P2GParticle without the coefficients that are
+// always zero (cx, cy, cz are non-zero only for the new momentum, values kNodeVNew..+2).
+template <typename T>
+struct P2GTileParticle {
+  Stencil<T> st;
+  T cw[kNodeVNew + 3];
+  T cx[3], cy[3], cz[3];
+};
+
+template <typename T>
+MPM_HD_INLINE void p2gTilePrepare(int p, const ParticleIn<T>& P, const GridConst<T>& g, T dt, P2GTileParticle<T>& t) {
+  P2GParticle<T> a;
+  p2gPrepare(p, P, g, dt, a);
+  t.st = a.st;
+  for (int c = 0; c < kNodeVNew + 3; ++c) t.cw[c] = a.cw[c];
+  for (int d = 0; d < 3; ++d) {
+    t.cx[d] = a.cx[kNodeVNew + d];
+    t.cy[d] = a.cy[kNodeVNew + d];
+    t.cz[d] = a.cz[kNodeVNew + d];
+  }
+}
+
+// Adds a prepared particle's share of node (n0, n1, n2) to acc[0..6] (nothing when the node is
+// outside its stencil): p2gStencil's values, with the products by zero coefficients left out
+// (they add exact zeros there).
+template <typename T>
+MPM_HD_INLINE void p2gTileNodeAdd(const P2GTileParticle<T>& a, int n0, int n1, int n2, T acc[kNodeVNew + 3]) {
+  const int i = n0 - a.st.base[0], j = n1 - a.st.base[1], k = n2 - a.st.base[2];
+  if (static_cast<unsigned>(i) > 2u || static_cast<unsigned>(j) > 2u || static_cast<unsigned>(k) > 2u) return;
+  const T wij = a.st.w[0][i] * a.st.w[1][j];
+  const T xij = a.st.dw[0][i] * a.st.w[1][j];
+  const T yij = a.st.w[0][i] * a.st.dw[1][j];
+  const T wk = a.st.w[2][k], dwk = a.st.dw[2][k];
+  for (int c = 0; c < kNodeVNew; ++c) acc[c] += wk * (wij * a.cw[c]);
+  for (int d = 0; d < 3; ++d) {
+    const T row = wij * a.cw[kNodeVNew + d] + xij * a.cx[d] + yij * a.cy[d];
+    acc[kNodeVNew + d] += wk * row + dwk * (wij * a.cz[d]);
+  }
+}
+
 // Grid velocities of one node (Eq 3): v_old = p/m, v_new = (p + dt f)/m + dt g; an empty node
 // is zeroed (mass included, so grid hooks see it at rest).
 template <typename T>

@@ -18,6 +18,10 @@ cpu-double) at the same size.
 default, "keep_last_good_state": true) and with one copy, and prints the speed ratio
 one/two copies.
 
+--baseline-exe OLD/mpmsdem-run runs each CUDA case also with that older build, right after the
+new one, and prints the speed ratio new/old (build "old" rows; the other ratios are the new
+build's).
+
 Uses only the standard library. Exit status 1 when a run fails.
 """
 import argparse
@@ -147,18 +151,19 @@ def steps_for(particles, target_updates, min_steps, max_steps):
 
 
 def format_table(rows):
-    head = ["size", "backend", "precision", "copies", "particles", "steps", "seconds",
-            "updates/s", "bytes/particle", "float/double", "1/2 copies", "GPU/CPU"]
+    head = ["size", "build", "backend", "precision", "copies", "particles", "steps", "seconds",
+            "updates/s", "bytes/particle", "float/double", "1/2 copies", "GPU/CPU", "new/old"]
     body = []
     for r in rows:
         body.append([
-            "%.0e" % r["size"], r["backend"], r["precision"], str(r["copies"]), str(r["particles"]),
+            "%.0e" % r["size"], r["build"], r["backend"], r["precision"], str(r["copies"]), str(r["particles"]),
             str(r["steps"]),
             "%.3g" % r["seconds"], "%.3e" % r["particle_updates_per_s"],
             "%.0f" % r["bytes_per_particle"],
             ("%.2f" % r["float_ratio"]) if r.get("float_ratio") is not None else "",
             ("%.2f" % r["copies_ratio"]) if r.get("copies_ratio") is not None else "",
-            ("%.1f" % r["ratio"]) if r.get("ratio") is not None else "n/a"])
+            ("%.1f" % r["ratio"]) if r.get("ratio") is not None else "n/a",
+            ("%.2f" % r["new_old"]) if r.get("new_old") is not None else ""])
     return render_table(head, body)
 
 
@@ -244,6 +249,7 @@ def main():
     ap.add_argument("--timeout", type=float, default=1800, help="seconds allowed per run (default 1800)")
     ap.add_argument("--markdown", help="append the results as a markdown table to this file")
     ap.add_argument("--json", help="write all results as a JSON list to this file")
+    ap.add_argument("--baseline-exe", help="an older mpmsdem-run: each CUDA case runs with it too (new/old column)")
     args = ap.parse_args()
     if args.threads < 1:
         ap.error("--threads must be >= 1")
@@ -253,21 +259,23 @@ def main():
     exe = find_exe(args)
     if not os.access(exe, os.X_OK):
         sys.exit("bench_mpm: no executable mpmsdem-run at %s (build it, or pass --build/--exe)" % exe)
+    exes = dict(builds(ap, exe, args.baseline_exe))
     use_cuda = args.cuda or (not args.no_cuda and gpu_present())
 
-    plan = []  # (size, backend, precision, copies)
+    plan = []  # (size, backend, precision, copies, build)
     if not args.no_cpu:
-        plan += [(n, "cpu", p, c) for n in args.cpu_sizes for p in args.cpu_precisions for c in args.cpu_copies]
+        plan += [(n, "cpu", p, c, "new") for n in args.cpu_sizes for p in args.cpu_precisions for c in args.cpu_copies]
     if use_cuda:
         for n in args.sizes:
-            plan += [(n, "cuda", "float", 2), (n, "cuda", "double", 2)]
+            for p in ("float", "double"):
+                plan += [(n, "cuda", p, 2, b) for b in exes]
     if not plan:
         sys.exit("bench_mpm: nothing to run (no CPU runs and no GPU)")
 
     rows = []
     failed = False
     with tempfile.TemporaryDirectory(prefix="bench_mpm_") as tmp:
-        for size, backend, precision, copies in plan:
+        for size, backend, precision, copies, build in plan:
             scene, particles = dam_break_scene(size)
             scene["keep_last_good_state"] = copies == 2
             path = os.path.join(tmp, "dam_break_%d_%d.json" % (size, copies))
@@ -277,10 +285,10 @@ def main():
                 steps = steps_for(particles, args.cpu_updates, args.min_steps, args.max_steps)
             else:
                 steps = steps_for(particles, args.gpu_updates, args.min_steps, args.max_steps)
-            print("running %s-%s, %d particles, %d steps, %d cop%s ..."
-                  % (backend, precision, particles, steps, copies, "y" if copies == 1 else "ies"), flush=True)
+            print("running %s-%s, %d particles, %d steps, %d cop%s, %s build ..."
+                  % (backend, precision, particles, steps, copies, "y" if copies == 1 else "ies", build), flush=True)
             try:
-                r = run_one(exe, path, backend, precision, steps,
+                r = run_one(exes[build], path, backend, precision, steps,
                             args.threads if backend == "cpu" else None, args.timeout)
             except (RuntimeError, subprocess.TimeoutExpired) as e:
                 print("bench_mpm: %s" % e, file=sys.stderr)
@@ -288,8 +296,15 @@ def main():
                 continue
             r["size"] = size
             r["copies"] = copies
+            r["build"] = build
             rows.append(r)
 
+    old = {(r["size"], r["backend"], r["precision"]): r["particle_updates_per_s"] for r in rows if r["build"] == "old"}
+    for r in rows:
+        base = old.get((r["size"], r["backend"], r["precision"]))
+        r["new_old"] = r["particle_updates_per_s"] / base if r["build"] == "new" and base else None
+    rows_old = [r for r in rows if r["build"] == "old"]
+    rows = [r for r in rows if r["build"] == "new"]
     rate = {(r["size"], r["backend"], r["precision"], r["copies"]): r["particle_updates_per_s"] for r in rows}
     for r in rows:
         double = rate.get((r["size"], r["backend"], "double", r["copies"]))
@@ -298,12 +313,13 @@ def main():
         r["copies_ratio"] = r["particle_updates_per_s"] / two if r["copies"] == 1 and two else None
         cpu = rate.get((r["size"], "cpu", "double", 2))
         r["ratio"] = r["particle_updates_per_s"] / cpu if r["backend"] == "cuda" and cpu else None
+    rows += rows_old
     text, md = format_table(rows)
     print()
     print(text, end="")
     print("(CPU runs: OMP_NUM_THREADS=%d; float/double: against the same backend and copies in double; "
-          "1/2 copies: one copy of the particles against two; GPU/CPU: against cpu-double at the same size)"
-          % args.threads)
+          "1/2 copies: one copy of the particles against two; GPU/CPU: against cpu-double at the same size; "
+          "new/old: against the baseline build's run of the same case)" % args.threads)
 
     if args.json:
         with open(args.json, "w") as f:

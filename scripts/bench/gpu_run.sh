@@ -9,26 +9,42 @@
 #                                                      # built elsewhere (-DMPMSDEM_DRIVER_ONLY=ON
 #                                                      # -DMPMSDEM_NATIVE=OFF, sm_90); builds if
 #                                                      # they do not start here
+#   ... --baseline DIR                                 # an older mpmsdem-run in DIR: the MPM
+#                                                      # benchmark and the flume's first 4,000
+#                                                      # steps run with it too (new/old speed)
 #   GPU_RUN_BUDGET=400 bash scripts/bench/gpu_run.sh   # seconds: a stage that would start later
 #                                                      # is skipped (and says so)
 #   GPU_RUN_STAGES='test_|coarse' bash ...             # only the stages whose names match this
 #                                                      # extended regular expression
 #
 # Stages, most telling first: the whole of test_mpm and test_coupling (the CPU-vs-CUDA
-# agreement tests are the ones a machine without a GPU skips); the coarse flume
+# agreement tests are the ones a machine without a GPU skips); bench_mpm.py --cuda (MPM
+# updates/s at 1e5..1e7 points, against the CPU and the baseline); the flume at the paper's
+# resolution (flume_block_full.json): 4,000 steps on the CPU and on CUDA (new and baseline: the
+# coupling's share of the step is in each JSON line), then the whole 2 s on CUDA in double and
+# float (the project's goal: at most 8 s on one H100); the coarse flume
 # (examples/scenes/flume_block.json) over its 1.2 s on the CPU (every core) and on CUDA in double
-# and float, and once more in double (CUDA's atomic sums make runs differ: by how much); the
-# flume at the paper's resolution (flume_block_full.json): 4,000 steps on the
-# CPU and on CUDA, then the whole 2 s on CUDA in double and float (the project's goal: at most
-# 2 min on one H100); bench_mpm.py --cuda. Every run is --bench (HDF5 may be missing there): its
-# JSON line holds the time, the stage split and each moving block's travel and peak flow force.
+# and float, and once more in double (are two CUDA runs equal?); an Nsight Compute profile of
+# the MPM kernels when ncu is found. Every run is --bench (HDF5 may be missing there): its JSON
+# line holds the time, the stage split and each moving block's travel and peak flow force.
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 out=${OUT:-gpu-out}
 budget=${GPU_RUN_BUDGET:-100000}
 only=${GPU_RUN_STAGES:-.}
 prebuilt=""
-if [ "${1:-}" = "--prebuilt" ]; then prebuilt=${2:?"--prebuilt needs a folder"}; fi
+baseline=""
+while [ $# -gt 0 ]; do
+  case $1 in
+    --prebuilt) prebuilt=${2:?"--prebuilt needs a folder"}; shift 2 ;;
+    --baseline) baseline=${2:?"--baseline needs a folder"}; shift 2 ;;
+    *) echo "gpu_run.sh: unknown argument $1" >&2; exit 2 ;;
+  esac
+done
+if [ -n "$baseline" ] && ! "$baseline/mpmsdem-run" --help > /dev/null 2>&1; then
+  echo "gpu_run.sh: no mpmsdem-run that starts in $baseline" >&2
+  exit 2
+fi
 mkdir -p "$out"
 start=$SECONDS
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv | tee "$out/gpu.txt"
@@ -69,11 +85,12 @@ for t in test_mpm test_coupling; do
 done
 
 # flume_run NAME SCENE BACKEND PRECISION [ARGS...]: one --bench run, its JSON line in $out/NAME.json
+# (FLUME_EXE: another mpmsdem-run)
 flume_run() {
   local name=$1 scene=$2 backend=$3 precision=$4
   shift 4
-  OMP_NUM_THREADS=$(nproc) "$bin/mpmsdem-run" "$scene" --backend "$backend" --precision "$precision" --bench "$@" \
-    2> "$out/$name.err" | tail -1 | tee "$out/$name.json"
+  OMP_NUM_THREADS=$(nproc) "${FLUME_EXE:-$bin/mpmsdem-run}" "$scene" --backend "$backend" --precision "$precision" \
+    --bench "$@" 2> "$out/$name.err" | tail -1 | tee "$out/$name.json"
   local rc=${PIPESTATUS[0]}
   (( rc == 0 )) || tail -5 "$out/$name.err"
   return "$rc"
@@ -88,14 +105,44 @@ flume() {
 }
 coarse=examples/scenes/flume_block.json
 full=examples/scenes/flume_block_full.json
-flume coarse_cpu_double 120 "$coarse" cpu double
-flume coarse_cuda_double 120 "$coarse" cuda double
-flume coarse_cuda_float 120 "$coarse" cuda float
-flume coarse_cuda_double_again 120 "$coarse" cuda double
+base_args=()
+[ -n "$baseline" ] && base_args=(--baseline-exe "$baseline/mpmsdem-run")
+stage bench_mpm 240 python3 scripts/bench/bench_mpm.py --exe "$bin/mpmsdem-run" --cuda --threads "$(nproc)" \
+  --cpu-precisions double --gpu-updates 1e9 --markdown "$out/bench.md" --json "$out/bench.json" "${base_args[@]}"
 flume full_cpu_4000 120 "$full" cpu double --steps 4000
-flume full_cuda_4000 120 "$full" cuda double --steps 4000
-flume full_cuda_double 150 "$full" cuda double
-flume full_cuda_float 150 "$full" cuda float
-stage bench_mpm 200 python3 scripts/bench/bench_mpm.py --exe "$bin/mpmsdem-run" --cuda --threads "$(nproc)" \
-  --gpu-updates 1e9 --markdown "$out/bench.md"
+flume full_cuda_4000 60 "$full" cuda double --steps 4000
+[ -n "$baseline" ] && FLUME_EXE=$baseline/mpmsdem-run flume full_cuda_4000_baseline 60 "$full" cuda double --steps 4000
+flume full_cuda_double 120 "$full" cuda double
+flume full_cuda_float 120 "$full" cuda float
+flume coarse_cpu_double 120 "$coarse" cpu double
+flume coarse_cuda_double 60 "$coarse" cuda double
+flume coarse_cuda_double_again 60 "$coarse" cuda double
+flume coarse_cuda_float 60 "$coarse" cuda float
+# Equal JSON lines but for the timings: the two CUDA runs gave the same travels and forces.
+stage cuda_repeat 10 python3 - "$out/coarse_cuda_double.json" "$out/coarse_cuda_double_again.json" <<'PY'
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+drop = lambda r: {k: v for k, v in r.items() if "second" not in k and "per_s" not in k}
+print("two CUDA double runs of the coarse flume:", "the same results" if drop(a) == drop(b) else "differ: %s / %s" % (drop(a), drop(b)))
+PY
+# ncu_profile EXE NAME: Nsight Compute on the MPM kernels of one step (the third) of a 1e6-point
+# dam break in float: duration, throughput against the device's peak, occupancy
+ncu_profile() {
+  python3 -c "import json, sys; sys.path.insert(0, 'scripts/bench'); import bench_mpm; \
+json.dump(bench_mpm.dam_break_scene(1000000)[0], open('$out/dam1e6.json', 'w'))" || return 1
+  "$ncu" -k 'regex:p2g|g2p|binKernel|blockRanges|gridKernel|Onesweep|Histogram' --launch-skip 26 --launch-count 13 \
+    --section SpeedOfLight --section Occupancy "$1" "$out/dam1e6.json" --backend cuda --precision float --bench \
+    --steps 4 > "$out/ncu_$2.txt" 2>&1
+  grep -E '^  [A-Za-z_].*[(]|Duration|Memory Throughput|DRAM Throughput|Compute [(]SM[)] Throughput|Achieved Occupancy' \
+    "$out/ncu_$2.txt" | head -100
+}
+ncu=$(command -v ncu || ls /usr/local/cuda/bin/ncu 2> /dev/null || true)
+export -f ncu_profile
+export ncu
+if [ -n "$ncu" ]; then
+  stage ncu_new 90 ncu_profile "$bin/mpmsdem-run" new
+  [ -n "$baseline" ] && stage ncu_baseline 90 ncu_profile "$baseline/mpmsdem-run" baseline
+else
+  echo "== ncu: skipped (no ncu on this machine)"
+fi
 echo "== done in $(( SECONDS - start )) s"

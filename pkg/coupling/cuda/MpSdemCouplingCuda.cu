@@ -1,16 +1,25 @@
 // Host control of the CUDA coupling backend: device copies of the shape table (when it
 // grows), the blocks, pair physics and bins (every step: a few kB), the tangential histories
-// (resident), the per-block sums (downloaded once per step). Particle data never leaves the
-// device.
+// (resident; copied to and from the host for checkpoints), the per-block sums (downloaded once
+// per step). Particle data never leaves the device.
+//
+// Block sums in a fixed order: the contacts' shares go to a list, sorted by block, particle
+// number and contact order, and each block's are added by a fixed tree, so two runs give the
+// same bits. A step with more contacts than the list holds uses sums added atomically in the
+// same pass (the order of those changes from run to run), and the list grows for the next.
 #include <cuda_runtime.h>
+
+#include <cub/device/device_radix_sort.cuh>
 
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "coupling/CouplingBackend.hpp"
 #include "coupling/cuda/MpSdemCouplingKernels.cuh"
+#include "common/Error.hpp"
 #include "mpm/cuda/CudaCheck.hpp"
 
 namespace mpmsdem {
@@ -41,6 +50,25 @@ struct DeviceArray {
   }
 };
 
+// Pinned host bytes that grow on demand (the source of asynchronous copies).
+struct PinnedArray {
+  unsigned char* ptr = nullptr;
+  std::size_t capacity = 0;
+  ~PinnedArray() {
+    if (ptr) CUDA_CHECK_NOTHROW(cudaFreeHost(ptr));
+  }
+  void reserve(std::size_t n) {
+    if (n <= capacity && ptr) return;
+    if (ptr) CUDA_CHECK(cudaFreeHost(ptr));
+    ptr = nullptr;
+    capacity = std::max<std::size_t>(n, 1);
+    CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&ptr), capacity));
+  }
+};
+
+// Offsets in the staged tables: every table starts on a 16-byte boundary.
+constexpr std::size_t alignUp(std::size_t bytes) { return (bytes + 15) / 16 * 16; }
+
 // Host double data converted to T, then uploaded.
 template <typename T>
 void uploadAs(DeviceArray<T>& dst, const double* src, std::size_t n) {
@@ -48,10 +76,38 @@ void uploadAs(DeviceArray<T>& dst, const double* src, std::size_t n) {
   dst.upload(buf.data(), n);
 }
 
+int bitsFor(unsigned long long values) {  // bits that hold 0 .. values - 1
+  int b = 0;
+  while (b < 64 && (1ull << b) < values) ++b;
+  return b;
+}
+
 template <typename T>
 class CouplingCuda : public CouplingDeviceBackend {
  public:
   void resetHistories() override { histCount_ = 0; }
+
+  void downloadHistories(std::vector<long long>& keys, std::vector<double>& xi,
+                         std::vector<unsigned>& written) override {
+    keys.assign(histCount_, -1);
+    xi.assign(3 * histCount_, 0.0);
+    written.assign(histParticles_, 0u);
+    if (histCount_ == 0) return;
+    std::vector<T> buf(3 * histCount_);
+    CUDA_CHECK(cudaMemcpy(keys.data(), histKey_.ptr, histCount_ * sizeof(long long), cudaMemcpyDeviceToHost));
+    CUDA_CHECK(cudaMemcpy(buf.data(), histXi_.ptr, buf.size() * sizeof(T), cudaMemcpyDeviceToHost));
+    CUDA_CHECK(cudaMemcpy(written.data(), histWritten_.ptr, histParticles_ * sizeof(unsigned), cudaMemcpyDeviceToHost));
+    for (std::size_t k = 0; k < buf.size(); ++k) xi[k] = static_cast<double>(buf[k]);
+  }
+
+  void uploadHistories(const std::vector<long long>& keys, const std::vector<double>& xi,
+                       const std::vector<unsigned>& written) override {
+    histKey_.upload(keys.data(), keys.size());
+    uploadAs(histXi_, xi.data(), xi.size());
+    histWritten_.upload(written.data(), written.size());
+    histCount_ = keys.size();
+    histParticles_ = written.size();
+  }
 
   double maxVolume0(const mpm::ParticleView& v) override {
     std::vector<T> buf(v.n);
@@ -81,16 +137,37 @@ class CouplingCuda : public CouplingDeviceBackend {
       numShapes_ = ns;
     }
     const std::vector<BlockState<double>>& hb = *in.blocks;
-    std::vector<BlockState<T>> blocks(hb.size());
-    for (std::size_t i = 0; i < hb.size(); ++i) blocks[i] = convertBlock<T>(hb[i]);
-    blocks_.upload(blocks.data(), blocks.size());
-    std::vector<sdem::BarrierCoulombPhys<T>> phys;
-    for (const auto& p : *in.phys) phys.push_back(convertPhys<T>(p));
-    phys_.upload(phys.data(), phys.size());
-    binStart_.upload(in.bins.start, in.numBins + 1);
-    binBlocks_.upload(in.bins.blocks, in.numBinEntries);
+    // What changes every step (blocks, pair physics, bins, the flags' start values) goes in one
+    // copy from pinned memory, queued before the kernel without waiting for it.
+    const std::size_t nb = hb.size(), np = in.phys->size();
+    const std::size_t offPhys = alignUp(nb * sizeof(BlockState<T>));
+    const std::size_t offBinStart = offPhys + alignUp(np * sizeof(sdem::BarrierCoulombPhys<T>));
+    const std::size_t offBinBlocks = offBinStart + alignUp((in.numBins + 1) * sizeof(int));
+    const std::size_t offFlags = offBinBlocks + alignUp(in.numBinEntries * sizeof(int));
+    const std::size_t bytes = offFlags + sizeof(cudak::CouplingFlags);
+    staged_.reserve(bytes);
+    stagedHost_.reserve(bytes);
+    unsigned char* h = stagedHost_.ptr;
+    auto* blocksH = reinterpret_cast<BlockState<T>*>(h);
+    for (std::size_t i = 0; i < nb; ++i) blocksH[i] = convertBlock<T>(hb[i]);
+    auto* physH = reinterpret_cast<sdem::BarrierCoulombPhys<T>*>(h + offPhys);
+    for (std::size_t i = 0; i < np; ++i) physH[i] = convertPhys<T>((*in.phys)[i]);
+    std::memcpy(h + offBinStart, in.bins.start, (in.numBins + 1) * sizeof(int));
+    std::memcpy(h + offBinBlocks, in.bins.blocks, in.numBinEntries * sizeof(int));
+    cudak::CouplingFlags init;
+    init.bad = ~0ull;
+    const float inf = std::numeric_limits<float>::infinity();
+    std::memcpy(&init.minStepBits, &inf, sizeof(float));
+    std::memcpy(&init.minApproachBits, &inf, sizeof(float));
+    init.overflow = 0;
+    init.contacts = 0;
+    std::memcpy(h + offFlags, &init, sizeof(init));
+    CUDA_CHECK(cudaMemcpyAsync(staged_.ptr, h, bytes, cudaMemcpyHostToDevice));
+    const auto* blocksD = reinterpret_cast<const BlockState<T>*>(staged_.ptr);
+    const auto* physD = reinterpret_cast<const sdem::BarrierCoulombPhys<T>*>(staged_.ptr + offPhys);
+    auto* flagsD = reinterpret_cast<cudak::CouplingFlags*>(staged_.ptr + offFlags);
     const std::size_t nh = static_cast<std::size_t>(in.historySlots) * v.n;
-    if (histCount_ != nh) {
+    if (histCount_ != nh || histParticles_ != v.n) {
       histKey_.reserve(nh);
       histXi_.reserve(3 * nh);
       histWritten_.reserve(v.n);
@@ -98,16 +175,19 @@ class CouplingCuda : public CouplingDeviceBackend {
       CUDA_CHECK(cudaMemset(histWritten_.ptr, 0, std::max<std::size_t>(v.n, 1) * sizeof(unsigned)));
       CUDA_CHECK(cudaMemset(histXi_.ptr, 0, std::max<std::size_t>(3 * nh, 1) * sizeof(T)));
       histCount_ = nh;
+      histParticles_ = v.n;
     }
+    const int numBlocks = static_cast<int>(hb.size());
+    const int numberBits = bitsFor(v.n);
+    const int keyBits = bitsFor(static_cast<unsigned long long>(numBlocks)) + numberBits + 8;
+    if (keyBits > 64)
+      throw ParameterError("MP-block coupling on CUDA: " + std::to_string(numBlocks) + " blocks and " +
+                           std::to_string(v.n) + " particles need a contact sort key of " + std::to_string(keyBits) +
+                           " bits, at most 64 are supported");
+    if (listCapacity_ == 0) growList(kFirstListCapacity);
     sums_.reserve(out.sums.size());
-    CUDA_CHECK(cudaMemset(sums_.ptr, 0, std::max<std::size_t>(out.sums.size(), 1) * sizeof(double)));
-    cudak::CouplingFlags init;
-    init.bad = ~0ull;
-    const float inf = std::numeric_limits<float>::infinity();
-    std::memcpy(&init.minStepBits, &inf, sizeof(float));
-    std::memcpy(&init.minApproachBits, &inf, sizeof(float));
-    init.overflow = 0;
-    flags_.upload(&init, 1);
+    CUDA_CHECK(cudaMemsetAsync(sums_.ptr, 0, std::max<std::size_t>(out.sums.size(), 1) * sizeof(double)));
+    const cudak::ContactList list{share_.ptr, keys_[0].ptr, entries_[0].ptr, listCapacity_, numberBits};
 
     const CouplingParticles<T> P = couplingParticles<T>(v);
     const sdem::ShapeTableView<T> S{numShapes_,          vertex_.ptr,         faceNormal_.ptr,
@@ -116,18 +196,22 @@ class CouplingCuda : public CouplingDeviceBackend {
                                     shapeEdgeStart_.ptr, sweepRadius_.ptr,    boundingRadius_.ptr,
                                     convex_.ptr};
     BinGridView bins = in.bins;
-    bins.start = binStart_.ptr;
-    bins.blocks = binBlocks_.ptr;
+    bins.start = reinterpret_cast<const int*>(staged_.ptr + offBinStart);
+    bins.blocks = reinterpret_cast<const int*>(staged_.ptr + offBinBlocks);
     const HistoryView<T> H{histKey_.ptr, histXi_.ptr, histWritten_.ptr, in.historyStep, in.historySlots};
     const int n = static_cast<int>(v.n);
     if (n > 0) {
       cudak::coupleKernel<T><<<(n + kThreads - 1) / kThreads, kThreads>>>(
-          n, P, blocks_.ptr, S, phys_.ptr, bins, H, static_cast<T>(in.dt), static_cast<T>(in.stepSafety), sums_.ptr,
-          flags_.ptr);
+          n, P, blocksD, S, physD, bins, H, static_cast<T>(in.dt), static_cast<T>(in.stepSafety), sums_.ptr, flagsD,
+          list);
       CUDA_CHECK(cudaGetLastError());
     }
     cudak::CouplingFlags res;
-    CUDA_CHECK(cudaMemcpy(&res, flags_.ptr, sizeof(res), cudaMemcpyDeviceToHost));
+    CUDA_CHECK(cudaMemcpy(&res, flagsD, sizeof(res), cudaMemcpyDeviceToHost));
+    if (res.contacts > listCapacity_)
+      growList(2ull * res.contacts);  // this step keeps the atomic sums
+    else if (res.contacts > 0)
+      orderedSums(static_cast<int>(res.contacts), numBlocks, numberBits, keyBits);
     if (!out.sums.empty())
       CUDA_CHECK(cudaMemcpy(out.sums.data(), sums_.ptr, out.sums.size() * sizeof(double), cudaMemcpyDeviceToHost));
     float minStep;
@@ -143,19 +227,59 @@ class CouplingCuda : public CouplingDeviceBackend {
   }
 
  private:
+  static constexpr unsigned int kFirstListCapacity = 1u << 16;
+
+  void growList(unsigned long long capacity) {
+    listCapacity_ = static_cast<unsigned int>(std::min<unsigned long long>(capacity, 1ull << 31));
+    share_.reserve(static_cast<std::size_t>(kBlockSums) * listCapacity_);
+    for (int b = 0; b < 2; ++b) {
+      keys_[b].reserve(listCapacity_);
+      entries_[b].reserve(listCapacity_);
+    }
+    sortScratchBytes_ = 0;
+    cub::DoubleBuffer<unsigned long long> k(keys_[0].ptr, keys_[1].ptr);
+    cub::DoubleBuffer<int> e(entries_[0].ptr, entries_[1].ptr);
+    CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sortScratchBytes_, k, e, static_cast<int>(listCapacity_)));
+    sortScratch_.reserve(sortScratchBytes_);
+  }
+
+  // The block sums of this step's `count` listed contacts, in their fixed order, into sums_.
+  void orderedSums(int count, int numBlocks, int numberBits, int keyBits) {
+    cub::DoubleBuffer<unsigned long long> k(keys_[0].ptr, keys_[1].ptr);
+    cub::DoubleBuffer<int> e(entries_[0].ptr, entries_[1].ptr);
+    std::size_t bytes = sortScratchBytes_;
+    CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_.ptr, bytes, k, e, count, 0, keyBits));
+    blockStart_.reserve(numBlocks);
+    blockEnd_.reserve(numBlocks);
+    CUDA_CHECK(cudaMemsetAsync(blockStart_.ptr, 0, std::max(numBlocks, 1) * sizeof(int)));
+    CUDA_CHECK(cudaMemsetAsync(blockEnd_.ptr, 0, std::max(numBlocks, 1) * sizeof(int)));
+    cudak::contactRangesKernel<<<(count + kThreads - 1) / kThreads, kThreads>>>(count, k.Current(), numberBits + 8,
+                                                                                blockStart_.ptr, blockEnd_.ptr);
+    CUDA_CHECK(cudaGetLastError());
+    cudak::blockSumsKernel<<<numBlocks, cudak::kSumThreads>>>(share_.ptr, e.Current(), blockStart_.ptr, blockEnd_.ptr,
+                                                              sums_.ptr);
+    CUDA_CHECK(cudaGetLastError());
+  }
+
   int numShapes_ = 0;
   DeviceArray<T> vertex_, faceNormal_, faceOffset_, sweepRadius_, boundingRadius_;
   DeviceArray<int> faceLoopStart_, loopVertex_, loopEdge_, shapeFaceStart_, shapeVertexStart_, shapeEdgeStart_;
   DeviceArray<std::uint8_t> convex_;
-  DeviceArray<BlockState<T>> blocks_;
-  DeviceArray<sdem::BarrierCoulombPhys<T>> phys_;
-  DeviceArray<int> binStart_, binBlocks_;
+  DeviceArray<unsigned char> staged_;  // this step's blocks, pair physics, bins and flags
+  PinnedArray stagedHost_;
   DeviceArray<long long> histKey_;
   DeviceArray<T> histXi_;
   DeviceArray<unsigned> histWritten_;
   std::size_t histCount_ = 0;
+  std::size_t histParticles_ = 0;
   DeviceArray<double> sums_;
-  DeviceArray<cudak::CouplingFlags> flags_;
+  unsigned int listCapacity_ = 0;
+  DeviceArray<double> share_;
+  DeviceArray<unsigned long long> keys_[2];
+  DeviceArray<int> entries_[2];
+  DeviceArray<unsigned char> sortScratch_;
+  std::size_t sortScratchBytes_ = 0;
+  DeviceArray<int> blockStart_, blockEnd_;
 };
 
 }  // namespace

@@ -6,18 +6,31 @@ namespace mpmsdem {
 namespace coupling {
 namespace cudak {
 
-// Device-side step flags: the first failing particle (packed with its block) and the
-// smallest particle step and approach bounds as float bits (non-negative floats order like
-// their bits).
+// Device-side step flags: the first failing particle (packed with its block), the smallest
+// particle step and approach bounds as float bits (non-negative floats order like their bits),
+// and the contacts of the step (entries the contact list was asked for).
 struct CouplingFlags {
   unsigned long long bad;       // (particle << 32) | block, or all ones
   unsigned int minStepBits;
   unsigned int minApproachBits;
   unsigned long long overflow;
+  unsigned int contacts;
 };
 
 struct AtomicAdd {
   __device__ __forceinline__ void operator()(double* slot, double value) const { atomicAdd(slot, value); }
+};
+
+// The step's contacts for the block sums in a fixed order: each contact's share (blockShare)
+// at the place an atomic counter gives it, with a sort key that orders the contacts by block,
+// particle number and the particle's own contact order (the order the CPU backend adds them in,
+// block by block).
+struct ContactList {
+  double* share;            // kBlockSums per entry
+  unsigned long long* key;  // block << (numberBits + 8) | number << 8 | j
+  int* entry;               // the entry's own place (the sort's values)
+  unsigned int capacity;
+  int numberBits;
 };
 
 template <typename T>
@@ -25,21 +38,66 @@ struct DeviceSink {
   const BlockState<T>* blocks;
   double* sums;
   CouplingFlags* flags;
-  __device__ void operator()(const MpContact<T>& c) const {
-    addBlockShare(c, blocks[c.block], sums, AtomicAdd{});
+  ContactList list;
+  unsigned int j = 0;  // contacts of this particle so far
+  // The atomic sums are those of a step whose contacts overflowed the list; otherwise the
+  // list's ordered sums replace them (blockSumsKernel).
+  __device__ void operator()(const MpContact<T>& c) {
+    const BlockState<T>& b = blocks[c.block];
+    addBlockShare(c, b, sums, AtomicAdd{});
+    const unsigned int i = atomicAdd(&flags->contacts, 1u);
+    if (i < list.capacity) {
+      blockShare(c, b, list.share + static_cast<std::size_t>(kBlockSums) * i);
+      list.key[i] = (static_cast<unsigned long long>(c.block) << (list.numberBits + 8)) |
+                    (static_cast<unsigned long long>(c.particle) << 8) | (j < 255u ? j : 255u);
+      list.entry[i] = static_cast<int>(i);
+    }
+    ++j;
     const float bound = static_cast<float>(particleStepBound(c));
     if (bound == bound) atomicMin(&flags->minStepBits, __float_as_uint(bound));
   }
 };
 
+// The range [start[b], end[b]) of block b's contacts in the sorted keys (zeros: none).
+static __global__ void contactRangesKernel(int count, const unsigned long long* key, int shift, int* start, int* end) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= count) return;
+  const int b = static_cast<int>(key[i] >> shift);
+  if (i == 0 || static_cast<int>(key[i - 1] >> shift) != b) start[b] = i;
+  if (i == count - 1 || static_cast<int>(key[i + 1] >> shift) != b) end[b] = i + 1;
+}
+
+// Block b's sums from its sorted contacts: thread t adds contacts t, t + kSumThreads, ... in
+// turn, then a fixed tree adds the threads' sums. The order depends on the contacts alone, not
+// on thread timing.
+constexpr int kSumThreads = 128;
+static __global__ void __launch_bounds__(kSumThreads)
+    blockSumsKernel(const double* share, const int* sortedEntry, const int* start, const int* end, double* sums) {
+  __shared__ double part[kSumThreads];
+  const int b = blockIdx.x, t = threadIdx.x;
+  const int q0 = start[b], q1 = end[b];
+  for (int k = 0; k < kBlockSums; ++k) {
+    double acc = 0.0;
+    for (int q = q0 + t; q < q1; q += kSumThreads) acc += share[static_cast<std::size_t>(kBlockSums) * sortedEntry[q] + k];
+    part[t] = acc;
+    __syncthreads();
+    for (int half = kSumThreads / 2; half > 0; half >>= 1) {
+      if (t < half) part[t] += part[t + half];
+      __syncthreads();
+    }
+    if (t == 0) sums[static_cast<std::size_t>(kBlockSums) * b + k] = part[0];
+    __syncthreads();
+  }
+}
+
 template <typename T>
 __global__ void coupleKernel(int n, CouplingParticles<T> P, const BlockState<T>* blocks,
                              sdem::ShapeTableView<T> shapes, const sdem::BarrierCoulombPhys<T>* phys,
                              BinGridView bins, HistoryView<T> hist, T dt, T safety, double* sums,
-                             CouplingFlags* flags) {
+                             CouplingFlags* flags, ContactList list) {
   const int p = blockIdx.x * blockDim.x + threadIdx.x;
   if (p >= n) return;
-  DeviceSink<T> sink{blocks, sums, flags};
+  DeviceSink<T> sink{blocks, sums, flags, list};
   int badBlock = -1, overflow = 0;
   T approach = T(INFINITY);
   CouplingLoopMemo<T> memo;

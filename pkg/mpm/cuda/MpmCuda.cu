@@ -1,6 +1,8 @@
 // Host control code of the CUDA backend: memory, transfers, launches, failure checks.
 #include <cuda_runtime.h>
 
+#include <cub/device/device_radix_sort.cuh>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -40,6 +42,32 @@ void download(std::vector<double>& dst, const T* src, std::size_t n, int stride,
   CUDA_CHECK(cudaMemcpy(buf.data(), src, n * sizeof(T), cudaMemcpyDeviceToHost));
   for (std::size_t p = 0; p < n; ++p) dst[stride * p + offset] = static_cast<double>(buf[p]);
 }
+// Host double array indexed by particle number (stride/offset) -> device T array by slot.
+template <typename T>
+void uploadByNumber(T* dst, const std::vector<double>& src, const std::vector<int>& id, int stride, int offset,
+                    std::vector<T>& buf) {
+  const std::size_t n = id.size();
+  buf.resize(n);
+  for (std::size_t q = 0; q < n; ++q) buf[q] = static_cast<T>(src[stride * static_cast<std::size_t>(id[q]) + offset]);
+  if (n) CUDA_CHECK(cudaMemcpy(dst, buf.data(), n * sizeof(T), cudaMemcpyHostToDevice));
+}
+// Device T array by slot -> the particles numbered [first, first + count) of a host double array.
+template <typename T, typename U = double>
+void downloadByNumber(std::vector<U>& dst, const T* src, const std::vector<int>& id, std::size_t first,
+                      std::size_t count, int stride, int offset, std::vector<T>& buf) {
+  const std::size_t n = id.size();
+  buf.resize(n);
+  if (n) CUDA_CHECK(cudaMemcpy(buf.data(), src, n * sizeof(T), cudaMemcpyDeviceToHost));
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::size_t k = static_cast<std::size_t>(id[q]) - first;  // wraps for numbers below first
+    if (k < count) dst[stride * k + offset] = static_cast<U>(buf[q]);
+  }
+}
+int bitsFor(unsigned long long values) {  // bits that hold 0 .. values - 1
+  int b = 0;
+  while (b < 64 && (1ull << b) < values) ++b;
+  return b;
+}
 }  // namespace
 
 template <typename T>
@@ -49,8 +77,12 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
       mat_(makeConstitutiveConst<T>(params.material)),
       maxSpeedAllowed_(blowUpSpeed(params)) {
   nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
+  for (int d = 0; d < 3; ++d) blocks_[d] = blocksAlong(params.cells[d]);
+  nBlocks_ = blocks_[0] * blocks_[1] * blocks_[2];
   deviceAlloc(&nodes_, static_cast<std::size_t>(kNodeValues) * nNodes_, bytes_);
   deviceAlloc(&flags_, 1, bytes_);
+  deviceAlloc(&blockStart_, nBlocks_, bytes_);
+  deviceAlloc(&blockEnd_, nBlocks_, bytes_);
 }
 
 template <typename T>
@@ -58,6 +90,8 @@ MpmCuda<T>::~MpmCuda() {
   freeParticles();
   deviceFree(nodes_);
   deviceFree(flags_);
+  deviceFree(blockStart_);
+  deviceFree(blockEnd_);
 }
 
 template <typename T>
@@ -73,12 +107,20 @@ void MpmCuda<T>::freeParticles() {
     for (auto& a : st.s) deviceFree(a);
     deviceFree(st.J);
     deviceFree(st.gdp);
+    deviceFree(st.mass);
+    deviceFree(st.vol0);
     deviceFree(st.phase);
+    deviceFree(st.id);
   }
-  deviceFree(mass_);
-  deviceFree(vol0_);
   for (auto& a : fext_) deviceFree(a);
-  bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags);
+  for (auto& a : keys_) deviceFree(a);
+  for (auto& a : slots_) deviceFree(a);
+  if (sortScratch_) CUDA_CHECK_NOTHROW(cudaFree(sortScratch_));
+  sortScratch_ = nullptr;
+  sortScratchBytes_ = 0;
+  sorted_ = nullptr;
+  bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags) +
+           2 * static_cast<std::size_t>(nBlocks_) * sizeof(int);
   hasFext_ = false;
   forcesIncomplete_ = false;
 }
@@ -87,8 +129,16 @@ template <typename T>
 void MpmCuda<T>::setParticles(const ParticleSet& ps) {
   const double meanMass = validateParticles(params_, ps);
   if (!ps.fext.empty()) validateExternalForces(ps.fext, ps.size());
+  const int numberBits = bitsFor(ps.size());
+  const int keyBits = numberBits + bitsFor(static_cast<unsigned long long>(nBlocks_) * kBlockCells);
+  if (keyBits > 64)
+    throw ParameterError(std::to_string(ps.size()) + " particles in a grid of " + std::to_string(nBlocks_) +
+                         " blocks of 3x3x3 cells: the CUDA P2G sort key needs " + std::to_string(keyBits) +
+                         " bits, at most 64 are supported (fewer particles or cells)");
   grid_.massEps = static_cast<T>(1e-12 * meanMass);
   freeParticles();
+  numberBits_ = numberBits;
+  keyBits_ = keyBits;
   n_ = 0;  // until every array is allocated and filled: a failure leaves an empty solver
   try {
     loadParticles(ps);
@@ -109,10 +159,20 @@ void MpmCuda<T>::loadParticles(const ParticleSet& ps) {
     for (auto& a : st.s) deviceAlloc(&a, n, bytes_);
     deviceAlloc(&st.J, n, bytes_);
     deviceAlloc(&st.gdp, n, bytes_);
+    deviceAlloc(&st.mass, n, bytes_);
+    deviceAlloc(&st.vol0, n, bytes_);
     deviceAlloc(&st.phase, n, bytes_);
+    deviceAlloc(&st.id, n, bytes_);
   }
-  deviceAlloc(&mass_, n, bytes_);
-  deviceAlloc(&vol0_, n, bytes_);
+  for (auto& a : keys_) deviceAlloc(&a, n, bytes_);
+  for (auto& a : slots_) deviceAlloc(&a, n, bytes_);
+  {
+    cub::DoubleBuffer<unsigned long long> k(keys_[0], keys_[1]);
+    cub::DoubleBuffer<int> v(slots_[0], slots_[1]);
+    CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sortScratchBytes_, k, v, static_cast<int>(n), 0, keyBits_));
+    CUDA_CHECK(cudaMalloc(&sortScratch_, std::max<std::size_t>(sortScratchBytes_, 1)));
+    bytes_ += std::max<std::size_t>(sortScratchBytes_, 1);
+  }
   cur_ = 0;
   DeviceState& s = state_[0];
   std::vector<T> buf;
@@ -122,8 +182,8 @@ void MpmCuda<T>::loadParticles(const ParticleSet& ps) {
   }
   for (int k = 0; k < 6; ++k) upload(s.s[k], ps.stress, n, 6, k, buf);
   upload(s.J, ps.J, n, 1, 0, buf);
-  upload(mass_, ps.mass, n, 1, 0, buf);
-  upload(vol0_, ps.volume0, n, 1, 0, buf);
+  upload(s.mass, ps.mass, n, 1, 0, buf);
+  upload(s.vol0, ps.volume0, n, 1, 0, buf);
   if (ps.gammaDotP.empty())
     CUDA_CHECK(cudaMemset(s.gdp, 0, std::max<std::size_t>(n, 1) * sizeof(T)));
   else
@@ -132,10 +192,20 @@ void MpmCuda<T>::loadParticles(const ParticleSet& ps) {
     CUDA_CHECK(cudaMemset(s.phase, 0, std::max<std::size_t>(n, 1)));
   else if (n)
     CUDA_CHECK(cudaMemcpy(s.phase, ps.phase.data(), n, cudaMemcpyHostToDevice));
+  std::vector<int> id(n);
+  for (std::size_t p = 0; p < n; ++p) id[p] = static_cast<int>(p);
+  if (n) CUDA_CHECK(cudaMemcpy(s.id, id.data(), n * sizeof(int), cudaMemcpyHostToDevice));
   maxSpeed_ = 0;
   for (std::size_t p = 0; p < n; ++p)
     maxSpeed_ = std::max(maxSpeed_, std::sqrt(ps.v[3 * p] * ps.v[3 * p] + ps.v[3 * p + 1] * ps.v[3 * p + 1] +
                                               ps.v[3 * p + 2] * ps.v[3 * p + 2]));
+}
+
+template <typename T>
+std::vector<int> MpmCuda<T>::numbers() const {
+  std::vector<int> id(n_);
+  if (n_) CUDA_CHECK(cudaMemcpy(id.data(), state_[cur_].id, n_ * sizeof(int), cudaMemcpyDeviceToHost));
+  return id;
 }
 
 template <typename T>
@@ -157,28 +227,31 @@ void MpmCuda<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t c
   out.phase.assign(count, 0);
   out.fext.assign(3 * count, 0.0);
   if (count == 0) return;
+  const std::vector<int> id = numbers();
   std::vector<T> buf;
   for (int d = 0; d < 3; ++d) {
-    download(out.x, s.x[d] + first, count, 3, d, buf);
-    download(out.v, s.v[d] + first, count, 3, d, buf);
-    if (hasFext_) download(out.fext, fext_[d] + first, count, 3, d, buf);
+    downloadByNumber(out.x, s.x[d], id, first, count, 3, d, buf);
+    downloadByNumber(out.v, s.v[d], id, first, count, 3, d, buf);
+    if (hasFext_) downloadByNumber(out.fext, fext_[d], id, first, count, 3, d, buf);
   }
-  for (int k = 0; k < 6; ++k) download(out.stress, s.s[k] + first, count, 6, k, buf);
-  download(out.J, s.J + first, count, 1, 0, buf);
-  download(out.gammaDotP, s.gdp + first, count, 1, 0, buf);
-  download(out.mass, mass_ + first, count, 1, 0, buf);
-  download(out.volume0, vol0_ + first, count, 1, 0, buf);
-  CUDA_CHECK(cudaMemcpy(out.phase.data(), s.phase + first, count, cudaMemcpyDeviceToHost));
+  for (int k = 0; k < 6; ++k) downloadByNumber(out.stress, s.s[k], id, first, count, 6, k, buf);
+  downloadByNumber(out.J, s.J, id, first, count, 1, 0, buf);
+  downloadByNumber(out.gammaDotP, s.gdp, id, first, count, 1, 0, buf);
+  downloadByNumber(out.mass, s.mass, id, first, count, 1, 0, buf);
+  downloadByNumber(out.volume0, s.vol0, id, first, count, 1, 0, buf);
+  std::vector<std::uint8_t> phase;
+  downloadByNumber(out.phase, s.phase, id, first, count, 1, 0, phase);
 }
 
 template <typename T>
 void MpmCuda<T>::setExternalForces(const std::vector<double>& f) {
   validateExternalForces(f, n_);
   forcesIncomplete_ = true;
+  const std::vector<int> id = numbers();
   std::vector<T> buf;
   for (int d = 0; d < 3; ++d) {
     if (!fext_[d]) deviceAlloc(&fext_[d], n_, bytes_);
-    upload(fext_[d], f, n_, 3, d, buf);
+    uploadByNumber(fext_[d], f, id, 3, d, buf);
   }
   hasFext_ = true;
   forcesIncomplete_ = false;
@@ -199,8 +272,9 @@ ParticleView MpmCuda<T>::openForceBuffer() {
     v.v[d] = s.v[d];
     v.force[d] = fext_[d];
   }
-  v.mass = mass_;
-  v.volume0 = vol0_;
+  v.id = s.id;
+  v.mass = s.mass;
+  v.volume0 = s.vol0;
   v.J = s.J;
   hasFext_ = true;
   forcesIncomplete_ = false;
@@ -228,9 +302,9 @@ ParticleIn<T> MpmCuda<T>::input() const {
   }
   for (int k = 0; k < 6; ++k) in.s[k] = s.s[k];
   in.J = s.J;
-  in.mass = mass_;
-  in.vol0 = vol0_;
-  in.id = nullptr;  // the particles stay in their own order
+  in.mass = s.mass;
+  in.vol0 = s.vol0;
+  in.id = s.id;
   return in;
 }
 
@@ -250,19 +324,43 @@ ParticleOut<T> MpmCuda<T>::output() const {
 }
 
 template <typename T>
+void MpmCuda<T>::sortParticles() {
+  const int n = static_cast<int>(n_);
+  const ParticleIn<T> in = input();
+  const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
+  cudak::binKernel<T><<<blocksFor(n_), kThreads>>>(n, in, grid_, bg, numberBits_, keys_[0], slots_[0]);
+  CUDA_CHECK(cudaGetLastError());
+  cub::DoubleBuffer<unsigned long long> k(keys_[0], keys_[1]);
+  cub::DoubleBuffer<int> v(slots_[0], slots_[1]);
+  CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_, sortScratchBytes_, k, v, n, 0, keyBits_));
+  CUDA_CHECK(cudaMemsetAsync(blockStart_, 0, static_cast<std::size_t>(nBlocks_) * sizeof(int)));
+  CUDA_CHECK(cudaMemsetAsync(blockEnd_, 0, static_cast<std::size_t>(nBlocks_) * sizeof(int)));
+  cudak::blockRangesKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, blockStart_, blockEnd_);
+  CUDA_CHECK(cudaGetLastError());
+  sorted_ = v.Current();
+}
+
+template <typename T>
 void MpmCuda<T>::step(double dt) {
   requireCompleteForces("step");
   if (steps_ % 100 == 0) checkTimeStep(dt);
   const int n = static_cast<int>(n_);
   const T dtT = static_cast<T>(dt);
-  CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
-  const StepFlags init{n, 0u};
-  CUDA_CHECK(cudaMemcpy(flags_, &init, sizeof(StepFlags), cudaMemcpyHostToDevice));
+  CUDA_CHECK(cudaMemsetAsync(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
+  CUDA_CHECK(cudaMemsetAsync(&flags_->firstBad, 0xff, sizeof(flags_->firstBad)));
+  CUDA_CHECK(cudaMemsetAsync(&flags_->maxSpeedBits, 0, sizeof(flags_->maxSpeedBits)));
   const ParticleIn<T> in = input();
   const ParticleOut<T> out = output();
   if (n > 0) {
-    cudak::p2gKernel<T><<<blocksFor(n_), kThreads>>>(n, in, grid_, dtT, nodes_);
-    CUDA_CHECK(cudaGetLastError());
+    sortParticles();
+    const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
+    for (int colour = 0; colour < 8; ++colour) {
+      const int count = bg.count(colour, 0) * bg.count(colour, 1) * bg.count(colour, 2);
+      if (count == 0) continue;
+      cudak::p2gTileKernel<T><<<count, cudak::kTileThreads>>>(bg, colour, in, sorted_, blockStart_, blockEnd_, grid_,
+                                                               dtT, nodes_);
+      CUDA_CHECK(cudaGetLastError());
+    }
   }
   if (hooks_.empty()) {
     cudak::gridKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_, dtT);
@@ -285,18 +383,21 @@ void MpmCuda<T>::step(double dt) {
   sc.alpha = static_cast<T>(params_.flipAlphaFor(dt));
   sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
   sc.mat = mat_;
+  const DeviceState& next = state_[1 - cur_];
   if (n > 0) {
-    cudak::g2pKernel<T><<<blocksFor(n_), kThreads>>>(n, in, out, nodes_, grid_, sc, &flags_->firstBad,
+    const cudak::MovedWith<T> moved{next.mass, next.vol0, next.id};
+    cudak::g2pKernel<T><<<blocksFor(n_), kThreads>>>(n, in, out, moved, sorted_, nodes_, grid_, sc, &flags_->firstBad,
                                                      &flags_->maxSpeedBits);
     CUDA_CHECK(cudaGetLastError());
   }
   StepFlags res;
   CUDA_CHECK(cudaMemcpy(&res, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
-  if (res.firstBad < n) {
-    const int p = res.firstBad;
+  if (res.firstBad != ~0ull) {
+    const int p = static_cast<int>(res.firstBad >> 32);
+    const int slot = static_cast<int>(res.firstBad & 0xffffffffull);
     T xv[7];
     const T* src[7] = {out.x[0], out.x[1], out.x[2], out.v[0], out.v[1], out.v[2], out.J};
-    for (int i = 0; i < 7; ++i) CUDA_CHECK(cudaMemcpy(&xv[i], src[i] + p, sizeof(T), cudaMemcpyDeviceToHost));
+    for (int i = 0; i < 7; ++i) CUDA_CHECK(cudaMemcpy(&xv[i], src[i] + slot, sizeof(T), cudaMemcpyDeviceToHost));
     const double x[3] = {double(xv[0]), double(xv[1]), double(xv[2])};
     const double v[3] = {double(xv[3]), double(xv[4]), double(xv[5])};
     throw RuntimeFailure(badParticleMessage(steps_ + 1, time_ + dt, name(), p, maxSpeedAllowed_, x, v, xv[6],

@@ -2,16 +2,26 @@
 // MpmCudaKernels.cuh and call the same __host__ __device__ stage functions as the CPU
 // backend (MpmKernelsCommon.hpp). T = float or double, picked at run time by makeSolver.
 //
+// P2G without atomics, in a fixed order: each step the particles are sorted (radix sort) by
+// block of stencil bases, base and number, as the CPU backend bins them, and each block's
+// nodes gather their sums (p2gTileKernel), the eight parity colours one launch after another.
+// A node's sum therefore has one order: two runs of a scene give the same bits, whatever the
+// storage order (a restart included), and a node is written once per block instead of taking
+// 7 atomic adds per particle. G2P writes each particle into the slot of its sorted place, so
+// that the next step reads the particles nearly in turn; a particle keeps its number (id[slot],
+// what setParticles/getParticles index by), and its mass and volume0 move with it.
+//
 // Device memory (T = float, N particles, G grid nodes): particle state double-buffered
-// (x, v, stress, J, gammaDotP: 14 values, phase 1 byte, twice) plus mass and volume0
-// = 122 bytes/particle, + 12 bytes/particle once external forces are set, + kNodeValues (8)
-// values per grid node (32 bytes; at 8 particles per cell 4 bytes/particle for a fully filled
-// grid). Particles are stored by number (no reordering: slot = number).
-// Double-buffering makes a failed step leave the previous state intact at no bandwidth cost.
-// P2G scatters with atomicAdd.
+// (x, v, stress, J, gammaDotP, mass, volume0: 16 values, phase 1 byte, number 4 bytes, twice)
+// = 138 bytes/particle; the sort (two keys of 8 bytes, two slots of 4) 24 bytes/particle;
+// + 12 bytes/particle once external forces are set; + kNodeValues (8) values per grid node
+// (32 bytes; at 8 particles per cell 4 bytes/particle for a fully filled grid) and two ints per
+// block of 27 cells. Double-buffering makes a failed step leave the previous state intact at no
+// bandwidth cost.
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "mpm/MpmKernelsCommon.hpp"
 #include "mpm/MpmSolver.hpp"
@@ -47,16 +57,21 @@ class MpmCuda : public MpmSolver {
     T* s[6] = {};
     T* J = nullptr;
     T* gdp = nullptr;
+    T* mass = nullptr;
+    T* vol0 = nullptr;
     std::uint8_t* phase = nullptr;
+    int* id = nullptr;  // particle number of each slot
   };
   struct StepFlags {
-    int firstBad;                // smallest failing particle index, or N
-    unsigned int maxSpeedBits;   // float bits of the largest particle speed (>= 0, so ordered as uint)
+    unsigned long long firstBad;  // smallest (number << 32 | slot) of a failing particle, or all ones
+    unsigned int maxSpeedBits;    // float bits of the largest particle speed (>= 0, so ordered as uint)
   };
   void freeParticles();
   void loadParticles(const ParticleSet& ps);  // allocates and fills the particle arrays for ps
   ParticleIn<T> input() const;
   ParticleOut<T> output() const;
+  std::vector<int> numbers() const;  // id of the current state, on the host
+  void sortParticles();              // sorted_, blockStart_/End_ for this step
 
   MpmParams params_;
   GridConst<T> grid_{};
@@ -66,12 +81,22 @@ class MpmCuda : public MpmSolver {
   std::size_t n_ = 0;
   DeviceState state_[2];
   int cur_ = 0;
-  T* mass_ = nullptr;
-  T* vol0_ = nullptr;
   T* fext_[3] = {};
   bool hasFext_ = false;
   T* nodes_ = nullptr;
   StepFlags* flags_ = nullptr;
+  // P2G order: blocks of stencil bases, the sort's double buffers and its scratch space.
+  int blocks_[3];
+  int nBlocks_;
+  int* blockStart_ = nullptr;
+  int* blockEnd_ = nullptr;
+  int numberBits_ = 0;
+  int keyBits_ = 0;
+  unsigned long long* keys_[2] = {};
+  int* slots_[2] = {};
+  const int* sorted_ = nullptr;  // slot of each sorted place, this step
+  void* sortScratch_ = nullptr;
+  std::size_t sortScratchBytes_ = 0;
   double maxSpeed_ = 0;
   std::size_t bytes_ = 0;
 };

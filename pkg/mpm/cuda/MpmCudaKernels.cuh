@@ -6,22 +6,91 @@ namespace mpmsdem {
 namespace mpm {
 namespace cudak {
 
-// P2G scatter into the grid with atomics (the zero eighth value is skipped).
-template <typename T>
-struct AtomicScatter {
-  T* grid;
-  __device__ __forceinline__ void operator()(int node, const T* r) const {
-    T* n = grid + kNodeValues * node;
-    for (int c = 0; c < kNodeValues - 1; ++c) atomicAdd(n + c, r[c]);
+// The grid's blocks of stencil bases (blockCellOf) and their eight parity colours: colour
+// (px, py, pz) = 4 px + 2 py + pz holds the blocks with b[d] % 2 == p_d, count(colour, d) of them
+// along axis d.
+struct BlockGrid {
+  int blocks[3];
+  __host__ __device__ int count(int colour, int d) const {
+    const int parity = (colour >> (2 - d)) & 1;
+    return (blocks[d] - parity + 1) / 2;
+  }
+  __device__ void colourBlock(int colour, int i, int b[3]) const {
+    for (int d = 2; d >= 0; --d) {
+      const int m = count(colour, d);
+      b[d] = 2 * (i % m) + ((colour >> (2 - d)) & 1);
+      i /= m;
+    }
   }
 };
 
+// What a particle carries from slot to slot besides its state.
 template <typename T>
-__global__ void p2gKernel(int n, ParticleIn<T> in, GridConst<T> g, T dt, T* grid) {
-  const int p = blockIdx.x * blockDim.x + threadIdx.x;
-  if (p >= n) return;
-  AtomicScatter<T> add{grid};
-  p2gParticle(p, in, g, dt, add);
+struct MovedWith {
+  T* mass;
+  T* vol0;
+  int* id;
+};
+
+// Sort key of the particle in slot s: its block and base (blockCellOf) above its number, so
+// that sorting by key orders the particles as the CPU backend bins them.
+template <typename T>
+__global__ void binKernel(int n, ParticleIn<T> in, GridConst<T> g, BlockGrid bg, int numberBits,
+                          unsigned long long* key, int* slot) {
+  const int s = blockIdx.x * blockDim.x + threadIdx.x;
+  if (s >= n) return;
+  T gc[3];
+  gridCoordinate(in, s, g, gc);
+  key[s] = (static_cast<unsigned long long>(blockCellOf(gc, bg.blocks)) << numberBits) |
+           static_cast<unsigned int>(in.id[s]);
+  slot[s] = s;
+}
+
+// The range [start[b], end[b]) of block b in the sorted keys (left as zeros for empty blocks);
+// static: this header is included by more than one translation unit.
+static __global__ void blockRangesKernel(int n, const unsigned long long* key, int numberBits, int* start, int* end) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  auto blockOf = [&](int q) { return static_cast<int>((key[q] >> numberBits) / kBlockCells); };
+  const int b = blockOf(i);
+  if (i == 0 || blockOf(i - 1) != b) start[b] = i;
+  if (i == n - 1 || blockOf(i + 1) != b) end[b] = i + 1;
+}
+
+// P2G of the blocks of one parity colour, one CUDA block (kTileThreads threads, one per node of
+// the 5x5x5 tile) per block of bases: the block's particles are prepared kTileChunk at a time
+// into shared memory, and each thread sums their shares of its node in sorted order, then adds
+// the sum to the grid. Blocks of one colour share no node, so the adds need no atomics; the
+// colours run one launch after another.
+constexpr int kTileThreads = 128;
+constexpr int kTileChunk = 64;
+template <typename T>
+__global__ void __launch_bounds__(kTileThreads)
+    p2gTileKernel(BlockGrid bg, int colour, ParticleIn<T> in, const int* sorted, const int* start, const int* end,
+                  GridConst<T> g, T dt, T* grid) {
+  int b[3];
+  bg.colourBlock(colour, blockIdx.x, b);
+  const int blk = (b[0] * bg.blocks[1] + b[1]) * bg.blocks[2] + b[2];
+  const int q0 = start[blk], q1 = end[blk];
+  if (q0 >= q1) return;
+  __shared__ P2GTileParticle<T> chunk[kTileChunk];
+  const int t = threadIdx.x;
+  constexpr int kTile = kBlockNodes * kBlockNodes * kBlockNodes;
+  const int n0 = 3 * b[0] + t / (kBlockNodes * kBlockNodes), n1 = 3 * b[1] + (t / kBlockNodes) % kBlockNodes,
+            n2 = 3 * b[2] + t % kBlockNodes;
+  T acc[kNodeVNew + 3] = {};
+  for (int q = q0; q < q1; q += kTileChunk) {
+    const int m = min(kTileChunk, q1 - q);
+    __syncthreads();  // the previous chunk has been read
+    if (t < m) p2gTilePrepare(sorted[q + t], in, g, dt, chunk[t]);
+    __syncthreads();
+    if (t < kTile)
+      for (int j = 0; j < m; ++j) p2gTileNodeAdd(chunk[j], n0, n1, n2, acc);
+  }
+  if (t < kTile && n0 < g.nodes[0] && n1 < g.nodes[1] && n2 < g.nodes[2]) {
+    T* r = grid + kNodeValues * ((n0 * g.nodes[1] + n1) * g.nodes[2] + n2);
+    for (int c = 0; c < kNodeVNew + 3; ++c) r[c] += acc[c];
+  }
 }
 
 template <typename T>
@@ -46,8 +115,6 @@ __global__ void gridWallsKernel(int nNodes, T* grid, GridConst<T> g) {
   gridNodeWalls(i, grid, g);
 }
 
-// flags[0]: smallest failing particle index (atomicMin); flags[1]: float bits of the largest
-// speed (atomicMax; non-negative floats order like their bit patterns).
 // Largest value over the warp; every lane calls it (inactive lanes must pass 0 via the
 // caller, which keeps the whole warp alive).
 __device__ __forceinline__ unsigned int warpMaxU32(unsigned int v) {
@@ -80,16 +147,27 @@ __global__ void gateKernel(GateBand b, int count, int stride, const T* mass, T* 
   }
 }
 
+// G2P of the particle at sorted place s (slot sorted[s] of the state read) into slot s of the
+// state written, which then holds the particles in sorted order; mass, volume0 and number move
+// with them. firstBad: the smallest (number << 32 | slot) of a failing particle (atomicMin);
+// maxSpeedBits: float bits of the largest speed (atomicMax; non-negative floats order like
+// their bit patterns).
 template <typename T>
-__global__ void g2pKernel(int n, ParticleIn<T> in, ParticleOut<T> out, const T* grid, GridConst<T> g,
-                          StepConst<T> sc, int* firstBad, unsigned int* maxSpeedBits) {
-  const int p = blockIdx.x * blockDim.x + threadIdx.x;
+__global__ void g2pKernel(int n, ParticleIn<T> in, ParticleOut<T> out, MovedWith<T> moved, const int* sorted,
+                          const T* grid, GridConst<T> g, StepConst<T> sc, unsigned long long* firstBad,
+                          unsigned int* maxSpeedBits) {
+  const int s = blockIdx.x * blockDim.x + threadIdx.x;
   unsigned int bits = 0u;
-  if (p < n) {
-    const G2PResult<T> r = g2pParticle(p, in, p, out, grid, g, sc);
-    if (!r.ok) atomicMin(firstBad, p);
-    const float s = static_cast<float>(r.speed);
-    bits = s == s ? __float_as_uint(s) : 0u;  // NaN speeds are reported via firstBad
+  if (s < n) {
+    const int p = sorted[s];
+    const G2PResult<T> r = g2pParticle(p, in, s, out, grid, g, sc);
+    moved.mass[s] = in.mass[p];
+    moved.vol0[s] = in.vol0[p];
+    moved.id[s] = in.id[p];
+    if (!r.ok)
+      atomicMin(firstBad, (static_cast<unsigned long long>(in.id[p]) << 32) | static_cast<unsigned int>(s));
+    const float sp = static_cast<float>(r.speed);
+    bits = sp == sp ? __float_as_uint(sp) : 0u;  // NaN speeds are reported via firstBad
   }
   // One atomic per warp (blockDim is a multiple of 32, so whole warps reach this point).
   const unsigned int warpMax = warpMaxU32(bits);

@@ -1,6 +1,7 @@
-// The CPU backend stores its particles sorted by grid block (MpmCpu, "Storage order"): a
-// particle keeps its number through every reordering, the results are those of number order,
-// and what a coupling reads and writes through the particle view lands on the right particle.
+// Both backends store their particles sorted by grid block (MpmCpu, "Storage order"; MpmCuda):
+// a particle keeps its number through every reordering, the results are those of number order
+// (so two runs, and a run restarted from its particles by number, give the same bits), and what
+// a coupling reads and writes through the particle view lands on the right particle.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +12,9 @@
 
 #include "mpm/MpmSolver.hpp"
 #include "mpm/Seeding.hpp"
+#ifdef MPMSDEM_WITH_CUDA
+#include <cuda_runtime.h>
+#endif
 
 #include "AgreementHelpers.hpp"
 #include "GranularColumn.hpp"
@@ -39,8 +43,8 @@ constexpr double kDt = 2e-4;  // [s]
 // A solver of `prm` in `precision` started from `start` and stepped `steps` times by kDt; its
 // particles at the end in `end`.
 std::unique_ptr<MpmSolver> run(const MpmParams& prm, const ParticleSet& start, int steps, ParticleSet& end,
-                               Precision precision = Precision::Double) {
-  auto s = makeSolver(prm, Backend::Cpu, precision);
+                               Precision precision = Precision::Double, Backend backend = Backend::Cpu) {
+  auto s = makeSolver(prm, backend, precision);
   s->setParticles(start);
   for (int n = 0; n < steps; ++n) s->step(kDt);
   s->getParticles(end);
@@ -54,12 +58,30 @@ double largestTravel(const ParticleSet& start, const ParticleSet& end) {
   return travel;
 }
 
+// The particle number of each slot of a view, on the host.
+std::vector<int> slotNumbers(const ParticleView& v) {
+  std::vector<int> id(v.n);
+  if (!v.id) {
+    std::iota(id.begin(), id.end(), 0);
+  } else if (v.device) {
+#ifdef MPMSDEM_WITH_CUDA
+    EXPECT_EQ(cudaMemcpy(id.data(), v.id, v.n * sizeof(int), cudaMemcpyDeviceToHost), cudaSuccess);
+#else
+    ADD_FAILURE() << "a device view in a build without CUDA";
+#endif
+  } else {
+    std::copy(v.id, v.id + v.n, id.begin());
+  }
+  return id;
+}
+
 // Slots whose particle number is not the slot itself; fails unless id is a permutation.
 long reordered(const ParticleView& v) {
+  const std::vector<int> id = slotNumbers(v);
   std::vector<int> seen(v.n, 0);
   long moved = 0;
   for (std::size_t q = 0; q < v.n; ++q) {
-    const int k = v.id[q];
+    const int k = id[q];
     EXPECT_TRUE(k >= 0 && static_cast<std::size_t>(k) < v.n && !seen[k]) << "slot " << q << " holds number " << k;
     if (k >= 0 && static_cast<std::size_t>(k) < v.n) seen[k] = 1;
     moved += k != static_cast<int>(q);
@@ -69,26 +91,34 @@ long reordered(const ParticleView& v) {
 
 }  // namespace
 
-TEST(StorageOrder, ARestartByParticleNumberContinuesBitForBit) {
-  // A collapsing column: 600 steps in one run, and 300 + 300 with the state handed over through
-  // getParticles/setParticles (by particle number: the new solver starts with slot = number,
-  // where the first one had its particles in block order). The flow mixes the particles across
-  // blocks, so the storage orders of the two runs differ; the results must not.
+class StorageOrderEveryBackend : public agreement::EveryBackend {};
+INSTANTIATE_TEST_SUITE_P(Kinds, StorageOrderEveryBackend, ::testing::ValuesIn(agreement::everyKind()),
+                         agreement::kindName);
+
+TEST_P(StorageOrderEveryBackend, TwoRunsAndARestartByParticleNumberGiveTheSameBits) {
+  // A collapsing column: 600 steps in one run, the same again, and 300 + 300 with the state
+  // handed over through getParticles/setParticles (by particle number: the new solver starts
+  // with slot = number, where the first one had its particles in block order). The flow mixes
+  // the particles across blocks, so the storage orders of the runs differ; the results must not
+  // (on CUDA: no atomic sum whose order changes from run to run).
   ParticleSet ps;
   const MpmParams prm = columnScene(ps);
-  ParticleSet endA, half, endC;
-  run(prm, ps, 600, endA);
-  auto b = run(prm, ps, 300, half);
+  ParticleSet endA, endB, half, endC;
+  run(prm, ps, 600, endA, precision(), backend());
+  run(prm, ps, 600, endB, precision(), backend());
+  auto b = run(prm, ps, 300, half, precision(), backend());
   EXPECT_GT(reordered(b->openForceBuffer()), static_cast<long>(ps.size() / 10));  // stored in an order of its own
-  auto c = makeSolver(prm);
+  auto c = solver(prm);
   c->setParticles(half);
   EXPECT_EQ(reordered(c->openForceBuffer()), 0);
   for (int n = 0; n < 300; ++n) c->step(kDt);
   c->getParticles(endC);
 
   EXPECT_GT(largestTravel(ps, endA), 0.02);  // the column did collapse
+  agreement::expectBitIdentical(endA, endB);
   agreement::expectBitIdentical(endA, endC);
-  EXPECT_TRUE(endA.mass == ps.mass);
+  for (std::size_t p = 0; p < ps.size(); ++p)
+    ASSERT_EQ(endA.mass[p], precision() == Precision::Float ? double(float(ps.mass[p])) : ps.mass[p]) << p;
 }
 
 // With a second copy of the particles (G2P writes them in block order) and with one (G2P
@@ -171,33 +201,30 @@ TEST(StorageOrder, OneCopyGivesTheSameRunToTheLastBitAndHoldsLessMemory) {
 
 // An output reads the particles in slices by number (MpmSolver::getParticles(out, first,
 // count)): each slice is exactly its range of the whole set, with the particles stored in an
-// order of their own, in both precisions and with one or two copies; steps in between make
+// order of their own, on every backend and precision and (CPU) with one or two copies; steps in between make
 // the next slices read the particles in their new slots; a slice outside the set is refused by name.
-TEST(StorageOrder, SlicesByNumberAreTheWholeSetsRanges) {
-  for (const Precision precision : {Precision::Double, Precision::Float})
-    for (const bool keep : {true, false}) {
-      ParticleSet ps, whole, slice;
-      const MpmParams prm = columnScene(ps, keep);
-      auto s = run(prm, ps, 30, whole, precision);
-      ASSERT_GT(reordered(s->openForceBuffer()), static_cast<long>(ps.size() / 10));
-      for (int pass = 0; pass < 2; ++pass) {
-        s->getParticles(whole);
-        const std::size_t n = whole.size(), size = 97;  // not a divisor of n: a short last slice
-        ASSERT_NE(n % size, 0u);
-        for (std::size_t first = 0; first < n; first += size) {
-          const std::size_t count = std::min(size, n - first);
-          s->getParticles(slice, first, count);
-          ASSERT_EQ(slice.size(), count);
-          agreement::expectRangeOf(slice, whole, first);
-        }
-        const ParticleView before = s->openForceBuffer();
-        const std::vector<int> order(before.id, before.id + before.n);
-        for (int k = 0; k < 200; ++k) s->step(kDt);
-        const ParticleView after = s->openForceBuffer();
-        ASSERT_FALSE(std::equal(order.begin(), order.end(), after.id)) << "the particles kept their slots";
+TEST_P(StorageOrderEveryBackend, SlicesByNumberAreTheWholeSetsRanges) {
+  for (const bool keep : {true, false}) {
+    ParticleSet ps, whole, slice;
+    const MpmParams prm = columnScene(ps, keep);
+    auto s = run(prm, ps, 30, whole, precision(), backend());
+    ASSERT_GT(reordered(s->openForceBuffer()), static_cast<long>(ps.size() / 10));
+    for (int pass = 0; pass < 2; ++pass) {
+      s->getParticles(whole);
+      const std::size_t n = whole.size(), size = 97;  // not a divisor of n: a short last slice
+      ASSERT_NE(n % size, 0u);
+      for (std::size_t first = 0; first < n; first += size) {
+        const std::size_t count = std::min(size, n - first);
+        s->getParticles(slice, first, count);
+        ASSERT_EQ(slice.size(), count);
+        agreement::expectRangeOf(slice, whole, first);
       }
-      EXPECT_THROW(s->getParticles(slice, ps.size() - 2, 3), ParameterError);
+      const std::vector<int> order = slotNumbers(s->openForceBuffer());
+      for (int k = 0; k < 200; ++k) s->step(kDt);
+      ASSERT_FALSE(order == slotNumbers(s->openForceBuffer())) << "the particles kept their slots";
     }
+    EXPECT_THROW(s->getParticles(slice, ps.size() - 2, 3), ParameterError);
+  }
 }
 
 // Loading slice by slice: forces that first appear in a later slice are loaded (the slices
