@@ -162,11 +162,14 @@ MPM_HD_INLINE void p2gParticle(int p, const ParticleIn<T>& P, const GridConst<T>
 // differ by 2 or more along some axis share no node. A block's particles are summed in the
 // order (base, number) into its tile, which is then added to the grid, the blocks of one parity
 // colour at a time. The CPU scatters each particle into a private copy of the tile; CUDA
-// gathers, one thread per tile node summing the particles' shares in that same order
-// (p2gTileNodeAdd). Either way a node's sum does not depend on thread timing or on the order
-// the particles are stored in.
+// gathers, kTileSplit threads per tile node each summing a fixed share of the particles in that
+// order (p2gTileNodeAdd), the parts then added in a fixed order (p2gTileCombine). Either way a
+// node's sum does not depend on thread timing or on the order the particles are stored in.
 constexpr int kBlockCells = 27;  // stencil bases per block
 constexpr int kBlockNodes = 5;   // nodes per axis of a block's tile
+// The gather splits a node's sum over a block's particles into kTileSplit parts: part k sums
+// the block's particles k, k + kTileSplit, ... in sorted order.
+constexpr int kTileSplit = 4;
 
 // Blocks along an axis of `cells` cells (stencil bases run up to cells - 1).
 MPM_HD_INLINE int blocksAlong(int cells) { return cells / 3 + 1; }
@@ -222,6 +225,12 @@ MPM_HD_INLINE void p2gTileNodeAdd(const P2GTileParticle<T>& a, int n0, int n1, i
     const T row = wij * a.cw[kNodeVNew + d] + xij * a.cx[d] + yij * a.cy[d];
     acc[kNodeVNew + d] += wk * row + dwk * (wij * a.cz[d]);
   }
+}
+
+// A node's sum from the kTileSplit parts of the gather, in one fixed order.
+template <typename T>
+MPM_HD_INLINE T p2gTileCombine(T a, T b, T c, T d) {
+  return (a + b) + (c + d);
 }
 
 // Grid velocities of one node (Eq 3): v_old = p/m, v_new = (p + dt f)/m + dt g; an empty node

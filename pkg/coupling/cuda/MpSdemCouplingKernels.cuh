@@ -33,6 +33,18 @@ struct ContactList {
   int numberBits;
 };
 
+// A place in the contact list: one atomic add per group of lanes that reach it together (the
+// whole flow's contacts with the bed would otherwise queue on one counter).
+__device__ __forceinline__ unsigned int listPlace(unsigned int* counter) {
+  const unsigned int mask = __activemask();
+  const int lane = threadIdx.x & 31;
+  const int leader = __ffs(mask) - 1;
+  unsigned int first = 0u;
+  if (lane == leader) first = atomicAdd(counter, static_cast<unsigned int>(__popc(mask)));
+  first = __shfl_sync(mask, first, leader);
+  return first + static_cast<unsigned int>(__popc(mask & ((1u << lane) - 1u)));
+}
+
 template <typename T>
 struct DeviceSink {
   const BlockState<T>* blocks;
@@ -45,7 +57,7 @@ struct DeviceSink {
   __device__ void operator()(const MpContact<T>& c) {
     const BlockState<T>& b = blocks[c.block];
     addBlockShare(c, b, sums, AtomicAdd{});
-    const unsigned int i = atomicAdd(&flags->contacts, 1u);
+    const unsigned int i = listPlace(&flags->contacts);
     if (i < list.capacity) {
       blockShare(c, b, list.share + static_cast<std::size_t>(kBlockSums) * i);
       list.key[i] = (static_cast<unsigned long long>(c.block) << (list.numberBits + 8)) |
@@ -73,21 +85,21 @@ static __global__ void contactRangesKernel(int count, const unsigned long long* 
 constexpr int kSumThreads = 128;
 static __global__ void __launch_bounds__(kSumThreads)
     blockSumsKernel(const double* share, const int* sortedEntry, const int* start, const int* end, double* sums) {
-  __shared__ double part[kSumThreads];
+  __shared__ double part[kBlockSums][kSumThreads];
   const int b = blockIdx.x, t = threadIdx.x;
-  const int q0 = start[b], q1 = end[b];
-  for (int k = 0; k < kBlockSums; ++k) {
-    double acc = 0.0;
-    for (int q = q0 + t; q < q1; q += kSumThreads) acc += share[static_cast<std::size_t>(kBlockSums) * sortedEntry[q] + k];
-    part[t] = acc;
-    __syncthreads();
-    for (int half = kSumThreads / 2; half > 0; half >>= 1) {
-      if (t < half) part[t] += part[t + half];
-      __syncthreads();
-    }
-    if (t == 0) sums[static_cast<std::size_t>(kBlockSums) * b + k] = part[0];
+  double acc[kBlockSums] = {};
+  for (int q = start[b] + t; q < end[b]; q += kSumThreads) {
+    const double* s = share + static_cast<std::size_t>(kBlockSums) * sortedEntry[q];
+    for (int k = 0; k < kBlockSums; ++k) acc[k] += s[k];
+  }
+  for (int k = 0; k < kBlockSums; ++k) part[k][t] = acc[k];
+  __syncthreads();
+  for (int half = kSumThreads / 2; half > 0; half >>= 1) {
+    if (t < half)
+      for (int k = 0; k < kBlockSums; ++k) part[k][t] += part[k][t + half];
     __syncthreads();
   }
+  if (t < kBlockSums) sums[static_cast<std::size_t>(kBlockSums) * b + t] = part[t][0];
 }
 
 template <typename T>

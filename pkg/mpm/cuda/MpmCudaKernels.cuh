@@ -57,13 +57,17 @@ static __global__ void blockRangesKernel(int n, const unsigned long long* key, i
   if (i == n - 1 || blockOf(i + 1) != b) end[b] = i + 1;
 }
 
-// P2G of the blocks of one parity colour, one CUDA block (kTileThreads threads, one per node of
-// the 5x5x5 tile) per block of bases: the block's particles are prepared kTileChunk at a time
-// into shared memory, and each thread sums their shares of its node in sorted order, then adds
-// the sum to the grid. Blocks of one colour share no node, so the adds need no atomics; the
-// colours run one launch after another.
-constexpr int kTileThreads = 128;
+// P2G of the blocks of one parity colour, one CUDA block per block of bases: kTileSplit
+// threads per node of its 5x5x5 tile. The block's particles are prepared kTileChunk at a time
+// into shared memory; thread (node, part) sums its node's shares of the chunk's particles
+// part, part + kTileSplit, ... in sorted order, and the parts are added in a fixed order
+// (p2gTileCombine) before the node's sum goes to the grid. Blocks of one colour share no node,
+// so the adds need no atomics; the colours run one launch after another.
+constexpr int kTileNodes = kBlockNodes * kBlockNodes * kBlockNodes;
+constexpr int kTileRow = 128;  // threads per part: the tile's nodes and 3 idle
+constexpr int kTileThreads = kTileRow * kTileSplit;
 constexpr int kTileChunk = 64;
+static_assert(kTileChunk % kTileSplit == 0, "a chunk must keep the parts' particles those of the whole block");
 template <typename T>
 __global__ void __launch_bounds__(kTileThreads)
     p2gTileKernel(BlockGrid bg, int colour, ParticleIn<T> in, const int* sorted, const int* start, const int* end,
@@ -74,22 +78,25 @@ __global__ void __launch_bounds__(kTileThreads)
   const int q0 = start[blk], q1 = end[blk];
   if (q0 >= q1) return;
   __shared__ P2GTileParticle<T> chunk[kTileChunk];
-  const int t = threadIdx.x;
-  constexpr int kTile = kBlockNodes * kBlockNodes * kBlockNodes;
-  const int n0 = 3 * b[0] + t / (kBlockNodes * kBlockNodes), n1 = 3 * b[1] + (t / kBlockNodes) % kBlockNodes,
-            n2 = 3 * b[2] + t % kBlockNodes;
+  __shared__ T parts[kTileSplit - 1][kTileNodes][kNodeVNew + 3];
+  const int t = threadIdx.x, node = t % kTileRow, part = t / kTileRow;
+  const int n0 = 3 * b[0] + node / (kBlockNodes * kBlockNodes), n1 = 3 * b[1] + (node / kBlockNodes) % kBlockNodes,
+            n2 = 3 * b[2] + node % kBlockNodes;
   T acc[kNodeVNew + 3] = {};
   for (int q = q0; q < q1; q += kTileChunk) {
     const int m = min(kTileChunk, q1 - q);
     __syncthreads();  // the previous chunk has been read
     if (t < m) p2gTilePrepare(sorted[q + t], in, g, dt, chunk[t]);
     __syncthreads();
-    if (t < kTile)
-      for (int j = 0; j < m; ++j) p2gTileNodeAdd(chunk[j], n0, n1, n2, acc);
+    if (node < kTileNodes)
+      for (int j = part; j < m; j += kTileSplit) p2gTileNodeAdd(chunk[j], n0, n1, n2, acc);
   }
-  if (t < kTile && n0 < g.nodes[0] && n1 < g.nodes[1] && n2 < g.nodes[2]) {
+  if (part > 0 && node < kTileNodes)
+    for (int c = 0; c < kNodeVNew + 3; ++c) parts[part - 1][node][c] = acc[c];
+  __syncthreads();
+  if (part == 0 && node < kTileNodes && n0 < g.nodes[0] && n1 < g.nodes[1] && n2 < g.nodes[2]) {
     T* r = grid + kNodeValues * ((n0 * g.nodes[1] + n1) * g.nodes[2] + n2);
-    for (int c = 0; c < kNodeVNew + 3; ++c) r[c] += acc[c];
+    for (int c = 0; c < kNodeVNew + 3; ++c) r[c] += p2gTileCombine(acc[c], parts[0][node][c], parts[1][node][c], parts[2][node][c]);
   }
 }
 

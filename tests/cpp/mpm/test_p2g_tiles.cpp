@@ -1,9 +1,9 @@
-// The CUDA backend's P2G gathers (MpmCudaKernels.cuh, p2gTileKernel): particles
-// sorted by block of stencil bases, base and number; one thread per node of a
-// block's 5x5x5 tile summing the block's shares in that order (p2gTilePrepare,
-// p2gTileNodeAdd); the blocks of one parity colour at a time. Here the same
-// shared functions run that algorithm on the host, against the per-particle
-// scatter (p2gParticle) and against the CPU backend's grid.
+// The CUDA backend's P2G gathers (MpmCudaKernels.cuh, p2gTileKernel): particles sorted by block of
+// stencil bases, base and number; kTileSplit threads per node of a block's 5x5x5 tile, each summing
+// every kTileSplit-th of the block's shares in that order (p2gTilePrepare, p2gTileNodeAdd), the
+// parts added in a fixed order (p2gTileCombine); the blocks of one parity colour at a time. Here the
+// same shared functions run that algorithm on the host, against the per-particle scatter
+// (p2gParticle) and against the CPU backend's grid.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -39,8 +39,7 @@ struct Slots {
     p.id = id.data();
     return p;
   }
-  // The same particles in the slots `perm` gives: slot q holds this set's slot
-  // perm[q].
+  // The same particles in the slots `perm` gives: slot q holds this set's slot perm[q].
   Slots permuted(const std::vector<int> &perm) const {
     Slots o;
     auto move = [&perm](const std::vector<double> &a, std::vector<double> &b) {
@@ -56,8 +55,7 @@ struct Slots {
   }
 };
 
-// A grid whose cell counts are not multiples of 3 (blocks cut by the far
-// faces).
+// A grid whose cell counts are not multiples of 3 (blocks cut by the far faces).
 MpmParams tileScene() {
   MpmParams prm;
   prm.dx = 0.01;
@@ -66,9 +64,8 @@ MpmParams tileScene() {
   return prm;
 }
 
-// n particles spread over the admissible box, clustered so that blocks hold
-// from none to dozens, with random mass, velocity, stress, J, volume and
-// external force.
+// n particles spread over the admissible box, clustered so that blocks hold from none to dozens,
+// with random mass, velocity, stress, J, volume and external force.
 Slots randomParticles(const GridConst<double> &g, int n) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0, 1);
@@ -141,10 +138,12 @@ std::vector<double> gatherGrid(const GridConst<double> &g, const Slots &p) {
               for (int c = 0; c < kBlockNodes; ++c) {
                 const int n0 = 3 * b0 + a, n1 = 3 * b1 + b, n2 = 3 * b2 + c;
                 if (n0 >= g.nodes[0] || n1 >= g.nodes[1] || n2 >= g.nodes[2]) continue;
-                double acc[kNodeVNew + 3] = {};
-                for (const auto &t : chunk) p2gTileNodeAdd(t, n0, n1, n2, acc);
+                double parts[kTileSplit][kNodeVNew + 3] = {};
+                for (std::size_t j = 0; j < chunk.size(); ++j)
+                  p2gTileNodeAdd(chunk[j], n0, n1, n2, parts[j % kTileSplit]);
                 double *r = grid.data() + kNodeValues * ((n0 * g.nodes[1] + n1) * g.nodes[2] + n2);
-                for (int v = 0; v < kNodeVNew + 3; ++v) r[v] += acc[v];
+                for (int v = 0; v < kNodeVNew + 3; ++v)
+                  r[v] += p2gTileCombine(parts[0][v], parts[1][v], parts[2][v], parts[3][v]);
               }
         }
   return grid;
@@ -164,9 +163,8 @@ class MassRecorder : public GridHook {
 }  // namespace
 
 TEST(P2GTiles, TheGatherSumsWhatTheScatterSums) {
-  // 3000 particles, blocks from empty to ~60 particles: every node value of the
-  // gather equals the scatter's to round-off (the two sum in different orders),
-  // mass and momentum included.
+  // 3000 particles, blocks from empty to ~60 particles: every node value of the gather equals the
+  // scatter's to round-off (the two sum in different orders), mass and momentum included.
   const MpmParams prm = tileScene();
   const GridConst<double> g = makeGridConst<double>(prm, 0.0);
   const Slots p = randomParticles(g, 3000);
@@ -199,8 +197,7 @@ TEST(P2GTiles, TheGatherSumsWhatTheScatterSums) {
 }
 
 TEST(P2GTiles, TheGatherDoesNotDependOnTheStorageOrder) {
-  // The same particles in reversed and shuffled slots (numbers kept): the same
-  // bits.
+  // The same particles in reversed and shuffled slots (numbers kept): the same bits.
   const MpmParams prm = tileScene();
   const GridConst<double> g = makeGridConst<double>(prm, 0.0);
   const Slots p = randomParticles(g, 3000);
@@ -213,11 +210,9 @@ TEST(P2GTiles, TheGatherDoesNotDependOnTheStorageOrder) {
   EXPECT_FALSE(scatterGrid(g, p.permuted(perm)) == scatterGrid(g, p)) << "the scatter's order should matter";
 }
 
-TEST(P2GTiles, TheGatherSumsTheMassesInTheCpuBackendsOrder) {
-  // The CPU backend scatters a block's particles into a private tile in the
-  // same order, so its node masses differ from the gather's only by the
-  // rounding of each share (a compiler may fuse a share's last product into the
-  // sum): a few units in the last place.
+TEST(P2GTiles, TheGatherGivesTheCpuBackendsNodeMasses) {
+  // The CPU backend scatters a block's particles into a private tile in the same order, the gather
+  // sums them in kTileSplit parts: node masses agree to round-off.
   const MpmParams prm = tileScene();
   const GridConst<double> g = makeGridConst<double>(prm, 0.0);
   const Slots p = randomParticles(g, 3000);
@@ -242,13 +237,12 @@ TEST(P2GTiles, TheGatherSumsTheMassesInTheCpuBackendsOrder) {
   solver->step(kDt);
   const std::vector<double> b = gatherGrid(g, p);
   ASSERT_EQ(rec->mass.size() * kNodeValues, b.size());
-  // The grid update empties nodes of mass <= 1e-12 times the mean particle
-  // mass.
+  // The grid update empties nodes of mass <= 1e-12 times the mean particle mass.
   const double empty = 1e-12 * std::accumulate(p.mass.begin(), p.mass.end(), 0.0) / static_cast<double>(n);
   long compared = 0;
   for (std::size_t i = 0; i < rec->mass.size(); ++i) {
     const double m = b[kNodeValues * i + kNodeMass];
-    ASSERT_NEAR(rec->mass[i], m > empty ? m : 0.0, 4 * 2.2e-16 * m) << "node " << i;
+    ASSERT_NEAR(rec->mass[i], m > empty ? m : 0.0, 64 * 2.2e-16 * m) << "node " << i;
     compared += m > empty;
   }
   EXPECT_GT(compared, 600);
