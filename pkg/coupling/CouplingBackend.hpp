@@ -18,6 +18,7 @@ struct CouplingStepInput {
   const std::vector<sdem::BarrierCoulombPhys<double>>* phys;
   BinGridView bins;                     // host arrays
   int numBins, numBinEntries;
+  bool binsChanged;                     // the bin table differs from the last step's
   mpm::ParticleView particles;
   double dt;
   double stepSafety;                    // the SDEM time-step safety factor (approachStepBound)

@@ -165,8 +165,8 @@ void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
     }
   }
   const int nb = binDims_[0] * binDims_[1] * binDims_[2];
-  binCount_.assign(nb, 0);
-  std::vector<std::array<int, 6>> range(blocks_.size());
+  std::vector<std::array<int, 6>>& range = binRangesNew_;
+  range.resize(blocks_.size());
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     Vec3 lo, hi;
     sdem::Bo1_SpheroPolyhedron_Aabb::go(sdem_.shape(static_cast<int>(i)), sdem_.position(static_cast<int>(i)),
@@ -181,18 +181,26 @@ void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
     }
     if (outside) range[i] = {0, 0, 0, -1, -1, -1};
   }
+  // The table only changes when a block's box enters or leaves a bin (for a block that moves
+  // less than a bin per step, every few hundred steps): otherwise it is kept, and the CUDA
+  // coupling keeps its copy.
+  binsChanged_ = range != binRanges_ || binStart_.size() != static_cast<std::size_t>(nb) + 1;
+  if (!binsChanged_) return;
+  binRanges_.swap(range);
+  const std::vector<std::array<int, 6>>& ranges = binRanges_;
+  binCount_.assign(nb, 0);
   auto forEachBin = [&](const std::array<int, 6>& r, auto&& fn) {
     for (int a = r[0]; a <= r[3]; ++a)
       for (int b = r[1]; b <= r[4]; ++b)
         for (int c = r[2]; c <= r[5]; ++c) fn((a * binDims_[1] + b) * binDims_[2] + c);
   };
-  for (const auto& r : range) forEachBin(r, [&](int bin) { ++binCount_[bin]; });
+  for (const auto& r : ranges) forEachBin(r, [&](int bin) { ++binCount_[bin]; });
   binStart_.assign(nb + 1, 0);
   for (int b = 0; b < nb; ++b) binStart_[b + 1] = binStart_[b] + binCount_[b];
   binBlocks_.resize(binStart_[nb]);
   std::vector<int> fill(binStart_.begin(), binStart_.end() - 1);
-  for (std::size_t i = 0; i < range.size(); ++i)
-    forEachBin(range[i], [&](int bin) { binBlocks_[fill[bin]++] = static_cast<int>(i); });
+  for (std::size_t i = 0; i < ranges.size(); ++i)
+    forEachBin(ranges[i], [&](int bin) { binBlocks_[fill[bin]++] = static_cast<int>(i); });
 }
 
 void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
@@ -262,6 +270,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
                         binWatch_};
   in.numBins = binDims_[0] * binDims_[1] * binDims_[2];
   in.numBinEntries = static_cast<int>(binBlocks_.size());
+  in.binsChanged = binsChanged_;
   in.particles = view;
   in.dt = dt;
   in.stepSafety = sdem_.timeStepSafety();

@@ -142,6 +142,8 @@ class MpSdemCoupling {
   double binOrigin_[3] = {0, 0, 0};
   int binDims_[3] = {0, 0, 0};
   std::vector<int> binStart_, binBlocks_, binCount_;
+  std::vector<std::array<int, 6>> binRanges_, binRangesNew_;  // bins of each block's box (last built, this step)
+  bool binsChanged_ = true;  // the last buildBins() changed the table
 
   std::size_t heldKeys_ = 0;       // history slots of the current particle set (host or device)
   std::vector<long long> key_;     // CPU histories (HistoryView)

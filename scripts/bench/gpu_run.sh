@@ -25,7 +25,8 @@
 # float (the project's goal: at most 8 s on one H100); the coarse flume
 # (examples/scenes/flume_block.json) over its 1.2 s on the CPU (every core) and on CUDA in double
 # and float, and once more in double (are two CUDA runs equal?); an Nsight Compute profile of
-# the MPM kernels when ncu is found. Every run is --bench (HDF5 may be missing there): its JSON
+# the MPM kernels when ncu is found, and an Nsight Systems summary of the flume when nsys is.
+# Every run is --bench (HDF5 may be missing there): its JSON
 # line holds the time, the stage split and each moving block's travel and peak flow force.
 set -uo pipefail
 cd "$(dirname "$0")/../.."
@@ -144,5 +145,15 @@ if [ -n "$ncu" ]; then
   [ -n "$baseline" ] && stage ncu_baseline 90 ncu_profile "$baseline/mpmsdem-run" baseline
 else
   echo "== ncu: skipped (no ncu on this machine)"
+fi
+# Nsight Systems on 2,000 steps of the flume at the paper's resolution: time per CUDA API call
+# and per kernel over the coupled step (what the small scene spends besides the kernels).
+nsys=$(command -v nsys || ls /usr/local/cuda/bin/nsys 2> /dev/null || true)
+if [ -n "$nsys" ]; then
+  stage nsys_flume 120 bash -c "'$nsys' profile --stats=true --force-overwrite=true -o '$out/flume' \
+    '$bin/mpmsdem-run' '$full' --backend cuda --precision double --bench --steps 2000 > '$out/nsys_flume.txt' 2>&1; \
+    grep -A14 -E 'cuda_api_sum|cuda_gpu_kern_sum' '$out/nsys_flume.txt' | cut -c1-160"
+else
+  echo "== nsys_flume: skipped (no nsys on this machine)"
 fi
 echo "== done in $(( SECONDS - start )) s"

@@ -137,13 +137,12 @@ class CouplingCuda : public CouplingDeviceBackend {
       numShapes_ = ns;
     }
     const std::vector<BlockState<double>>& hb = *in.blocks;
-    // What changes every step (blocks, pair physics, bins, the flags' start values) goes in one
-    // copy from pinned memory, queued before the kernel without waiting for it.
+    // What changes every step (blocks, pair physics, the flags' start values) goes in one copy
+    // from pinned memory, queued before the kernel without waiting for it; the bin table only
+    // when it changed.
     const std::size_t nb = hb.size(), np = in.phys->size();
     const std::size_t offPhys = alignUp(nb * sizeof(BlockState<T>));
-    const std::size_t offBinStart = offPhys + alignUp(np * sizeof(sdem::BarrierCoulombPhys<T>));
-    const std::size_t offBinBlocks = offBinStart + alignUp((in.numBins + 1) * sizeof(int));
-    const std::size_t offFlags = offBinBlocks + alignUp(in.numBinEntries * sizeof(int));
+    const std::size_t offFlags = offPhys + alignUp(np * sizeof(sdem::BarrierCoulombPhys<T>));
     const std::size_t bytes = offFlags + sizeof(cudak::CouplingFlags);
     staged_.reserve(bytes);
     stagedHost_.reserve(bytes);
@@ -152,8 +151,6 @@ class CouplingCuda : public CouplingDeviceBackend {
     for (std::size_t i = 0; i < nb; ++i) blocksH[i] = convertBlock<T>(hb[i]);
     auto* physH = reinterpret_cast<sdem::BarrierCoulombPhys<T>*>(h + offPhys);
     for (std::size_t i = 0; i < np; ++i) physH[i] = convertPhys<T>((*in.phys)[i]);
-    std::memcpy(h + offBinStart, in.bins.start, (in.numBins + 1) * sizeof(int));
-    std::memcpy(h + offBinBlocks, in.bins.blocks, in.numBinEntries * sizeof(int));
     cudak::CouplingFlags init;
     init.bad = ~0ull;
     const float inf = std::numeric_limits<float>::infinity();
@@ -163,6 +160,10 @@ class CouplingCuda : public CouplingDeviceBackend {
     init.contacts = 0;
     std::memcpy(h + offFlags, &init, sizeof(init));
     CUDA_CHECK(cudaMemcpyAsync(staged_.ptr, h, bytes, cudaMemcpyHostToDevice));
+    if (in.binsChanged || binStart_.capacity < static_cast<std::size_t>(in.numBins) + 1) {
+      binStart_.upload(in.bins.start, in.numBins + 1);
+      binBlocks_.upload(in.bins.blocks, in.numBinEntries);
+    }
     const auto* blocksD = reinterpret_cast<const BlockState<T>*>(staged_.ptr);
     const auto* physD = reinterpret_cast<const sdem::BarrierCoulombPhys<T>*>(staged_.ptr + offPhys);
     auto* flagsD = reinterpret_cast<cudak::CouplingFlags*>(staged_.ptr + offFlags);
@@ -196,8 +197,8 @@ class CouplingCuda : public CouplingDeviceBackend {
                                     shapeEdgeStart_.ptr, sweepRadius_.ptr,    boundingRadius_.ptr,
                                     convex_.ptr};
     BinGridView bins = in.bins;
-    bins.start = reinterpret_cast<const int*>(staged_.ptr + offBinStart);
-    bins.blocks = reinterpret_cast<const int*>(staged_.ptr + offBinBlocks);
+    bins.start = binStart_.ptr;
+    bins.blocks = binBlocks_.ptr;
     const HistoryView<T> H{histKey_.ptr, histXi_.ptr, histWritten_.ptr, in.historyStep, in.historySlots};
     const int n = static_cast<int>(v.n);
     if (n > 0) {
@@ -265,7 +266,8 @@ class CouplingCuda : public CouplingDeviceBackend {
   DeviceArray<T> vertex_, faceNormal_, faceOffset_, sweepRadius_, boundingRadius_;
   DeviceArray<int> faceLoopStart_, loopVertex_, loopEdge_, shapeFaceStart_, shapeVertexStart_, shapeEdgeStart_;
   DeviceArray<std::uint8_t> convex_;
-  DeviceArray<unsigned char> staged_;  // this step's blocks, pair physics, bins and flags
+  DeviceArray<unsigned char> staged_;  // this step's blocks, pair physics and flags
+  DeviceArray<int> binStart_, binBlocks_;  // the bin table, uploaded when it changes
   PinnedArray stagedHost_;
   DeviceArray<long long> histKey_;
   DeviceArray<T> histXi_;
