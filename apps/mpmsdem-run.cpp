@@ -26,6 +26,9 @@
 //                            with blocks also time, stage_seconds, contact_step_min(_time)
 //                            and moving_blocks (BlockRecord: travel, rotation, peak flow
 //                            force of each moving block)
+//   --device-stages          with --bench on CUDA: time the MPM step's stages on the device
+//                            (events; sort, p2g, grid, g2p) and add device_stage_seconds to
+//                            the JSON line
 // Outputs (not with --bench), in the output folder:
 //   mpm.h5          HDF5 (pkg/io/Hdf5Writer.hpp): /series/{time, step, dt, kinetic_energy,
 //                   front_x, height_z, centre_of_mass (3), max_speed, flowing_fraction,
@@ -95,7 +98,7 @@ namespace {
 
 const char* const kUsage =
     "usage: mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR] [--steps N] "
-    "[--restart] [--bench]\n";
+    "[--restart] [--bench [--device-stages]]\n";
 
 struct Options {
   std::string scene;
@@ -105,6 +108,7 @@ struct Options {
   long steps = 0;  // 0: run for run.duration
   bool restart = false;
   bool bench = false;
+  bool deviceStages = false;
 };
 
 Options parseArgs(int argc, char** argv) {
@@ -134,6 +138,8 @@ Options parseArgs(int argc, char** argv) {
       o.restart = true;
     } else if (a == "--bench") {
       o.bench = true;
+    } else if (a == "--device-stages") {
+      o.deviceStages = true;
     } else if (a == "-h" || a == "--help") {
       std::cout << kUsage;
       std::exit(0);
@@ -147,6 +153,7 @@ Options parseArgs(int argc, char** argv) {
   }
   if (o.scene.empty()) throw ParameterError(std::string("no scene file given\n") + kUsage);
   if (o.restart && o.bench) throw ParameterError("--restart and --bench: choose one (a benchmark writes no files)");
+  if (o.deviceStages && !o.bench) throw ParameterError(std::string("--device-stages: only with --bench\n") + kUsage);
   return o;
 }
 
@@ -342,6 +349,11 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
                         {"threads", omp_get_max_threads()},
                         {"flip_blend", mpm::describeFlipBlend(scene.params)},
                         {"blocks", st.coupled ? st.coupled->world.engine.numBodies() : 0}};
+  const auto device = solver.stageSeconds();
+  if (!device.empty()) {
+    out["device_stage_seconds"] = nlohmann::json::object();
+    for (const auto& [name, sec] : device) out["device_stage_seconds"][name] = sec;
+  }
   if (st.coupled) {
     const auto& s = st.coupled->stageSeconds();
     out["stage_seconds"] = {{"mpm", s.mpm}, {"coupling", s.coupling}, {"blocks", s.blocks}};
@@ -708,6 +720,7 @@ int main(int argc, char** argv) {
                     mpm.stableTimeStep());
       throwParameter("run.dt", scene.run.dt, "s", range);
     }
+    if (opt.deviceStages) mpm.setStageTiming(true);
 #ifdef MPMSDEM_WITH_HDF5
     if (opt.bench) return runBench(stepper, scene, maxSteps);
     OutputRun out(stepper, scene, opt.restart, checkpoint ? &*checkpoint : nullptr);

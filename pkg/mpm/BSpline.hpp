@@ -39,15 +39,24 @@ struct Stencil {
       const T b = hdFloor(g[d] - T(0.5));
       base[d] = static_cast<int>(b);
       const T f = g[d] - b;  // in [0.5, 1.5): distance to node base
-      // Nodes at distances f, f-1, f-2 from the point (Eq 2 evaluated in closed form).
-      const T a0 = T(1.5) - f, a1 = f - T(1), a2 = f - T(0.5);
-      w[d][0] = T(0.5) * a0 * a0;
-      w[d][1] = T(0.75) - a1 * a1;
-      w[d][2] = T(0.5) * a2 * a2;
-      // d/dg of w(g - node): node base at distance f -> -(1.5 - f), etc.
-      dw[d][0] = -a0;
-      dw[d][1] = T(-2) * a1;
-      dw[d][2] = a2;
+      for (int k = 0; k < 3; ++k) axis(f, k, w[d][k], dw[d][k]);
+    }
+  }
+  // Weight and derivative along one axis of node base + k for a point at distance f from node
+  // base: Eq 2 in closed form at distances f, f - 1, f - 2; dw is d/dg of w(g - node).
+  MPM_HD_INLINE static void axis(T f, int k, T& wk, T& dwk) {
+    if (k == 0) {
+      const T a0 = T(1.5) - f;
+      wk = T(0.5) * a0 * a0;
+      dwk = -a0;
+    } else if (k == 1) {
+      const T a1 = f - T(1);
+      wk = T(0.75) - a1 * a1;
+      dwk = T(-2) * a1;
+    } else {
+      const T a2 = f - T(0.5);
+      wk = T(0.5) * a2 * a2;
+      dwk = a2;
     }
   }
   // Weight of node (i, j, k) of the stencil.

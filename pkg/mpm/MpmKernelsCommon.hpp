@@ -159,23 +159,21 @@ MPM_HD_INLINE void p2gParticle(int p, const ParticleIn<T>& P, const GridConst<T>
 // ---------------------------------------------------------------- P2G by blocks of bases
 // Both backends sum P2G by blocks of 3x3x3 stencil-base cells: a particle whose base lies in
 // block b reaches nodes 3b .. 3b + 4 per axis (the block's 5x5x5 tile), so blocks whose indices
-// differ by 2 or more along some axis share no node. A block's particles are summed in the
-// order (base, number) into its tile, which is then added to the grid, the blocks of one parity
-// colour at a time. The CPU scatters each particle into a private copy of the tile; CUDA
-// gathers, kTileSplit threads per tile node each summing a fixed share of the particles in that
-// order (p2gTileNodeAdd), the parts then added in a fixed order (p2gTileCombine). Either way a
+// differ by 2 or more along some axis share no node; a block's tile is added to the grid with
+// the blocks of one parity colour at a time. The CPU scatters a block's particles, in the order
+// (base, number), into a private copy of its tile. CUDA gathers: the particles of one base (in
+// number order) into that base's 27 nodes (p2gBaseNodeAdd, one thread per node), then each tile
+// node adds the sums of the bases that reach it in base order (p2gBaseTileSum). Either way a
 // node's sum does not depend on thread timing or on the order the particles are stored in.
 constexpr int kBlockCells = 27;  // stencil bases per block
 constexpr int kBlockNodes = 5;   // nodes per axis of a block's tile
-// The gather splits a node's sum over a block's particles into kTileSplit parts: part k sums
-// the block's particles k, k + kTileSplit, ... in sorted order.
-constexpr int kTileSplit = 4;
 
 // Blocks along an axis of `cells` cells (stencil bases run up to cells - 1).
 MPM_HD_INLINE int blocksAlong(int cells) { return cells / 3 + 1; }
 
 // kBlockCells b + c for a point at grid coordinate gc: b its block in a grid of nb blocks per
-// axis, c the place of its stencil base (Stencil::compute's floor) in the block.
+// axis, c = 9 o0 + 3 o1 + o2 the place (o0, o1, o2) of its stencil base (Stencil::compute's
+// floor) in the block.
 template <typename T>
 MPM_HD_INLINE int blockCellOf(const T gc[3], const int nb[3]) {
   int b[3], c = 0;
@@ -187,20 +185,23 @@ MPM_HD_INLINE int blockCellOf(const T gc[3], const int nb[3]) {
   return kBlockCells * ((b[0] * nb[1] + b[1]) * nb[2] + b[2]) + c;
 }
 
-// A prepared particle as the gather keeps it: P2GParticle without the coefficients that are
-// always zero (cx, cy, cz are non-zero only for the new momentum, values kNodeVNew..+2).
+// A particle as the gather of its base keeps it: its offset from the base node per axis (the f of
+// Stencil::compute) and P2GParticle's coefficients without those that are always zero (cx, cy,
+// cz are non-zero only for the new momentum, values kNodeVNew..+2).
 template <typename T>
-struct P2GTileParticle {
-  Stencil<T> st;
+struct P2GBaseParticle {
+  T f[3];
   T cw[kNodeVNew + 3];
   T cx[3], cy[3], cz[3];
 };
 
 template <typename T>
-MPM_HD_INLINE void p2gTilePrepare(int p, const ParticleIn<T>& P, const GridConst<T>& g, T dt, P2GTileParticle<T>& t) {
+MPM_HD_INLINE void p2gBasePrepare(int p, const ParticleIn<T>& P, const GridConst<T>& g, T dt, P2GBaseParticle<T>& t) {
   P2GParticle<T> a;
   p2gPrepare(p, P, g, dt, a);
-  t.st = a.st;
+  T gc[3];
+  gridCoordinate(P, p, g, gc);
+  for (int d = 0; d < 3; ++d) t.f[d] = gc[d] - static_cast<T>(a.st.base[d]);
   for (int c = 0; c < kNodeVNew + 3; ++c) t.cw[c] = a.cw[c];
   for (int d = 0; d < 3; ++d) {
     t.cx[d] = a.cx[kNodeVNew + d];
@@ -209,28 +210,40 @@ MPM_HD_INLINE void p2gTilePrepare(int p, const ParticleIn<T>& P, const GridConst
   }
 }
 
-// Adds a prepared particle's share of node (n0, n1, n2) to acc[0..6] (nothing when the node is
-// outside its stencil): p2gStencil's values, with the products by zero coefficients left out
-// (they add exact zeros there).
+// Adds a prepared particle's share of node base + (i, j, k) to acc[0..6]: p2gStencil's values,
+// with the products by zero coefficients left out (they add exact zeros there).
 template <typename T>
-MPM_HD_INLINE void p2gTileNodeAdd(const P2GTileParticle<T>& a, int n0, int n1, int n2, T acc[kNodeVNew + 3]) {
-  const int i = n0 - a.st.base[0], j = n1 - a.st.base[1], k = n2 - a.st.base[2];
-  if (static_cast<unsigned>(i) > 2u || static_cast<unsigned>(j) > 2u || static_cast<unsigned>(k) > 2u) return;
-  const T wij = a.st.w[0][i] * a.st.w[1][j];
-  const T xij = a.st.dw[0][i] * a.st.w[1][j];
-  const T yij = a.st.w[0][i] * a.st.dw[1][j];
-  const T wk = a.st.w[2][k], dwk = a.st.dw[2][k];
-  for (int c = 0; c < kNodeVNew; ++c) acc[c] += wk * (wij * a.cw[c]);
+MPM_HD_INLINE void p2gBaseNodeAdd(const P2GBaseParticle<T>& a, int i, int j, int k, T acc[kNodeVNew + 3]) {
+  T w[3], dw[3];
+  const int idx[3] = {i, j, k};
+  for (int d = 0; d < 3; ++d) Stencil<T>::axis(a.f[d], idx[d], w[d], dw[d]);
+  const T wij = w[0] * w[1];
+  const T xij = dw[0] * w[1];
+  const T yij = w[0] * dw[1];
+  for (int c = 0; c < kNodeVNew; ++c) acc[c] += w[2] * (wij * a.cw[c]);
   for (int d = 0; d < 3; ++d) {
     const T row = wij * a.cw[kNodeVNew + d] + xij * a.cx[d] + yij * a.cy[d];
-    acc[kNodeVNew + d] += wk * row + dwk * (wij * a.cz[d]);
+    acc[kNodeVNew + d] += w[2] * row + dw[2] * (wij * a.cz[d]);
   }
 }
 
-// A node's sum from the kTileSplit parts of the gather, in one fixed order.
-template <typename T>
-MPM_HD_INLINE T p2gTileCombine(T a, T b, T c, T d) {
-  return (a + b) + (c + d);
+// Adds to acc the sums of tile node (n0, n1, n2) (0..4 per axis) from the bases (o0, o1, o2) of
+// one o0 = row that reach it, in (o1, o2) order: part(o1, o2, m) is the sum of base (row, o1, o2)
+// at its node m = 9 i + 3 j + k.
+template <typename T, typename Part>
+MPM_HD_INLINE void p2gBaseTileSum(int row, int n0, int n1, int n2, const Part& part, T acc[kNodeVNew + 3]) {
+  const int i = n0 - row;
+  if (i < 0 || i > 2) return;
+  for (int o1 = 0; o1 < 3; ++o1) {
+    const int j = n1 - o1;
+    if (j < 0 || j > 2) continue;
+    for (int o2 = 0; o2 < 3; ++o2) {
+      const int k = n2 - o2;
+      if (k < 0 || k > 2) continue;
+      const T* s = part(o1, o2, 9 * i + 3 * j + k);
+      for (int c = 0; c < kNodeVNew + 3; ++c) acc[c] += s[c];
+    }
+  }
 }
 
 // Grid velocities of one node (Eq 3): v_old = p/m, v_new = (p + dt f)/m + dt g; an empty node

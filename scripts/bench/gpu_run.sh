@@ -24,7 +24,8 @@
 # coupling's share of the step is in each JSON line), then the whole 2 s on CUDA in double and
 # float (the project's goal: at most 8 s on one H100); the coarse flume
 # (examples/scenes/flume_block.json) over its 1.2 s on the CPU (every core) and on CUDA in double
-# and float, and once more in double (are two CUDA runs equal?); an Nsight Compute profile of
+# and float, and once more in double (are two CUDA runs equal?); the device time of the MPM
+# step's stages (--device-stages) on dam breaks and the flume; an Nsight Compute profile of
 # the MPM kernels when ncu is found, and an Nsight Systems summary of the flume when nsys is.
 # Every run is --bench (HDF5 may be missing there): its JSON
 # line holds the time, the stage split and each moving block's travel and peak flow force.
@@ -126,6 +127,31 @@ a, b = (json.load(open(f)) for f in sys.argv[1:3])
 drop = lambda r: {k: v for k, v in r.items() if "second" not in k and "per_s" not in k}
 print("two CUDA double runs of the coarse flume:", "the same results" if drop(a) == drop(b) else "differ: %s / %s" % (drop(a), drop(b)))
 PY
+# Where a step's device time goes (mpmsdem-run --device-stages: sort, P2G, grid, G2P by device
+# events) on dam breaks of 1e5 and 1e6 points in float and on the flume's first 4,000 steps,
+# against the step loop's wall time.
+device_stages() {
+  for size in 100000 1000000; do
+    python3 -c "import json, sys; sys.path.insert(0, 'scripts/bench'); import bench_mpm; \
+json.dump(bench_mpm.dam_break_scene($size)[0], open('$out/dam$size.json', 'w'))" || return 1
+    "$bin/mpmsdem-run" "$out/dam$size.json" --backend cuda --precision float --bench --device-stages --steps 500 \
+      2> /dev/null | tail -1 > "$out/stages_dam$size.json"
+  done
+  OMP_NUM_THREADS=$(nproc) "$bin/mpmsdem-run" "$full" --backend cuda --precision double --bench --device-stages \
+    --steps 4000 2> /dev/null | tail -1 > "$out/stages_full.json"
+  python3 - "$out"/stages_dam100000.json "$out"/stages_dam1000000.json "$out"/stages_full.json <<'PY'
+import json, sys
+for f in sys.argv[1:]:
+    r = json.load(open(f))
+    d = r.get("device_stage_seconds", {})
+    extra = " mpm stage %.3f s coupling %.3f s" % (r["stage_seconds"]["mpm"], r["stage_seconds"]["coupling"]) if "stage_seconds" in r else ""
+    print("%s: %d points x %d steps, loop %.3f s%s; device: %s (sum %.3f s)" % (f.split("/")[-1], r["particles"], r["steps"],
+          r["seconds"], extra, ", ".join("%s %.3f" % kv for kv in d.items()), sum(d.values())))
+PY
+}
+export -f device_stages
+export full
+
 # ncu_profile EXE NAME: Nsight Compute on the MPM kernels of one step (the third) of a 1e6-point
 # dam break in float: duration, throughput against the device's peak, occupancy
 ncu_profile() {
@@ -137,6 +163,7 @@ json.dump(bench_mpm.dam_break_scene(1000000)[0], open('$out/dam1e6.json', 'w'))"
   grep -E '^  [A-Za-z_].*[(]|Duration|Memory Throughput|DRAM Throughput|Compute [(]SM[)] Throughput|Achieved Occupancy' \
     "$out/ncu_$2.txt" | head -100
 }
+stage device_stages 120 device_stages
 ncu=$(command -v ncu || ls /usr/local/cuda/bin/ncu 2> /dev/null || true)
 export -f ncu_profile
 export ncu

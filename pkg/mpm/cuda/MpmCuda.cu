@@ -81,17 +81,18 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
   nBlocks_ = blocks_[0] * blocks_[1] * blocks_[2];
   deviceAlloc(&nodes_, static_cast<std::size_t>(kNodeValues) * nNodes_, bytes_);
   deviceAlloc(&flags_, 1, bytes_);
-  deviceAlloc(&blockStart_, nBlocks_, bytes_);
-  deviceAlloc(&blockEnd_, nBlocks_, bytes_);
+  deviceAlloc(&cellStart_, static_cast<std::size_t>(kBlockCells) * nBlocks_, bytes_);
+  deviceAlloc(&cellEnd_, static_cast<std::size_t>(kBlockCells) * nBlocks_, bytes_);
 }
 
 template <typename T>
 MpmCuda<T>::~MpmCuda() {
+  setStageTiming(false);
   freeParticles();
   deviceFree(nodes_);
   deviceFree(flags_);
-  deviceFree(blockStart_);
-  deviceFree(blockEnd_);
+  deviceFree(cellStart_);
+  deviceFree(cellEnd_);
 }
 
 template <typename T>
@@ -120,7 +121,7 @@ void MpmCuda<T>::freeParticles() {
   sortScratchBytes_ = 0;
   sorted_ = nullptr;
   bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags) +
-           2 * static_cast<std::size_t>(nBlocks_) * sizeof(int);
+           2 * static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int);
   hasFext_ = false;
   forcesIncomplete_ = false;
 }
@@ -292,6 +293,30 @@ std::size_t MpmCuda<T>::memoryBytes() const {
 }
 
 template <typename T>
+void MpmCuda<T>::setStageTiming(bool on) {
+  for (auto& e : events_) {
+    if (e) CUDA_CHECK_NOTHROW(cudaEventDestroy(static_cast<cudaEvent_t>(e)));
+    e = nullptr;
+  }
+  for (double& t : stageTotals_) t = 0;
+  if (!on) return;
+  for (auto& e : events_) {
+    cudaEvent_t ev;
+    CUDA_CHECK(cudaEventCreate(&ev));
+    e = ev;
+  }
+}
+
+template <typename T>
+std::vector<std::pair<std::string, double>> MpmCuda<T>::stageSeconds() const {
+  if (!events_[0]) return {};
+  static const char* kNames[kStages] = {"sort", "p2g", "grid", "g2p"};
+  std::vector<std::pair<std::string, double>> out;
+  for (int k = 0; k < kStages; ++k) out.emplace_back(kNames[k], stageTotals_[k]);
+  return out;
+}
+
+template <typename T>
 ParticleIn<T> MpmCuda<T>::input() const {
   const DeviceState& s = state_[cur_];
   ParticleIn<T> in;
@@ -333,9 +358,10 @@ void MpmCuda<T>::sortParticles() {
   cub::DoubleBuffer<unsigned long long> k(keys_[0], keys_[1]);
   cub::DoubleBuffer<int> v(slots_[0], slots_[1]);
   CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_, sortScratchBytes_, k, v, n, 0, keyBits_));
-  CUDA_CHECK(cudaMemsetAsync(blockStart_, 0, static_cast<std::size_t>(nBlocks_) * sizeof(int)));
-  CUDA_CHECK(cudaMemsetAsync(blockEnd_, 0, static_cast<std::size_t>(nBlocks_) * sizeof(int)));
-  cudak::blockRangesKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, blockStart_, blockEnd_);
+  const std::size_t cells = static_cast<std::size_t>(kBlockCells) * nBlocks_;
+  CUDA_CHECK(cudaMemsetAsync(cellStart_, 0, cells * sizeof(int)));
+  CUDA_CHECK(cudaMemsetAsync(cellEnd_, 0, cells * sizeof(int)));
+  cudak::cellRangesKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, cellStart_, cellEnd_);
   CUDA_CHECK(cudaGetLastError());
   sorted_ = v.Current();
 }
@@ -351,17 +377,23 @@ void MpmCuda<T>::step(double dt) {
   CUDA_CHECK(cudaMemsetAsync(&flags_->maxSpeedBits, 0, sizeof(flags_->maxSpeedBits)));
   const ParticleIn<T> in = input();
   const ParticleOut<T> out = output();
+  auto mark = [this](int k) {
+    if (events_[k]) CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(events_[k])));
+  };
+  mark(0);
   if (n > 0) {
     sortParticles();
+    mark(1);
     const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
     for (int colour = 0; colour < 8; ++colour) {
       const int count = bg.count(colour, 0) * bg.count(colour, 1) * bg.count(colour, 2);
       if (count == 0) continue;
-      cudak::p2gTileKernel<T><<<count, cudak::kTileThreads>>>(bg, colour, in, sorted_, blockStart_, blockEnd_, grid_,
+      cudak::p2gBaseKernel<T><<<count, cudak::kBaseThreads>>>(bg, colour, in, sorted_, cellStart_, cellEnd_, grid_,
                                                                dtT, nodes_);
       CUDA_CHECK(cudaGetLastError());
     }
   }
+  mark(2);
   if (hooks_.empty()) {
     cudak::gridKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_, dtT);
     CUDA_CHECK(cudaGetLastError());
@@ -378,6 +410,7 @@ void MpmCuda<T>::step(double dt) {
     cudak::gridWallsKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_);
     CUDA_CHECK(cudaGetLastError());
   }
+  mark(3);
   StepConst<T> sc;
   sc.dt = dtT;
   sc.alpha = static_cast<T>(params_.flipAlphaFor(dt));
@@ -390,8 +423,15 @@ void MpmCuda<T>::step(double dt) {
                                                      &flags_->maxSpeedBits);
     CUDA_CHECK(cudaGetLastError());
   }
+  mark(4);
   StepFlags res;
   CUDA_CHECK(cudaMemcpy(&res, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
+  if (events_[0] && n > 0)
+    for (int k = 0; k < kStages; ++k) {
+      float ms = 0;
+      CUDA_CHECK(cudaEventElapsedTime(&ms, static_cast<cudaEvent_t>(events_[k]), static_cast<cudaEvent_t>(events_[k + 1])));
+      stageTotals_[k] += 1e-3 * ms;
+    }
   if (res.firstBad != ~0ull) {
     const int p = static_cast<int>(res.firstBad >> 32);
     const int slot = static_cast<int>(res.firstBad & 0xffffffffull);

@@ -4,7 +4,7 @@
 //
 // P2G without atomics, in a fixed order: each step the particles are sorted (radix sort) by
 // block of stencil bases, base and number, as the CPU backend bins them, and each block's
-// nodes gather their sums (p2gTileKernel), the eight parity colours one launch after another.
+// nodes gather their sums (p2gBaseKernel), the eight parity colours one launch after another.
 // A node's sum therefore has one order: two runs of a scene give the same bits, whatever the
 // storage order (a restart included), and a node is written once per block instead of taking
 // 7 atomic adds per particle. G2P writes each particle into the slot of its sorted place, so
@@ -16,8 +16,8 @@
 // = 138 bytes/particle; the sort (two keys of 8 bytes, two slots of 4) 24 bytes/particle;
 // + 12 bytes/particle once external forces are set; + kNodeValues (8) values per grid node
 // (32 bytes; at 8 particles per cell 4 bytes/particle for a fully filled grid) and two ints per
-// block of 27 cells. Double-buffering makes a failed step leave the previous state intact at no
-// bandwidth cost.
+// cell (the sorted ranges of the block cells). Double-buffering makes a failed step leave the
+// previous state intact at no bandwidth cost.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -49,6 +49,8 @@ class MpmCuda : public MpmSolver {
   void step(double dt) override;
   double stableTimeStep() override;
   std::size_t memoryBytes() const override;
+  void setStageTiming(bool on) override;
+  std::vector<std::pair<std::string, double>> stageSeconds() const override;
 
  private:
   struct DeviceState {
@@ -71,7 +73,7 @@ class MpmCuda : public MpmSolver {
   ParticleIn<T> input() const;
   ParticleOut<T> output() const;
   std::vector<int> numbers() const;  // id of the current state, on the host
-  void sortParticles();              // sorted_, blockStart_/End_ for this step
+  void sortParticles();              // sorted_, cellStart_/End_ for this step
 
   MpmParams params_;
   GridConst<T> grid_{};
@@ -88,8 +90,8 @@ class MpmCuda : public MpmSolver {
   // P2G order: blocks of stencil bases, the sort's double buffers and its scratch space.
   int blocks_[3];
   int nBlocks_;
-  int* blockStart_ = nullptr;
-  int* blockEnd_ = nullptr;
+  int* cellStart_ = nullptr;  // per block cell (kBlockCells b + base): its sorted range
+  int* cellEnd_ = nullptr;
   int numberBits_ = 0;
   int keyBits_ = 0;
   unsigned long long* keys_[2] = {};
@@ -97,6 +99,10 @@ class MpmCuda : public MpmSolver {
   const int* sorted_ = nullptr;  // slot of each sorted place, this step
   void* sortScratch_ = nullptr;
   std::size_t sortScratchBytes_ = 0;
+  // Stage timing (setStageTiming): events before the sort and after each stage, and the sums.
+  static constexpr int kStages = 4;  // sort, p2g, grid, g2p
+  void* events_[kStages + 1] = {};
+  double stageTotals_[kStages] = {};
   double maxSpeed_ = 0;
   std::size_t bytes_ = 0;
 };

@@ -46,57 +46,69 @@ __global__ void binKernel(int n, ParticleIn<T> in, GridConst<T> g, BlockGrid bg,
   slot[s] = s;
 }
 
-// The range [start[b], end[b]) of block b in the sorted keys (left as zeros for empty blocks);
-// static: this header is included by more than one translation unit.
-static __global__ void blockRangesKernel(int n, const unsigned long long* key, int numberBits, int* start, int* end) {
+// The range [start[c], end[c]) of each block cell c (kBlockCells b + base) in the sorted keys
+// (left as zeros for empty cells); static: this header is included by more than one
+// translation unit.
+static __global__ void cellRangesKernel(int n, const unsigned long long* key, int numberBits, int* start, int* end) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n) return;
-  auto blockOf = [&](int q) { return static_cast<int>((key[q] >> numberBits) / kBlockCells); };
-  const int b = blockOf(i);
-  if (i == 0 || blockOf(i - 1) != b) start[b] = i;
-  if (i == n - 1 || blockOf(i + 1) != b) end[b] = i + 1;
+  const int c = static_cast<int>(key[i] >> numberBits);
+  if (i == 0 || static_cast<int>(key[i - 1] >> numberBits) != c) start[c] = i;
+  if (i == n - 1 || static_cast<int>(key[i + 1] >> numberBits) != c) end[c] = i + 1;
 }
 
-// P2G of the blocks of one parity colour, one CUDA block per block of bases: kTileSplit
-// threads per node of its 5x5x5 tile. The block's particles are prepared kTileChunk at a time
-// into shared memory; thread (node, part) sums its node's shares of the chunk's particles
-// part, part + kTileSplit, ... in sorted order, and the parts are added in a fixed order
-// (p2gTileCombine) before the node's sum goes to the grid. Blocks of one colour share no node,
-// so the adds need no atomics; the colours run one launch after another.
-constexpr int kTileNodes = kBlockNodes * kBlockNodes * kBlockNodes;
-constexpr int kTileRow = 128;  // threads per part: the tile's nodes and 3 idle
-constexpr int kTileThreads = kTileRow * kTileSplit;
-constexpr int kTileChunk = 64;
-static_assert(kTileChunk % kTileSplit == 0, "a chunk must keep the parts' particles those of the whole block");
+// P2G of the blocks of one parity colour, one CUDA block per block of bases, in three rows
+// (o0 = 0, 1, 2 of the bases (o0, o1, o2)): warp 3 o1 + o2 sums the particles of base
+// (row, o1, o2), prepared kBaseChunk at a time into shared memory, into that base's 27 nodes, a
+// lane per node; then thread m of the first 125 adds to tile node m the sums of the row's bases
+// that reach it (p2gBaseTileSum). After the third row it adds its node's sum to the grid. Blocks
+// of one colour share no node, so the adds need no atomics; the colours run one launch after
+// another.
+constexpr int kBaseWarps = 9;
+constexpr int kBaseThreads = 32 * kBaseWarps;
 template <typename T>
-__global__ void __launch_bounds__(kTileThreads)
-    p2gTileKernel(BlockGrid bg, int colour, ParticleIn<T> in, const int* sorted, const int* start, const int* end,
+constexpr int kBaseChunk = sizeof(T) == 8 ? 16 : 32;  // double: the shared arrays within 48 kB
+template <typename T>
+__global__ void __launch_bounds__(kBaseThreads)
+    p2gBaseKernel(BlockGrid bg, int colour, ParticleIn<T> in, const int* sorted, const int* start, const int* end,
                   GridConst<T> g, T dt, T* grid) {
   int b[3];
   bg.colourBlock(colour, blockIdx.x, b);
-  const int blk = (b[0] * bg.blocks[1] + b[1]) * bg.blocks[2] + b[2];
-  const int q0 = start[blk], q1 = end[blk];
-  if (q0 >= q1) return;
-  __shared__ P2GTileParticle<T> chunk[kTileChunk];
-  __shared__ T parts[kTileSplit - 1][kTileNodes][kNodeVNew + 3];
-  const int t = threadIdx.x, node = t % kTileRow, part = t / kTileRow;
-  const int n0 = 3 * b[0] + node / (kBlockNodes * kBlockNodes), n1 = 3 * b[1] + (node / kBlockNodes) % kBlockNodes,
-            n2 = 3 * b[2] + node % kBlockNodes;
-  T acc[kNodeVNew + 3] = {};
-  for (int q = q0; q < q1; q += kTileChunk) {
-    const int m = min(kTileChunk, q1 - q);
-    __syncthreads();  // the previous chunk has been read
-    if (t < m) p2gTilePrepare(sorted[q + t], in, g, dt, chunk[t]);
-    __syncthreads();
-    if (node < kTileNodes)
-      for (int j = part; j < m; j += kTileSplit) p2gTileNodeAdd(chunk[j], n0, n1, n2, acc);
+  const int first = kBlockCells * ((b[0] * bg.blocks[1] + b[1]) * bg.blocks[2] + b[2]);
+  const int t = threadIdx.x, warp = t / 32, lane = t % 32;
+  __shared__ int range[kBlockCells][2];
+  if (t < kBlockCells) {
+    range[t][0] = start[first + t];
+    range[t][1] = end[first + t];
   }
-  if (part > 0 && node < kTileNodes)
-    for (int c = 0; c < kNodeVNew + 3; ++c) parts[part - 1][node][c] = acc[c];
-  __syncthreads();
-  if (part == 0 && node < kTileNodes && n0 < g.nodes[0] && n1 < g.nodes[1] && n2 < g.nodes[2]) {
-    T* r = grid + kNodeValues * ((n0 * g.nodes[1] + n1) * g.nodes[2] + n2);
-    for (int c = 0; c < kNodeVNew + 3; ++c) r[c] += p2gTileCombine(acc[c], parts[0][node][c], parts[1][node][c], parts[2][node][c]);
+  if (!__syncthreads_or(t < kBlockCells && range[t][0] < range[t][1])) return;
+  __shared__ P2GBaseParticle<T> stage[kBaseWarps][kBaseChunk<T>];
+  __shared__ T part[kBaseWarps][kBlockCells][kNodeVNew + 3];
+  constexpr int kTile = kBlockNodes * kBlockNodes * kBlockNodes;
+  const int n0 = t / (kBlockNodes * kBlockNodes), n1 = (t / kBlockNodes) % kBlockNodes, n2 = t % kBlockNodes;
+  T acc[kNodeVNew + 3] = {};
+  for (int row = 0; row < 3; ++row) {
+    const int q0 = range[9 * row + warp][0], q1 = range[9 * row + warp][1];
+    T mine[kNodeVNew + 3] = {};
+    for (int q = q0; q < q1; q += kBaseChunk<T>) {
+      const int m = min(kBaseChunk<T>, q1 - q);
+      __syncwarp();  // the previous chunk has been read
+      if (lane < m) p2gBasePrepare(sorted[q + lane], in, g, dt, stage[warp][lane]);
+      __syncwarp();
+      if (lane < kBlockCells)
+        for (int j = 0; j < m; ++j) p2gBaseNodeAdd(stage[warp][j], lane / 9, (lane / 3) % 3, lane % 3, mine);
+    }
+    if (lane < kBlockCells)
+      for (int c = 0; c < kNodeVNew + 3; ++c) part[warp][lane][c] = mine[c];
+    __syncthreads();
+    if (t < kTile)
+      p2gBaseTileSum(row, n0, n1, n2, [&](int o1, int o2, int m) -> const T* { return part[3 * o1 + o2][m]; }, acc);
+    __syncthreads();  // the row's sums have been read
+  }
+  const int g0 = 3 * b[0] + n0, g1 = 3 * b[1] + n1, g2 = 3 * b[2] + n2;
+  if (t < kTile && g0 < g.nodes[0] && g1 < g.nodes[1] && g2 < g.nodes[2]) {
+    T* r = grid + kNodeValues * ((g0 * g.nodes[1] + g1) * g.nodes[2] + g2);
+    for (int c = 0; c < kNodeVNew + 3; ++c) r[c] += acc[c];
   }
 }
 

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 
 #include "common/Error.hpp"
@@ -187,6 +189,39 @@ TEST(MpmSolver, CpuAndCudaAgree) {
     const double tol = prec == Precision::Double ? 1e-9 : 1e-4;
     agreement::expectAgree(a, b, tol, 0.2, 100.0, gpu->name());
   }
+}
+
+// With stage timing on, CUDA reports the device time of its sort, P2G, grid and G2P: each
+// positive, together no more than the steps' wall time (the stages run one after another
+// within a step, which waits for them); the CPU reports none.
+TEST(MpmSolver, CudaStageTimesFitInTheSteps) {
+  MpmParams prm = granularColumnParams(0.01, {20, 5, 22}, 2e5);
+  ParticleSet ps;
+  seedBox(prm, {0.02, 0.02, 0.02}, {0.10, 0.03, 0.18}, {2, 1, 2}, ps);
+  auto cpu = makeSolver(prm);
+  cpu->setStageTiming(true);
+  cpu->setParticles(ps);
+  cpu->step(0.5 * cpu->stableTimeStep());
+  EXPECT_TRUE(cpu->stageSeconds().empty());
+  if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
+  auto gpu = makeSolver(prm, Backend::Cuda);
+  gpu->setParticles(ps);
+  gpu->setStageTiming(true);
+  const double dt = 0.5 * gpu->stableTimeStep();
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < 50; ++k) gpu->step(dt);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto stages = gpu->stageSeconds();
+  ASSERT_EQ(stages.size(), 4u);
+  double sum = 0;
+  for (const auto& [name, sec] : stages) {
+    EXPECT_GT(sec, 0.0) << name;
+    sum += sec;
+  }
+  EXPECT_LE(sum, wall);
+  std::printf("cuda stages over 50 steps: %s %.3g s, %s %.3g s, %s %.3g s, %s %.3g s; wall %.3g s\n",
+              stages[0].first.c_str(), stages[0].second, stages[1].first.c_str(), stages[1].second,
+              stages[2].first.c_str(), stages[2].second, stages[3].first.c_str(), stages[3].second, wall);
 }
 
 TEST(MpmSolver, TimeStepAboveCflIsRejected) {
