@@ -17,8 +17,8 @@ agree (ours from a second, non-benchmark run that prints them). A mismatch is an
 
 The peer runs in a virtual environment (.venv-peers/ at the repository root, created with
 --peer-python and given the pinned Taichi from PyPI when missing). Our rate is particles x
-steps / wall time of the step loop (mpmsdem-run --bench); the peer's leaves out its first
-step, which compiles its kernels (reported apart). Exit status 1 when a run fails or the
+steps / wall time of the step loop (mpmsdem-run --bench); the peer's leaves out its first two
+steps, which compile its kernels (reported apart). Exit status 1 when a run fails or the
 solvers disagree.
 """
 import argparse
@@ -225,7 +225,7 @@ def main():
                     peer.append(run_peer(py, path, steps, args.threads, args.timeout))
                     print("  ours %.3e upd/s, peer %.3e upd/s (peer compile %.1f s)"
                           % (ours[-1]["particle_updates_per_s"], peer[-1]["particle_updates_per_s"],
-                             peer[-1]["first_step_seconds"]), flush=True)
+                             peer[-1]["warmup_seconds"]), flush=True)
                 row = {"size": size,
                        "ours": max(ours, key=lambda r: r["particle_updates_per_s"]),
                        "peer": max(peer, key=lambda r: r["particle_updates_per_s"]),

@@ -21,6 +21,7 @@
 #include "coupling/cuda/MpSdemCouplingKernels.cuh"
 #include "common/Error.hpp"
 #include "mpm/cuda/CudaCheck.hpp"
+#include "mpm/cuda/SortedKeys.cuh"
 
 namespace mpmsdem {
 namespace coupling {
@@ -29,42 +30,32 @@ namespace {
 
 constexpr int kThreads = 128;
 
-// A device array that grows on demand and is refilled from host data.
-template <typename U>
-struct DeviceArray {
+// Memory that grows on demand: device memory (refilled from host data with upload), or pinned
+// host memory (kPinned: the source of asynchronous copies).
+template <typename U, bool kPinned = false>
+struct GrowingArray {
   U* ptr = nullptr;
   std::size_t capacity = 0;
-  ~DeviceArray() {
-    if (ptr) CUDA_CHECK_NOTHROW(cudaFree(ptr));
+  ~GrowingArray() {
+    if (ptr) CUDA_CHECK_NOTHROW(kPinned ? cudaFreeHost(ptr) : cudaFree(ptr));
   }
   void reserve(std::size_t n) {
     if (n <= capacity && ptr) return;
-    if (ptr) CUDA_CHECK(cudaFree(ptr));
+    if (ptr) CUDA_CHECK(kPinned ? cudaFreeHost(ptr) : cudaFree(ptr));
     ptr = nullptr;
     capacity = std::max<std::size_t>(n, 1);
-    CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&ptr), capacity * sizeof(U)));
+    void** p = reinterpret_cast<void**>(&ptr);
+    CUDA_CHECK(kPinned ? cudaMallocHost(p, capacity * sizeof(U)) : cudaMalloc(p, capacity * sizeof(U)));
   }
   void upload(const U* src, std::size_t n) {
+    static_assert(!kPinned, "a pinned host array is written directly");
     reserve(n);
     if (n) CUDA_CHECK(cudaMemcpy(ptr, src, n * sizeof(U), cudaMemcpyHostToDevice));
   }
 };
-
-// Pinned host bytes that grow on demand (the source of asynchronous copies).
-struct PinnedArray {
-  unsigned char* ptr = nullptr;
-  std::size_t capacity = 0;
-  ~PinnedArray() {
-    if (ptr) CUDA_CHECK_NOTHROW(cudaFreeHost(ptr));
-  }
-  void reserve(std::size_t n) {
-    if (n <= capacity && ptr) return;
-    if (ptr) CUDA_CHECK(cudaFreeHost(ptr));
-    ptr = nullptr;
-    capacity = std::max<std::size_t>(n, 1);
-    CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&ptr), capacity));
-  }
-};
+template <typename U>
+using DeviceArray = GrowingArray<U>;
+using PinnedArray = GrowingArray<unsigned char, true>;
 
 // Offsets in the staged tables: every table starts on a 16-byte boundary.
 constexpr std::size_t alignUp(std::size_t bytes) { return (bytes + 15) / 16 * 16; }
@@ -76,11 +67,6 @@ void uploadAs(DeviceArray<T>& dst, const double* src, std::size_t n) {
   dst.upload(buf.data(), n);
 }
 
-int bitsFor(unsigned long long values) {  // bits that hold 0 .. values - 1
-  int b = 0;
-  while (b < 64 && (1ull << b) < values) ++b;
-  return b;
-}
 
 template <typename T>
 class CouplingCuda : public CouplingDeviceBackend {
@@ -179,8 +165,8 @@ class CouplingCuda : public CouplingDeviceBackend {
       histParticles_ = v.n;
     }
     const int numBlocks = static_cast<int>(hb.size());
-    const int numberBits = bitsFor(v.n);
-    const int keyBits = bitsFor(static_cast<unsigned long long>(numBlocks)) + numberBits + 8;
+    const int numberBits = sortedkeys::bitsFor(v.n);
+    const int keyBits = sortedkeys::bitsFor(static_cast<unsigned long long>(numBlocks)) + numberBits + 8;
     if (keyBits > 64)
       throw ParameterError("MP-block coupling on CUDA: " + std::to_string(numBlocks) + " blocks and " +
                            std::to_string(v.n) + " particles need a contact sort key of " + std::to_string(keyBits) +
@@ -254,7 +240,7 @@ class CouplingCuda : public CouplingDeviceBackend {
     blockEnd_.reserve(numBlocks);
     CUDA_CHECK(cudaMemsetAsync(blockStart_.ptr, 0, std::max(numBlocks, 1) * sizeof(int)));
     CUDA_CHECK(cudaMemsetAsync(blockEnd_.ptr, 0, std::max(numBlocks, 1) * sizeof(int)));
-    cudak::contactRangesKernel<<<(count + kThreads - 1) / kThreads, kThreads>>>(count, k.Current(), numberBits + 8,
+    sortedkeys::rangesKernel<<<(count + kThreads - 1) / kThreads, kThreads>>>(count, k.Current(), numberBits + 8,
                                                                                 blockStart_.ptr, blockEnd_.ptr);
     CUDA_CHECK(cudaGetLastError());
     cudak::blockSumsKernel<<<numBlocks, cudak::kSumThreads>>>(share_.ptr, e.Current(), blockStart_.ptr, blockEnd_.ptr,

@@ -70,15 +70,6 @@ struct DeviceSink {
   }
 };
 
-// The range [start[b], end[b]) of block b's contacts in the sorted keys (zeros: none).
-static __global__ void contactRangesKernel(int count, const unsigned long long* key, int shift, int* start, int* end) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= count) return;
-  const int b = static_cast<int>(key[i] >> shift);
-  if (i == 0 || static_cast<int>(key[i - 1] >> shift) != b) start[b] = i;
-  if (i == count - 1 || static_cast<int>(key[i + 1] >> shift) != b) end[b] = i + 1;
-}
-
 // Block b's sums from its sorted contacts: thread t adds contacts t, t + kSumThreads, ... in
 // turn, then a fixed tree adds the threads' sums. The order depends on the contacts alone, not
 // on thread timing.

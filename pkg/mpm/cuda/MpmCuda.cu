@@ -11,6 +11,7 @@
 #include "mpm/cuda/CudaCheck.hpp"
 #include "mpm/cuda/MpmCuda.hpp"
 #include "mpm/cuda/MpmCudaKernels.cuh"
+#include "mpm/cuda/SortedKeys.cuh"
 
 namespace mpmsdem {
 namespace mpm {
@@ -62,11 +63,6 @@ void downloadByNumber(std::vector<U>& dst, const T* src, const std::vector<int>&
     const std::size_t k = static_cast<std::size_t>(id[q]) - first;  // wraps for numbers below first
     if (k < count) dst[stride * k + offset] = static_cast<U>(buf[q]);
   }
-}
-int bitsFor(unsigned long long values) {  // bits that hold 0 .. values - 1
-  int b = 0;
-  while (b < 64 && (1ull << b) < values) ++b;
-  return b;
 }
 }  // namespace
 
@@ -130,8 +126,8 @@ template <typename T>
 void MpmCuda<T>::setParticles(const ParticleSet& ps) {
   const double meanMass = validateParticles(params_, ps);
   if (!ps.fext.empty()) validateExternalForces(ps.fext, ps.size());
-  const int numberBits = bitsFor(ps.size());
-  const int keyBits = numberBits + bitsFor(static_cast<unsigned long long>(nBlocks_) * kBlockCells);
+  const int numberBits = sortedkeys::bitsFor(ps.size());
+  const int keyBits = numberBits + sortedkeys::bitsFor(static_cast<unsigned long long>(nBlocks_) * kBlockCells);
   if (keyBits > 64)
     throw ParameterError(std::to_string(ps.size()) + " particles in a grid of " + std::to_string(nBlocks_) +
                          " blocks of 3x3x3 cells: the CUDA P2G sort key needs " + std::to_string(keyBits) +
@@ -361,7 +357,7 @@ void MpmCuda<T>::sortParticles() {
   const std::size_t cells = static_cast<std::size_t>(kBlockCells) * nBlocks_;
   CUDA_CHECK(cudaMemsetAsync(cellStart_, 0, cells * sizeof(int)));
   CUDA_CHECK(cudaMemsetAsync(cellEnd_, 0, cells * sizeof(int)));
-  cudak::cellRangesKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, cellStart_, cellEnd_);
+  sortedkeys::rangesKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, cellStart_, cellEnd_);
   CUDA_CHECK(cudaGetLastError());
   sorted_ = v.Current();
 }

@@ -46,17 +46,6 @@ __global__ void binKernel(int n, ParticleIn<T> in, GridConst<T> g, BlockGrid bg,
   slot[s] = s;
 }
 
-// The range [start[c], end[c]) of each block cell c (kBlockCells b + base) in the sorted keys
-// (left as zeros for empty cells); static: this header is included by more than one
-// translation unit.
-static __global__ void cellRangesKernel(int n, const unsigned long long* key, int numberBits, int* start, int* end) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= n) return;
-  const int c = static_cast<int>(key[i] >> numberBits);
-  if (i == 0 || static_cast<int>(key[i - 1] >> numberBits) != c) start[c] = i;
-  if (i == n - 1 || static_cast<int>(key[i + 1] >> numberBits) != c) end[c] = i + 1;
-}
-
 // P2G of the blocks of one parity colour, one CUDA block per block of bases, in three rows
 // (o0 = 0, 1, 2 of the bases (o0, o1, o2)): warp 3 o1 + o2 sums the particles of base
 // (row, o1, o2), prepared kBaseChunk at a time into shared memory, into that base's 27 nodes, a
