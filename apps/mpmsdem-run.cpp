@@ -655,6 +655,9 @@ int main(int argc, char** argv) {
     if (opt.precision) scene.run.precision = *opt.precision;
     if (opt.out) scene.run.outputDir = *opt.out;
     const coupling::SceneBlocks blocks = coupling::parseBlocks(scene.sourceJson);
+    if (opt.deviceStages && scene.run.backend != Backend::Cuda)
+      throw ParameterError("--device-stages: times the CUDA step; this run is on the " +
+                           std::string(backendName(scene.run.backend)) + " backend (--backend cuda)");
     auto solver = makeSolver(scene.params, scene.run.backend, scene.run.precision);
     long maxSteps = opt.steps;
     std::optional<coupling::CoupledCheckpoint> checkpoint;

@@ -324,6 +324,13 @@ def test_driver_names_bad_scene_files_and_sizes(tmp_path):
     assert r.returncode == 2 and "out of range" in r.stderr, r.stderr
     r = subprocess.run([exe, "/dev/zero", "--bench", "--steps", "1"], capture_output=True, text=True, timeout=30)
     assert r.returncode == 2 and "/dev/zero" in r.stderr and "regular" in r.stderr, r.stderr
+    # device stage timing goes with --bench on the CUDA backend
+    path.write_text(json.dumps(SCENE))
+    r = subprocess.run([exe, str(path), "--device-stages", "--steps", "1"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "--device-stages: only with --bench" in r.stderr, r.stderr
+    r = subprocess.run([exe, str(path), "--bench", "--device-stages", "--backend", "cpu", "--steps", "1"],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "--device-stages" in r.stderr and "cpu backend" in r.stderr, r.stderr
     # 600^3 cells need ~12 GB of grid: under a 2 GB cap, a message naming grid.cells, exit 2
     huge = json.loads(json.dumps(SCENE))
     huge["grid"] = {"dx": 0.02, "cells": [600, 600, 600], "origin": [-0.04, -0.04, -0.04]}
