@@ -462,7 +462,6 @@ class OutputRun {
         coupled_->dropAfter(solver_.time() * (1 + 1e-12));
         coupled_->setReferenceOrientations(checkpoint->referenceOrientations);
       }
-      checkpoints_ = true;
     }
     io::writeMpmHeader(h5_, scene.sourceJson, scene.params, solver_.name());
     if (coupled_) coupled_->h5().setAttribute("flip_blend", mpm::describeFlipBlend(scene.params));
@@ -618,7 +617,7 @@ class OutputRun {
     // naming this snapshot, so every checkpoint finds its records in the copies.
     if (coupled_) coupled_->h5().commit();
     h5_.commit();
-    if (checkpoint && checkpoints_)
+    if (checkpoint && coupled_)
       coupling::writeCheckpoint((dir_ / "coupled.checkpoint.json").string(),
                                 coupling::captureCheckpoint(*stepper_.coupled, index, stepper_.lastDt,
                                                             coupled_->referenceOrientations()));
@@ -634,7 +633,6 @@ class OutputRun {
   io::Hdf5Writer h5_;
   std::optional<io::PvdCollection> pvd_;
   std::optional<coupling::CoupledOutput> coupled_;
-  bool checkpoints_ = false;  // coupled.checkpoint.json with every snapshot (a coupled run)
   // Outputs read the particles in slices: a whole host copy would add 145 B per particle to
   // the solver's memory while it is written.
   mpm::SolverParticleSlices slices_{solver_, 1 << 16};

@@ -127,13 +127,19 @@ a, b = (json.load(open(f)) for f in sys.argv[1:3])
 drop = lambda r: {k: v for k, v in r.items() if "second" not in k and "per_s" not in k}
 print("two CUDA double runs of the coarse flume:", "the same results" if drop(a) == drop(b) else "differ: %s / %s" % (drop(a), drop(b)))
 PY
+# dam_scene SIZE: bench_mpm.py's dam break of about SIZE points, written to $out/damSIZE.json
+dam_scene() {
+  python3 -c "import json, sys; sys.path.insert(0, 'scripts/bench'); import bench_mpm; \
+json.dump(bench_mpm.dam_break_scene($1)[0], open('$out/dam$1.json', 'w'))"
+}
+export -f dam_scene
+
 # Where a step's device time goes (mpmsdem-run --device-stages: sort, P2G, grid, G2P by device
 # events) on dam breaks of 1e5 and 1e6 points in float and on the flume's first 4,000 steps,
 # against the step loop's wall time.
 device_stages() {
   for size in 100000 1000000; do
-    python3 -c "import json, sys; sys.path.insert(0, 'scripts/bench'); import bench_mpm; \
-json.dump(bench_mpm.dam_break_scene($size)[0], open('$out/dam$size.json', 'w'))" || return 1
+    dam_scene "$size" || return 1
     "$bin/mpmsdem-run" "$out/dam$size.json" --backend cuda --precision float --bench --device-stages --steps 500 \
       2> /dev/null | tail -1 > "$out/stages_dam$size.json"
   done
@@ -155,10 +161,9 @@ export full
 # ncu_profile EXE NAME: Nsight Compute on the MPM kernels of one step (the third) of a 1e6-point
 # dam break in float: duration, throughput against the device's peak, occupancy
 ncu_profile() {
-  python3 -c "import json, sys; sys.path.insert(0, 'scripts/bench'); import bench_mpm; \
-json.dump(bench_mpm.dam_break_scene(1000000)[0], open('$out/dam1e6.json', 'w'))" || return 1
-  "$ncu" -k 'regex:p2g|g2p|binKernel|blockRanges|gridKernel|Onesweep|Histogram' --launch-skip 26 --launch-count 13 \
-    --section SpeedOfLight --section Occupancy "$1" "$out/dam1e6.json" --backend cuda --precision float --bench \
+  dam_scene 1000000 || return 1
+  "$ncu" -k 'regex:p2g|g2p|binKernel|rangesKernel|gridKernel|Onesweep|Histogram' --launch-skip 26 --launch-count 13 \
+    --section SpeedOfLight --section Occupancy "$1" "$out/dam1000000.json" --backend cuda --precision float --bench \
     --steps 4 > "$out/ncu_$2.txt" 2>&1
   grep -E '^  [A-Za-z_].*[(]|Duration|Memory Throughput|DRAM Throughput|Compute [(]SM[)] Throughput|Achieved Occupancy' \
     "$out/ncu_$2.txt" | head -100

@@ -67,7 +67,6 @@ void uploadAs(DeviceArray<T>& dst, const double* src, std::size_t n) {
   dst.upload(buf.data(), n);
 }
 
-
 template <typename T>
 class CouplingCuda : public CouplingDeviceBackend {
  public:
@@ -223,18 +222,18 @@ class CouplingCuda : public CouplingDeviceBackend {
       keys_[b].reserve(listCapacity_);
       entries_[b].reserve(listCapacity_);
     }
-    sortScratchBytes_ = 0;
+    std::size_t bytes = 0;
     cub::DoubleBuffer<unsigned long long> k(keys_[0].ptr, keys_[1].ptr);
     cub::DoubleBuffer<int> e(entries_[0].ptr, entries_[1].ptr);
-    CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sortScratchBytes_, k, e, static_cast<int>(listCapacity_)));
-    sortScratch_.reserve(sortScratchBytes_);
+    CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, k, e, static_cast<int>(listCapacity_)));
+    sortScratch_.reserve(bytes);
   }
 
   // The block sums of this step's `count` listed contacts, in their fixed order, into sums_.
   void orderedSums(int count, int numBlocks, int numberBits, int keyBits) {
     cub::DoubleBuffer<unsigned long long> k(keys_[0].ptr, keys_[1].ptr);
     cub::DoubleBuffer<int> e(entries_[0].ptr, entries_[1].ptr);
-    std::size_t bytes = sortScratchBytes_;
+    std::size_t bytes = sortScratch_.capacity;
     CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_.ptr, bytes, k, e, count, 0, keyBits));
     blockStart_.reserve(numBlocks);
     blockEnd_.reserve(numBlocks);
@@ -266,7 +265,6 @@ class CouplingCuda : public CouplingDeviceBackend {
   DeviceArray<unsigned long long> keys_[2];
   DeviceArray<int> entries_[2];
   DeviceArray<unsigned char> sortScratch_;
-  std::size_t sortScratchBytes_ = 0;
   DeviceArray<int> blockStart_, blockEnd_;
 };
 

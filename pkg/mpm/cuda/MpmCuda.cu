@@ -30,19 +30,6 @@ void deviceFree(U*& ptr) {
   if (ptr) CUDA_CHECK_NOTHROW(cudaFree(ptr));
   ptr = nullptr;
 }
-// Host double array with a given stride/offset -> device T array.
-template <typename T>
-void upload(T* dst, const std::vector<double>& src, std::size_t n, int stride, int offset, std::vector<T>& buf) {
-  buf.resize(n);
-  for (std::size_t p = 0; p < n; ++p) buf[p] = static_cast<T>(src[stride * p + offset]);
-  CUDA_CHECK(cudaMemcpy(dst, buf.data(), n * sizeof(T), cudaMemcpyHostToDevice));
-}
-template <typename T>
-void download(std::vector<double>& dst, const T* src, std::size_t n, int stride, int offset, std::vector<T>& buf) {
-  buf.resize(n);
-  CUDA_CHECK(cudaMemcpy(buf.data(), src, n * sizeof(T), cudaMemcpyDeviceToHost));
-  for (std::size_t p = 0; p < n; ++p) dst[stride * p + offset] = static_cast<double>(buf[p]);
-}
 // Host double array indexed by particle number (stride/offset) -> device T array by slot.
 template <typename T>
 void uploadByNumber(T* dst, const std::vector<double>& src, const std::vector<int>& id, int stride, int offset,
@@ -112,8 +99,7 @@ void MpmCuda<T>::freeParticles() {
   for (auto& a : fext_) deviceFree(a);
   for (auto& a : keys_) deviceFree(a);
   for (auto& a : slots_) deviceFree(a);
-  if (sortScratch_) CUDA_CHECK_NOTHROW(cudaFree(sortScratch_));
-  sortScratch_ = nullptr;
+  deviceFree(sortScratch_);
   sortScratchBytes_ = 0;
   sorted_ = nullptr;
   bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags) +
@@ -167,30 +153,29 @@ void MpmCuda<T>::loadParticles(const ParticleSet& ps) {
     cub::DoubleBuffer<unsigned long long> k(keys_[0], keys_[1]);
     cub::DoubleBuffer<int> v(slots_[0], slots_[1]);
     CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sortScratchBytes_, k, v, static_cast<int>(n), 0, keyBits_));
-    CUDA_CHECK(cudaMalloc(&sortScratch_, std::max<std::size_t>(sortScratchBytes_, 1)));
-    bytes_ += std::max<std::size_t>(sortScratchBytes_, 1);
+    deviceAlloc(&sortScratch_, sortScratchBytes_, bytes_);
   }
   cur_ = 0;
   DeviceState& s = state_[0];
+  std::vector<int> id(n);  // a new set: slot = number
+  for (std::size_t p = 0; p < n; ++p) id[p] = static_cast<int>(p);
   std::vector<T> buf;
   for (int d = 0; d < 3; ++d) {
-    upload(s.x[d], ps.x, n, 3, d, buf);
-    upload(s.v[d], ps.v, n, 3, d, buf);
+    uploadByNumber(s.x[d], ps.x, id, 3, d, buf);
+    uploadByNumber(s.v[d], ps.v, id, 3, d, buf);
   }
-  for (int k = 0; k < 6; ++k) upload(s.s[k], ps.stress, n, 6, k, buf);
-  upload(s.J, ps.J, n, 1, 0, buf);
-  upload(s.mass, ps.mass, n, 1, 0, buf);
-  upload(s.vol0, ps.volume0, n, 1, 0, buf);
+  for (int k = 0; k < 6; ++k) uploadByNumber(s.s[k], ps.stress, id, 6, k, buf);
+  uploadByNumber(s.J, ps.J, id, 1, 0, buf);
+  uploadByNumber(s.mass, ps.mass, id, 1, 0, buf);
+  uploadByNumber(s.vol0, ps.volume0, id, 1, 0, buf);
   if (ps.gammaDotP.empty())
     CUDA_CHECK(cudaMemset(s.gdp, 0, std::max<std::size_t>(n, 1) * sizeof(T)));
   else
-    upload(s.gdp, ps.gammaDotP, n, 1, 0, buf);
+    uploadByNumber(s.gdp, ps.gammaDotP, id, 1, 0, buf);
   if (ps.phase.empty())
     CUDA_CHECK(cudaMemset(s.phase, 0, std::max<std::size_t>(n, 1)));
   else if (n)
     CUDA_CHECK(cudaMemcpy(s.phase, ps.phase.data(), n, cudaMemcpyHostToDevice));
-  std::vector<int> id(n);
-  for (std::size_t p = 0; p < n; ++p) id[p] = static_cast<int>(p);
   if (n) CUDA_CHECK(cudaMemcpy(s.id, id.data(), n * sizeof(int), cudaMemcpyHostToDevice));
   maxSpeed_ = 0;
   for (std::size_t p = 0; p < n; ++p)

@@ -97,7 +97,7 @@ class MpmCuda : public MpmSolver {
   unsigned long long* keys_[2] = {};
   int* slots_[2] = {};
   const int* sorted_ = nullptr;  // slot of each sorted place, this step
-  void* sortScratch_ = nullptr;
+  unsigned char* sortScratch_ = nullptr;
   std::size_t sortScratchBytes_ = 0;
   // Stage timing (setStageTiming): events before the sort and after each stage, and the sums.
   static constexpr int kStages = 4;  // sort, p2g, grid, g2p
