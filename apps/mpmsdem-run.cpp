@@ -46,6 +46,14 @@
 //                   of the MPM step and the contact step (CoupledWorld::criticalTimeStep).
 //                   coupled.checkpoint.json after every snapshot: what --restart needs
 //                   besides the particles (block states, contact histories).
+//   With "flow_probes": /series/probe_depth, probe_velocity, probe_points (one value per
+//                   probe and record) in mpm.h5, and flow_probes.json at the end: why the run
+//                   stopped ("duration", "steps", "probes", "front_still", "failure"), the
+//                   time, and per probe its spec, arrival (null: the front never came), h_f,
+//                   v_f, Fr = v_f / sqrt(|g| h_f) and the number of records. run.stop_when_probed
+//                   and run.stop_when_front_still end the run early (MpmScene.hpp). Such a run
+//                   is not restarted (its probe records are not in the checkpoint); --bench
+//                   takes no records, so it ignores the probes and those two stop rules.
 // Progress lines go to stdout (stderr with --bench) every 5 % of the run and at least every
 // run.progress_every seconds of wall time (10), with the step and what sets it (the flow's CFL
 // step, a contact, a block's approach naming the block). With "dt": "auto" a step below
@@ -71,6 +79,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <new>
 #include <optional>
@@ -465,6 +474,7 @@ class OutputRun {
     }
     io::writeMpmHeader(h5_, scene.sourceJson, scene.params, solver_.name());
     if (coupled_) coupled_->h5().setAttribute("flip_blend", mpm::describeFlipBlend(scene.params));
+    for (const mpm::FlowProbeSpec& p : scene.probes) probes_.emplace_back(p);
   }
 
   int run(long maxSteps) {
@@ -493,13 +503,14 @@ class OutputRun {
     std::fflush(stdout);
     double dt = 0;
     try {
-      while (!finished(solver_, run, maxSteps)) {
+      while (!finished(solver_, run, maxSteps) && stopReason_.empty()) {
         dt = nextStep(stepper_, run, byTime);
         stepper_.step(dt);
         const double t = solver_.time();
         const bool series = t >= nextSeries * (1 - 1e-12), output = t >= nextOutput * (1 - 1e-12);
         const double f = progressFraction(solver_, run, maxSteps, firstStep);
-        const bool report = f >= nextReport || finished(solver_, run, maxSteps) || since(lastReport) >= run.progressEvery;
+        const bool report = f >= nextReport || finished(solver_, run, maxSteps) || since(lastReport) >= run.progressEvery ||
+                            (series && willStop(t));
         // one pass over the particles serves the series record and the progress line
         std::optional<mpm::Diagnostics> d;
         if (series || report) d = diagnose();
@@ -530,6 +541,7 @@ class OutputRun {
         std::fprintf(stderr, "mpmsdem-run: run failure: %s\nmpmsdem-run: last good state: the last snapshot in %s "
                              "(t = %.6g s; keep_last_good_state is false, so the state at the failure was not kept)\n",
                      e.what(), h5_.path().c_str(), state_time_);
+        writeProbeResults("failure");
         return 3;
       }
       // The solver keeps the state at the start of the failed step: save it. The blocks have
@@ -544,10 +556,16 @@ class OutputRun {
       std::fprintf(stderr, "mpmsdem-run: run failure: %s\nmpmsdem-run: last good state (t = %.6g s, step %ld) "
                            "saved as snapshot %ld in %s\n",
                    e.what(), solver_.time(), solver_.steps(), index, h5_.path().c_str());
+      writeProbeResults("failure");
       return 3;
     }
     if (solver_.time() > state_time_) writeSnapshot();
     const double loop = since(t0);
+    if (!stopReason_.empty())
+      std::printf("mpmsdem-run: stopped before run.duration: %s\n",
+                  stopReason_ == "probes" ? "every flow probe has its result (run.stop_when_probed)"
+                                          : "the front has not advanced for run.stop_when_front_still");
+    writeProbeResults(stopReason_.empty() ? (maxSteps > 0 ? "steps" : "duration") : stopReason_);
     std::printf("mpmsdem-run: done, t = %.6g s, %ld steps, %.3g s wall\n", solver_.time(), solver_.steps(), loop);
     if (stepper_.coupled) {
       std::printf("mpmsdem-run: step loop: %s\n", stageSplit(*stepper_.coupled, loop).c_str());
@@ -572,7 +590,65 @@ class OutputRun {
   }
 
  private:
-  mpm::Diagnostics diagnose() { return mpm::diagnose(slices_, solver_.params().gravity); }
+  mpm::Diagnostics diagnose() { return mpm::diagnose(slices_, solver_.params().gravity, scene_.probes); }
+
+  // Whether the record just taken at time t ended the run by a stop rule.
+  bool willStop(double t) const { return !stopReason_.empty() && t == stopTime_; }
+
+  // The flow probes' records and the run's stop rules, at a series record of time t.
+  void recordProbes(const mpm::Diagnostics& d, double t) {
+    if (probes_.empty() && scene_.run.stopWhenFrontStill == 0) return;
+    std::vector<double> depth, velocity, points;
+    bool complete = true;
+    for (std::size_t k = 0; k < probes_.size(); ++k) {
+      probes_[k].add(t, d.probes[k]);
+      complete = complete && probes_[k].complete();
+      depth.push_back(d.probes[k].depth);
+      velocity.push_back(d.probes[k].velocity);
+      points.push_back(double(d.probes[k].points));
+    }
+    if (!probes_.empty()) {
+      h5_.appendVector("probe_depth", depth);
+      h5_.appendVector("probe_velocity", velocity);
+      h5_.appendVector("probe_points", points);
+    }
+    if (d.frontX > front_ + 0.5 * scene_.params.dx) front_ = d.frontX, frontAt_ = t;
+    if (scene_.run.stopWhenProbed && complete)
+      stopReason_ = "probes", stopTime_ = t;
+    else if (scene_.run.stopWhenFrontStill > 0 && t - frontAt_ > scene_.run.stopWhenFrontStill)
+      stopReason_ = "front_still", stopTime_ = t;
+  }
+
+  // flow_probes.json: why the run stopped and each probe's result (scenes with flow_probes).
+  void writeProbeResults(const std::string& stopped) {
+    if (probes_.empty()) return;
+    const auto& g = scene_.params.gravity;
+    const double gravity = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    nlohmann::json list = nlohmann::json::array();
+    for (const mpm::FlowProbeRecord& r : probes_) {
+      const mpm::FlowProbeSpec& p = r.spec();
+      nlohmann::json j = {{"x", p.x},           {"half_width", p.halfWidth}, {"bed_z", p.bedZ},
+                          {"min_points", p.minPoints}, {"window", p.window}, {"records", r.records()},
+                          {"complete", r.complete()}};
+      const bool arrived = r.arrival().has_value();
+      j["arrival"] = arrived ? nlohmann::json(*r.arrival()) : nlohmann::json();
+      j["h_f"] = arrived ? nlohmann::json(r.depth()) : nlohmann::json();
+      j["v_f"] = arrived ? nlohmann::json(r.velocity()) : nlohmann::json();
+      j["Fr"] = arrived && r.depth() > 0 ? nlohmann::json(r.velocity() / std::sqrt(gravity * r.depth()))
+                                         : nlohmann::json();
+      list.push_back(j);
+    }
+    const nlohmann::json out = {{"stopped", stopped},
+                                {"time", solver_.time()},
+                                {"front_x", front_},
+                                {"front_still_since", frontAt_},
+                                {"flip_blend", mpm::describeFlipBlend(scene_.params)},
+                                {"probes", list}};
+    const std::filesystem::path path = dir_ / "flow_probes.json";
+    std::ofstream f(path);
+    f << out.dump(1) << "\n";
+    if (!f) throw RuntimeFailure("cannot write " + path.string());
+  }
 
   void recordSeries(const mpm::Diagnostics& d, double dt = 0) {
     h5_.appendScalar("time", solver_.time());
@@ -585,6 +661,7 @@ class OutputRun {
     h5_.appendScalar("max_speed", d.maxSpeed);
     h5_.appendScalar("flowing_fraction", d.flowing);
     h5_.appendScalar("gasified_fraction", d.gasified);
+    recordProbes(d, solver_.time());
     if (coupled_) recordBlocks(d);
   }
 
@@ -637,6 +714,10 @@ class OutputRun {
   // the solver's memory while it is written.
   mpm::SolverParticleSlices slices_{solver_, 1 << 16};
   double state_time_ = -1;  // time of the last snapshot written
+  std::vector<mpm::FlowProbeRecord> probes_;
+  double front_ = -INFINITY, frontAt_ = 0;  // the front's largest x so far and when it got there [m, s]
+  std::string stopReason_;                  // a stop rule that ended the run ("probes", "front_still")
+  double stopTime_ = 0;
 };
 
 #endif  // MPMSDEM_WITH_HDF5
@@ -665,6 +746,9 @@ int main(int argc, char** argv) {
                            "--bench only; build with libhdf5 for outputs and --restart");
 #else
     if (opt.restart) {
+      if (!scene.probes.empty())
+        throw ParameterError("--restart: this scene has flow_probes, whose records are not kept in a restart point; "
+                             "run it again without --restart (a free-flow probe run is short)");
       const std::filesystem::path dir(scene.run.outputDir);
       const std::string h5 = (dir / "mpm.h5").string();
       // Back to the files as they were at the last snapshot: a run killed while it flushed

@@ -189,43 +189,15 @@ def driverScene(dx, duration, a):
           "mpmsdem-run %s" % (dx, scene.mpm.numParticles, O.dt, duration, a.driver_scene, a.driver_scene))
 
 
-def driverSeries(folder):
-    """The cube's series from the coupled.h5 that ``mpmsdem-run`` wrote in ``folder`` (the
-    first block that moves; the bed is fixed), with the keys of :meth:`Flume.series`."""
-    import h5py
-    import numpy as np
-    path = os.path.join(folder, "coupled.h5")
-    if not os.path.exists(path):
-        raise ValueError("--from-driver %s: no coupled.h5 there (the output folder of mpmsdem-run)" % folder)
-    with h5py.File(path, "r") as f:
-        g = f["series"]
-        t = g["time"][:]
-        pos, vel = g["pos"][:], g["vel"][:]
-        moving = [k for k in range(pos.shape[1] // 3) if np.ptp(pos[:, 3 * k:3 * k + 3], axis=0).max() > 0]
-        if not moving:
-            raise ValueError("--from-driver %s: no block moved in coupled.h5" % folder)
-        c = slice(3 * moving[0], 3 * moving[0] + 3)
-        s = {"t": t, "travel": pos[:, c][:, 0] - pos[0, c][0], "vx": vel[:, c][:, 0],
-             "Ft": g["flow_force"][:, c][:, 0], "Ff": g["face_force"][:, c][:, 0], "Fe": g["edge_force"][:, c][:, 0],
-             "rotation": np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))}
-        turns = np.array([analysis.tiltAndYaw(np.linalg.norm(r), r) for r in g["rotation"][:, c]]).reshape(-1, 2)
-        s["tilt"], s["yaw"] = turns[:, 0], turns[:, 1]
-        scene = json.loads(f.attrs["parameters"])
-    return s, scene
-
-
 def fromDriver(a):
     """Plot and summarise a driver run of this scene (e.g. one made on a GPU machine)."""
-    import numpy as np
-    s, scene = driverSeries(a.from_driver)
+    s, scene = analysis.driverBlockSeries(a.from_driver)
     import h5py
     with h5py.File(os.path.join(a.from_driver, "mpm.h5"), "r") as f:
         blend = f.attrs.get("flip_blend", "not recorded (written before the blend was recorded: alpha per step)")
-    w = max(1, int(round(0.01 / np.median(np.diff(s["t"])))))
-    smooth = np.convolve(s["Ft"], np.ones(w) / w, mode="same")
-    j = int(np.argmax(smooth))
+    peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
     summary = {"dx": scene["grid"]["dx"], "duration": float(s["t"][-1]), "travel": float(s["travel"][-1]),
-               "peak_force": float(smooth[j]), "peak_time": float(s["t"][j]), "rotation_deg": float(s["rotation"][-1]),
+               "peak_force": peak, "peak_time": tPeak, "rotation_deg": float(s["rotation"][-1]),
                "dt": scene["run"].get("dt"), "flip_blend": blend}
     with open(os.path.join(a.from_driver, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)

@@ -15,6 +15,11 @@ Dask cluster):
     python3 examples/parametric_study.py --sweep --workers 2
     python3 examples/parametric_study.py --sweep --scheduler tcp://HOST:8786
 Then: python3 examples/parametric_study_summary.py     (Figs 14, 16b, 19a, 19b)
+Through the plain C++ driver (a machine without YADE, e.g. a GPU machine; the same scenes,
+probe and results):
+    python3 examples/parametric_study.py --prepare DIR --full         (here, with YADE)
+    python3 examples/parametric_study.py --run-prepared DIR [--backend cuda]   (needs only mpmsdem-run)
+    python3 examples/parametric_study.py --collect DIR                (h5py; then the summary on DIR)
 
 Resolution: coarse by default (dx = 0.02 m, 8 points per cell); table column ``full = 1`` or
 ``--full``: the paper's (dx = 0.01 m). A coarse case takes from 6 minutes on one core (AR 1.3,
@@ -25,7 +30,8 @@ Set-up (our reading of §5 and §3.2): the §3.2 flume (width 0.2 m, incline 10�
 of Table 1, basal friction 0.21, no gate: the column starts free) with a column of length
 L_i = 0.3 m and height H_i = AR · L_i (rounded to the grid: the coarse grid makes AR = 1.3 a
 column of 0.40 m, AR 1.33; the reported AR is the one simulated), the cube's upstream face at
-L_i + L0, and a flume long enough for the flow to pass it: L_i + L0 + h_b + ``margin``.
+L_i + L0, and a flume long enough for the flow to carry the cube without reaching its end
+wall: L_i + L0 + h_b + ``margin`` (3 m by default: at the paper's blend a cube slid 1.2 m).
 """
 import argparse
 import json
@@ -37,6 +43,11 @@ HB = 0.05          # cube side h_b [m] (paper §5)
 COLUMN = 0.3       # column length L_i [m] (the §3.2 storage container)
 RHO = 1600.0       # bulk density of the glass beads [kg/m³] (Table 1)
 K_STATIC = 1.6     # static pressure coefficient of the paper's Eq 21 fit
+MARGIN = 3.0       # flume length downstream of the cube [m]
+PROBE_EVERY = 0.005   # free flow: the station is read every this much simulated time [s]
+PROBE_WINDOW = 0.05   # h_f, v_f: means over this long after the front's arrival [s]
+FRONT_STILL = 0.3     # free flow: a front that has not advanced dx/2 for this long has stopped [s]
+SAMPLE_EVERY = 0.002  # coupled run: the cube's record interval [s]
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
@@ -48,7 +59,7 @@ def resolution(full, dx=None, ppc=None):
     return dx, ppc or 8
 
 
-def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=1.0, maxFreeTime=5.0, output=None,
+def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, maxFreeTime=5.0, output=None,
             backend="cpu", precision="double", verbose=False):
     """One case of the study: free flow, then the coupled run. Returns a dict of the results.
 
@@ -56,9 +67,10 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=1.0, maxFre
     :param L0_hb: block-to-column distance L0 in cube heights [-], > 0 (paper: 4 to 74).
     :param full: 0 (default): coarse grid; 1: the paper's resolution.
     :param dx: grid spacing [m] (default 0.02, full 0.01); :param ppc: points per cell (8).
-    :param settle: coupled run lasts until the front's arrival + settle [s] (default 1.5);
-        the static force is the mean flow force on the cube over its last 0.1 s.
-    :param margin: flume length downstream of the cube [m] (default 1.0).
+    :param settle: coupled run lasts until the front's arrival + settle [s] (default 1.5),
+        rounded up to whole record intervals (2 ms); the static force is the mean flow force
+        on the cube over its last 0.1 s.
+    :param margin: flume length downstream of the cube [m] (default 3).
     :param maxFreeTime: the free flow gives up after this [s] (default 5).
     :param output: folder for the coupled run's HDF5 and ParaView files (default none).
     :param backend, precision: MPM backend ("cpu"/"cuda") and precision ("double"/"float").
@@ -66,64 +78,205 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=1.0, maxFre
     import mpmsdem  # before yade: it finds YADE's folder in a plain python3
     from yade import O
     from mpmsdem import analysis
-    from mpmsdem.flume import Block, Flume
-    from mpmsdem.mpm import PAPER_VISCOSITY
-    if not (AR > 0 and L0_hb > 0):
-        raise ValueError("AR = %r, L0_hb = %r: both must be > 0" % (AR, L0_hb))
-    dx, ppc = resolution(full, dx, ppc)
-    H = round(max(1, round(AR * COLUMN / dx)) * dx, 12)  # the column's top on a grid line
-    L0 = L0_hb * HB
-    station = COLUMN + L0
-    length = COLUMN + L0 + HB + margin
-    # the paper's blend (α 0.99 per 5e-6 s, 2010 /s) at the paper's resolution (docs/physics.md)
-    common = dict(length=length, columnLength=COLUMN, columnHeight=H, dx=dx, ppc=ppc, backend=backend,
-                  precision=precision, verbose=verbose, flipViscosity=PAPER_VISCOSITY if full else None)
-    out = {"AR": round(H / COLUMN, 6), "AR_nominal": AR, "L0_hb": L0_hb, "L0": L0, "h_b": HB, "H_i": H, "L_i": COLUMN,
-           "dx": dx, "ppc": ppc, "flume_length": length}
+    from mpmsdem.flume import Flume
+    case = _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, verbose)
+    out, common, station = case["result"], case["common"], case["station"]
 
     t0 = time.time()
     scene = Flume(**common)
     out["particles"] = scene.mpm.numParticles
     out["flip_blend"] = scene.flipBlend()
-    probe = analysis.FlowProbe(station, halfWidth=dx, bedZ=0.0, L0=L0, window=0.05)
+    probe = analysis.FlowProbe(station, halfWidth=case["dx"], bedZ=0.0, L0=case["L0"], window=PROBE_WINDOW)
     front, frontAt = 0.0, 0.0
     while True:
-        mpmsdem.run(max(1, int(round(0.005 / O.dt))), scene.coupled)
+        mpmsdem.run(_stepsOf(PROBE_EVERY, O.dt), scene.coupled)
         p = scene.mpm.particles()
         probe.sample(O.time, p)
         if probe.arrival is not None and O.time > probe.arrival + probe.window:
             break
         x = float(p["x"][:, 0].max())
-        if x > front + 0.5 * dx:
+        if x > front + 0.5 * case["dx"]:
             front, frontAt = x, O.time
-        if O.time - frontAt > 0.3 or O.time > maxFreeTime:  # the flow stopped short of the station
+        if O.time - frontAt > FRONT_STILL or O.time > maxFreeTime:  # the flow stopped short of the station
             out.update(reached=False, front=front, stopped_at=O.time, wall_seconds={"free_flow": time.time() - t0})
             return out
     ff = probe.result()
-    out.update(reached=True, free_flow=ff, submersion=analysis.submersion(ff["h_f"], HB))
     tFree = time.time() - t0
 
     t1 = time.time()
-    cube = Block(half=(HB / 2,) * 3, x=station, density=8900, friction=0.67, flowFriction=0.21)
-    scene = Flume(blocks=[cube], output=output, outputEvery=0.01, vtkEvery=0.05 if output else None, **common)
-    duration = ff["arrival"] + settle
-    scene.run(duration, sampleEvery=0.002)
-    s = scene.series(0)
-    peak, tPeak = scene.peakForce(0, smooth=0.01)
+    scene = Flume(blocks=[_cube(station)], output=output, outputEvery=0.01, vtkEvery=0.05 if output else None,
+                  **common)
+    steps, every = _coupledSteps(ff["arrival"], settle, O.dt)
+    scene.run(steps * O.dt, sampleEvery=every * O.dt)
+    _coupledResults(out, ff, scene.series(0), steps * O.dt)
+    out["wall_seconds"] = {"free_flow": tFree, "coupled": time.time() - t1}
+    return out
+
+
+def _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, verbose):
+    """A case's geometry: the Flume arguments it shares between its two runs ("common"), the
+    station, and the start of its result dict."""
+    from mpmsdem.mpm import PAPER_VISCOSITY
+    if not (AR > 0 and L0_hb > 0):
+        raise ValueError("AR = %r, L0_hb = %r: both must be > 0" % (AR, L0_hb))
+    if not margin > 0:
+        raise ValueError("margin = %r m: must be > 0" % (margin,))
+    dx, ppc = resolution(full, dx, ppc)
+    H = round(max(1, round(AR * COLUMN / dx)) * dx, 12)  # the column's top on a grid line
+    L0 = L0_hb * HB
+    length = COLUMN + L0 + HB + margin
+    # the paper's blend (α 0.99 per 5e-6 s, 2010 /s) at the paper's resolution (docs/physics.md)
+    common = dict(length=length, columnLength=COLUMN, columnHeight=H, dx=dx, ppc=ppc, backend=backend,
+                  precision=precision, verbose=verbose, flipViscosity=PAPER_VISCOSITY if full else None)
+    result = {"AR": round(H / COLUMN, 6), "AR_nominal": AR, "L0_hb": L0_hb, "L0": L0, "h_b": HB, "H_i": H,
+              "L_i": COLUMN, "dx": dx, "ppc": ppc, "flume_length": length, "margin": margin}
+    return {"common": common, "station": COLUMN + L0, "L0": L0, "dx": dx, "result": result}
+
+
+def _cube(station):
+    from mpmsdem.flume import Block
+    return Block(half=(HB / 2,) * 3, x=station, density=8900, friction=0.67, flowFriction=0.21)
+
+
+def _stepsOf(interval, dt):
+    return max(1, int(round(interval / dt)))
+
+
+def _coupledSteps(arrival, settle, dt):
+    """(steps, record interval in steps) of the coupled run: to the free front's arrival +
+    settle, rounded up to whole record intervals, so that the last record is the run's end."""
+    every = _stepsOf(SAMPLE_EVERY, dt)
+    steps = int(round((arrival + settle) / dt))
+    return -(-steps // every) * every, every
+
+
+def _coupledResults(out, ff, s, duration):
+    """The coupled run's results into ``out`` from the cube's series ``s`` (the keys of
+    Flume.series) and the free flow ``ff`` (FlowProbe.result)."""
+    from mpmsdem import analysis
+    peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
     late = s["t"] >= s["t"][-1] - 0.1
     static = float(s["Ft"][late].mean())
     A = min(ff["h_f"], HB) * HB  # impact area: the flow's depth on the cube's face, at most its height
-    travel = scene.travel(0)
+    travel = float(s["travel"][-1])
     # A cube carried to the flume's end has a travel cut short by the end wall: flagged, and
     # left out of the travel fits by the summary (give such a case a larger margin).
-    atEnd = station + travel + HB > length - 0.1
-    out.update(travel=travel, travel_L0=travel / L0, cube_at_end=atEnd, duration=duration, peak_force=peak,
-               peak_time=tPeak,
+    station = out["L_i"] + out["L0"]
+    atEnd = station + travel + HB > out["flume_length"] - 0.1
+    out.update(reached=True, free_flow=ff, submersion=analysis.submersion(ff["h_f"], HB), travel=travel,
+               travel_L0=travel / out["L0"], cube_at_end=atEnd, duration=duration, peak_force=peak, peak_time=tPeak,
                static_force=static, force_ratio=peak / static if static > 0 else None,
                static_force_model=analysis.staticImpactForce(RHO, ff["h_f"], A, k=K_STATIC),
                eq20_force=analysis.hydrodynamicForce(RHO, ff["v_f"], ff["h_f"], A),
-               rotation_deg=float(s["rotation"][-1]),
-               wall_seconds={"free_flow": tFree, "coupled": time.time() - t1})
+               rotation_deg=float(s["rotation"][-1]))
+
+
+# ---------------------------------------------------------------- through the C++ driver
+# A case folder holds case.json, free.json (the free flow with its probe at the station) and
+# coupled.json (the flow with the cube); --run-prepared writes free/ and coupled/ (the driver's
+# outputs) and run.json (wall times, backend) there; --collect turns them into the result dict
+# of runCase, one CASE.json beside the case folders.
+
+def prepareCase(AR, L0_hb, folder, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, maxFreeTime=5.0,
+                backend="cpu", precision="double"):
+    """Write one case's two driver scenes and case.json into ``folder`` (created). The scenes
+    are the ones runCase runs (the same O.dt, records at the same steps): the driver's results
+    are runCase's to round-off. Returns the folder."""
+    import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
+    from yade import O
+    from mpmsdem import driver
+    from mpmsdem.flume import Flume
+    case = _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, False)
+    common, station = case["common"], case["station"]
+    os.makedirs(folder, exist_ok=True)
+    scene = Flume(**common)
+    case["result"]["particles"] = scene.mpm.numParticles
+    case["result"]["flip_blend"] = scene.flipBlend()
+    probe = {"x": station, "halfWidth": case["dx"], "bedZ": 0.0, "window": PROBE_WINDOW}
+    driver.writeScene(os.path.join(folder, "free.json"), scene.coupled, duration=maxFreeTime, dt=O.dt,
+                      flowProbes=[probe], seriesEvery=_stepsOf(PROBE_EVERY, O.dt) * O.dt, outputEvery=maxFreeTime,
+                      vtk="none", stopWhenProbed=True, stopWhenFrontStill=FRONT_STILL)
+    dt = O.dt
+    scene = Flume(blocks=[_cube(station)], **common)
+    if O.dt != dt:
+        raise RuntimeError("the free flow and the coupled run chose different steps (%r, %r s)" % (dt, O.dt))
+    # run.duration bounds the run; --run-prepared runs the steps that runCase would (--steps)
+    driver.writeScene(os.path.join(folder, "coupled.json"), scene.coupled, duration=maxFreeTime + settle, dt=O.dt,
+                      seriesEvery=_stepsOf(SAMPLE_EVERY, O.dt) * O.dt, outputEvery=0.5, vtk="none")
+    with open(os.path.join(folder, "case.json"), "w") as f:
+        json.dump({"name": caseName(AR, L0_hb, full), "settle": settle, "dt": O.dt, "result": case["result"]}, f,
+                  indent=1)
+    return folder
+
+
+def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads=None, rerun=False):
+    """Run the prepared cases under ``folder`` through the driver, one after the other: the
+    free flow, then (if its front reached the station) the coupled run to the arrival + settle.
+    Standard library only (no YADE, numpy or h5py): it runs where only mpmsdem-run is built.
+    A case with run.json is done and skipped unless ``rerun``. Returns the case folders run."""
+    import subprocess
+    done = []
+    for name in sorted(os.listdir(folder)):
+        case = os.path.join(folder, name)
+        if not os.path.isfile(os.path.join(case, "case.json")):
+            continue
+        if os.path.exists(os.path.join(case, "run.json")) and not rerun:
+            print("%s: done before (run.json), skipped" % name)
+            continue
+        with open(os.path.join(case, "case.json")) as f:
+            meta = json.load(f)
+        opts = (["--backend", backend] if backend else []) + (["--precision", precision] if precision else [])
+        env = dict(os.environ, **({"OMP_NUM_THREADS": str(threads)} if threads else {}))
+
+        def drive(scene, out, extra=()):
+            t = time.time()
+            with open(os.path.join(case, out + ".log"), "w") as log:
+                r = subprocess.run([exe, os.path.join(case, scene), "--out", os.path.join(case, out)] + opts +
+                                   list(extra), stdout=log, stderr=subprocess.STDOUT, env=env)
+            if r.returncode != 0:
+                raise RuntimeError("%s: mpmsdem-run %s exited %d (see %s.log)" % (name, scene, r.returncode,
+                                                                                 os.path.join(case, out)))
+            return time.time() - t
+
+        record = {"backend": backend or "scene's", "precision": precision or "scene's", "exe": exe,
+                  "free_flow_seconds": drive("free.json", "free")}
+        with open(os.path.join(case, "free", "flow_probes.json")) as f:
+            probe = json.load(f)["probes"][0]
+        if probe["complete"]:
+            steps, every = _coupledSteps(probe["arrival"], meta["settle"], meta["dt"])
+            record["coupled_steps"] = steps
+            record["coupled_seconds"] = drive("coupled.json", "coupled", ["--steps", str(steps)])
+        with open(os.path.join(case, "run.json"), "w") as f:
+            json.dump(record, f, indent=1)
+        print("%s: free flow %.0f s%s" % (name, record["free_flow_seconds"],
+                                          ", coupled %.0f s" % record["coupled_seconds"] if probe["complete"]
+                                          else ", the front did not reach the station"))
+        done.append(case)
+    return done
+
+
+def collectCase(case):
+    """The result dict of runCase from a case folder that --run-prepared ran."""
+    from mpmsdem import analysis
+    with open(os.path.join(case, "case.json")) as f:
+        meta = json.load(f)
+    with open(os.path.join(case, "run.json")) as f:
+        record = json.load(f)
+    with open(os.path.join(case, "free", "flow_probes.json")) as f:
+        run = json.load(f)
+    out = dict(meta["result"], driver=record)
+    probe = run["probes"][0]
+    out["wall_seconds"] = {"free_flow": record["free_flow_seconds"]}
+    if not probe["complete"]:
+        out.update(reached=False, front=run["front_x"], stopped_at=run["time"])
+        return out
+    h, v = probe["h_f"], probe["v_f"]
+    ff = {"arrival": probe["arrival"], "h_f": h, "v_f": v, "Fr": analysis.froude(v, h),
+          "Fr1": analysis.froudeDistance(v, out["L0"])}
+    s, _ = analysis.driverBlockSeries(os.path.join(case, "coupled"))
+    s = {k: v[1:] for k, v in s.items()}  # the driver's record at t = 0 (runCase's series starts after a step)
+    _coupledResults(out, ff, s, record["coupled_steps"] * meta["dt"])
+    out["wall_seconds"]["coupled"] = record["coupled_seconds"]
     return out
 
 
@@ -166,6 +319,20 @@ def parse(argv):
                     help="results folder: the sweep's store runs.jsonl, or one JSON file per case")
     ap.add_argument("--AR", type=float, default=None, help="one case: aspect ratio (default 1.3)")
     ap.add_argument("--L0-hb", type=float, default=None, help="one case: L0 / h_b (default 4)")
+    ap.add_argument("--margin", type=float, default=None,
+                    help="flume length beyond the cube [m] where the table gives none (default %g)" % MARGIN)
+    ap.add_argument("--prepare", metavar="DIR", default=None,
+                    help="write the driver scenes of the table's cases (or of --AR/--L0-hb) into DIR/CASE")
+    ap.add_argument("--run-prepared", metavar="DIR", default=None,
+                    help="run the prepared cases in DIR through mpmsdem-run (no YADE needed)")
+    ap.add_argument("--collect", metavar="DIR", default=None,
+                    help="results of the cases run in DIR as DIR/CASE.json, for parametric_study_summary.py")
+    ap.add_argument("--exe", default="mpmsdem-run", help="--run-prepared: the driver (default: mpmsdem-run on the PATH)")
+    ap.add_argument("--backend", choices=("cpu", "cuda"), default=None,
+                    help="--run-prepared: the backend (default: the scenes', cpu)")
+    ap.add_argument("--precision", choices=("double", "float"), default=None,
+                    help="--run-prepared: the precision (default: the scenes', double)")
+    ap.add_argument("--rerun", action="store_true", help="--run-prepared: run the cases done before again")
     return ap.parse_known_args(argv)[0]
 
 
@@ -194,15 +361,54 @@ def _describe(r):
                " (at the flume's end)" if r["cube_at_end"] else "", ratio))
 
 
+def prepareMain(a):
+    if a.AR or a.L0_hb:
+        cases = [{"AR": a.AR or 1.3, "L0_hb": a.L0_hb or 4}]
+    else:
+        cases = readTable(a.table)
+    for c in cases:
+        c = dict(c, full=1 if a.full else c.get("full", 0))
+        if a.margin and "margin" not in c:
+            c["margin"] = a.margin
+        folder = prepareCase(folder=os.path.join(a.prepare, caseName(c["AR"], c["L0_hb"], c["full"])), **c)
+        print("prepared %s" % folder)
+    print("next: python3 %s --run-prepared %s [--backend cuda] [--exe PATH/mpmsdem-run]" % (__file__, a.prepare))
+
+
+def collectMain(a):
+    n = 0
+    for name in sorted(os.listdir(a.collect)):
+        case = os.path.join(a.collect, name)
+        if not os.path.isfile(os.path.join(case, "run.json")):
+            continue
+        r = collectCase(case)
+        with open(case + ".json", "w") as f:
+            json.dump(r, f, indent=1)
+        print("%s %s" % (name, _describe(r)))
+        n += 1
+    if not n:
+        sys.exit("--collect %s: no case folder there has been run (run.json); --run-prepared first" % a.collect)
+    print("summary: python3 %s --results %s" % (os.path.join(HERE, "parametric_study_summary.py"), a.collect))
+
+
 def main(argv):
     a = parse(argv)
     if a.sweep:
         return sweepMain(a)
+    if a.prepare:
+        return prepareMain(a)
+    if a.run_prepared:
+        if not runPrepared(a.run_prepared, a.exe, a.backend, a.precision, a.threads, a.rerun):
+            print("--run-prepared %s: nothing to run (no case folder without run.json; --rerun runs them again)"
+                  % a.run_prepared)
+        return
+    if a.collect:
+        return collectMain(a)
     import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
     from yade import utils
     # Table columns beyond AR, L0_hb and full are optional; 0 means runCase's default.
     utils.readParamsFromTable(AR=a.AR or 1.3, L0_hb=a.L0_hb or 4, full=1 if a.full else 0, dx=0, ppc=0, settle=1.5,
-                              margin=1.0, noTableOk=True)
+                              margin=a.margin or MARGIN, noTableOk=True)
     from yade.params import table
     r = runCase(table.AR, table.L0_hb, full=table.full, dx=table.dx or None, ppc=table.ppc or None,
                 settle=table.settle, margin=table.margin, verbose=True)

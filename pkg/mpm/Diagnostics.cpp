@@ -6,8 +6,10 @@
 namespace mpmsdem {
 namespace mpm {
 
-Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& g) {
+Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& g,
+                     const std::vector<FlowProbeSpec>& probes) {
   Diagnostics d;
+  d.probes.assign(probes.size(), ProbeSample{});
   const std::size_t n = particles.size();
   if (n == 0) {
     // no flow has no front, height or centre of mass; its energies and fractions are zero
@@ -18,6 +20,7 @@ Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& g) 
   d.heightZ = -INFINITY;
   double mass = 0, maxV2 = 0;
   std::size_t flowing = 0, gasified = 0;
+  std::vector<double> top(probes.size(), -INFINITY), probeMass(probes.size(), 0.0);
   forEachSlice(particles, [&](std::size_t, const ParticleSet& p) {
     for (std::size_t i = 0; i < p.size(); ++i) {
       const double* v = &p.v[3 * i];
@@ -33,12 +36,48 @@ Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& g) 
     }
     for (std::size_t i = 0; i < p.size(); ++i)
       d.potential -= p.mass[i] * (g[0] * p.x[3 * i] + g[1] * p.x[3 * i + 1] + g[2] * p.x[3 * i + 2]);
+    for (std::size_t k = 0; k < probes.size(); ++k) {
+      ProbeSample& s = d.probes[k];
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        if (std::abs(p.x[3 * i] - probes[k].x) > probes[k].halfWidth) continue;
+        ++s.points;
+        top[k] = std::max(top[k], p.x[3 * i + 2]);
+        probeMass[k] += p.mass[i];
+        s.velocity += p.mass[i] * p.v[3 * i];
+      }
+    }
   });
+  for (std::size_t k = 0; k < probes.size(); ++k) {
+    ProbeSample& s = d.probes[k];
+    if (s.points < probes[k].minPoints) {
+      s.depth = s.velocity = 0;
+      continue;
+    }
+    s.depth = top[k] - probes[k].bedZ;
+    s.velocity /= probeMass[k];
+  }
   for (double& c : d.com) c /= mass;
   d.maxSpeed = std::sqrt(maxV2);
   d.flowing = double(flowing) / n;
   d.gasified = double(gasified) / n;
   return d;
+}
+
+void FlowProbeRecord::add(double t, const ProbeSample& s) {
+  ++records_;
+  const bool here = s.points >= spec_.minPoints;
+  if (!arrival_) {
+    if (!here) return;
+    arrival_ = t;
+  }
+  if (t > *arrival_ + spec_.window) {
+    complete_ = true;
+    return;
+  }
+  if (!here) return;  // a record within the window without the flow: the front thinned out
+  depthSum_ += s.depth;
+  velocitySum_ += s.velocity;
+  ++count_;
 }
 
 }  // namespace mpm

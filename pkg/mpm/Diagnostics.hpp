@@ -4,11 +4,31 @@
 // those of the whole set and no whole host copy is needed.
 #pragma once
 #include <array>
+#include <optional>
+#include <vector>
 
 #include "mpm/MpmTypes.hpp"
 
 namespace mpmsdem {
 namespace mpm {
+
+// A station across a flume where the free flow's depth and velocity are taken (the paper's
+// free-flow tests, §3.2.3 and §5: h_f and v_f at the block's station before the block is there).
+struct FlowProbeSpec {
+  double x = 0;          // station along x [m]
+  double halfWidth = 0;  // the points with |x_p - x| <= halfWidth are the flow at the station [m], > 0
+  double bedZ = 0;       // bed height: depth = highest of those points - bedZ [m]
+  int minPoints = 4;     // with fewer points the front has not arrived, >= 1
+  double window = 0.05;  // h_f and v_f: means of the records within window after the arrival [s], >= 0
+};
+
+// The flow at one probe in one particle state; depth and velocity are 0 while fewer than
+// minPoints points are at the station.
+struct ProbeSample {
+  double depth = 0;     // highest point above the bed [m]
+  double velocity = 0;  // mass-weighted mean velocity along x [m/s]
+  long points = 0;      // points at the station
+};
 
 struct Diagnostics {
   double kineticEnergy = 0;   // sum of m |v|^2 / 2 [J]
@@ -19,9 +39,34 @@ struct Diagnostics {
   double maxSpeed = 0;        // [m/s]
   double flowing = 0;         // fraction of particles in phase 1 (dense, plastic)
   double gasified = 0;        // fraction of particles in phase 2 (stress-free)
+  std::vector<ProbeSample> probes;  // one per probe given to diagnose, in its order
 };
 
-Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& gravity);
+Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& gravity,
+                     const std::vector<FlowProbeSpec>& probes = {});
+
+// A probe's records over a run: the front's arrival (the first record with the flow at the
+// station) and the means of depth and velocity over the records up to `window` after it, as
+// the paper's free-flow tests report h_f and v_f.
+class FlowProbeRecord {
+ public:
+  explicit FlowProbeRecord(const FlowProbeSpec& spec) : spec_(spec) {}
+  void add(double time, const ProbeSample& sample);
+  const FlowProbeSpec& spec() const { return spec_; }
+  std::optional<double> arrival() const { return arrival_; }
+  // The front has arrived and a record later than arrival + window has been added.
+  bool complete() const { return complete_; }
+  double depth() const { return count_ ? depthSum_ / count_ : 0; }        // h_f [m]; 0 before the arrival
+  double velocity() const { return count_ ? velocitySum_ / count_ : 0; }  // v_f [m/s]
+  long records() const { return records_; }
+
+ private:
+  FlowProbeSpec spec_;
+  std::optional<double> arrival_;
+  bool complete_ = false;
+  double depthSum_ = 0, velocitySum_ = 0;
+  long count_ = 0, records_ = 0;
+};
 
 }  // namespace mpm
 }  // namespace mpmsdem

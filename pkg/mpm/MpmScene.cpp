@@ -306,10 +306,39 @@ void parseParticles(const json& root, MpmScene& s, const std::string& baseDir) {
   }
 }
 
+void parseProbes(const json& root, MpmScene& s) {
+  if (!root.contains("flow_probes")) return;
+  const json& list = root.at("flow_probes");
+  if (!list.is_array()) throwParameter("flow_probes", list.dump(), "", "a list of {x, half_width, bed_z, min_points, window}");
+  const double lo = materialRegionLo(s.params)[0], hi = materialRegionHi(s.params)[0];
+  for (std::size_t k = 0; k < list.size(); ++k) {
+    const std::string path = "flow_probes[" + std::to_string(k) + "]";
+    const json& j = list[k];
+    if (!j.is_object()) throwParameter(path, j.dump(), "", "an object {x, half_width, bed_z, min_points, window}");
+    checkKeys(j, path, {"x", "half_width", "bed_z", "min_points", "window"});
+    FlowProbeSpec p;
+    p.x = requireNumber(j, path, "x");
+    checkRange(path + ".x", p.x, "m", lo, false, hi, false);
+    p.halfWidth = optNumber(j, path, "half_width", s.params.dx);
+    checkRange(path + ".half_width", p.halfWidth, "m", 0, true, kInf, true);
+    p.bedZ = optNumber(j, path, "bed_z", 0);
+    if (j.contains("min_points")) {
+      const json& m = j.at("min_points");
+      if (!m.is_number_integer() || m.get<long>() < 1 || m.get<long>() > (1L << 30))
+        throwParameter(path + ".min_points", m.dump(), "", "an integer in [1, 2^30]");
+      p.minPoints = static_cast<int>(m.get<long>());
+    }
+    p.window = optNumber(j, path, "window", p.window);
+    checkRange(path + ".window", p.window, "s", 0, false, kInf, true);
+    s.probes.push_back(p);
+  }
+}
+
 void parseRun(const json& root, RunSettings& r) {
   const json& j = requireObject(root, "", "run");
   checkKeys(j, "run", {"duration", "dt", "dt_factor", "output_every", "series_every", "output_dir", "vtk", "backend",
-                       "precision", "min_step_fraction", "max_block_speed", "progress_every"});
+                       "precision", "min_step_fraction", "max_block_speed", "progress_every", "stop_when_probed",
+                       "stop_when_front_still"});
   r.duration = requireNumber(j, "run", "duration");
   checkRange("run.duration", r.duration, "s", 0, true, kInf, true);
   if (j.contains("dt")) {
@@ -333,6 +362,13 @@ void parseRun(const json& root, RunSettings& r) {
   }
   r.progressEvery = optNumber(j, "run", "progress_every", r.progressEvery);
   checkRange("run.progress_every", r.progressEvery, "s", 0, true, kInf, true);
+  if (j.contains("stop_when_probed")) {
+    const json& b = j.at("stop_when_probed");
+    if (!b.is_boolean()) throwParameter("run.stop_when_probed", b.dump(), "", "true or false");
+    r.stopWhenProbed = b.get<bool>();
+  }
+  r.stopWhenFrontStill = optNumber(j, "run", "stop_when_front_still", r.stopWhenFrontStill);
+  checkRange("run.stop_when_front_still", r.stopWhenFrontStill, "s", 0, false, kInf, true);
   r.outputEvery = optNumber(j, "run", "output_every", r.duration / 20);
   checkRange("run.output_every", r.outputEvery, "s", 0, true, kInf, true);
   r.seriesEvery = optNumber(j, "run", "series_every", r.outputEvery / 10);
@@ -375,7 +411,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
   // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
   checkKeys(root, "", {"description", "grid", "gravity", "flip_viscosity", "flip_alpha", "flip_reference_dt", "cfl", "keep_last_good_state", "walls", "gate", "material", "particles",
-                       "run", "blocks", "block_materials"});
+                       "flow_probes", "run", "blocks", "block_materials"});
   if (root.contains("description") && !root.at("description").is_string())
     throwParameter("description", root.at("description").dump(), "", "a string");
   MpmScene s;
@@ -393,7 +429,10 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   parseGate(root, s.params);
   parseMaterial(root, s.params);
   parseParticles(root, s, baseDir);
+  parseProbes(root, s);
   parseRun(root, s.run);
+  if (s.run.stopWhenProbed && s.probes.empty())
+    throwParameter("run.stop_when_probed", "true", "", "false in a scene without flow_probes (nothing to wait for)");
   if (s.run.maxBlockSpeed == 0) s.run.maxBlockSpeed = 10 * pWaveSpeed(s.params.material);
   s.sourceJson = root.dump();
   return s;

@@ -75,6 +75,18 @@
 //                                   entry's box or mesh bounding box (a refusal by bounding
 //                                   boxes: simple, and it never lets two entries put material
 //                                   in the same place, whatever their ppc).
+//   "flow_probes": [                stations where the flow's depth and velocity are recorded
+//                                   (the paper's free-flow tests, §3.2.3 and §5: h_f and v_f at
+//                                   a block's station, run without the block); absent: none
+//     {"x": 0.51,                   (req) station along x [m], inside the material region
+//      "half_width": dx,            the points with |x_p - x| <= half_width are the flow at the
+//                                   station [m], > 0
+//      "bed_z": 0,                  bed height [m]: depth = highest of those points - bed_z
+//      "min_points": 4,             with fewer points the front has not arrived, integer >= 1
+//      "window": 0.05}              h_f, v_f: means over the records within window [s] >= 0
+//   ],                              after the arrival (mpm::FlowProbeRecord). Recorded every
+//                                   run.series_every; the driver writes the results to
+//                                   flow_probes.json
 //   "blocks": [...], "block_materials": {...}   rigid blocks coupled with the flow: see
 //                                   pkg/coupling/CoupledScene.hpp (a scene without them is MPM only)
 //   "run": {                        (req)
@@ -93,6 +105,11 @@
 //                                   radius) exceeds it at load is refused, naming it. Default ten
 //                                   times the flow's P-wave speed c_p = sqrt((K + 4G/3)/rho_0),
 //                                   far beyond any speed the scene's waves or flows reach
+//     "stop_when_probed": false,    true: end the run at the first series record after every
+//                                   flow probe's arrival + window (its result is complete)
+//     "stop_when_front_still": 0,   [s] >= 0: end the run when the front (the largest particle x)
+//                                   has not advanced by dx/2 for this long at the series records
+//                                   (a flow that stopped); 0: never
 //     "progress_every": 10,         [s] of wall time, > 0: a progress line at least this often
 //                                   (and every 5 % of the run), with the step and what limits it
 //     "output_every": duration/20,  snapshot interval [s], > 0 (HDF5 snapshot + VTK file)
@@ -119,6 +136,7 @@
 #include <vector>
 
 #include "common/Types.hpp"
+#include "mpm/Diagnostics.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "mpm/MpmTypes.hpp"
 #include "mpm/Seeding.hpp"
@@ -147,6 +165,8 @@ struct RunSettings {
   double minStepFraction = 1e-4;  // auto step floor, a fraction of the CFL step, in [0, 1)
   double maxBlockSpeed = 0;       // [m/s] > 0; 0: 10 x the flow's P-wave speed (set by parseScene)
   double progressEvery = 10;      // wall-time interval of progress lines [s], > 0
+  bool stopWhenProbed = false;    // end once every flow probe's result is complete
+  double stopWhenFrontStill = 0;  // end when the front has been still this long [s]; 0: never
   double outputEvery = 0;         // snapshot interval [s], > 0
   double seriesEvery = 0;         // time-series record interval [s], > 0
   std::string outputDir = "out";  // output folder
@@ -159,6 +179,7 @@ struct MpmScene {
   MpmParams params;
   std::vector<ParticleBox> boxes;  // the "particles" entries, boxes and meshes, in order
   RunSettings run;
+  std::vector<FlowProbeSpec> probes;  // "flow_probes", in order
   std::string sourceJson;  // the scene as parsed (compact JSON), kept for output metadata
 };
 

@@ -249,6 +249,54 @@ class FlowProbe:
         return out
 
 
+def smoothedPeak(t, f, smooth=None):
+    """Largest value of the series f(t) and its time: (peak, t_peak). With ``smooth`` [s] the
+    series is first averaged over that window (a centred running mean over round(smooth/Δt)
+    samples, Δt the median sample interval): contact forces of single points are spiky."""
+    import numpy as np
+    t, f = np.asarray(t, dtype=float), np.asarray(f, dtype=float)
+    if smooth:
+        w = max(1, int(round(smooth / np.median(np.diff(t)))))
+        f = np.convolve(f, np.ones(w) / w, mode="same")
+    j = int(np.argmax(f))
+    return float(f[j]), float(t[j])
+
+
+def driverBlockSeries(folder, block=None):
+    """A block's series from the coupled.h5 that ``mpmsdem-run`` wrote in ``folder``, with the
+    keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, Ft, Ff, Fe
+    (downstream flow force: total, on faces, on edges) [N], rotation (the whole angle turned
+    since the start), tilt and yaw [deg]. ``block``: its index in the file (default: the first
+    block that moves; a flume's bed is fixed). Returns (series, scene dict). Needs h5py only,
+    not YADE: runs made on another machine are read here."""
+    import json
+    import os
+    import h5py
+    import numpy as np
+    path = os.path.join(folder, "coupled.h5")
+    if not os.path.exists(path):
+        raise ValueError("%s: no coupled.h5 there (the output folder of a coupled mpmsdem-run)" % folder)
+    with h5py.File(path, "r") as f:
+        g = f["series"]
+        t = g["time"][:]
+        pos, vel = g["pos"][:], g["vel"][:]
+        if block is None:
+            moving = [k for k in range(pos.shape[1] // 3) if np.ptp(pos[:, 3 * k:3 * k + 3], axis=0).max() > 0]
+            if not moving:
+                raise ValueError("%s: no block moved in coupled.h5" % folder)
+            block = moving[0]
+        if not 0 <= block < pos.shape[1] // 3:
+            raise ValueError("block = %r: must be in [0, %d) (the blocks of %s)" % (block, pos.shape[1] // 3, path))
+        c = slice(3 * block, 3 * block + 3)
+        s = {"t": t, "travel": pos[:, c][:, 0] - pos[0, c][0], "vx": vel[:, c][:, 0],
+             "Ft": g["flow_force"][:, c][:, 0], "Ff": g["face_force"][:, c][:, 0], "Fe": g["edge_force"][:, c][:, 0],
+             "rotation": np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))}
+        turns = np.array([tiltAndYaw(np.linalg.norm(r), r) for r in g["rotation"][:, c]]).reshape(-1, 2)
+        s["tilt"], s["yaw"] = turns[:, 0], turns[:, 1]
+        scene = json.loads(f.attrs["parameters"])
+    return s, scene
+
+
 def checkAgainstReference(values, path, tolerances, regenerate=False, stored=None):
     """Regression check of a scene's numbers against a stored reference (JSON), the way the
     project's checks and a user's regression scripts use it.

@@ -23,10 +23,12 @@ import shutil
 from yade import O
 
 RUN_KEYS = {"outputEvery": "output_every", "seriesEvery": "series_every", "outputDir": "output_dir",
-            "vtk": "vtk", "backend": "backend", "precision": "precision", "dtFactor": "dt_factor"}
+            "vtk": "vtk", "backend": "backend", "precision": "precision", "dtFactor": "dt_factor",
+            "stopWhenProbed": "stop_when_probed", "stopWhenFrontStill": "stop_when_front_still"}
+PROBE_KEYS = {"x": "x", "halfWidth": "half_width", "bedZ": "bed_z", "minPoints": "min_points", "window": "window"}
 
 
-def sceneDict(coupled, duration, dt="auto", **run):
+def sceneDict(coupled, duration, dt="auto", flowProbes=(), **run):
     """The driver scene of ``coupled`` as a dict (see :func:`writeScene`)."""
     from .coupling import CoupledEngine
     if not isinstance(coupled, CoupledEngine):
@@ -50,6 +52,14 @@ def sceneDict(coupled, duration, dt="auto", **run):
         if k in backend and k not in settings:
             settings[k] = backend[k]
     scene["run"] = settings
+    probes = []
+    for k, p in enumerate(flowProbes):
+        if not isinstance(p, dict) or "x" not in p or set(p) - set(PROBE_KEYS):
+            raise ValueError("flowProbes[%d] = %r: must be a dict with x and optionally %s"
+                             % (k, p, ", ".join(sorted(set(PROBE_KEYS) - {"x"}))))
+        probes.append({PROBE_KEYS[key]: v for key, v in p.items()})
+    if probes:
+        scene["flow_probes"] = probes
     sdem = coupled.sdem
     materials, names = {}, {}
     for mat, k in sdem._materials:
@@ -87,17 +97,22 @@ def sceneDict(coupled, duration, dt="auto", **run):
     return scene
 
 
-def writeScene(path, coupled, duration, dt="auto", **run):
+def writeScene(path, coupled, duration, dt="auto", flowProbes=(), **run):
     """Write the coupled scene of ``coupled`` (an :class:`mpmsdem.CoupledEngine` before its
     first step) as a JSON scene for ``mpmsdem-run``.
 
     :param duration: simulated time [s], > 0.
     :param dt: fixed step [s] (e.g. ``O.dt``, to compare with the YADE run) or ``"auto"``.
+    :param flowProbes: stations where the driver records the flow's depth and velocity (the
+        free-flow tests of the paper's §3.2.3 and §5), dicts with ``x`` [m] and optionally
+        ``halfWidth`` [m], ``bedZ`` [m], ``minPoints``, ``window`` [s] (the scene's
+        ``flow_probes``: pkg/mpm/MpmScene.hpp); results in the output's flow_probes.json.
     :param run: other run settings of the scene (``outputEvery``, ``seriesEvery`` [s],
-        ``outputDir``, ``vtk``, ``backend``, ``precision``, ``dtFactor``).
+        ``outputDir``, ``vtk``, ``backend``, ``precision``, ``dtFactor``, ``stopWhenProbed``,
+        ``stopWhenFrontStill`` [s]).
     :returns: the path written.
     """
-    scene = sceneDict(coupled, duration, dt, **run)
+    scene = sceneDict(coupled, duration, dt, flowProbes, **run)
     with open(path, "w") as f:
         json.dump(scene, f, allow_nan=False)
     return path

@@ -220,13 +220,6 @@ class Flume:
 
     def peakForce(self, k, smooth=None):
         """Peak downstream flow force on block k [N] and its time [s]; with ``smooth`` [s] the
-        series is first averaged over that window (contact forces of single points are spiky)."""
-        import numpy as np
+        series is first averaged over that window (:func:`mpmsdem.analysis.smoothedPeak`)."""
         s = self.series(k)
-        f = s["Ft"]
-        if smooth:
-            dt = np.median(np.diff(s["t"]))
-            w = max(1, int(round(smooth / dt)))
-            f = np.convolve(f, np.ones(w) / w, mode="same")
-        j = int(np.argmax(f))
-        return float(f[j]), float(s["t"][j])
+        return analysis.smoothedPeak(s["t"], s["Ft"], smooth)

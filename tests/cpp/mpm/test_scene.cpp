@@ -304,3 +304,53 @@ TEST(MpmScene, BadValueRanges) {
   EXPECT_THROW(parseScene("[1, 2]"), ParameterError);
   EXPECT_THROW(loadScene("/nonexistent/scene.json"), ParameterError);
 }
+
+TEST(MpmScene, FlowProbesAndStopRules) {
+  json j = goodScene();
+  j["flow_probes"] = json::parse(R"([{"x": 0.3}, {"x": 0.1, "half_width": 0.02, "bed_z": 0.02, "min_points": 1,
+                                      "window": 0}])");
+  j["run"]["stop_when_probed"] = true;
+  j["run"]["stop_when_front_still"] = 0.3;
+  const MpmScene s = parseScene(j.dump());
+  ASSERT_EQ(s.probes.size(), 2u);
+  EXPECT_EQ(s.probes[0].x, 0.3);
+  EXPECT_EQ(s.probes[0].halfWidth, 0.01);  // default: one cell
+  EXPECT_EQ(s.probes[0].bedZ, 0.0);
+  EXPECT_EQ(s.probes[0].minPoints, 4);
+  EXPECT_EQ(s.probes[0].window, 0.05);
+  EXPECT_EQ(s.probes[1].halfWidth, 0.02);
+  EXPECT_EQ(s.probes[1].bedZ, 0.02);
+  EXPECT_EQ(s.probes[1].minPoints, 1);
+  EXPECT_EQ(s.probes[1].window, 0.0);
+  EXPECT_TRUE(s.run.stopWhenProbed);
+  EXPECT_EQ(s.run.stopWhenFrontStill, 0.3);
+  const MpmScene plain = parseScene(goodScene().dump());
+  EXPECT_TRUE(plain.probes.empty());
+  EXPECT_FALSE(plain.run.stopWhenProbed);
+  EXPECT_EQ(plain.run.stopWhenFrontStill, 0.0);
+
+  const std::vector<std::pair<std::string, json>> bad = {
+      {"/flow_probes/0/x", 0.39},           // beyond the material region [0.02, 0.38]
+      {"/flow_probes/0/half_width", 0},     {"/flow_probes/0/min_points", 0},
+      {"/flow_probes/0/min_points", 2.5},   {"/flow_probes/0/window", -0.01},
+      {"/run/stop_when_front_still", -1},   {"/run/stop_when_probed", 1}};
+  for (const auto& [ptr, value] : bad) {
+    json b = j;
+    b[json::json_pointer(ptr)] = value;
+    std::string name = ptr.substr(1);
+    std::size_t pos;
+    while ((pos = name.find('/')) != std::string::npos) name.replace(pos, 1, ".");
+    name = std::regex_replace(name, std::regex("\\.([0-9]+)"), "[$1]");
+    SCOPED_TRACE(ptr);
+    expectError(b, {name.c_str(), "must be"});
+  }
+  json noX = j;
+  noX["flow_probes"][0].erase("x");
+  expectError(noX, {"flow_probes[0]", "x"});
+  json unknown = j;
+  unknown["flow_probes"][0]["depth"] = 1;
+  expectError(unknown, {"depth"});
+  json nothing = goodScene();
+  nothing["run"]["stop_when_probed"] = true;
+  expectError(nothing, {"run.stop_when_probed", "flow_probes"});
+}

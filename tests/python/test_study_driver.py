@@ -1,0 +1,97 @@
+"""The §5 study through the plain C++ driver (examples/parametric_study.py --prepare,
+--run-prepared, --collect): a case's free flow, read by the driver's flow probe, and its
+coupled run give runCase's results in YADE to round-off; a flow that never reaches the
+station is reported as such by both; the driver's probe and stop rules are refused or
+recorded as documented."""
+import importlib.util
+import json
+import os
+import subprocess
+
+import pytest
+
+from mpmsdem import driver
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+pytest.importorskip("h5py")
+
+
+def study():
+    spec = importlib.util.spec_from_file_location("parametric_study", os.path.join(ROOT, "examples",
+                                                                                    "parametric_study.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+# A coarse case (dx 0.05 m: 1,536 points, the cube one cell): what is compared is the path, not
+# the physics, so the same numbers must come out of both.
+CASE = dict(AR=1.3, L0_hb=4, dx=0.05, settle=0.3, margin=1.0)
+
+
+def test_a_case_through_the_driver_gives_the_yade_case(tmp_path):
+    ps = study()
+    ref = ps.runCase(**CASE)
+    folder = ps.prepareCase(folder=str(tmp_path / "AR=1.3_L0hb=4"), **CASE)
+    assert ps.runPrepared(str(tmp_path), exe=driver.executable()) == [folder]
+    assert ps.runPrepared(str(tmp_path), exe=driver.executable()) == []  # done: run.json
+    got = ps.collectCase(folder)
+    assert ref["reached"] and got["reached"]
+    for k in ("arrival", "h_f", "v_f", "Fr", "Fr1"):
+        assert got["free_flow"][k] == pytest.approx(ref["free_flow"][k], rel=1e-12, abs=1e-15), k
+    for k in ("travel", "peak_force", "static_force", "rotation_deg", "eq20_force", "static_force_model"):
+        assert got[k] == pytest.approx(ref[k], rel=1e-9, abs=1e-12), k
+    for k in ("peak_time", "duration", "particles", "cube_at_end", "submersion", "flume_length", "flip_blend"):
+        assert got[k] == ref[k], k
+    # the front arrives at the station (x 0.5 m) in 0.2 s and the cube is pushed downstream
+    assert 0.1 < ref["free_flow"]["arrival"] < 0.3
+    assert 0.05 < ref["travel"] < 1.0
+    # the run is sized from the free flow's arrival, rounded up to whole 2 ms records
+    steps = json.load(open(os.path.join(folder, "run.json")))["coupled_steps"]
+    dt = json.load(open(os.path.join(folder, "case.json")))["dt"]
+    every = round(0.002 / dt)
+    assert steps % every == 0 and -dt / 2 <= steps * dt - (ref["free_flow"]["arrival"] + CASE["settle"]) < every * dt
+
+
+def test_a_flow_that_stops_short_of_the_station_has_no_coupled_run(tmp_path):
+    ps = study()
+    kw = dict(CASE, maxFreeTime=0.1)  # stopped before the front reaches x 0.5 m
+    ref = ps.runCase(**kw)
+    folder = ps.prepareCase(folder=str(tmp_path / "short"), **kw)
+    ps.runPrepared(str(tmp_path), exe=driver.executable())
+    got = ps.collectCase(folder)
+    assert not ref["reached"] and not got["reached"]
+    assert not os.path.exists(os.path.join(folder, "coupled"))
+    assert got["front"] == pytest.approx(ref["front"], abs=CASE["dx"])
+    probes = json.load(open(os.path.join(folder, "free", "flow_probes.json")))
+    assert probes["stopped"] == "duration" and probes["probes"][0]["arrival"] is None
+
+
+def test_stop_rules_and_a_restart_of_a_probed_run(tmp_path):
+    ps = study()
+    folder = ps.prepareCase(folder=str(tmp_path / "case"), **CASE)
+    exe = driver.executable()
+    scene = json.load(open(os.path.join(folder, "free.json")))
+    # the flow piles up at the flume's end wall (x 1.6 m): the front-still rule ends the run
+    # long before run.duration, with the probe near the wall read and complete
+    scene["flow_probes"] = [{"x": 1.5}]
+    scene["run"]["duration"] = 20.0
+    scene["run"]["stop_when_probed"] = False
+    path = str(tmp_path / "still.json")
+    json.dump(scene, open(path, "w"))
+    r = subprocess.run([exe, path, "--out", str(tmp_path / "still")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    res = json.load(open(tmp_path / "still" / "flow_probes.json"))
+    assert res["stopped"] == "front_still"
+    assert 0.3 < res["time"] - res["front_still_since"] < 0.3 + 0.006
+    assert res["time"] < 3.0 and res["front_x"] < 1.6
+    assert res["probes"][0]["complete"] and res["probes"][0]["arrival"] < res["front_still_since"]
+    # a restart of a probed run is refused by name (its records are not in a restart point)
+    r = subprocess.run([exe, path, "--out", str(tmp_path / "still"), "--restart"], capture_output=True, text=True)
+    assert r.returncode == 2 and "flow_probes" in r.stderr, r.stderr
+    # stop_when_probed without probes is a parameter error naming the key
+    del scene["flow_probes"]
+    scene["run"]["stop_when_probed"] = True
+    json.dump(scene, open(path, "w"))
+    r = subprocess.run([exe, path, "--out", str(tmp_path / "bad")], capture_output=True, text=True)
+    assert r.returncode == 2 and "run.stop_when_probed" in r.stderr, r.stderr
