@@ -39,7 +39,8 @@ struct Diagnostics {
   double maxSpeed = 0;        // [m/s]
   double flowing = 0;         // fraction of particles in phase 1 (dense, plastic)
   double gasified = 0;        // fraction of particles in phase 2 (stress-free)
-  std::vector<ProbeSample> probes;  // one per probe given to diagnose, in its order
+  // the flow at each probe given to diagnose, in its order
+  std::vector<ProbeSample> probes;
 };
 
 Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& gravity,

@@ -9,6 +9,11 @@
 #                                                      # built elsewhere (-DMPMSDEM_DRIVER_ONLY=ON
 #                                                      # -DMPMSDEM_NATIVE=OFF, sm_90); builds if
 #                                                      # they do not start here
+#   ... --study DIR                                    # the §5 cases prepared in DIR
+#                                                      # (examples/parametric_study.py --prepare)
+#                                                      # through the CUDA driver; needs a driver
+#                                                      # with HDF5 (scripts/bench/gpu_bundle.sh);
+#                                                      # results in $OUT/study.tgz, for --collect
 #   ... --baseline DIR                                 # an older mpmsdem-run in DIR: the MPM
 #                                                      # benchmark and the flume's first 4,000
 #                                                      # steps run with it too (new/old speed)
@@ -29,6 +34,7 @@
 # the MPM kernels when ncu is found, and an Nsight Systems summary of the flume when nsys is.
 # Every run is --bench (HDF5 may be missing there): its JSON
 # line holds the time, the stage split and each moving block's travel and peak flow force.
+# Binaries from scripts/bench/gpu_bundle.sh bring the shared libraries they need in DIR/lib.
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 out=${OUT:-gpu-out}
@@ -36,10 +42,12 @@ budget=${GPU_RUN_BUDGET:-100000}
 only=${GPU_RUN_STAGES:-.}
 prebuilt=""
 baseline=""
+study=""
 while [ $# -gt 0 ]; do
   case $1 in
     --prebuilt) prebuilt=${2:?"--prebuilt needs a folder"}; shift 2 ;;
     --baseline) baseline=${2:?"--baseline needs a folder"}; shift 2 ;;
+    --study) study=${2:?"--study needs a folder of prepared cases"}; shift 2 ;;
     *) echo "gpu_run.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -54,6 +62,10 @@ grep -m1 'model name' /proc/cpuinfo | tee -a "$out/gpu.txt"
 echo "cores: $(nproc); commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)" | tee -a "$out/gpu.txt"
 
 bin=build-gpu
+# a bundle's own libraries (HDF5 and what it needs), before any of its binaries is started
+for d in "$prebuilt" "$baseline"; do
+  [ -n "$d" ] && [ -d "$d/lib" ] && export LD_LIBRARY_PATH="$(cd "$d/lib" && pwd)${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+done
 if [ -n "$prebuilt" ] && "$prebuilt/mpmsdem-run" --help > /dev/null 2>&1; then
   bin=$prebuilt
   echo "binaries: $prebuilt (built elsewhere)" | tee -a "$out/gpu.txt"
@@ -85,6 +97,19 @@ for t in test_mpm test_coupling; do
   stage "$t" 240 bash -c "'$bin/$t' --gtest_output=xml:'$out/$t.xml' > '$out/$t.log' 2>&1; rc=\$?; \
     grep -E '^\[  (FAILED|PASSED|SKIPPED) +\] ([0-9]+ tests?|[^ ]+$)' '$out/$t.log'; grep -B30 '^\[  FAILED  \]' '$out/$t.log' | head -150; exit \$rc"
 done
+
+# the §5 cases through the CUDA driver (a case with its run.json is done: a second call goes on)
+study_run() {
+  python3 examples/parametric_study.py --run-prepared "$study" --backend cuda --exe "$bin/mpmsdem-run" \
+    --threads "$(nproc)" 2>&1 | tee "$out/study.log"
+  local rc=${PIPESTATUS[0]}
+  tar czf "$out/study.tgz" --exclude=mpm.snapshots --exclude='*.restart' -C "$(dirname "$study")" \
+    "$(basename "$study")"
+  return "$rc"
+}
+export -f study_run
+export study
+[ -n "$study" ] && stage study 420 study_run
 
 # flume_run NAME SCENE BACKEND PRECISION [ARGS...]: one --bench run, its JSON line in $out/NAME.json
 # (FLUME_EXE: another mpmsdem-run)

@@ -39,18 +39,6 @@ void uploadByNumber(T* dst, const std::vector<double>& src, const std::vector<in
   for (std::size_t q = 0; q < n; ++q) buf[q] = static_cast<T>(src[stride * static_cast<std::size_t>(id[q]) + offset]);
   if (n) CUDA_CHECK(cudaMemcpy(dst, buf.data(), n * sizeof(T), cudaMemcpyHostToDevice));
 }
-// Device T array by slot -> the particles numbered [first, first + count) of a host double array.
-template <typename T, typename U = double>
-void downloadByNumber(std::vector<U>& dst, const T* src, const std::vector<int>& id, std::size_t first,
-                      std::size_t count, int stride, int offset, std::vector<T>& buf) {
-  const std::size_t n = id.size();
-  buf.resize(n);
-  if (n) CUDA_CHECK(cudaMemcpy(buf.data(), src, n * sizeof(T), cudaMemcpyDeviceToHost));
-  for (std::size_t q = 0; q < n; ++q) {
-    const std::size_t k = static_cast<std::size_t>(id[q]) - first;  // wraps for numbers below first
-    if (k < count) dst[stride * k + offset] = static_cast<U>(buf[q]);
-  }
-}
 }  // namespace
 
 template <typename T>
@@ -156,6 +144,7 @@ void MpmCuda<T>::loadParticles(const ParticleSet& ps) {
     deviceAlloc(&sortScratch_, sortScratchBytes_, bytes_);
   }
   cur_ = 0;
+  slotOfValid_ = false;
   DeviceState& s = state_[0];
   std::vector<int> id(n);  // a new set: slot = number
   for (std::size_t p = 0; p < n; ++p) id[p] = static_cast<int>(p);
@@ -196,6 +185,31 @@ void MpmCuda<T>::getParticles(ParticleSet& out) {
 }
 
 template <typename T>
+const int* MpmCuda<T>::slotsByNumber() {
+  // slots_ serve the sort within a step only; between steps slots_[0] holds this map
+  if (!slotOfValid_) {
+    cudak::slotOfKernel<<<blocksFor(n_), kThreads>>>(static_cast<int>(n_), state_[cur_].id, slots_[0]);
+    CUDA_CHECK(cudaGetLastError());
+    slotOfValid_ = true;
+  }
+  return slots_[0];
+}
+
+template <typename T>
+template <typename U, typename H>
+void MpmCuda<T>::gatherByNumber(const U* src, std::size_t first, std::size_t count, std::vector<H>& dst, int stride,
+                                int offset) {
+  // keys_[0] (n 8-byte keys, free between steps) receives the gathered values
+  U* gathered = reinterpret_cast<U*>(keys_[0]);
+  cudak::gatherByNumberKernel<U><<<blocksFor(count), kThreads>>>(static_cast<int>(count), static_cast<int>(first),
+                                                                 slotsByNumber(), src, gathered);
+  CUDA_CHECK(cudaGetLastError());
+  std::vector<U> buf(count);
+  CUDA_CHECK(cudaMemcpy(buf.data(), gathered, count * sizeof(U), cudaMemcpyDeviceToHost));
+  for (std::size_t k = 0; k < count; ++k) dst[stride * k + offset] = static_cast<H>(buf[k]);
+}
+
+template <typename T>
 void MpmCuda<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t count) {
   validateSliceRange("particle slice", first, count, n_);
   const DeviceState& s = state_[cur_];
@@ -209,20 +223,17 @@ void MpmCuda<T>::getParticles(ParticleSet& out, std::size_t first, std::size_t c
   out.phase.assign(count, 0);
   out.fext.assign(3 * count, 0.0);
   if (count == 0) return;
-  const std::vector<int> id = numbers();
-  std::vector<T> buf;
   for (int d = 0; d < 3; ++d) {
-    downloadByNumber(out.x, s.x[d], id, first, count, 3, d, buf);
-    downloadByNumber(out.v, s.v[d], id, first, count, 3, d, buf);
-    if (hasFext_) downloadByNumber(out.fext, fext_[d], id, first, count, 3, d, buf);
+    gatherByNumber(s.x[d], first, count, out.x, 3, d);
+    gatherByNumber(s.v[d], first, count, out.v, 3, d);
+    if (hasFext_) gatherByNumber(fext_[d], first, count, out.fext, 3, d);
   }
-  for (int k = 0; k < 6; ++k) downloadByNumber(out.stress, s.s[k], id, first, count, 6, k, buf);
-  downloadByNumber(out.J, s.J, id, first, count, 1, 0, buf);
-  downloadByNumber(out.gammaDotP, s.gdp, id, first, count, 1, 0, buf);
-  downloadByNumber(out.mass, s.mass, id, first, count, 1, 0, buf);
-  downloadByNumber(out.volume0, s.vol0, id, first, count, 1, 0, buf);
-  std::vector<std::uint8_t> phase;
-  downloadByNumber(out.phase, s.phase, id, first, count, 1, 0, phase);
+  for (int k = 0; k < 6; ++k) gatherByNumber(s.s[k], first, count, out.stress, 6, k);
+  gatherByNumber(s.J, first, count, out.J, 1, 0);
+  gatherByNumber(s.gdp, first, count, out.gammaDotP, 1, 0);
+  gatherByNumber(s.mass, first, count, out.mass, 1, 0);
+  gatherByNumber(s.vol0, first, count, out.volume0, 1, 0);
+  gatherByNumber(s.phase, first, count, out.phase, 1, 0);
 }
 
 template <typename T>
@@ -331,6 +342,7 @@ ParticleOut<T> MpmCuda<T>::output() const {
 
 template <typename T>
 void MpmCuda<T>::sortParticles() {
+  slotOfValid_ = false;  // the sort takes slots_ back
   const int n = static_cast<int>(n_);
   const ParticleIn<T> in = input();
   const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};

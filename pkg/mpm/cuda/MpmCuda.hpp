@@ -73,6 +73,11 @@ class MpmCuda : public MpmSolver {
   ParticleIn<T> input() const;
   ParticleOut<T> output() const;
   std::vector<int> numbers() const;  // id of the current state, on the host
+  // slot of each particle number on the device (built in the sort's free buffer between steps)
+  const int* slotsByNumber();
+  // count values of src for the particles numbered [first, first + count), into host dst
+  template <typename U, typename H>
+  void gatherByNumber(const U* src, std::size_t first, std::size_t count, std::vector<H>& dst, int stride, int offset);
   void sortParticles();              // sorted_, cellStart_/End_ for this step
 
   MpmParams params_;
@@ -97,6 +102,7 @@ class MpmCuda : public MpmSolver {
   unsigned long long* keys_[2] = {};
   int* slots_[2] = {};
   const int* sorted_ = nullptr;  // slot of each sorted place, this step
+  bool slotOfValid_ = false;      // slots_[0] holds slotsByNumber() of the current state
   unsigned char* sortScratch_ = nullptr;
   std::size_t sortScratchBytes_ = 0;
   // Stage timing (setStageTiming): events before the sort and after each stage, and the sums.

@@ -182,6 +182,21 @@ __global__ void g2pKernel(int n, ParticleIn<T> in, ParticleOut<T> out, MovedWith
   if ((threadIdx.x & 31u) == 0u && warpMax > 0u) atomicMax(maxSpeedBits, warpMax);
 }
 
+// Outputs read the particles by number while they are stored by block: slotOf[number] is the
+// slot of each particle, and a slice [first, first + count) is gathered through it on the device,
+// so that a slice costs its own size to bring to the host.
+__global__ inline void slotOfKernel(int n, const int* __restrict__ id, int* __restrict__ slotOf) {
+  const int q = blockIdx.x * blockDim.x + threadIdx.x;
+  if (q < n) slotOf[id[q]] = q;
+}
+
+template <typename U>
+__global__ void gatherByNumberKernel(int count, int first, const int* __restrict__ slotOf, const U* __restrict__ src,
+                                     U* __restrict__ dst) {
+  const int k = blockIdx.x * blockDim.x + threadIdx.x;
+  if (k < count) dst[k] = src[slotOf[first + k]];
+}
+
 }  // namespace cudak
 }  // namespace mpm
 }  // namespace mpmsdem

@@ -31,8 +31,8 @@ ParticleSet points(const std::vector<std::array<double, 4>>& rows) {
 
 TEST(FlowProbe, ReadsTheHighestPointAndTheMassWeightedVelocityAtTheStation) {
   // Two points within 0.1 m of x = 1 (one exactly on the edge), two outside it.
-  const ParticleSet p = points({{0.9, 0.30, 1.0, 2.0}, {1.05, 0.50, 3.0, 4.0}, {1.2, 9.0, 5.0, 7.0},
-                                {0.7, 8.0, 1.0, 1.0}});
+  const ParticleSet p =
+      points({{0.9, 0.30, 1.0, 2.0}, {1.05, 0.50, 3.0, 4.0}, {1.2, 9.0, 5.0, 7.0}, {0.7, 8.0, 1.0, 1.0}});
   WholeParticleSet all(p);
   FlowProbeSpec near{1.0, 0.1, 0.1, 2, 0.05}, strict = near, empty = near;
   strict.minPoints = 3;
@@ -61,10 +61,10 @@ TEST(FlowProbe, RecordGivesTheArrivalAndTheMeansOverTheWindow) {
   EXPECT_FALSE(r.arrival());
   r.add(0.20, at(0.04, 1.0, 5));
   r.add(0.23, at(0.06, 2.0, 9));
-  r.add(0.24, at(0, 0, 2));        // the front thinned out within the window: not averaged
-  r.add(0.25, at(0.05, 3.0, 9));   // exactly arrival + window: averaged
+  r.add(0.24, at(0, 0, 2));       // the front thinned out within the window: not averaged
+  r.add(0.25, at(0.05, 3.0, 9));  // exactly arrival + window: averaged
   EXPECT_FALSE(r.complete());
-  r.add(0.2500001, at(9, 9, 9));   // past the window: complete, not averaged
+  r.add(0.2500001, at(9, 9, 9));  // past the window: complete, not averaged
   EXPECT_TRUE(r.complete());
   r.add(0.30, at(9, 9, 9));
   ASSERT_TRUE(r.arrival());
