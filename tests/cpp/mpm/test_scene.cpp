@@ -48,6 +48,15 @@ void expectError(const json& scene, std::initializer_list<const char*> needles) 
   }
 }
 
+// A JSON pointer as the messages name the key: "/material/poisson_ratio" -> "material.poisson_ratio",
+// "/grid/cells/1" -> "grid.cells[1]".
+std::string keyName(const std::string& ptr) {
+  std::string name = ptr.substr(1);
+  std::size_t pos;
+  while ((pos = name.find('/')) != std::string::npos) name.replace(pos, 1, ".");
+  return std::regex_replace(name, std::regex("\\.([0-9]+)"), "[$1]");
+}
+
 }  // namespace
 
 TEST(MpmScene, GoodSceneGivesParameters) {
@@ -291,13 +300,8 @@ TEST(MpmScene, BadValueRanges) {
   for (const auto& [ptr, value] : cases) {
     json j = goodScene();
     j[json::json_pointer(ptr)] = value;
-    // Name as in the messages: "/material/poisson_ratio" -> "material.poisson_ratio", "/grid/cells/1" -> "grid.cells[1]".
-    std::string name = ptr.substr(1);
-    std::size_t pos;
-    while ((pos = name.find('/')) != std::string::npos) name.replace(pos, 1, ".");
-    name = std::regex_replace(name, std::regex("\\.([0-9]+)"), "[$1]");
     SCOPED_TRACE(ptr);
-    expectError(j, {name.c_str(), "must be"});
+    expectError(j, {keyName(ptr).c_str(), "must be"});
   }
   // Not JSON, not an object, missing file.
   EXPECT_THROW(parseScene("{\"grid\": "), ParameterError);
@@ -337,12 +341,8 @@ TEST(MpmScene, FlowProbesAndStopRules) {
   for (const auto& [ptr, value] : bad) {
     json b = j;
     b[json::json_pointer(ptr)] = value;
-    std::string name = ptr.substr(1);
-    std::size_t pos;
-    while ((pos = name.find('/')) != std::string::npos) name.replace(pos, 1, ".");
-    name = std::regex_replace(name, std::regex("\\.([0-9]+)"), "[$1]");
     SCOPED_TRACE(ptr);
-    expectError(b, {name.c_str(), "must be"});
+    expectError(b, {keyName(ptr).c_str(), "must be"});
   }
   json noX = j;
   noX["flow_probes"][0].erase("x");
