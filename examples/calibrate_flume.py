@@ -58,11 +58,34 @@ def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFrictio
         |yaw|) [deg] (mpmsdem.analysis.tiltAndYaw), speed_end [m/s] (the cube's at the end),
         flip_blend, particles); the quantities at times past the duration are left out.
     """
+    scene = _flumeScene(basalFriction, mu_2, mu_s, I0, sideWallFriction, blockFriction, flowFriction, inclineDeg, dx,
+                        ppc, backend, precision, flipDampingRate, flipViscosity)
+    from yade import O
+    steps, every = _recordSteps(duration, O.dt)
+    scene.run(steps * O.dt, sampleEvery=every * O.dt)
+    front = float(scene.mpm.particles()["x"][:, 0].max())
+    return _flumeResults(scene.series(0), front, steps * O.dt, scene.mpm.numParticles, scene.flipBlend())
+
+
+RECORD_EVERY = 0.002  # the cube's record interval [s]
+
+
+def _recordSteps(duration, dt):
+    """(steps, record interval in steps) of a run of ``duration``: whole record intervals, so
+    that the last record is the run's end."""
+    every = max(1, int(round(RECORD_EVERY / dt)))
+    steps = max(1, int(round(duration / dt)))
+    return -(-steps // every) * every, every
+
+
+def _flumeScene(basalFriction, mu_2, mu_s, I0, sideWallFriction, blockFriction, flowFriction, inclineDeg, dx, ppc,
+                backend, precision, flipDampingRate, flipViscosity):
+    """The Flume of flumeRun's parameters (see there), before its first step."""
     if not mu_2 > mu_s:
         raise ValueError("mu_2 = %r: must be > mu_s = %r (the mu(I) model's friction rises from mu_s to mu_2)"
                          % (mu_2, mu_s))
     from mpmsdem.flume import GLASS_BEADS, Flume
-    from flume_block import COLUMN, blockEvents, copperCube
+    from flume_block import copperCube
     granular = dict(GLASS_BEADS, mu_s=mu_s, mu_2=mu_2, I0=I0)
     cube = copperCube(friction=blockFriction, flowFriction=flowFriction)
     if flipDampingRate is not None and not (flipDampingRate > 0 and math.isfinite(flipDampingRate)):
@@ -71,16 +94,60 @@ def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFrictio
         raise ValueError("flipViscosity = %r and flipDampingRate = %r: give one (both set the blend)"
                          % (flipViscosity, flipDampingRate))
     ref = None if flipDampingRate is None else -math.log(0.99) / flipDampingRate
-    scene = Flume(dx=dx, ppc=ppc, inclineDeg=inclineDeg, granular=granular, basalFriction=basalFriction,
-                  sideWallFriction=sideWallFriction, blocks=[cube], backend=backend, precision=precision,
-                  verbose=False, flipReferenceDt=ref, flipViscosity=flipViscosity)
-    scene.run(duration, sampleEvery=0.002)
-    peak, _ = scene.peakForce(0, smooth=0.01)
-    front = float(scene.mpm.particles()["x"][:, 0].max())
-    out = {"travel": scene.travel(0), "runout": front - COLUMN, "peak_force": peak,
-           "particles": scene.mpm.numParticles, "flip_blend": scene.flipBlend()}
-    out.update(blockEvents(scene.series(0), duration))
+    return Flume(dx=dx, ppc=ppc, inclineDeg=inclineDeg, granular=granular, basalFriction=basalFriction,
+                 sideWallFriction=sideWallFriction, blocks=[cube], backend=backend, precision=precision,
+                 verbose=False, flipReferenceDt=ref, flipViscosity=flipViscosity)
+
+
+def _flumeResults(s, front, duration, particles, blend):
+    """flumeRun's dict from the cube's series ``s`` (keys of Flume.series) and the flow's front
+    [m] at the end of a run of ``duration`` [s]."""
+    from mpmsdem import analysis
+    from flume_block import COLUMN, blockEvents
+    peak, _ = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
+    out = {"travel": float(s["travel"][-1]), "runout": front - COLUMN, "peak_force": peak, "particles": particles,
+           "flip_blend": blend}
+    out.update(blockEvents(s, duration))
     return out
+
+
+def prepareFlume(folder, duration=1.2, **params):
+    """Write flumeRun(duration=duration, **params) as a driver scene, ``folder``/scene.json, with
+    ``folder``/case.json (the parameters, the steps to run, O.dt): run it with mpmsdem-run
+    ``--steps`` (anywhere, a GPU machine included) and read it back with :func:`flumeResultOfDriver`;
+    the driver gives flumeRun's results to round-off."""
+    import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
+    from yade import O
+    from mpmsdem import driver
+    names = ("basalFriction", "mu_2", "mu_s", "I0", "sideWallFriction", "blockFriction", "flowFriction",
+             "inclineDeg", "dx", "ppc", "backend", "precision", "flipDampingRate", "flipViscosity")
+    unknown = set(params) - set(names)
+    if unknown:
+        raise ValueError("unknown parameter(s) %s: allowed %s" % (", ".join(sorted(unknown)), ", ".join(names)))
+    defaults = dict(zip(names, (0.21, 0.65, 0.24, 0.279, 0.0, 0.67, 0.21, 10.0, 0.02, 8, "cpu", "double", None, None)))
+    scene = _flumeScene(**dict(defaults, **params))
+    steps, every = _recordSteps(duration, O.dt)
+    os.makedirs(folder, exist_ok=True)
+    driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=steps * O.dt, dt=O.dt,
+                      seriesEvery=every * O.dt, outputEvery=steps * O.dt, vtk="none")
+    with open(os.path.join(folder, "case.json"), "w") as f:
+        json.dump({"params": dict(params, duration=duration), "steps": steps, "dt": O.dt,
+                   "particles": scene.mpm.numParticles, "flip_blend": scene.flipBlend()}, f, indent=1)
+    return folder
+
+
+def flumeResultOfDriver(folder):
+    """flumeRun's dict from a case that :func:`prepareFlume` wrote and mpmsdem-run ran into
+    ``folder``/out (h5py, no YADE)."""
+    import h5py
+    from mpmsdem import analysis
+    with open(os.path.join(folder, "case.json")) as f:
+        meta = json.load(f)
+    s, _ = analysis.driverBlockSeries(os.path.join(folder, "out"))
+    s = {k: v[1:] for k, v in s.items()}  # the driver's record at t = 0 (flumeRun's series starts after a step)
+    with h5py.File(os.path.join(folder, "out", "mpm.h5"), "r") as f:
+        front = float(f["series/front_x"][-1])
+    return _flumeResults(s, front, meta["steps"] * meta["dt"], meta["particles"], meta["flip_blend"])
 
 
 def _pairs(items, what, form, convert):

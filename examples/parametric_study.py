@@ -214,7 +214,8 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
     free flow, then (if its front reached the station) the coupled run to the arrival + settle.
     Standard library only (no YADE, numpy or h5py): it runs where only mpmsdem-run is built.
     A case with run.json is done and skipped unless ``rerun``. Returns the case folders run."""
-    import subprocess
+    sys.path.insert(0, HERE)
+    from driver_runs import runDriver
     done = []
     for name in sorted(os.listdir(folder)):
         case = os.path.join(folder, name)
@@ -225,18 +226,10 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
             continue
         with open(os.path.join(case, "case.json")) as f:
             meta = json.load(f)
-        opts = (["--backend", backend] if backend else []) + (["--precision", precision] if precision else [])
-        env = dict(os.environ, **({"OMP_NUM_THREADS": str(threads)} if threads else {}))
 
         def drive(scene, out, extra=()):
-            t = time.time()
-            with open(os.path.join(case, out + ".log"), "w") as log:
-                r = subprocess.run([exe, os.path.join(case, scene), "--out", os.path.join(case, out)] + opts +
-                                   list(extra), stdout=log, stderr=subprocess.STDOUT, env=env)
-            if r.returncode != 0:
-                raise RuntimeError("%s: mpmsdem-run %s exited %d (see %s.log)" % (name, scene, r.returncode,
-                                                                                 os.path.join(case, out)))
-            return time.time() - t
+            return runDriver(exe, os.path.join(case, scene), os.path.join(case, out), os.path.join(case, out + ".log"),
+                             extra, backend, precision, threads)
 
         record = {"backend": backend or "scene's", "precision": precision or "scene's", "exe": exe,
                   "free_flow_seconds": drive("free.json", "free")}

@@ -14,6 +14,9 @@
 #                                                      # through the CUDA driver; needs a driver
 #                                                      # with HDF5 (scripts/bench/gpu_bundle.sh);
 #                                                      # results in $OUT/study.tgz, for --collect
+#   ... --design DIR                                   # the §3.2 cases prepared in DIR
+#                                                      # (scripts/validation/paper_flume_design.py
+#                                                      # --prepare), likewise: $OUT/design.tgz
 #   ... --baseline DIR                                 # an older mpmsdem-run in DIR: the MPM
 #                                                      # benchmark and the flume's first 4,000
 #                                                      # steps run with it too (new/old speed)
@@ -43,11 +46,13 @@ only=${GPU_RUN_STAGES:-.}
 prebuilt=""
 baseline=""
 study=""
+design=""
 while [ $# -gt 0 ]; do
   case $1 in
     --prebuilt) prebuilt=${2:?"--prebuilt needs a folder"}; shift 2 ;;
     --baseline) baseline=${2:?"--baseline needs a folder"}; shift 2 ;;
     --study) study=${2:?"--study needs a folder of prepared cases"}; shift 2 ;;
+    --design) design=${2:?"--design needs a folder of prepared cases"}; shift 2 ;;
     *) echo "gpu_run.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -98,18 +103,20 @@ for t in test_mpm test_coupling; do
     grep -E '^\[  (FAILED|PASSED|SKIPPED) +\] ([0-9]+ tests?|[^ ]+$)' '$out/$t.log'; grep -B30 '^\[  FAILED  \]' '$out/$t.log' | head -150; exit \$rc"
 done
 
-# the §5 cases through the CUDA driver (a case with its run.json is done: a second call goes on)
-study_run() {
-  python3 examples/parametric_study.py --run-prepared "$study" --backend cuda --exe "$bin/mpmsdem-run" \
-    --threads "$(nproc)" 2>&1 | tee "$out/study.log"
+# prepared cases through the CUDA driver (a case run before is skipped: a second call goes on),
+# their outputs but the particle snapshots in $out/NAME.tgz: prepared_run NAME DIR SCRIPT
+prepared_run() {
+  local name=$1 dir=$2 script=$3
+  python3 "$script" --run-prepared "$dir" --backend cuda --exe "$bin/mpmsdem-run" --threads "$(nproc)" 2>&1 |
+    tee "$out/$name.log"
   local rc=${PIPESTATUS[0]}
-  tar czf "$out/study.tgz" --exclude=mpm.snapshots --exclude='*.restart' -C "$(dirname "$study")" \
-    "$(basename "$study")"
+  tar czf "$out/$name.tgz" --exclude=mpm.snapshots --exclude='*.restart' -C "$(dirname "$dir")" "$(basename "$dir")"
   return "$rc"
 }
-export -f study_run
-export study
-[ -n "$study" ] && stage study 420 study_run
+export -f prepared_run
+export bin out
+[ -n "$study" ] && stage study 420 prepared_run study "$study" examples/parametric_study.py
+[ -n "$design" ] && stage design 420 prepared_run design "$design" scripts/validation/paper_flume_design.py
 
 # flume_run NAME SCENE BACKEND PRECISION [ARGS...]: one --bench run, its JSON line in $out/NAME.json
 # (FLUME_EXE: another mpmsdem-run)

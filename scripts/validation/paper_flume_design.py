@@ -23,16 +23,29 @@ runs only the cases not yet done. Cases (``--cases`` picks a comma-separated sub
     flow067_basal015   flow–cube friction 0.67 and basal friction 0.15, paper blend
     half_flow067       half the paper's damping (1005 /s) with flow–cube friction 0.67
 
+``--lhs N`` adds N joint cases ``lhs01`` … spread over the calibration's space by a Latin
+hypercube (seed ``--seed``): PIC damping 1000–4000 /s (log-uniform), basal friction 0.15–0.30,
+μ₂ 0.65–0.80, flow–cube friction 0–0.67, side-wall friction 0–0.21 (``LHS_RANGES``).
+
 Targets (paper §3.2, Figs 8–9): first touch ~0.25 s (experiment 0.3 s), F_t 0.32 N at 0.4 s,
 ~0.20 N plateau, 45° at 0.72 s and then at rest. Prints the table with each case's Δx, step
 and damping per second, and writes it to ``--out``/design.md.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/paper_flume_design.py [--cases paper,basal030]
-        [--duration 0.8] [--out results/paper_flume_design]
+        [--lhs 20] [--duration 0.8] [--out results/paper_flume_design]
+
+Through the plain C++ driver (a GPU machine has no YADE): the same cases written as driver
+scenes here, run there, read back here (the same numbers as the YADE runs, to round-off):
+
+    /usr/bin/python3 scripts/validation/paper_flume_design.py --prepare DIR [--cases ...] [--lhs 20]
+    python3 scripts/validation/paper_flume_design.py --run-prepared DIR --exe PATH/mpmsdem-run --backend cuda
+    /usr/bin/python3 scripts/validation/paper_flume_design.py --collect DIR       (table in DIR/design.md)
 """
 import argparse
+import json
 import math
 import os
+import random
 import sys
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
@@ -51,6 +64,26 @@ CASES = {
     "flow067_basal015": {"flipDampingRate": PAPER_RATE, "flowFriction": 0.67, "basalFriction": 0.15},
     "half_flow067": {"flipDampingRate": PAPER_RATE / 2, "flowFriction": 0.67},
 }
+# the joint design's space: (name, low, high, log-uniform)
+LHS_RANGES = [("flipDampingRate", 1000.0, 4000.0, True), ("basalFriction", 0.15, 0.30, False),
+              ("mu_2", 0.65, 0.80, False), ("flowFriction", 0.0, 0.67, False), ("sideWallFriction", 0.0, 0.21, False)]
+
+
+def latinHypercube(n, seed):
+    """n cases over LHS_RANGES: each range cut into n equal strata (in log for the damping), one
+    case per stratum of every parameter, strata paired at random (seeded)."""
+    rng = random.Random(seed)
+    columns = []
+    for name, lo, hi, log in LHS_RANGES:
+        strata = list(range(n))
+        rng.shuffle(strata)
+        a, b = (math.log(lo), math.log(hi)) if log else (lo, hi)
+        u = [a + (b - a) * (k + rng.random()) / n for k in strata]
+        columns.append([round(math.exp(v) if log else v, 4) for v in u])
+    return {"lhs%02d" % (i + 1): {name: col[i] for (name, _, _, _), col in zip(LHS_RANGES, columns)}
+            for i in range(n)}
+
+
 # (result key, label, paper's value or None, format)
 COLUMNS = [("first_touch", "first touch [s]", 0.25, "%.3f"), ("force_04", "F_t at 0.4 s [N]", 0.32, "%.2f"),
            ("force_mean", "F_t 0.4–0.7 s [N]", 0.20, "%.2f"), ("rotation_04", "rot 0.4 s [°]", None, "%.0f"),
@@ -67,9 +100,20 @@ def parse(argv):
     ap.add_argument("--dx", type=float, default=0.01, help="grid spacing [m] (0.01, the paper's)")
     ap.add_argument("--workers", type=int, default=1, help="cases at a time (1)")
     ap.add_argument("--out", default=os.path.join("results", "paper_flume_design"), help="results folder")
+    ap.add_argument("--lhs", type=int, default=0, help="add N joint cases by a Latin hypercube (0)")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the Latin hypercube (1)")
+    ap.add_argument("--prepare", metavar="DIR", help="write the cases as driver scenes into DIR/CASE")
+    ap.add_argument("--run-prepared", metavar="DIR", help="run the prepared cases in DIR with mpmsdem-run")
+    ap.add_argument("--collect", metavar="DIR", help="the table of the cases run in DIR (DIR/design.md)")
+    ap.add_argument("--exe", default="mpmsdem-run", help="--run-prepared: the driver (mpmsdem-run on the PATH)")
+    ap.add_argument("--backend", choices=("cpu", "cuda"), help="--run-prepared: the backend (the scenes': cpu)")
+    ap.add_argument("--threads", type=int, help="--run-prepared: OMP_NUM_THREADS of the driver (as set)")
     a = ap.parse_args(argv)
-    a.caseList = [c.strip() for c in a.cases.split(",") if c.strip()]
-    unknown = [c for c in a.caseList if c not in CASES]
+    if a.lhs < 0:
+        ap.error("--lhs %d: must be >= 0" % a.lhs)
+    a.cases_ = dict(CASES, **latinHypercube(a.lhs, a.seed)) if a.lhs else dict(CASES)
+    a.caseList = [c.strip() for c in a.cases.split(",") if c.strip()] + sorted(set(a.cases_) - set(CASES))
+    unknown = [c for c in a.caseList if c not in a.cases_]
     if unknown or not a.caseList:
         ap.error("--cases %r: give names among %s" % (a.cases, ", ".join(CASES)))
     if not 0.7 <= a.duration <= 3:
@@ -94,12 +138,63 @@ def table(names, records, a):
     return "\n".join(rows)
 
 
+def caseParams(a, name):
+    return dict(a.cases_[name], dx=a.dx, duration=a.duration)
+
+
+def prepare(a):
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    from calibrate_flume import prepareFlume
+    for name in a.caseList:
+        prepareFlume(os.path.join(a.prepare, name), **caseParams(a, name))
+        print("prepared %s" % os.path.join(a.prepare, name))
+
+
+def runPrepared(a):
+    """The prepared cases without YADE or numpy (a case with its out/done.json is skipped)."""
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    from driver_runs import runDriver
+    for name in sorted(os.listdir(a.run_prepared)):
+        case = os.path.join(a.run_prepared, name)
+        if not os.path.isfile(os.path.join(case, "case.json")) or os.path.exists(os.path.join(case, "done.json")):
+            continue
+        with open(os.path.join(case, "case.json")) as f:
+            steps = json.load(f)["steps"]
+        seconds = runDriver(a.exe, os.path.join(case, "scene.json"), os.path.join(case, "out"),
+                            os.path.join(case, "out.log"), ["--steps", str(steps)], a.backend, None, a.threads)
+        with open(os.path.join(case, "done.json"), "w") as f:
+            json.dump({"seconds": seconds, "backend": a.backend or "scene's", "exe": a.exe}, f)
+        print("%s: %d steps in %.0f s" % (name, steps, seconds))
+
+
+def collect(a):
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    from calibrate_flume import flumeResultOfDriver
+    names = sorted(n for n in os.listdir(a.collect) if os.path.exists(os.path.join(a.collect, n, "done.json")))
+    if not names:
+        raise SystemExit("--collect %s: no case there has been run (done.json); --run-prepared first" % a.collect)
+    records = [{"status": "ok", "result": flumeResultOfDriver(os.path.join(a.collect, n))} for n in names]
+    params = {n: json.load(open(os.path.join(a.collect, n, "case.json")))["params"] for n in names}
+    text = ("§3.2 flume through mpmsdem-run, %s; the cases' parameters below the table.\n\n" % a.collect
+            + table(names, records, a) + "\n\n" + "\n".join("- %s: %s" % (n, json.dumps(params[n])) for n in names)
+            + "\n")
+    with open(os.path.join(a.collect, "design.md"), "w") as f:
+        f.write(text)
+    print(text)
+
+
 def main(argv):
     a = parse(argv)
+    if a.run_prepared:
+        return runPrepared(a)
+    if a.prepare:
+        return prepare(a)
+    if a.collect:
+        return collect(a)
     import mpmsdem  # noqa: F401  (finds YADE for the sweep's children)
     from mpmsdem import sweep
     os.makedirs(a.out, exist_ok=True)
-    cases = [dict(CASES[c], dx=a.dx, duration=a.duration) for c in a.caseList]
+    cases = [caseParams(a, c) for c in a.caseList]
     task = "%s:flumeRun" % os.path.join(ROOT, "examples", "calibrate_flume.py")
     records = sweep.runAll(task, cases, os.path.join(a.out, "runs.jsonl"), workers=a.workers,
                            describe=lambda rec: "first touch %.3f s, F_t(0.4 s) %.2f N, 45° at %.3f s" % (

@@ -1,12 +1,16 @@
-"""The §5 study through the plain C++ driver (examples/parametric_study.py --prepare,
---run-prepared, --collect): a case's free flow, read by the driver's flow probe, and its
-coupled run give runCase's results in YADE to round-off; a flow that never reaches the
-station is reported as such by both; the driver's probe and stop rules are refused or
-recorded as documented."""
+"""The paper's studies through the plain C++ driver, as a GPU machine (no YADE) runs them:
+- §5 (examples/parametric_study.py --prepare, --run-prepared, --collect): a case's free flow,
+  read by the driver's flow probe, and its coupled run give runCase's results in YADE to
+  round-off; a flow that never reaches the station is reported as such by both; the driver's
+  probe and stop rules are refused or recorded as documented.
+- §3.2 (examples/calibrate_flume.py prepareFlume / flumeResultOfDriver, used by
+  scripts/validation/paper_flume_design.py): a candidate through the driver gives flumeRun's
+  targets in YADE to round-off."""
 import importlib.util
 import json
 import os
 import subprocess
+import sys
 
 import pytest
 
@@ -95,3 +99,23 @@ def test_stop_rules_and_a_restart_of_a_probed_run(tmp_path):
     json.dump(scene, open(path, "w"))
     r = subprocess.run([exe, path, "--out", str(tmp_path / "bad")], capture_output=True, text=True)
     assert r.returncode == 2 and "run.stop_when_probed" in r.stderr, r.stderr
+
+
+def test_a_flume_candidate_through_the_driver_gives_flumerun(tmp_path):
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    import calibrate_flume
+    from driver_runs import runDriver
+    kw = dict(duration=0.3, flowFriction=0.4)  # coarse (dx 0.02 m): the front touches the cube at 0.22 s
+    ref = calibrate_flume.flumeRun(**kw)
+    folder = calibrate_flume.prepareFlume(str(tmp_path / "c"), **kw)
+    steps = json.load(open(os.path.join(folder, "case.json")))["steps"]
+    runDriver(driver.executable(), os.path.join(folder, "scene.json"), os.path.join(folder, "out"),
+              os.path.join(folder, "out.log"), ["--steps", str(steps)])
+    got = calibrate_flume.flumeResultOfDriver(folder)
+    assert set(got) == set(ref)
+    assert 0.1 < ref["first_touch"] < 0.3 and ref["peak_force"] > 0.1 and ref["travel"] > 1e-3  # the cube was hit
+    for k, v in ref.items():
+        if isinstance(v, float):
+            assert got[k] == pytest.approx(v, rel=1e-9, abs=1e-12), k
+        else:
+            assert got[k] == v, k
