@@ -168,7 +168,7 @@ def _coupledResults(out, ff, s, duration):
                static_force=static, force_ratio=peak / static if static > 0 else None,
                static_force_model=analysis.staticImpactForce(RHO, ff["h_f"], A, k=K_STATIC),
                eq20_force=analysis.hydrodynamicForce(RHO, ff["v_f"], ff["h_f"], A),
-               rotation_deg=float(s["rotation"][-1]))
+               rotation_deg=float(s["rotation"][-1]), speed_end=float(abs(s["vx"][-1])))
 
 
 # ---------------------------------------------------------------- through the C++ driver

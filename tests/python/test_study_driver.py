@@ -43,7 +43,7 @@ def test_a_case_through_the_driver_gives_the_yade_case(tmp_path):
     assert ref["reached"] and got["reached"]
     for k in ("arrival", "h_f", "v_f", "Fr", "Fr1"):
         assert got["free_flow"][k] == pytest.approx(ref["free_flow"][k], rel=1e-12, abs=1e-15), k
-    for k in ("travel", "peak_force", "static_force", "rotation_deg", "eq20_force", "static_force_model"):
+    for k in ("travel", "peak_force", "static_force", "rotation_deg", "speed_end", "eq20_force", "static_force_model"):
         assert got[k] == pytest.approx(ref[k], rel=1e-9, abs=1e-12), k
     for k in ("peak_time", "duration", "particles", "cube_at_end", "submersion", "flume_length", "flip_blend"):
         assert got[k] == ref[k], k
