@@ -509,13 +509,13 @@ class OutputRun {
         const double t = solver_.time();
         const bool series = t >= nextSeries * (1 - 1e-12), output = t >= nextOutput * (1 - 1e-12);
         const double f = progressFraction(solver_, run, maxSteps, firstStep);
-        const bool report = f >= nextReport || finished(solver_, run, maxSteps) || since(lastReport) >= run.progressEvery ||
-                            (series && willStop(t));
+        bool report = f >= nextReport || finished(solver_, run, maxSteps) || since(lastReport) >= run.progressEvery;
         // one pass over the particles serves the series record and the progress line
         std::optional<mpm::Diagnostics> d;
         if (series || report) d = diagnose();
         if (series) {
           recordSeries(*d, dt);
+          report = report || !stopReason_.empty();  // a stop rule ended the run at this record
           while (nextSeries <= t * (1 + 1e-12)) nextSeries += run.seriesEvery;
         }
         if (output) {
@@ -592,9 +592,6 @@ class OutputRun {
  private:
   mpm::Diagnostics diagnose() { return mpm::diagnose(slices_, solver_.params().gravity, scene_.probes); }
 
-  // Whether the record just taken at time t ended the run by a stop rule.
-  bool willStop(double t) const { return !stopReason_.empty() && t == stopTime_; }
-
   // The flow probes' records and the run's stop rules, at a series record of time t.
   void recordProbes(const mpm::Diagnostics& d, double t) {
     if (probes_.empty() && scene_.run.stopWhenFrontStill == 0) return;
@@ -614,9 +611,9 @@ class OutputRun {
     }
     if (d.frontX > front_ + 0.5 * scene_.params.dx) front_ = d.frontX, frontAt_ = t;
     if (scene_.run.stopWhenProbed && complete)
-      stopReason_ = "probes", stopTime_ = t;
+      stopReason_ = "probes";
     else if (scene_.run.stopWhenFrontStill > 0 && t - frontAt_ > scene_.run.stopWhenFrontStill)
-      stopReason_ = "front_still", stopTime_ = t;
+      stopReason_ = "front_still";
   }
 
   // flow_probes.json: why the run stopped and each probe's result (scenes with flow_probes).
@@ -717,7 +714,6 @@ class OutputRun {
   std::vector<mpm::FlowProbeRecord> probes_;
   double front_ = -INFINITY, frontAt_ = 0;  // the front's largest x so far and when it got there [m, s]
   std::string stopReason_;                  // a stop rule that ended the run ("probes", "front_still")
-  double stopTime_ = 0;
 };
 
 #endif  // MPMSDEM_WITH_HDF5
