@@ -159,10 +159,12 @@ def _coupledResults(out, ff, s, duration):
     static = float(s["Ft"][late].mean())
     A = min(ff["h_f"], HB) * HB  # impact area: the flow's depth on the cube's face, at most its height
     travel = float(s["travel"][-1])
-    # A cube carried to the flume's end has a travel cut short by the end wall: flagged, and
-    # left out of the travel fits by the summary (give such a case a larger margin).
+    # A cube carried to the flume's end, or pushed back by the flow the end wall turned (a
+    # negative force at the end: nothing else pushes upstream), has a travel cut short by the
+    # end wall: flagged, and left out of the travel fits by the summary (give such a case a
+    # larger margin).
     station = out["L_i"] + out["L0"]
-    atEnd = station + travel + HB > out["flume_length"] - 0.1
+    atEnd = station + travel + HB > out["flume_length"] - 0.1 or static < 0
     out.update(reached=True, free_flow=ff, submersion=analysis.submersion(ff["h_f"], HB), travel=travel,
                travel_L0=travel / out["L0"], cube_at_end=atEnd, duration=duration, peak_force=peak, peak_time=tPeak,
                static_force=static, force_ratio=peak / static if static > 0 else None,
