@@ -58,9 +58,10 @@ def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFrictio
         |yaw|) [deg] (mpmsdem.analysis.tiltAndYaw), speed_end [m/s] (the cube's at the end),
         flip_blend, particles); the quantities at times past the duration are left out.
     """
+    import mpmsdem  # noqa: F401  (before yade: it finds YADE's folder in a plain python3)
+    from yade import O
     scene = _flumeScene(basalFriction, mu_2, mu_s, I0, sideWallFriction, blockFriction, flowFriction, inclineDeg, dx,
                         ppc, backend, precision, flipDampingRate, flipViscosity)
-    from yade import O
     steps, every = _recordSteps(duration, O.dt)
     scene.run(steps * O.dt, sampleEvery=every * O.dt)
     front = float(scene.mpm.particles()["x"][:, 0].max())
