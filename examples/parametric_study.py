@@ -48,6 +48,7 @@ PROBE_EVERY = 0.005   # free flow: the station is read every this much simulated
 PROBE_WINDOW = 0.05   # h_f, v_f: means over this long after the front's arrival [s]
 FRONT_STILL = 0.3     # free flow: a front that has not advanced dx/2 for this long has stopped [s]
 SAMPLE_EVERY = 0.002  # coupled run: the cube's record interval [s]
+STATIC_FLOOR = 0.01   # a static force below this fraction of the peak: nothing rests against the cube (no ratio)
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
@@ -167,7 +168,7 @@ def _coupledResults(out, ff, s, duration):
     atEnd = station + travel + HB > out["flume_length"] - 0.1 or static < 0
     out.update(reached=True, free_flow=ff, submersion=analysis.submersion(ff["h_f"], HB), travel=travel,
                travel_L0=travel / out["L0"], cube_at_end=atEnd, duration=duration, peak_force=peak, peak_time=tPeak,
-               static_force=static, force_ratio=peak / static if static > 0 else None,
+               static_force=static, force_ratio=peak / static if static > STATIC_FLOOR * peak else None,
                static_force_model=analysis.staticImpactForce(RHO, ff["h_f"], A, k=K_STATIC),
                eq20_force=analysis.hydrodynamicForce(RHO, ff["v_f"], ff["h_f"], A),
                rotation_deg=float(s["rotation"][-1]), speed_end=float(abs(s["vx"][-1])))
