@@ -21,10 +21,14 @@ travel distance at the end of the run [m]) and ``runout`` (the flow front's dist
 beyond the column's initial front at the end [m]).
 """
 import argparse
+import inspect
 import json
 import math
 import os
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from driver_runs import recordSteps  # noqa: E402  (standard library only)
 
 
 def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFriction=0.0, blockFriction=0.67,
@@ -62,21 +66,13 @@ def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFrictio
     from yade import O
     scene = _flumeScene(basalFriction, mu_2, mu_s, I0, sideWallFriction, blockFriction, flowFriction, inclineDeg, dx,
                         ppc, backend, precision, flipDampingRate, flipViscosity)
-    steps, every = _recordSteps(duration, O.dt)
+    steps, every = recordSteps(duration, O.dt, RECORD_EVERY)
     scene.run(steps * O.dt, sampleEvery=every * O.dt)
     front = float(scene.mpm.particles()["x"][:, 0].max())
     return _flumeResults(scene.series(0), front, steps * O.dt, scene.mpm.numParticles, scene.flipBlend())
 
 
 RECORD_EVERY = 0.002  # the cube's record interval [s]
-
-
-def _recordSteps(duration, dt):
-    """(steps, record interval in steps) of a run of ``duration``: whole record intervals, so
-    that the last record is the run's end."""
-    every = max(1, int(round(RECORD_EVERY / dt)))
-    steps = max(1, int(round(duration / dt)))
-    return -(-steps // every) * every, every
 
 
 def _flumeScene(basalFriction, mu_2, mu_s, I0, sideWallFriction, blockFriction, flowFriction, inclineDeg, dx, ppc,
@@ -120,14 +116,15 @@ def prepareFlume(folder, duration=1.2, **params):
     import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
     from yade import O
     from mpmsdem import driver
-    names = ("basalFriction", "mu_2", "mu_s", "I0", "sideWallFriction", "blockFriction", "flowFriction",
-             "inclineDeg", "dx", "ppc", "backend", "precision", "flipDampingRate", "flipViscosity")
+    # flumeRun's own parameters and defaults
+    names = [n for n in inspect.signature(flumeRun).parameters if n != "duration"]
     unknown = set(params) - set(names)
     if unknown:
         raise ValueError("unknown parameter(s) %s: allowed %s" % (", ".join(sorted(unknown)), ", ".join(names)))
-    defaults = dict(zip(names, (0.21, 0.65, 0.24, 0.279, 0.0, 0.67, 0.21, 10.0, 0.02, 8, "cpu", "double", None, None)))
-    scene = _flumeScene(**dict(defaults, **params))
-    steps, every = _recordSteps(duration, O.dt)
+    bound = inspect.signature(flumeRun).bind(duration=duration, **params)
+    bound.apply_defaults()
+    scene = _flumeScene(**{n: bound.arguments[n] for n in names})
+    steps, every = recordSteps(duration, O.dt, RECORD_EVERY)
     os.makedirs(folder, exist_ok=True)
     driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=steps * O.dt, dt=O.dt,
                       seriesEvery=every * O.dt, outputEvery=steps * O.dt, vtk="none")
@@ -144,8 +141,7 @@ def flumeResultOfDriver(folder):
     from mpmsdem import analysis
     with open(os.path.join(folder, "case.json")) as f:
         meta = json.load(f)
-    s, _ = analysis.driverBlockSeries(os.path.join(folder, "out"))
-    s = {k: v[1:] for k, v in s.items()}  # the driver's record at t = 0 (flumeRun's series starts after a step)
+    s, _ = analysis.driverBlockSeries(os.path.join(folder, "out"), initial=False)
     with h5py.File(os.path.join(folder, "out", "mpm.h5"), "r") as f:
         front = float(f["series/front_x"][-1])
     return _flumeResults(s, front, meta["steps"] * meta["dt"], meta["particles"], meta["flip_blend"])

@@ -1,6 +1,7 @@
 """Runs of prepared scenes through the plain C++ driver ``mpmsdem-run``, with the standard
 library only: the examples' ``--run-prepared`` steps use it where neither YADE nor numpy is
-installed (a GPU machine). ``mpmsdem.driver`` writes the scenes (that side needs YADE)."""
+installed (a GPU machine). ``mpmsdem.driver`` writes the scenes (that side needs YADE); both
+sides size the runs with :func:`stepsOf` and :func:`recordSteps`."""
 import os
 import subprocess
 import time
@@ -19,3 +20,17 @@ def runDriver(exe, scene, out, log, extra=(), backend=None, precision=None, thre
     if r.returncode != 0:
         raise RuntimeError("mpmsdem-run %s exited %d (its output: %s)" % (scene, r.returncode, log))
     return time.time() - start
+
+
+def stepsOf(interval, dt):
+    """Whole steps of ``dt`` [s] nearest to ``interval`` [s], at least one."""
+    return max(1, int(round(interval / dt)))
+
+
+def recordSteps(duration, dt, interval):
+    """(steps, record interval in steps) of a run of about ``duration`` [s] recorded every
+    ``interval`` [s]: rounded up to whole record intervals, so that the last record is the run's
+    end (the YADE run and the driver then record the same steps)."""
+    every = stepsOf(interval, dt)
+    steps = stepsOf(duration, dt)
+    return -(-steps // every) * every, every

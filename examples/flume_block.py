@@ -118,8 +118,7 @@ def plot(s, title, ff, path):
     ax[0, 0].set_xlabel("t [s]")
     ax[0, 0].legend()
     ax[0, 0].set_title("Block kinematics")
-    w = max(1, int(round(0.01 / np.median(np.diff(t)))))
-    smooth = lambda f: np.convolve(f, np.ones(w) / w, mode="same")  # noqa: E731
+    smooth = lambda f: analysis.runningMean(t, f, 0.01)  # noqa: E731
     ax[0, 1].plot(t, smooth(s["Ft"]), label="F_t (flow on block, downstream)")
     ax[0, 1].plot(t, smooth(s["Ff"]), label="F_f (faces)", alpha=0.7)
     ax[0, 1].plot(t, smooth(s["Fe"]), label="F_e (edges, vertices)", alpha=0.7)
@@ -155,8 +154,7 @@ def blockEvents(s, duration):
     0.4/0.5/0.7 s, when the rotation reaches 45°; the keys of calibrate_flume.flumeRun."""
     import numpy as np
     t, ft, rot = s["t"], s["Ft"], s["rotation"]
-    w = max(1, int(round(0.01 / np.median(np.diff(t))))) if len(t) > 1 else 1
-    smooth = np.convolve(ft, np.ones(w) / w, mode="same")
+    smooth = analysis.runningMean(t, ft, 0.01)
     touched = np.nonzero(np.abs(ft) > 0)[0]
     turned = np.nonzero(rot >= 45.0)[0]
     out = {"first_touch": float(t[touched[0]]) if len(touched) else duration,

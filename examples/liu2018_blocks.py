@@ -201,12 +201,6 @@ def events(s):
     return out
 
 
-def smoothed(f, t):
-    import numpy as np
-    w = max(1, int(round(SMOOTH / np.median(np.diff(t)))))
-    return np.convolve(f, np.ones(w) / w, mode="same")
-
-
 def plot(s, ff, eq20, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -216,7 +210,7 @@ def plot(s, ff, eq20, path):
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
     for k, name in enumerate(NAMES):
         d = s.series(k)
-        ax[0].plot(d["t"], smoothed(d["Ft"], d["t"]), label="%s block" % name)
+        ax[0].plot(d["t"], analysis.runningMean(d["t"], d["Ft"], SMOOTH), label="%s block" % name)
     if ff:
         ax[0].axhline(eq20, color="k", ls="--", label="Eq 20, bottom block (Fr = %.2f)" % ff["Fr"])
     ax[0].axhline(9.7, color="grey", ls=":", label="paper §3.3, computed peak 9.7 N")

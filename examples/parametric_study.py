@@ -50,6 +50,8 @@ FRONT_STILL = 0.3     # free flow: a front that has not advanced dx/2 for this l
 SAMPLE_EVERY = 0.002  # coupled run: the cube's record interval [s]
 STATIC_FLOOR = 0.01   # a static force below this fraction of the peak: nothing rests against the cube (no ratio)
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from driver_runs import recordSteps, runDriver, stepsOf  # noqa: E402  (standard library only)
 
 
 def resolution(full, dx=None, ppc=None):
@@ -80,23 +82,23 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, max
     from yade import O
     from mpmsdem import analysis
     from mpmsdem.flume import Flume
-    case = _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, verbose)
-    out, common, station = case["result"], case["common"], case["station"]
+    common, out = _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, verbose)
+    station = COLUMN + out["L0"]
 
     t0 = time.time()
     scene = Flume(**common)
     out["particles"] = scene.mpm.numParticles
     out["flip_blend"] = scene.flipBlend()
-    probe = analysis.FlowProbe(station, halfWidth=case["dx"], bedZ=0.0, L0=case["L0"], window=PROBE_WINDOW)
+    probe = analysis.FlowProbe(station, halfWidth=out["dx"], bedZ=0.0, L0=out["L0"], window=PROBE_WINDOW)
     front, frontAt = 0.0, 0.0
     while True:
-        mpmsdem.run(_stepsOf(PROBE_EVERY, O.dt), scene.coupled)
+        mpmsdem.run(stepsOf(PROBE_EVERY, O.dt), scene.coupled)
         p = scene.mpm.particles()
         probe.sample(O.time, p)
         if probe.arrival is not None and O.time > probe.arrival + probe.window:
             break
         x = float(p["x"][:, 0].max())
-        if x > front + 0.5 * case["dx"]:
+        if x > front + 0.5 * out["dx"]:
             front, frontAt = x, O.time
         if O.time - frontAt > FRONT_STILL or O.time > maxFreeTime:  # the flow stopped short of the station
             out.update(reached=False, front=front, stopped_at=O.time, wall_seconds={"free_flow": time.time() - t0})
@@ -107,7 +109,7 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, max
     t1 = time.time()
     scene = Flume(blocks=[_cube(station)], output=output, outputEvery=0.01, vtkEvery=0.05 if output else None,
                   **common)
-    steps, every = _coupledSteps(ff["arrival"], settle, O.dt)
+    steps, every = recordSteps(ff["arrival"] + settle, O.dt, SAMPLE_EVERY)
     scene.run(steps * O.dt, sampleEvery=every * O.dt)
     _coupledResults(out, ff, scene.series(0), steps * O.dt)
     out["wall_seconds"] = {"free_flow": tFree, "coupled": time.time() - t1}
@@ -115,8 +117,8 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, max
 
 
 def _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, verbose):
-    """A case's geometry: the Flume arguments it shares between its two runs ("common"), the
-    station, and the start of its result dict."""
+    """A case's geometry: (the Flume arguments its two runs share, the start of its result
+    dict)."""
     from mpmsdem.mpm import PAPER_VISCOSITY
     if not (AR > 0 and L0_hb > 0):
         raise ValueError("AR = %r, L0_hb = %r: both must be > 0" % (AR, L0_hb))
@@ -131,24 +133,12 @@ def _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, verbose):
                   precision=precision, verbose=verbose, flipViscosity=PAPER_VISCOSITY if full else None)
     result = {"AR": round(H / COLUMN, 6), "AR_nominal": AR, "L0_hb": L0_hb, "L0": L0, "h_b": HB, "H_i": H,
               "L_i": COLUMN, "dx": dx, "ppc": ppc, "flume_length": length, "margin": margin}
-    return {"common": common, "station": COLUMN + L0, "L0": L0, "dx": dx, "result": result}
+    return common, result
 
 
 def _cube(station):
     from mpmsdem.flume import Block
     return Block(half=(HB / 2,) * 3, x=station, density=8900, friction=0.67, flowFriction=0.21)
-
-
-def _stepsOf(interval, dt):
-    return max(1, int(round(interval / dt)))
-
-
-def _coupledSteps(arrival, settle, dt):
-    """(steps, record interval in steps) of the coupled run: to the free front's arrival +
-    settle, rounded up to whole record intervals, so that the last record is the run's end."""
-    every = _stepsOf(SAMPLE_EVERY, dt)
-    steps = int(round((arrival + settle) / dt))
-    return -(-steps // every) * every, every
 
 
 def _coupledResults(out, ff, s, duration):
@@ -164,8 +154,7 @@ def _coupledResults(out, ff, s, duration):
     # negative force at the end: nothing else pushes upstream), has a travel cut short by the
     # end wall: flagged, and left out of the travel fits by the summary (give such a case a
     # larger margin).
-    station = out["L_i"] + out["L0"]
-    atEnd = station + travel + HB > out["flume_length"] - 0.1 or static < 0
+    atEnd = out["L_i"] + out["L0"] + travel + HB > out["flume_length"] - 0.1 or static < 0
     out.update(reached=True, free_flow=ff, submersion=analysis.submersion(ff["h_f"], HB), travel=travel,
                travel_L0=travel / out["L0"], cube_at_end=atEnd, duration=duration, peak_force=peak, peak_time=tPeak,
                static_force=static, force_ratio=peak / static if static > STATIC_FLOOR * peak else None,
@@ -189,15 +178,15 @@ def prepareCase(AR, L0_hb, folder, full=0, dx=None, ppc=None, settle=1.5, margin
     from yade import O
     from mpmsdem import driver
     from mpmsdem.flume import Flume
-    case = _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, False)
-    common, station = case["common"], case["station"]
+    common, result = _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, False)
+    station = COLUMN + result["L0"]
     os.makedirs(folder, exist_ok=True)
     scene = Flume(**common)
-    case["result"]["particles"] = scene.mpm.numParticles
-    case["result"]["flip_blend"] = scene.flipBlend()
-    probe = {"x": station, "halfWidth": case["dx"], "bedZ": 0.0, "window": PROBE_WINDOW}
+    result["particles"] = scene.mpm.numParticles
+    result["flip_blend"] = scene.flipBlend()
+    probe = {"x": station, "halfWidth": result["dx"], "bedZ": 0.0, "window": PROBE_WINDOW}
     driver.writeScene(os.path.join(folder, "free.json"), scene.coupled, duration=maxFreeTime, dt=O.dt,
-                      flowProbes=[probe], seriesEvery=_stepsOf(PROBE_EVERY, O.dt) * O.dt, outputEvery=maxFreeTime,
+                      flowProbes=[probe], seriesEvery=stepsOf(PROBE_EVERY, O.dt) * O.dt, outputEvery=maxFreeTime,
                       vtk="none", stopWhenProbed=True, stopWhenFrontStill=FRONT_STILL)
     dt = O.dt
     scene = Flume(blocks=[_cube(station)], **common)
@@ -205,9 +194,9 @@ def prepareCase(AR, L0_hb, folder, full=0, dx=None, ppc=None, settle=1.5, margin
         raise RuntimeError("the free flow and the coupled run chose different steps (%r, %r s)" % (dt, O.dt))
     # run.duration bounds the run; --run-prepared runs the steps that runCase would (--steps)
     driver.writeScene(os.path.join(folder, "coupled.json"), scene.coupled, duration=maxFreeTime + settle, dt=O.dt,
-                      seriesEvery=_stepsOf(SAMPLE_EVERY, O.dt) * O.dt, outputEvery=0.5, vtk="none")
+                      seriesEvery=stepsOf(SAMPLE_EVERY, O.dt) * O.dt, outputEvery=0.5, vtk="none")
     with open(os.path.join(folder, "case.json"), "w") as f:
-        json.dump({"name": caseName(AR, L0_hb, full), "settle": settle, "dt": O.dt, "result": case["result"]}, f,
+        json.dump({"name": caseName(AR, L0_hb, full), "settle": settle, "dt": O.dt, "result": result}, f,
                   indent=1)
     return folder
 
@@ -217,8 +206,6 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
     free flow, then (if its front reached the station) the coupled run to the arrival + settle.
     Standard library only (no YADE, numpy or h5py): it runs where only mpmsdem-run is built.
     A case with run.json is done and skipped unless ``rerun``. Returns the case folders run."""
-    sys.path.insert(0, HERE)
-    from driver_runs import runDriver
     done = []
     for name in sorted(os.listdir(folder)):
         case = os.path.join(folder, name)
@@ -239,7 +226,7 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
         with open(os.path.join(case, "free", "flow_probes.json")) as f:
             probe = json.load(f)["probes"][0]
         if probe["complete"]:
-            steps, every = _coupledSteps(probe["arrival"], meta["settle"], meta["dt"])
+            steps, _ = recordSteps(probe["arrival"] + meta["settle"], meta["dt"], SAMPLE_EVERY)
             record["coupled_steps"] = steps
             record["coupled_seconds"] = drive("coupled.json", "coupled", ["--steps", str(steps)])
         with open(os.path.join(case, "run.json"), "w") as f:
@@ -269,8 +256,7 @@ def collectCase(case):
     h, v = probe["h_f"], probe["v_f"]
     ff = {"arrival": probe["arrival"], "h_f": h, "v_f": v, "Fr": analysis.froude(v, h),
           "Fr1": analysis.froudeDistance(v, out["L0"])}
-    s, _ = analysis.driverBlockSeries(os.path.join(case, "coupled"))
-    s = {k: v[1:] for k, v in s.items()}  # the driver's record at t = 0 (runCase's series starts after a step)
+    s, _ = analysis.driverBlockSeries(os.path.join(case, "coupled"), initial=False)
     _coupledResults(out, ff, s, record["coupled_steps"] * meta["dt"])
     out["wall_seconds"]["coupled"] = record["coupled_seconds"]
     return out
@@ -323,7 +309,8 @@ def parse(argv):
                     help="run the prepared cases in DIR through mpmsdem-run (no YADE needed)")
     ap.add_argument("--collect", metavar="DIR", default=None,
                     help="results of the cases run in DIR as DIR/CASE.json, for parametric_study_summary.py")
-    ap.add_argument("--exe", default="mpmsdem-run", help="--run-prepared: the driver (default: mpmsdem-run on the PATH)")
+    ap.add_argument("--exe", default="mpmsdem-run",
+                    help="--run-prepared: the driver (default: mpmsdem-run on the PATH)")
     ap.add_argument("--backend", choices=("cpu", "cuda"), default=None,
                     help="--run-prepared: the backend (default: the scenes', cpu)")
     ap.add_argument("--precision", choices=("double", "float"), default=None,

@@ -249,26 +249,36 @@ class FlowProbe:
         return out
 
 
+def runningMean(t, f, window):
+    """The series f(t) averaged over ``window`` [s]: a centred running mean over
+    round(window/Δt) samples (at least one), Δt the median sample interval (contact forces of
+    single points are spiky)."""
+    import numpy as np
+    t, f = np.asarray(t, dtype=float), np.asarray(f, dtype=float)
+    w = max(1, int(round(window / np.median(np.diff(t))))) if len(t) > 1 else 1
+    return np.convolve(f, np.ones(w) / w, mode="same")
+
+
 def smoothedPeak(t, f, smooth=None):
     """Largest value of the series f(t) and its time: (peak, t_peak). With ``smooth`` [s] the
-    series is first averaged over that window (a centred running mean over round(smooth/Δt)
-    samples, Δt the median sample interval): contact forces of single points are spiky."""
+    series is first averaged over that window (:func:`runningMean`)."""
     import numpy as np
     t, f = np.asarray(t, dtype=float), np.asarray(f, dtype=float)
     if smooth:
-        w = max(1, int(round(smooth / np.median(np.diff(t)))))
-        f = np.convolve(f, np.ones(w) / w, mode="same")
+        f = runningMean(t, f, smooth)
     j = int(np.argmax(f))
     return float(f[j]), float(t[j])
 
 
-def driverBlockSeries(folder, block=None):
+def driverBlockSeries(folder, block=None, initial=True):
     """A block's series from the coupled.h5 that ``mpmsdem-run`` wrote in ``folder``, with the
     keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, Ft, Ff, Fe
     (downstream flow force: total, on faces, on edges) [N], rotation (the whole angle turned
     since the start), tilt and yaw [deg]. ``block``: its index in the file (default: the first
-    block that moves; a flume's bed is fixed). Returns (series, scene dict). Needs h5py only,
-    not YADE: runs made on another machine are read here."""
+    block that moves; a flume's bed is fixed). ``initial``: keep the driver's record at the
+    start; False leaves it out, as :meth:`Flume.series` has no record before the first step
+    (travel still counts from the start). Returns (series, scene dict). Needs h5py only, not
+    YADE: runs made on another machine are read here."""
     import json
     import os
     import h5py
@@ -294,7 +304,35 @@ def driverBlockSeries(folder, block=None):
         turns = np.array([tiltAndYaw(np.linalg.norm(r), r) for r in g["rotation"][:, c]]).reshape(-1, 2)
         s["tilt"], s["yaw"] = turns[:, 0], turns[:, 1]
         scene = json.loads(f.attrs["parameters"])
+    if not initial:
+        s = {k: v[1:] for k, v in s.items()}
     return s, scene
+
+
+def stateIsFinite(state):
+    """Whether a YADE body state's position, velocity, angular velocity and orientation are all
+    finite numbers."""
+    return all(math.isfinite(v) for vec in (state.pos, state.vel, state.angVel) for v in vec) and \
+        all(math.isfinite(state.ori[k]) for k in range(4))
+
+
+def referenceCheckArguments(doc):
+    """The command line of a check against stored reference numbers: ``--regenerate`` (store
+    this run's numbers as the new reference); ``doc``: the check's description (--help)."""
+    import argparse
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--regenerate", action="store_true", help="store this run's numbers as the new reference")
+    return ap.parse_args()
+
+
+def finishCheck(failures):
+    """End a check: exit status 1 with "FAILED: ..." on stderr when ``failures`` (messages)
+    is not empty, else print "OK"."""
+    import sys
+    if failures:
+        print("FAILED: " + "; ".join(failures), file=sys.stderr)
+        sys.exit(1)
+    print("OK")
 
 
 def checkAgainstReference(values, path, tolerances, regenerate=False, stored=None):
