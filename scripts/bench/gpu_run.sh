@@ -130,7 +130,6 @@ flume_run() {
   return "$rc"
 }
 export -f flume_run
-export bin out
 # flume NAME SECONDS SCENE BACKEND PRECISION [ARGS...]: flume_run as a stage of that name
 flume() {
   local name=$1 limit=$2

@@ -20,10 +20,8 @@ Asserts:
 ``--regenerate`` stores the numbers of this run as the new reference (after a deliberate
 change of the method; say why in the commit).
 """
-import argparse
 import math
 import os
-import sys
 
 import mpmsdem
 from mpmsdem import analysis
@@ -49,9 +47,7 @@ def run():
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--regenerate", action="store_true", help="store this run's numbers as the reference")
-    args = ap.parse_args()
+    args = analysis.referenceCheckArguments(__doc__)
     r = run()
     print("flume block (coarse §3.2): %d material points, travel %.4f m, peak force %.4f N at %.3f s"
           % (r["particles"], r["travel"], r["peak_force"], r["peak_time"]))
@@ -64,10 +60,7 @@ def main():
         failures.append("the flow did not push the cube (travel %g m, peak %g N)" % (r["travel"], r["peak_force"]))
     failures += analysis.checkAgainstReference(r, REF, TOL, args.regenerate,
                                                stored=("travel", "peak_force", "peak_time", "particles"))
-    if failures:
-        print("FAILED: " + "; ".join(failures), file=sys.stderr)
-        sys.exit(1)
-    print("OK")
+    analysis.finishCheck(failures)
 
 
 main()

@@ -22,10 +22,8 @@ Asserts:
 ``--regenerate`` stores the numbers of this run as the new reference (after a deliberate
 change of the method; say why in the commit).
 """
-import argparse
 import math
 import os
-import sys
 
 import mpmsdem
 from mpmsdem import analysis
@@ -54,9 +52,7 @@ def run(duration=0.5):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--regenerate", action="store_true", help="store this run's numbers as the new reference")
-    args = ap.parse_args()
+    args = analysis.referenceCheckArguments(__doc__)
     r = run()
     print("flume block at the paper's numerics (§3.2, 0.1 m slice): %d material points, %s; first touch %.3f s, "
           "tilt %.1f deg and travel %.4f m at 0.5 s, largest |yaw| %.2g deg"
@@ -70,10 +66,7 @@ def main():
         failures.append("the cube turned %.3g deg on the bed in a scene symmetric about its centre line" % r["max_yaw"])
     failures += analysis.checkAgainstReference(r, REF, TOL, args.regenerate,
                                                stored=("first_touch", "tilt_05", "travel_05", "particles"))
-    if failures:
-        print("FAILED: " + "; ".join(failures), file=sys.stderr)
-        sys.exit(1)
-    print("OK")
+    analysis.finishCheck(failures)
 
 
 main()

@@ -25,10 +25,8 @@ moves them by more.
 ``--regenerate`` stores the numbers of this run as the new reference (after a deliberate
 change of the method; say why in the commit).
 """
-import argparse
 import math
 import os
-import sys
 
 import mpmsdem
 from mpmsdem import analysis
@@ -55,10 +53,6 @@ def blocks():
     return [Block(z=0.0, blockedDOFs="xyzXYZ", **common), Block(z=zMid, **common), Block(z=zTop, **common)]
 
 
-def finite(state):
-    return all(math.isfinite(v) for vec in (state.pos, state.vel, state.angVel) for v in vec) and \
-        all(math.isfinite(state.ori[k]) for k in range(4))
-
 
 def run():
     scene = Flume(inclineDeg=0.0, length=0.6, width=0.2, columnLength=0.1, columnHeight=0.2, dx=0.02, ppc=1,
@@ -82,7 +76,7 @@ def run():
             nextSample += 0.002
         if tuple(glued.pos) != p0 or tuple(glued.ori[k] for k in range(4)) != q0:
             moved += 1
-        allFinite = allFinite and all(finite(O.bodies[i].state) for i in scene.blockIds)
+        allFinite = allFinite and all(analysis.stateIsFinite(O.bodies[i].state) for i in scene.blockIds)
     peak, tPeak = scene.peakForce(0, smooth=0.01)
     p = scene.mpm.particles()
     return {"peak_force_bottom": peak, "peak_time": tPeak,
@@ -93,9 +87,7 @@ def run():
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--regenerate", action="store_true", help="store this run's numbers as the reference")
-    args = ap.parse_args()
+    args = analysis.referenceCheckArguments(__doc__)
     r = run()
     print("liu2018 blocks (coarse §3.3): %d material points, %d steps; bottom block peak force %.3f N at %.3f s; "
           "final x middle %.4f m, top %.4f m" % (r["particles"], r["steps"], r["peak_force_bottom"], r["peak_time"],
@@ -112,10 +104,7 @@ def main():
                         % (r["travel_middle"], r["travel_top"], r["peak_force_bottom"]))
     failures += analysis.checkAgainstReference(r, REF, TOL, args.regenerate,
                                                stored=("peak_force_bottom", "peak_time", "x_middle", "x_top", "particles"))
-    if failures:
-        print("FAILED: " + "; ".join(failures), file=sys.stderr)
-        sys.exit(1)
-    print("OK")
+    analysis.finishCheck(failures)
 
 
 main()

@@ -23,8 +23,6 @@ Asserts:
 ``--regenerate`` stores the numbers of this run as the new reference (after a deliberate
 change of the method; say why in the commit).
 """
-import argparse
-import math
 import os
 import sys
 
@@ -38,10 +36,6 @@ REF = os.path.join(HERE, "reference", "liu2018_blocks_paper.json")
 TOL = {"first_touch_bottom": 0.05, "peak_force_bottom": 0.35, "x_middle": 0.02, "x_top": 0.02}
 DURATION = 0.35
 
-
-def finite(state):
-    return all(math.isfinite(v) for vec in (state.pos, state.vel, state.angVel) for v in vec) and \
-        all(math.isfinite(state.ori[k]) for k in range(4))
 
 
 def run():
@@ -59,14 +53,12 @@ def run():
             "x_middle": O.bodies[s.blockIds[1]].state.pos[0], "x_top": O.bodies[s.blockIds[2]].state.pos[0],
             "glued_moved": tuple(glued.pos) != p0 or tuple(glued.ori[k] for k in range(4)) != q0,
             "mass_error": abs(float(s.mpm.particles()["mass"].sum()) - m0),
-            "finite": all(finite(O.bodies[i].state) for i in s.blockIds), "particles": s.mpm.numParticles,
-            "flip_blend": s.flipBlend()}
+            "finite": all(analysis.stateIsFinite(O.bodies[i].state) for i in s.blockIds),
+            "particles": s.mpm.numParticles, "flip_blend": s.flipBlend()}
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--regenerate", action="store_true", help="store this run's numbers as the new reference")
-    args = ap.parse_args()
+    args = analysis.referenceCheckArguments(__doc__)
     r = run()
     print("liu2018 blocks at the paper's numerics (§3.3): %d material points, %s; bottom block first touched at "
           "%.3f s, peak %.2f N at %.3f s; x at %.2f s: middle %.4f m, top %.4f m"
@@ -84,10 +76,7 @@ def main():
     failures += analysis.checkAgainstReference(r, REF, TOL, args.regenerate,
                                                stored=("first_touch_bottom", "peak_force_bottom", "peak_time",
                                                        "x_middle", "x_top", "particles"))
-    if failures:
-        print("FAILED: " + "; ".join(failures), file=sys.stderr)
-        sys.exit(1)
-    print("OK")
+    analysis.finishCheck(failures)
 
 
 main()
