@@ -63,7 +63,7 @@ def resolution(full, dx=None, ppc=None):
 
 
 def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, maxFreeTime=5.0, output=None,
-            backend="cpu", precision="double", verbose=False):
+            backend="cpu", precision="double", verbose=False, until=None):
     """One case of the study: free flow, then the coupled run. Returns a dict of the results.
 
     :param AR: aspect ratio H_i / L_i of the column [-], > 0 (paper: 1.3 to 4.0).
@@ -73,6 +73,8 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, max
     :param settle: coupled run lasts until the front's arrival + settle [s] (default 1.5),
         rounded up to whole record intervals (2 ms); the static force is the mean flow force
         on the cube over its last 0.1 s.
+    :param until: None (default), or the coupled run lasts at least until this time [s] (the
+        paper's runs end at 4.5 s, "when the system approaches quasi-steady state", §5.4).
     :param margin: flume length downstream of the cube [m] (default 3).
     :param maxFreeTime: the free flow gives up after this [s] (default 5).
     :param output: folder for the coupled run's HDF5 and ParaView files (default none).
@@ -109,11 +111,19 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, max
     t1 = time.time()
     scene = Flume(blocks=[_cube(station)], output=output, outputEvery=0.01, vtkEvery=0.05 if output else None,
                   **common)
-    steps, every = recordSteps(ff["arrival"] + settle, O.dt, SAMPLE_EVERY)
+    potential0 = scene.mpm.diagnostics()["potential_energy"]
+    steps, every = recordSteps(coupledEnd(ff["arrival"], settle, until), O.dt, SAMPLE_EVERY)
     scene.run(steps * O.dt, sampleEvery=every * O.dt)
-    _coupledResults(out, ff, scene.series(0), steps * O.dt)
+    _coupledResults(out, ff, scene.series(0), steps * O.dt, potential0)
     out["wall_seconds"] = {"free_flow": tFree, "coupled": time.time() - t1}
     return out
+
+
+def coupledEnd(arrival, settle, until=None):
+    """When a case's coupled run ends [s]: the front's arrival + settle, or ``until`` if later."""
+    if until is not None and not until > 0:
+        raise ValueError("until = %r s: must be > 0 (or None)" % (until,))
+    return max(arrival + settle, until or 0.0)
 
 
 def _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, verbose):
@@ -141,9 +151,12 @@ def _cube(station):
     return Block(half=(HB / 2,) * 3, x=station, density=8900, friction=0.67, flowFriction=0.21)
 
 
-def _coupledResults(out, ff, s, duration):
+def _coupledResults(out, ff, s, duration, potential0):
     """The coupled run's results into ``out`` from the cube's series ``s`` (the keys of
-    Flume.series) and the free flow ``ff`` (FlowProbe.result)."""
+    Flume.series), the free flow ``ff`` (FlowProbe.result) and the flow's potential energy at
+    the start, ``potential0`` [J] (zero at the bed under the column's upstream end): the
+    energies of the paper's Figs 17 and 18 (the flow's kinetic peak and its time; the cube's
+    largest kinetic energy E_k,max^b and its ratio to E_p,0^f)."""
     from mpmsdem import analysis
     peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
     late = s["t"] >= s["t"][-1] - 0.1
@@ -160,7 +173,12 @@ def _coupledResults(out, ff, s, duration):
                static_force=static, force_ratio=peak / static if static > STATIC_FLOOR * peak else None,
                static_force_model=analysis.staticImpactForce(RHO, ff["h_f"], A, k=K_STATIC),
                eq20_force=analysis.hydrodynamicForce(RHO, ff["v_f"], ff["h_f"], A),
-               rotation_deg=float(s["rotation"][-1]), speed_end=float(abs(s["vx"][-1])))
+               rotation_deg=float(s["rotation"][-1]), speed_end=float(abs(s["vx"][-1])),
+               flow_potential_0=potential0)
+    for key in ("flow_kinetic", "block_kinetic"):
+        i = int(s[key].argmax())
+        out.update({key + "_max": float(s[key][i]), key + "_max_time": float(s["t"][i])})
+    out["block_kinetic_ratio"] = out["block_kinetic_max"] / potential0
 
 
 # ---------------------------------------------------------------- through the C++ driver
@@ -201,18 +219,18 @@ def prepareCase(AR, L0_hb, folder, full=0, dx=None, ppc=None, settle=1.5, margin
     return folder
 
 
-def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads=None, rerun=False):
+def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads=None, rerun=False, until=None):
     """Run the prepared cases under ``folder`` through the driver, one after the other: the
-    free flow, then (if its front reached the station) the coupled run to the arrival + settle.
-    Standard library only (no YADE, numpy or h5py): it runs where only mpmsdem-run is built.
-    A case with run.json is done and skipped unless ``rerun``. Returns the case folders run."""
+    free flow, then (if its front reached the station) the coupled run to the arrival + settle,
+    or to ``until`` [s] if later (see runCase). Standard library only (no YADE, numpy or
+    h5py): it runs where only mpmsdem-run is built. A case with run.json is done and skipped
+    unless ``rerun``, or unless its coupled run ended before ``until``: that run then goes on
+    from its last snapshot (mpmsdem-run --restart, the same run as one to ``until``). Returns
+    the case folders run."""
     done = []
     for name in sorted(os.listdir(folder)):
         case = os.path.join(folder, name)
         if not os.path.isfile(os.path.join(case, "case.json")):
-            continue
-        if os.path.exists(os.path.join(case, "run.json")) and not rerun:
-            print("%s: done before (run.json), skipped" % name)
             continue
         with open(os.path.join(case, "case.json")) as f:
             meta = json.load(f)
@@ -221,12 +239,19 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
             return runDriver(exe, os.path.join(case, scene), os.path.join(case, out), os.path.join(case, out + ".log"),
                              extra, backend, precision, threads)
 
+        if os.path.exists(os.path.join(case, "run.json")) and not rerun:
+            if _extend(case, meta, until, drive):
+                done.append(case)
+            else:
+                print("%s: done before (run.json), skipped" % name)
+            continue
+
         record = {"backend": backend or "scene's", "precision": precision or "scene's", "exe": exe,
                   "free_flow_seconds": drive("free.json", "free")}
         with open(os.path.join(case, "free", "flow_probes.json")) as f:
             probe = json.load(f)["probes"][0]
         if probe["complete"]:
-            steps, _ = recordSteps(probe["arrival"] + meta["settle"], meta["dt"], SAMPLE_EVERY)
+            steps, _ = recordSteps(coupledEnd(probe["arrival"], meta["settle"], until), meta["dt"], SAMPLE_EVERY)
             record["coupled_steps"] = steps
             record["coupled_seconds"] = drive("coupled.json", "coupled", ["--steps", str(steps)])
         with open(os.path.join(case, "run.json"), "w") as f:
@@ -236,6 +261,30 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
                                           else ", the front did not reach the station"))
         done.append(case)
     return done
+
+
+def _extend(case, meta, until, drive):
+    """Continue a case's finished coupled run to ``until`` [s] if it ended before: from its last
+    snapshot (coupled/coupled.checkpoint.json) to the step runCase(until=...) would end on.
+    Updates run.json. Returns whether it ran."""
+    with open(os.path.join(case, "run.json")) as f:
+        record = json.load(f)
+    if until is None or "coupled_steps" not in record:
+        return False
+    with open(os.path.join(case, "free", "flow_probes.json")) as f:
+        probe = json.load(f)["probes"][0]
+    steps, _ = recordSteps(coupledEnd(probe["arrival"], meta["settle"], until), meta["dt"], SAMPLE_EVERY)
+    if steps <= record["coupled_steps"]:
+        return False
+    with open(os.path.join(case, "coupled", "coupled.checkpoint.json")) as f:
+        start = json.load(f)["step"]
+    seconds = drive("coupled.json", "coupled", ["--restart", "--steps", str(steps - start)])
+    record.update(coupled_steps=steps, coupled_seconds=record["coupled_seconds"] + seconds, until=until)
+    with open(os.path.join(case, "run.json"), "w") as f:
+        json.dump(record, f, indent=1)
+    print("%s: coupled run continued from step %d to %d (until %g s), %.0f s" % (os.path.basename(case), start, steps,
+                                                                                until, seconds))
+    return True
 
 
 def collectCase(case):
@@ -256,8 +305,9 @@ def collectCase(case):
     h, v = probe["h_f"], probe["v_f"]
     ff = {"arrival": probe["arrival"], "h_f": h, "v_f": v, "Fr": analysis.froude(v, h),
           "Fr1": analysis.froudeDistance(v, out["L0"])}
-    s, _ = analysis.driverBlockSeries(os.path.join(case, "coupled"), initial=False)
-    _coupledResults(out, ff, s, record["coupled_steps"] * meta["dt"])
+    s, _ = analysis.driverBlockSeries(os.path.join(case, "coupled"))
+    potential0 = float(s["flow_potential"][0])  # the driver's record at the start
+    _coupledResults(out, ff, {k: v[1:] for k, v in s.items()}, record["coupled_steps"] * meta["dt"], potential0)
     out["wall_seconds"]["coupled"] = record["coupled_seconds"]
     return out
 
@@ -316,6 +366,9 @@ def parse(argv):
     ap.add_argument("--precision", choices=("double", "float"), default=None,
                     help="--run-prepared: the precision (default: the scenes', double)")
     ap.add_argument("--rerun", action="store_true", help="--run-prepared: run the cases done before again")
+    ap.add_argument("--until", type=float, default=None,
+                    help="the coupled runs last at least until this time [s] (the paper's: 4.5); with "
+                         "--run-prepared, cases done before that ended earlier go on from their last snapshot")
     return ap.parse_known_args(argv)[0]
 
 
@@ -324,6 +377,8 @@ def sweepMain(a):
     cases = readTable(a.table)
     if a.full:
         cases = [dict(c, full=1) for c in cases]
+    if a.until:
+        cases = [dict(c, until=a.until) for c in cases]
     store = os.path.join(a.out, "runs.jsonl")
     records = sweep.runAll("%s:runCase" % os.path.abspath(__file__), cases, store, workers=a.workers,
                            scheduler=a.scheduler, retries=a.retries, timeout=a.timeout, threads=a.threads,
@@ -381,7 +436,7 @@ def main(argv):
     if a.prepare:
         return prepareMain(a)
     if a.run_prepared:
-        if not runPrepared(a.run_prepared, a.exe, a.backend, a.precision, a.threads, a.rerun):
+        if not runPrepared(a.run_prepared, a.exe, a.backend, a.precision, a.threads, a.rerun, a.until):
             print("--run-prepared %s: nothing to run (no case folder without run.json; --rerun runs them again)"
                   % a.run_prepared)
         return
@@ -391,10 +446,10 @@ def main(argv):
     from yade import utils
     # Table columns beyond AR, L0_hb and full are optional; 0 means runCase's default.
     utils.readParamsFromTable(AR=a.AR or 1.3, L0_hb=a.L0_hb or 4, full=1 if a.full else 0, dx=0, ppc=0, settle=1.5,
-                              margin=a.margin or MARGIN, noTableOk=True)
+                              margin=a.margin or MARGIN, until=a.until or 0, noTableOk=True)
     from yade.params import table
     r = runCase(table.AR, table.L0_hb, full=table.full, dx=table.dx or None, ppc=table.ppc or None,
-                settle=table.settle, margin=table.margin, verbose=True)
+                settle=table.settle, margin=table.margin, until=table.until or None, verbose=True)
     os.makedirs(a.out, exist_ok=True)
     path = os.path.join(a.out, caseName(table.AR, table.L0_hb, table.full) + ".json")
     with open(path, "w") as f:

@@ -9,6 +9,11 @@ Figs 14, 16b and 19:
   (k = 1.6, α_f = 0.18) and its bound (k = α_f = 1).
 - Fig 19a, 19b: S_b/L0 against Fr and against Fr1 = v_f/√(g L0), with a line and Pearson's
   r for each submersion group (paper: r = 0.02 and −0.11 against Fr; 0.91 and 0.83 against Fr1).
+- Fig 18: the cube's largest kinetic energy over the flow's initial potential energy,
+  E_k,max^b / E_p,0^f, against L0/h_b for each AR (paper: below 0.4 % in every case; our E_p,0^f
+  is zero at the bed under the column's upstream end), and beside it the time of the flow's
+  kinetic-energy peak in the coupled run (Fig 17: about 0.38 s for AR 3.0 at L0/h_b 4 and 24).
+  Runs recorded before these energies were kept are left out of both.
 
     python3 examples/parametric_study_summary.py [--results results/parametric_study]
 
@@ -92,6 +97,11 @@ def main():
               % (r["AR"], r["L0_hb"], ff["h_f"], ff["v_f"], ff["Fr"], ff["Fr1"], r["travel_L0"], ratio,
                  r["peak_force"], r["submersion"],
                  "" if travelled(r) else " (cube at the flume's end: not in the travel fits)"))
+    for r in sorted((r for r in runs if "block_kinetic_ratio" in r), key=lambda r: (r["AR"], r["L0_hb"])):
+        print("%5.2f %6g   E_k,max^b/E_p,0^f %.2f %% (paper: < 0.4 %%) at %.3f s; flow kinetic peak %.1f J at %.3f s "
+              "(paper, AR 3.0: ~0.38 s)" % (r["AR"], r["L0_hb"], 100 * r["block_kinetic_ratio"],
+                                            r["block_kinetic_max_time"], r["flow_kinetic_max"],
+                                            r["flow_kinetic_max_time"]))
     for r in short:
         print("%5.2f %6g   the flow stopped at x = %.2f m, short of the cube (not in the fits)"
               % (r["AR"], r["L0_hb"], r["front"]))
@@ -119,7 +129,7 @@ def main():
 
 
 def plot(runs, fits, path):
-    fig, ax = plt.subplots(2, 2, figsize=(11, 8.5))
+    fig, ax = plt.subplots(2, 3, figsize=(16, 8.5))
     a = ax[0, 0]
     hf = np.array([r["free_flow"]["h_f"] / r["h_b"] for r in runs])
     norm = matplotlib.colors.Normalize(hf.min(), hf.max())
@@ -167,6 +177,20 @@ def plot(runs, fits, path):
         a.set_xlabel("Fr = v_f / √(g h_f)" if xname == "Fr" else "Fr1 = v_f / √(g L0)")
         a.set_ylabel("S_b / L0")
         a.set_title("Travel distance (%s)" % title)
+        a.legend(fontsize=8)
+    energies = [r for r in runs if "block_kinetic_ratio" in r]
+    for a, key, scale, ylabel, title in (
+            (ax[0, 2], "block_kinetic_ratio", 100.0, "E_k,max^b / E_p,0^f [%]", "Cube's largest kinetic energy (Fig 18)"),
+            (ax[1, 2], "flow_kinetic_max_time", 1.0, "t [s]", "Flow's kinetic-energy peak (Fig 17)")):
+        for k, AR in enumerate(sorted({r["AR"] for r in energies})):
+            sel = sorted((r for r in energies if r["AR"] == AR), key=lambda r: r["L0_hb"])
+            a.plot([r["L0_hb"] for r in sel], [scale * r[key] for r in sel], "o-", color="C%d" % k, label="AR %.2f" % AR)
+        a.set_xlabel("L0 / h_b")
+        a.set_ylabel(ylabel)
+        a.set_title(title)
+    ax[0, 2].axhline(0.4, color="k", ls="--", label="paper: below 0.4 %")
+    ax[1, 2].axhline(0.38, color="k", ls="--", label="paper: ~0.38 s (AR 3.0)")
+    for a in ax[:, 2]:
         a.legend(fontsize=8)
     fig.suptitle("Parametric study (paper §5): %d runs" % len(runs))
     fig.tight_layout()

@@ -274,7 +274,8 @@ def driverBlockSeries(folder, block=None, initial=True):
     """A block's series from the coupled.h5 that ``mpmsdem-run`` wrote in ``folder``, with the
     keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, Ft, Ff, Fe
     (downstream flow force: total, on faces, on edges) [N], rotation (the whole angle turned
-    since the start), tilt and yaw [deg]. ``block``: its index in the file (default: the first
+    since the start), tilt and yaw [deg], and the scene's flow_kinetic, flow_potential and
+    block_kinetic [J]. ``block``: its index in the file (default: the first
     block that moves; a flume's bed is fixed). ``initial``: keep the driver's record at the
     start; False leaves it out, as :meth:`Flume.series` has no record before the first step
     (travel still counts from the start). Returns (series, scene dict). Needs h5py only, not
@@ -303,6 +304,9 @@ def driverBlockSeries(folder, block=None, initial=True):
              "rotation": np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))}
         turns = np.array([tiltAndYaw(np.linalg.norm(r), r) for r in g["rotation"][:, c]]).reshape(-1, 2)
         s["tilt"], s["yaw"] = turns[:, 0], turns[:, 1]
+        for k in ("flow_kinetic", "flow_potential", "block_kinetic"):
+            if k in g:  # the driver and CoupledEngine write them; other writers may not
+                s[k] = g[k][:]
         scene = json.loads(f.attrs["parameters"])
     if not initial:
         s = {k: v[1:] for k, v in s.items()}

@@ -159,7 +159,9 @@ class Flume:
         O.engines = [ForceResetter(), self.coupled.runner, NewtonIntegrator(gravity=Vector3(*self.gravity), damping=0)]
         O.dt = dtFactor * self.mpm.stableTimeStep()
         self.x0 = [O.bodies[i].state.pos[0] for i in self.blockIds]
-        self.history = []  # (t, [x], [vx], [Fx], [Ffx], [Fex], [rotation], [tilt], [yaw] deg) per sample
+        # per sample: (t, [x], [vx], [Fx], [Ffx], [Fex], [rotation], [tilt], [yaw] deg, (flow
+        # kinetic, flow potential, blocks' kinetic energy) [J])
+        self.history = []
 
     def sample(self):
         """Append the blocks' state and flow forces (downstream components) to ``history``."""
@@ -175,6 +177,8 @@ class Flume:
         split = [tiltAndYaw(angle, axis) for angle, axis in turns]
         row.append([tilt for tilt, _ in split])
         row.append([yaw for _, yaw in split])
+        d = self.mpm.diagnostics()
+        row.append((d["kinetic_energy"], d["potential_energy"], self.coupled.blockKineticEnergy()))
         self.history.append(row)
 
     def run(self, duration, sampleEvery=None):
@@ -211,12 +215,16 @@ class Flume:
 
     def series(self, k):
         """numpy arrays of block k: t, travel S_b, v_x, F_t, F_f, F_e (downstream, N), rotation
-        (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`)."""
+        (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`); and
+        of the scene: flow_kinetic, flow_potential (zero at the origin: the bed under the
+        column's upstream end) and block_kinetic (all blocks, translation and rotation) [J]."""
         import numpy as np
         t = np.array([r[0] for r in self.history])
         cols = [np.array([r[j][k] for r in self.history]) for j in range(1, 9)]
+        energies = np.array([r[9] for r in self.history]).reshape(-1, 3)
         return {"t": t, "travel": cols[0] - self.x0[k], "vx": cols[1], "Ft": cols[2], "Ff": cols[3], "Fe": cols[4],
-                "rotation": cols[5], "tilt": cols[6], "yaw": cols[7]}
+                "rotation": cols[5], "tilt": cols[6], "yaw": cols[7], "flow_kinetic": energies[:, 0],
+                "flow_potential": energies[:, 1], "block_kinetic": energies[:, 2]}
 
     def peakForce(self, k, smooth=None):
         """Peak downstream flow force on block k [N] and its time [s]; with ``smooth`` [s] the

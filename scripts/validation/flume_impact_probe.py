@@ -7,10 +7,13 @@ points touching it. Prints 20 ms means from the first touch on: the force F_x an
 height of the force's line of action relative to the centroid (T_y / F_x), tilt, yaw, the
 cube's speed and centroid height; then the first touch, the impulse of the first 30 ms and the
 speed 30 ms after the touch. Writes the series to --out (npz: t, pos, vel, force, torque, tilt,
-yaw, contacts).
+yaw, contacts). At the first touch and every 4 ms for 20 ms after it, the state of the flow
+within 6 cm upstream of the cube (and 3 cm either side of its centre): how many points, the
+share of them gasified (stress-free), their mean density and mean pressure.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/flume_impact_probe.py [--dx 0.01]
         [--width 0.2] [--duration 0.6] [--viscosity 0.0503] [--yaw0 0] [--dy 0] [--out FILE]
+        [--ppc 8] [--young 1e6] [--flow-stiffness 1e4] [--dt-factor 0.5]
 
 Defaults: the paper's numerics (dx 0.01 m, its blend as a PIC viscosity of 0.0503 m²/s), the
 0.2 m flume, 0.6 s. docs/coupled-results.md ("Why our cube tips") quotes its output.
@@ -34,6 +37,13 @@ def parse(argv):
                     help="PIC viscosity of the flow's blend [m^2/s] (the paper's: %.4g)" % PAPER_VISCOSITY)
     ap.add_argument("--yaw0", type=float, default=0.0, help="the cube's start off face-on, about the bed normal [deg]")
     ap.add_argument("--dy", type=float, default=0.0, help="the cube's offset from the centre line [m]")
+    ap.add_argument("--ppc", type=int, default=8, help="material points per cell (8, the paper's)")
+    ap.add_argument("--young", type=float, default=1e6, help="the flow's Young's modulus [Pa] (1e6, Table 1)")
+    ap.add_argument("--flow-stiffness", type=float, default=1e4,
+                    help="barrier stiffness k_c of the cube's contacts [N/m] (1e4, the paper's), bed and flow")
+    ap.add_argument("--dt-factor", type=float, default=0.5,
+                    help="O.dt as a fraction of the flow's stable step at the start (0.5; a softer flow needs less "
+                         "to keep the contact step)")
     ap.add_argument("--out", default=os.path.join("results", "flume_impact_probe.npz"), help="series file (npz)")
     a = ap.parse_args(argv)
     if not a.duration > 0.35:
@@ -41,6 +51,18 @@ def parse(argv):
     if not abs(a.dy) < a.width / 2 - 0.01:
         ap.error("--dy %g m: the cube must stay inside the flume (|dy| < width/2 - 0.01 m)" % a.dy)
     return a
+
+
+def upstreamState(scene, x0, yc):
+    """(t, points, gasified share, mean density [kg/m³], mean pressure [Pa]) of the flow within
+    6 cm upstream of x0 (and 2.5 cm past it) and 3 cm either side of yc."""
+    import numpy as np
+    p = scene.mpm.particles()
+    x = p["x"]
+    m = (x[:, 0] > x0 - 0.06) & (x[:, 0] < x0 + 0.025) & (np.abs(x[:, 1] - yc) < 0.03)
+    pressure = -p["stress"][m, :3].sum(axis=1) / 3.0
+    return (scene.mpm.time, int(m.sum()), float((p["phase"][m] == 2).mean()), float(p["density"][m].mean()),
+            float(pressure.mean()))
 
 
 def main(argv):
@@ -53,18 +75,25 @@ def main(argv):
     from mpmsdem.flume import Flume
     from yade import O
     from yade.minieigenHP import Quaternion, Vector3
+    from mpmsdem.flume import GLASS_BEADS
     cube = copperCube(y=a.width / 2 + a.dy)
-    scene = Flume(dx=a.dx, width=a.width, blocks=[cube], flipViscosity=a.viscosity, verbose=False)
+    cube.barrierStiffness = a.flow_stiffness
+    scene = Flume(dx=a.dx, width=a.width, blocks=[cube], flipViscosity=a.viscosity, verbose=False, ppc=a.ppc,
+                  granular=dict(GLASS_BEADS, young_modulus=a.young), dtFactor=a.dt_factor)
     body = scene.blockIds[0]
     if a.yaw0:
         O.bodies[body].state.ori = Quaternion(Vector3(0, 0, 1), math.radians(a.yaw0))
     mass = O.bodies[body].state.mass
     every = max(1, int(round(0.002 / O.dt)))
-    rows = []
+    rows, upstream, touch = [], [], None
     while O.time < a.duration - 0.5 * O.dt:
         mpmsdem.run(every, scene.coupled)
         st = O.bodies[body].state
         f, t = scene.coupled.force(body), scene.coupled.torque(body)
+        if touch is None and f[0] != 0:
+            touch = O.time
+        if touch is not None and round((O.time - touch) / 0.002) in (0, 2, 4, 6, 8, 10):
+            upstream.append(upstreamState(scene, cube.x, st.pos[1]))
         tilt, yaw = tiltAndYaw(*st.ori.toAngleAxis())
         rows.append([O.time, *st.pos, *st.vel, *f, *t, tilt, yaw, scene.coupled.contactCount(body)])
     r = np.array(rows)
@@ -73,8 +102,12 @@ def main(argv):
     os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
     np.savez(a.out, **s)
     t, fx = s["t"], s["force"][:, 0]
-    print("§3.2 cube, dx %g m, width %g m, %d material points, O.dt %.3g s, %s; yaw0 %g deg, dy %g m"
-          % (a.dx, a.width, scene.mpm.numParticles, O.dt, scene.flipBlend(), a.yaw0, a.dy))
+    print("§3.2 cube, dx %g m, width %g m, %d material points (%d per cell), E %g Pa, k_c %g N/m, O.dt %.3g s, %s; "
+          "yaw0 %g deg, dy %g m" % (a.dx, a.width, scene.mpm.numParticles, a.ppc, a.young, a.flow_stiffness, O.dt,
+                                    scene.flipBlend(), a.yaw0, a.dy))
+    print("  the flow 6 cm upstream:  t [s]  points  gasified  density [kg/m3]  pressure [Pa]")
+    for u in upstream:
+        print("                         %.3f  %6d  %8.2f  %15.0f  %13.0f" % u)
     touched = np.nonzero(np.abs(fx) > 0)[0]
     if not len(touched):
         print("the flow did not touch the cube by %g s" % a.duration)

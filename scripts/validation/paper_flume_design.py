@@ -28,8 +28,8 @@ hypercube (seed ``--seed``): PIC damping 1000–4000 /s (log-uniform), basal fri
 μ₂ 0.65–0.80, flow–cube friction 0–0.67, side-wall friction 0–0.21 (``LHS_RANGES``).
 
 Targets (paper §3.2, Figs 8–9): first touch ~0.25 s (experiment 0.3 s), F_t 0.32 N at 0.4 s,
-~0.20 N plateau, 45° at 0.72 s and then at rest. Prints the table with each case's Δx, step
-and damping per second, and writes it to ``--out``/design.md.
+~0.20 N plateau, 45° at 0.72 s and turning on past it, at rest in the end. Prints the table
+with each case's Δx, step and damping per second, and writes it to ``--out``/design.md.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/paper_flume_design.py [--cases paper,basal030]
         [--lhs 20] [--duration 0.8] [--out results/paper_flume_design]

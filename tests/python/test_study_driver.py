@@ -8,6 +8,7 @@
   targets in YADE to round-off."""
 import importlib.util
 import json
+import math
 import os
 import subprocess
 import sys
@@ -41,12 +42,18 @@ def test_a_case_through_the_driver_gives_the_yade_case(tmp_path):
     assert ps.runPrepared(str(tmp_path), exe=driver.executable()) == []  # done: run.json
     got = ps.collectCase(folder)
     assert ref["reached"] and got["reached"]
-    for k in ("arrival", "h_f", "v_f", "Fr", "Fr1"):
-        assert got["free_flow"][k] == pytest.approx(ref["free_flow"][k], rel=1e-12, abs=1e-15), k
-    for k in ("travel", "peak_force", "static_force", "rotation_deg", "speed_end", "eq20_force", "static_force_model"):
-        assert got[k] == pytest.approx(ref[k], rel=1e-9, abs=1e-12), k
-    for k in ("peak_time", "duration", "particles", "cube_at_end", "submersion", "flume_length", "flip_blend"):
-        assert got[k] == ref[k], k
+    assertSameCase(got, ref)
+    # E_p,0 is the column's weight times its centroid's height against gravity, zero at the bed
+    # under its upstream end (10° flume; the lowest points R_p0 - dx/4 above the bed, Eq 13)
+    dx, th = CASE["dx"], math.radians(10)
+    zLow = (3 * dx ** 3 / 8 / (4 * math.pi)) ** (1 / 3) - dx / 4
+    mass = 1600 * 0.3 * 0.2 * ref["H_i"]
+    assert ref["flow_potential_0"] == pytest.approx(
+        mass * 9.81 * (math.cos(th) * (zLow + ref["H_i"] / 2) - math.sin(th) * 0.15), rel=1e-9)
+    # the flow's kinetic energy peaks after the release, the cube's after the front's arrival
+    assert 0 < ref["flow_kinetic_max_time"] < ref["duration"]
+    assert ref["free_flow"]["arrival"] < ref["block_kinetic_max_time"] <= ref["duration"] + 1e-9
+    assert 0.001 < ref["block_kinetic_ratio"] < 0.2
     # the front arrives at the station (x 0.5 m) in 0.2 s and the cube is pushed downstream
     assert 0.1 < ref["free_flow"]["arrival"] < 0.3
     assert 0.05 < ref["travel"] < 1.0
@@ -55,6 +62,26 @@ def test_a_case_through_the_driver_gives_the_yade_case(tmp_path):
     dt = json.load(open(os.path.join(folder, "case.json")))["dt"]
     every = round(0.002 / dt)
     assert steps % every == 0 and -dt / 2 <= steps * dt - (ref["free_flow"]["arrival"] + CASE["settle"]) < every * dt
+    # a later end (--until) continues the finished coupled run from its last snapshot: the
+    # results of one run to that end
+    until = ref["duration"] + 0.1
+    longer = ps.runCase(**CASE, until=until)
+    assert ps.runPrepared(str(tmp_path), exe=driver.executable(), until=until) == [folder]
+    assert ps.runPrepared(str(tmp_path), exe=driver.executable(), until=until) == []  # already there
+    extended = ps.collectCase(folder)
+    assertSameCase(extended, longer)
+    assert until - dt / 2 <= longer["duration"] < until + every * dt
+    assert extended["travel"] != pytest.approx(got["travel"], rel=1e-6)  # the cube was still moving: it went on
+
+
+def assertSameCase(got, ref):
+    for k in ("arrival", "h_f", "v_f", "Fr", "Fr1"):
+        assert got["free_flow"][k] == pytest.approx(ref["free_flow"][k], rel=1e-12, abs=1e-15), k
+    for k in ("travel", "peak_force", "static_force", "rotation_deg", "speed_end", "eq20_force", "static_force_model",
+              "flow_potential_0", "flow_kinetic_max", "block_kinetic_max", "block_kinetic_ratio"):
+        assert got[k] == pytest.approx(ref[k], rel=1e-9, abs=1e-12), k
+    for k in ("peak_time", "flow_kinetic_max_time", "block_kinetic_max_time", "duration", "particles", "cube_at_end", "submersion", "flume_length", "flip_blend"):
+        assert got[k] == ref[k], k
 
 
 def test_a_flow_that_stops_short_of_the_station_has_no_coupled_run(tmp_path):

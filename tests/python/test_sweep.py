@@ -233,12 +233,17 @@ def test_parametric_study_summary_on_known_data(tmp_path):
         for r in runs[:15]:
             st.append({"key": sweep.runKey({"AR": r["AR"], "L0_hb": r["L0_hb"]}), "status": "ok", "result": r,
                        "params": {"AR": r["AR"], "L0_hb": r["L0_hb"]}})
-    for r in runs[15:]:
+    for k, r in enumerate(runs[15:]):  # these recorded the energies of Figs 17-18 too
+        r.update(block_kinetic_ratio=0.002 * (k + 1), block_kinetic_max_time=0.5, flow_kinetic_max=100.0,
+                 flow_kinetic_max_time=0.38)
         with open(out / ("AR=%g_L0hb=%g.json" % (r["AR"], r["L0_hb"])), "w") as f:
             json.dump(r, f)
     proc = subprocess.run([sys.executable, os.path.join(ROOT, "examples", "parametric_study_summary.py"),
                            "--results", str(out)], capture_output=True, text=True, timeout=120, env=children.env())
     assert proc.returncode == 0, proc.stdout + proc.stderr
+    energyLines = [line for line in proc.stdout.splitlines() if "E_k,max^b/E_p,0^f" in line]
+    assert [line.split()[:2] for line in energyLines] == [["4.00", str(r["L0_hb"])] for r in runs[15:]]
+    assert "1.00 %" in energyLines[-1] and "at 0.380 s" in energyLines[-1]
     fits = json.load(open(out / "fits.json"))
     assert fits["runs"] == 20 and fits["cube_at_end"] == 1 and os.path.getsize(out / "parametric_study.png") > 10000
     Fr = np.array([r["free_flow"]["Fr"] for r in runs])
