@@ -14,6 +14,7 @@
 #                                                      # through the CUDA driver; needs a driver
 #                                                      # with HDF5 (scripts/bench/gpu_bundle.sh);
 #                                                      # results in $OUT/study.tgz, for --collect
+#   ... --study DIR --until 4.5                        # its coupled runs to 4.5 s (the paper's end)
 #   ... --design DIR                                   # the §3.2 cases prepared in DIR
 #                                                      # (scripts/validation/paper_flume_design.py
 #                                                      # --prepare), likewise: $OUT/design.tgz
@@ -47,12 +48,14 @@ prebuilt=""
 baseline=""
 study=""
 design=""
+until=""
 while [ $# -gt 0 ]; do
   case $1 in
     --prebuilt) prebuilt=${2:?"--prebuilt needs a folder"}; shift 2 ;;
     --baseline) baseline=${2:?"--baseline needs a folder"}; shift 2 ;;
     --study) study=${2:?"--study needs a folder of prepared cases"}; shift 2 ;;
     --design) design=${2:?"--design needs a folder of prepared cases"}; shift 2 ;;
+    --until) until=${2:?"--until needs a time [s]"}; shift 2 ;;
     *) echo "gpu_run.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -104,10 +107,11 @@ for t in test_mpm test_coupling; do
 done
 
 # prepared cases through the CUDA driver (a case run before is skipped: a second call goes on),
-# their outputs but the particle snapshots in $out/NAME.tgz: prepared_run NAME DIR SCRIPT
+# their outputs but the particle snapshots in $out/NAME.tgz: prepared_run NAME DIR SCRIPT [OPTION...]
 prepared_run() {
   local name=$1 dir=$2 script=$3
-  python3 "$script" --run-prepared "$dir" --backend cuda --exe "$bin/mpmsdem-run" --threads "$(nproc)" 2>&1 |
+  shift 3
+  python3 "$script" --run-prepared "$dir" --backend cuda --exe "$bin/mpmsdem-run" --threads "$(nproc)" "$@" 2>&1 |
     tee "$out/$name.log"
   local rc=${PIPESTATUS[0]}
   tar czf "$out/$name.tgz" --exclude=mpm.snapshots --exclude='*.restart' -C "$(dirname "$dir")" "$(basename "$dir")"
@@ -115,7 +119,7 @@ prepared_run() {
 }
 export -f prepared_run
 export bin out
-[ -n "$study" ] && stage study 420 prepared_run study "$study" examples/parametric_study.py
+[ -n "$study" ] && stage study 420 prepared_run study "$study" examples/parametric_study.py ${until:+--until "$until"}
 [ -n "$design" ] && stage design 420 prepared_run design "$design" scripts/validation/paper_flume_design.py
 
 # flume_run NAME SCENE BACKEND PRECISION [ARGS...]: one --bench run, its JSON line in $out/NAME.json
