@@ -20,6 +20,9 @@ probe and results):
     python3 examples/parametric_study.py --prepare DIR --full         (here, with YADE)
     python3 examples/parametric_study.py --run-prepared DIR [--backend cuda]   (needs only mpmsdem-run)
     python3 examples/parametric_study.py --collect DIR                (h5py; then the summary on DIR)
+The coupled runs last until the front's arrival + 1.5 s; ``--until 4.5`` runs them to the
+paper's 4.5 s (§5.4: "when the system approaches quasi-steady state") in every mode, and with
+--run-prepared continues cases that ended earlier from their last snapshot.
 
 Resolution: coarse by default (dx = 0.02 m, 8 points per cell); table column ``full = 1`` or
 ``--full``: the paper's (dx = 0.01 m). A coarse case takes from 6 minutes on one core (AR 1.3,
