@@ -8,6 +8,7 @@ surface than at the bed.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/flume_velocity_profile.py [--dx 0.01]
         [--width 0.06] [--viscosity 0.0503] [--times 0.32,0.36,0.40,0.45] [--station 0.51]
+        [--basal-friction 0.21]
 
 Defaults: the paper's numerics (dx 0.01 m, its blend as a PIC viscosity of 0.0503 m²/s) in a
 0.06 m slice of the flume (the flow is uniform across it between smooth walls).
@@ -25,6 +26,7 @@ def parse(argv):
     ap.add_argument("--width", type=float, default=0.06, help="flume width [m] (0.06)")
     ap.add_argument("--viscosity", type=float, default=PAPER_VISCOSITY,
                     help="PIC viscosity of the flow's blend [m^2/s] (the paper's: %.4g)" % PAPER_VISCOSITY)
+    ap.add_argument("--basal-friction", type=float, default=0.21, help="flow-bed friction (0.21, Table 1)")
     ap.add_argument("--times", default="0.32,0.36,0.40,0.45", help="times of the profiles [s], increasing")
     ap.add_argument("--station", type=float, default=0.51, help="x of the station [m] (the cube's face: 0.51)")
     ap.add_argument("--reach", type=float, default=0.05, help="the points within this much upstream [m] (0.05)")
@@ -46,10 +48,11 @@ def main(argv):
     import numpy as np
     from mpmsdem.flume import Flume
     from yade import O
-    scene = Flume(dx=a.dx, width=a.width, flipViscosity=a.viscosity, verbose=False)
-    print("§3.2 free flow, dx %g m, width %g m, %d points, O.dt %.3g s, %s; v_x [m/s] in 1 cm layers "
-          "(height of the layer's middle [mm]: speed), points %g-%g m" % (
-              a.dx, a.width, scene.mpm.numParticles, O.dt, scene.flipBlend(), a.station - a.reach, a.station))
+    scene = Flume(dx=a.dx, width=a.width, flipViscosity=a.viscosity, basalFriction=a.basal_friction, verbose=False)
+    print("§3.2 free flow, dx %g m, width %g m, %d points, O.dt %.3g s, %s, basal friction %g; v_x [m/s] in 1 cm "
+          "layers (height of the layer's middle [mm]: speed), points %g-%g m" % (
+              a.dx, a.width, scene.mpm.numParticles, O.dt, scene.flipBlend(), a.basal_friction, a.station - a.reach,
+              a.station))
     for t in a.times:
         mpmsdem.run(max(1, int(round((t - O.time) / O.dt))), scene.coupled)
         p = scene.mpm.particles()
