@@ -115,18 +115,20 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, max
     scene = Flume(blocks=[_cube(station)], output=output, outputEvery=0.01, vtkEvery=0.05 if output else None,
                   **common)
     potential0 = scene.mpm.diagnostics()["potential_energy"]
-    steps, every = recordSteps(coupledEnd(ff["arrival"], settle, until), O.dt, SAMPLE_EVERY)
+    steps, every = coupledSteps(ff["arrival"], settle, until, O.dt)
     scene.run(steps * O.dt, sampleEvery=every * O.dt)
     _coupledResults(out, ff, scene.series(0), steps * O.dt, potential0)
     out["wall_seconds"] = {"free_flow": tFree, "coupled": time.time() - t1}
     return out
 
 
-def coupledEnd(arrival, settle, until=None):
-    """When a case's coupled run ends [s]: the front's arrival + settle, or ``until`` if later."""
+def coupledSteps(arrival, settle, until, dt):
+    """(steps, record interval in steps) of a case's coupled run of step ``dt`` [s]: to the
+    front's arrival + settle, or to ``until`` [s] if later (None: no such end), in whole record
+    intervals."""
     if until is not None and not until > 0:
         raise ValueError("until = %r s: must be > 0 (or None)" % (until,))
-    return max(arrival + settle, until or 0.0)
+    return recordSteps(max(arrival + settle, until or 0.0), dt, SAMPLE_EVERY)
 
 
 def _setup(AR, L0_hb, full, dx, ppc, margin, backend, precision, verbose):
@@ -251,10 +253,9 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
 
         record = {"backend": backend or "scene's", "precision": precision or "scene's", "exe": exe,
                   "free_flow_seconds": drive("free.json", "free")}
-        with open(os.path.join(case, "free", "flow_probes.json")) as f:
-            probe = json.load(f)["probes"][0]
+        probe = _freeFlow(case)["probes"][0]
         if probe["complete"]:
-            steps, _ = recordSteps(coupledEnd(probe["arrival"], meta["settle"], until), meta["dt"], SAMPLE_EVERY)
+            steps, _ = coupledSteps(probe["arrival"], meta["settle"], until, meta["dt"])
             record["coupled_steps"] = steps
             record["coupled_seconds"] = drive("coupled.json", "coupled", ["--steps", str(steps)])
         with open(os.path.join(case, "run.json"), "w") as f:
@@ -274,9 +275,7 @@ def _extend(case, meta, until, drive):
         record = json.load(f)
     if until is None or "coupled_steps" not in record:
         return False
-    with open(os.path.join(case, "free", "flow_probes.json")) as f:
-        probe = json.load(f)["probes"][0]
-    steps, _ = recordSteps(coupledEnd(probe["arrival"], meta["settle"], until), meta["dt"], SAMPLE_EVERY)
+    steps, _ = coupledSteps(_freeFlow(case)["probes"][0]["arrival"], meta["settle"], until, meta["dt"])
     if steps <= record["coupled_steps"]:
         return False
     with open(os.path.join(case, "coupled", "coupled.checkpoint.json")) as f:
@@ -290,6 +289,12 @@ def _extend(case, meta, until, drive):
     return True
 
 
+def _freeFlow(case):
+    """What the driver's free flow of a case folder reported (free/flow_probes.json)."""
+    with open(os.path.join(case, "free", "flow_probes.json")) as f:
+        return json.load(f)
+
+
 def collectCase(case):
     """The result dict of runCase from a case folder that --run-prepared ran."""
     from mpmsdem import analysis
@@ -297,8 +302,7 @@ def collectCase(case):
         meta = json.load(f)
     with open(os.path.join(case, "run.json")) as f:
         record = json.load(f)
-    with open(os.path.join(case, "free", "flow_probes.json")) as f:
-        run = json.load(f)
+    run = _freeFlow(case)
     out = dict(meta["result"], driver=record)
     probe = run["probes"][0]
     out["wall_seconds"] = {"free_flow": record["free_flow_seconds"]}
