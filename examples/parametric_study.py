@@ -22,7 +22,9 @@ probe and results):
     python3 examples/parametric_study.py --collect DIR                (h5py; then the summary on DIR)
 The coupled runs last until the front's arrival + 1.5 s; ``--until 4.5`` runs them to the
 paper's 4.5 s (§5.4: "when the system approaches quasi-steady state") in every mode, and with
---run-prepared continues cases that ended earlier from their last snapshot.
+--run-prepared continues cases that ended earlier from their last snapshot. --run-prepared also
+resumes a case that was stopped part-way (killed): its finished free flow is kept and its
+coupled run goes on from its last snapshot.
 
 Resolution: coarse by default (dx = 0.02 m, 8 points per cell); table column ``full = 1`` or
 ``--full``: the paper's (dx = 0.01 m). A coarse case takes from 6 minutes on one core (AR 1.3,
@@ -230,8 +232,10 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
     or to ``until`` [s] if later (see runCase). Standard library only (no YADE, numpy or
     h5py): it runs where only mpmsdem-run is built. A case with run.json is done and skipped
     unless ``rerun``, or unless its coupled run ended before ``until``: that run then goes on
-    from its last snapshot (mpmsdem-run --restart, the same run as one to ``until``). Returns
-    the case folders run."""
+    from its last snapshot (mpmsdem-run --restart, the same run as one to ``until``). A case
+    stopped part-way (killed, or the machine went away) resumes: its finished free flow is
+    kept (run.partial.json) and its coupled run goes on from its last snapshot (every 0.5 s).
+    Returns the case folders run."""
     done = []
     for name in sorted(os.listdir(folder)):
         case = os.path.join(folder, name)
@@ -250,21 +254,58 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
             else:
                 print("%s: done before (run.json), skipped" % name)
             continue
-
-        record = {"backend": backend or "scene's", "precision": precision or "scene's", "exe": exe,
-                  "free_flow_seconds": drive("free.json", "free")}
-        probe = _freeFlow(case)["probes"][0]
-        if probe["complete"]:
-            steps, _ = coupledSteps(probe["arrival"], meta["settle"], until, meta["dt"])
-            record["coupled_steps"] = steps
-            record["coupled_seconds"] = drive("coupled.json", "coupled", ["--steps", str(steps)])
-        with open(os.path.join(case, "run.json"), "w") as f:
-            json.dump(record, f, indent=1)
-        print("%s: free flow %.0f s%s" % (name, record["free_flow_seconds"],
-                                          ", coupled %.0f s" % record["coupled_seconds"] if probe["complete"]
-                                          else ", the front did not reach the station"))
+        how = {"backend": backend or "scene's", "precision": precision or "scene's", "exe": exe}
+        _runCaseFolder(case, meta, until, drive, how, restart=not rerun)
         done.append(case)
     return done
+
+
+def _runCaseFolder(case, meta, until, drive, how, restart):
+    """The free flow and the coupled run of one prepared case (``how``: backend, precision and
+    driver, recorded); writes run.json at the end. What has finished is kept in run.partial.json
+    as it finishes; with ``restart`` a case stopped part-way goes on from there (the coupled run
+    from coupled/coupled.checkpoint.json; the wall seconds then count the legs that finished)."""
+    partialPath = os.path.join(case, "run.partial.json")
+    record = {}
+    if restart and os.path.exists(partialPath):
+        with open(partialPath) as f:
+            record = json.load(f)
+
+    def keep():
+        with open(partialPath, "w") as f:
+            json.dump(record, f, indent=1)
+
+    name = os.path.basename(case)
+    if "free_flow_seconds" not in record:
+        record = dict(how, free_flow_seconds=drive("free.json", "free"))
+        keep()
+    elif restart:
+        print("%s: free flow done before (run.partial.json), kept" % name)
+    probe = _freeFlow(case)["probes"][0]
+    if probe["complete"]:
+        steps, _ = coupledSteps(probe["arrival"], meta["settle"], until, meta["dt"])
+        checkpoint = os.path.join(case, "coupled", "coupled.checkpoint.json")
+        start = 0
+        if record.get("coupled_started") and os.path.exists(checkpoint):
+            with open(checkpoint) as f:
+                start = min(json.load(f)["step"], steps)
+        record.update(coupled_steps=steps, coupled_started=True)
+        keep()
+        seconds = record.get("coupled_seconds", 0.0)
+        if start == 0:
+            seconds = drive("coupled.json", "coupled", ["--steps", str(steps)])
+        elif start < steps:
+            print("%s: coupled run resumed from step %d of %d" % (name, start, steps))
+            record.setdefault("resumed_from_steps", []).append(start)
+            seconds += drive("coupled.json", "coupled", ["--restart", "--steps", str(steps - start)])
+        record["coupled_seconds"] = seconds
+    record.pop("coupled_started", None)
+    with open(os.path.join(case, "run.json"), "w") as f:
+        json.dump(record, f, indent=1)
+    os.remove(partialPath)
+    print("%s: free flow %.0f s%s" % (name, record["free_flow_seconds"],
+                                      ", coupled %.0f s" % record["coupled_seconds"] if probe["complete"]
+                                      else ", the front did not reach the station"))
 
 
 def _extend(case, meta, until, drive):

@@ -84,6 +84,45 @@ def assertSameCase(got, ref):
         assert got[k] == ref[k], k
 
 
+def test_a_case_stopped_part_way_resumes_where_it_stopped(tmp_path):
+    """A machine that goes away mid-case: --run-prepared keeps the finished free flow and goes on
+    with the coupled run from its last snapshot; the results are those of one unbroken run."""
+    ps = study()
+    until = 0.8
+    ref = ps.runCase(**CASE, until=until)
+    folder = ps.prepareCase(folder=str(tmp_path / "study" / "case"), **CASE)
+    dt = json.load(open(os.path.join(folder, "case.json")))["dt"]
+    steps, _ = ps.coupledSteps(ref["free_flow"]["arrival"], CASE["settle"], until, dt)
+    stop = steps // 2
+    # a driver whose coupled run stops after `stop` steps and reports a kill (SIGKILL's 137)
+    real = driver.executable()
+    wrapper = tmp_path / "killed-driver"
+    wrapper.write_text("#!%s\nimport subprocess, sys\nargs = sys.argv[1:]\n"
+                       "if args[0].endswith('coupled.json') and '--restart' not in args:\n"
+                       "    args[args.index('--steps') + 1] = '%d'\n"
+                       "    subprocess.run([%r] + args)\n"
+                       "    sys.exit(137)\n"
+                       "sys.exit(subprocess.run([%r] + args).returncode)\n" % (sys.executable, stop, real, real))
+    wrapper.chmod(0o755)
+    with pytest.raises(RuntimeError, match="exited 137"):
+        ps.runPrepared(str(tmp_path / "study"), exe=str(wrapper), until=until)
+    assert not os.path.exists(os.path.join(folder, "run.json"))
+    partial = json.load(open(os.path.join(folder, "run.partial.json")))
+    assert partial["coupled_steps"] == steps and partial["free_flow_seconds"] > 0
+    freeLog = os.path.join(folder, "free.log")
+    freeWritten = os.stat(freeLog).st_mtime_ns
+    assert ps.runPrepared(str(tmp_path / "study"), exe=real, until=until) == [folder]
+    assert os.stat(freeLog).st_mtime_ns == freeWritten  # the free flow was not run again
+    record = json.load(open(os.path.join(folder, "run.json")))
+    assert record["resumed_from_steps"] == [stop] and record["coupled_steps"] == steps
+    assert not os.path.exists(os.path.join(folder, "run.partial.json"))
+    assertSameCase(ps.collectCase(folder), ref)
+    # --rerun starts the case afresh: the same results again
+    assert ps.runPrepared(str(tmp_path / "study"), exe=real, until=until, rerun=True) == [folder]
+    assert "resumed_from_steps" not in json.load(open(os.path.join(folder, "run.json")))
+    assertSameCase(ps.collectCase(folder), ref)
+
+
 def test_a_flow_that_stops_short_of_the_station_has_no_coupled_run(tmp_path):
     ps = study()
     kw = dict(CASE, maxFreeTime=0.1)  # stopped before the front reaches x 0.5 m
