@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""Validation probe (opt-in, a minute or two): the §3.2 free flow's velocity profile at the
-cube's station. Runs the flume of examples/flume_block.py without the cube and prints, at the
-given times, the flow's depth at the station, the front's position and the mean downstream
-velocity of the points in 1 cm layers above the bed (points within --reach upstream of the
-station). A plug flow moves as one (the layers' speeds equal); a sheared one is faster at the
-surface than at the bed.
+"""Validation probe (opt-in, a minute or two): the §3.2 free flow's velocity and pressure
+profiles at the cube's station. Runs the flume of examples/flume_block.py without the cube and
+prints, at the given times, the flow's depth at the station, the front's position and, in 1 cm
+layers above the bed (points within --reach upstream of the station), the mean downstream
+velocity and the mean pressure -tr(sigma)/3 beside the lithostatic rho g cos(theta) (h - z)
+of a layer at rest under the flow's depth h (rho the bulk density). A plug flow moves as one
+(the layers' speeds equal); a sheared one is faster at the surface than at the bed.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/flume_velocity_profile.py [--dx 0.01]
         [--width 0.06] [--viscosity 0.0503] [--times 0.32,0.36,0.40,0.45] [--station 0.51]
@@ -15,6 +16,7 @@ Defaults: the paper's numerics (dx 0.01 m, its blend as a PIC viscosity of 0.050
 docs/coupled-results.md quotes its output.
 """
 import argparse
+import math
 import sys
 
 
@@ -46,7 +48,7 @@ def main(argv):
     import mpmsdem
     a = parse(argv)
     import numpy as np
-    from mpmsdem.flume import Flume
+    from mpmsdem.flume import GLASS_BEADS, Flume
     from yade import O
     scene = Flume(dx=a.dx, width=a.width, flipViscosity=a.viscosity, basalFriction=a.basal_friction, verbose=False)
     print("§3.2 free flow, dx %g m, width %g m, %d points, O.dt %.3g s, %s, basal friction %g; v_x [m/s] in 1 cm "
@@ -62,15 +64,19 @@ def main(argv):
             print("t %.3f s: the flow is not at the station yet (front %.3f m)" % (O.time, x[:, 0].max()))
             continue
         z, vx = x[at, 2], v[at, 0]
+        pressure = -p["stress"][at, :3].sum(axis=1) / 3.0
         layers = []
         for lo in np.arange(0.0, z.max(), 0.01):
             w = (z >= lo) & (z < lo + 0.01)
             if w.sum() > 3:
-                layers.append((lo + 0.005, vx[w].mean()))
-        speeds = [s for _, s in layers]
+                layers.append((lo + 0.005, vx[w].mean(), pressure[w].mean()))
+        speeds = [s for _, s, _ in layers]
         print("t %.3f s: depth %.3f m, front %.3f m, top/bottom layer %.2f | %s" % (
             O.time, z.max(), x[:, 0].max(), speeds[-1] / speeds[0],
-            " ".join("%.0f:%.2f" % (1000 * h, s) for h, s in layers)))
+            " ".join("%.0f:%.2f" % (1000 * h, s) for h, s, _ in layers)))
+        weight = GLASS_BEADS["density"] * 9.81 * math.cos(math.radians(scene.inclineDeg))
+        print("           pressure [Pa] (lithostatic) | %s" % " ".join(
+            "%.0f:%.0f(%.0f)" % (1000 * h, q, weight * max(z.max() - h, 0.0)) for h, _, q in layers))
     return 0
 
 
