@@ -9,11 +9,14 @@ cube's speed and centroid height; then the first touch, the impulse of the first
 speed 30 ms after the touch. Writes the series to --out (npz: t, pos, vel, force, torque, tilt,
 yaw, contacts). At the first touch and every 4 ms for 20 ms after it, the state of the flow
 within 6 cm upstream of the cube (and 3 cm either side of its centre): how many points, the
-share of them gasified (stress-free), their mean density and mean pressure.
+share of them gasified (stress-free), their mean density and mean pressure. With --faces, the
+normal load of the flow on the cube's top face and on its upstream face in each 20 ms window,
+from the barrier law (Eq 10) and the positions of the points whose nearest core feature is
+that face (points at edges and corners are left out; the tangential forces are not included).
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/flume_impact_probe.py [--dx 0.01]
         [--width 0.2] [--duration 0.6] [--viscosity 0.0503] [--yaw0 0] [--dy 0] [--out FILE]
-        [--ppc 8] [--young 1e6] [--flow-stiffness 1e4] [--dt-factor 0.5] [--held]
+        [--ppc 8] [--young 1e6] [--flow-stiffness 1e4] [--dt-factor 0.5] [--held] [--faces]
 
 Defaults: the paper's numerics (dx 0.01 m, its blend as a PIC viscosity of 0.0503 m²/s), the
 0.2 m flume, 0.6 s. docs/coupled-results.md ("Why our cube tips") quotes its output.
@@ -46,6 +49,9 @@ def parse(argv):
                          "to keep the contact step)")
     ap.add_argument("--held", action="store_true",
                     help="hold the cube in place (blockedDOFs xyzXYZ): the force of the flow on a cube it does not move")
+    ap.add_argument("--faces", action="store_true",
+                    help="the flow's normal load on the cube's top and upstream faces (slower: reads the points "
+                         "every record)")
     ap.add_argument("--out", default=os.path.join("results", "flume_impact_probe.npz"), help="series file (npz)")
     a = ap.parse_args(argv)
     if not a.duration > 0.35:
@@ -65,6 +71,29 @@ def upstreamState(scene, x0, yc):
     pressure = -p["stress"][m, :3].sum(axis=1) / 3.0
     return (scene.mpm.time, int(m.sum()), float((p["phase"][m] == 2).mean()), float(p["density"][m].mean()),
             float(pressure.mean()))
+
+
+def faceLoads(particles, pos, ori, core, radius, kc):
+    """(top, upstream) normal loads [N] of the flow on a box-shaped block whose core has the
+    half-extents ``core`` [m] and sweep radius ``radius`` [m], at ``pos`` with orientation
+    ``ori`` (a YADE Quaternion): Eq 10's barrier force of each point whose nearest core feature
+    is the top (+z) or the upstream (-x) face, in the block's frame. A point's radius is
+    R_p0 = (3 V0 / 4 pi)^(1/3) (Eq 13)."""
+    import numpy as np
+    from mpmsdem.analysis import barrierForce
+    rot = np.array([[ori.toRotationMatrix()[i, j] for j in range(3)] for i in range(3)])
+    local = (particles["x"] - np.array([pos[0], pos[1], pos[2]])) @ rot  # into the block's frame
+    rp = (3.0 * particles["volume0"] / (4.0 * math.pi)) ** (1.0 / 3.0)
+    loads = []
+    for axis, sign in ((2, 1.0), (0, -1.0)):
+        others = [d for d in range(3) if d != axis]
+        gap = sign * local[:, axis] - core[axis]
+        inside = (np.abs(local[:, others[0]]) <= core[others[0]]) & (np.abs(local[:, others[1]]) <= core[others[1]])
+        R = rp + radius
+        delta = R - gap
+        touching = inside & (gap > 0) & (delta > 0)
+        loads.append(float(sum(barrierForce(d, r, kc) for d, r in zip(delta[touching], R[touching]))))
+    return tuple(loads)
 
 
 def main(argv):
@@ -99,10 +128,12 @@ def main(argv):
         if touch is not None and round((O.time - touch) / 0.002) in (0, 2, 4, 6, 8, 10):
             upstream.append(upstreamState(scene, cube.x, st.pos[1]))
         tilt, yaw = tiltAndYaw(*st.ori.toAngleAxis())
-        rows.append([O.time, *st.pos, *st.vel, *f, *t, tilt, yaw, scene.coupled.contactCount(body)])
+        faces = faceLoads(scene.mpm.particles(), st.pos, st.ori, [h - cube.sweepRadius for h in cube.half],
+                          cube.sweepRadius, a.flow_stiffness) if a.faces else (0.0, 0.0)
+        rows.append([O.time, *st.pos, *st.vel, *f, *t, tilt, yaw, scene.coupled.contactCount(body), *faces])
     r = np.array(rows)
     s = {"t": r[:, 0], "pos": r[:, 1:4], "vel": r[:, 4:7], "force": r[:, 7:10], "torque": r[:, 10:13],
-         "tilt": r[:, 13], "yaw": r[:, 14], "contacts": r[:, 15]}
+         "tilt": r[:, 13], "yaw": r[:, 14], "contacts": r[:, 15], "top_load": r[:, 16], "upstream_load": r[:, 17]}
     os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
     np.savez(a.out, **s)
     t, fx = s["t"], s["force"][:, 0]
@@ -117,15 +148,17 @@ def main(argv):
         print("the flow did not touch the cube by %g s" % a.duration)
         return 1
     t0 = t[touched[0]]
-    print("  t [s]   F_x [N]  F_z [N]  line of action [mm]  tilt [deg]  yaw [deg]  v_x [m/s]  z_c [mm]  points")
+    print("  t [s]   F_x [N]  F_z [N]  line of action [mm]  tilt [deg]  yaw [deg]  v_x [m/s]  z_c [mm]  points%s"
+          % ("  top face [N]  upstream face [N]" if a.faces else ""))
     for lo in np.arange(t0 - 0.01, t[-1], 0.02):
         w = (t >= lo) & (t < lo + 0.02)
         if not w.any():
             continue
         Fx, Fz, Ty = s["force"][w, 0].mean(), s["force"][w, 2].mean(), s["torque"][w, 1].mean()
-        print("  %.3f  %7.3f  %7.3f  %19s  %10.1f  %9.2f  %9.2f  %8.1f  %6.0f"
+        print("  %.3f  %7.3f  %7.3f  %19s  %10.1f  %9.2f  %9.2f  %8.1f  %6.0f%s"
               % (lo, Fx, Fz, "%.1f" % (1e3 * Ty / Fx) if Fx else "-", s["tilt"][w].mean(), s["yaw"][w].mean(),
-                 s["vel"][w, 0].mean(), 1e3 * s["pos"][w, 2].mean(), s["contacts"][w].mean()))
+                 s["vel"][w, 0].mean(), 1e3 * s["pos"][w, 2].mean(), s["contacts"][w].mean(),
+                 "  %12.3f  %17.3f" % (s["top_load"][w].mean(), s["upstream_load"][w].mean()) if a.faces else ""))
     w = (t >= t0) & (t <= t0 + 0.03)
     after = int(np.argmin(np.abs(t - t0 - 0.03)))
     print("first touch %.3f s; impulse of the first 30 ms %.4f N s (the cube's mass times its speed then: %.4f); "
