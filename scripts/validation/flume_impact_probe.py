@@ -16,7 +16,7 @@ that face (points at edges and corners are left out; the tangential forces are n
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/flume_impact_probe.py [--dx 0.01]
         [--width 0.2] [--duration 0.6] [--viscosity 0.0503] [--yaw0 0] [--dy 0] [--out FILE]
-        [--ppc 8] [--young 1e6] [--flow-stiffness 1e4] [--dt-factor 0.5] [--held] [--faces]
+        [--ppc 8] [--young 1e6] [--flow-stiffness 1e4] [--dt-factor 0.5] [--blocked DOFS] [--faces]
 
 Defaults: the paper's numerics (dx 0.01 m, its blend as a PIC viscosity of 0.0503 m²/s), the
 0.2 m flume, 0.6 s. docs/coupled-results.md ("Why our cube tips") quotes its output.
@@ -47,8 +47,9 @@ def parse(argv):
     ap.add_argument("--dt-factor", type=float, default=0.5,
                     help="O.dt as a fraction of the flow's stable step at the start (0.5; a softer flow needs less "
                          "to keep the contact step)")
-    ap.add_argument("--held", action="store_true",
-                    help="hold the cube in place (blockedDOFs xyzXYZ): the force of the flow on a cube it does not move")
+    ap.add_argument("--blocked", default="",
+                    help="the cube's blocked degrees of freedom (YADE's blockedDOFs): xyzXYZ holds it in place (the "
+                         "flow's force on a cube it does not move), XYZ lets it slide without turning")
     ap.add_argument("--faces", action="store_true",
                     help="the flow's normal load on the cube's top and upstream faces (slower: reads the points "
                          "every record)")
@@ -109,8 +110,7 @@ def main(argv):
     from mpmsdem.flume import GLASS_BEADS
     cube = copperCube(y=a.width / 2 + a.dy)
     cube.barrierStiffness = a.flow_stiffness
-    if a.held:
-        cube.blockedDOFs = "xyzXYZ"
+    cube.blockedDOFs = a.blocked
     scene = Flume(dx=a.dx, width=a.width, blocks=[cube], flipViscosity=a.viscosity, verbose=False, ppc=a.ppc,
                   granular=dict(GLASS_BEADS, young_modulus=a.young), dtFactor=a.dt_factor)
     body = scene.blockIds[0]
@@ -139,7 +139,7 @@ def main(argv):
     t, fx = s["t"], s["force"][:, 0]
     print("§3.2 cube, dx %g m, width %g m, %d material points (%d per cell), E %g Pa, k_c %g N/m, O.dt %.3g s, %s; "
           "yaw0 %g deg, dy %g m%s" % (a.dx, a.width, scene.mpm.numParticles, a.ppc, a.young, a.flow_stiffness, O.dt,
-                                    scene.flipBlend(), a.yaw0, a.dy, ", held in place" if a.held else ""))
+                                    scene.flipBlend(), a.yaw0, a.dy, ", blockedDOFs " + a.blocked if a.blocked else ""))
     print("  the flow 6 cm upstream:  t [s]  points  gasified  density [kg/m3]  pressure [Pa]")
     for u in upstream:
         print("                         %.3f  %6d  %8.2f  %15.0f  %13.0f" % u)
