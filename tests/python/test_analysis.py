@@ -1,4 +1,4 @@
-"""Hand-derived values of mpmsdem.analysis helpers that need no YADE scene."""
+"""Hand-derived values of mpmsdem.analysis helpers and of the validation probes that need no YADE scene."""
 import math
 
 import pytest
@@ -48,3 +48,38 @@ def test_a_turn_then_a_tip_splits_into_both_angles(yawDeg, tiltDeg, tiltAxis):
     # the tilt is the lean of the body's z axis whatever the order of the two turns
     angle, axis = angleAxis(mul(quat(yawDeg, (0, 0, 1)), quat(tiltDeg, tiltAxis)))
     assert tiltAndYaw(angle, axis)[0] == pytest.approx(tiltDeg, abs=1e-9)
+
+
+def test_the_impact_probes_face_loads_follow_the_block_and_eq10():
+    """scripts/validation/flume_impact_probe.py faceLoads: a point's barrier force (Eq 10) counts
+    on the face it faces in the block's frame, points off the face's footprint do not."""
+    import importlib.util
+    import os
+    import numpy as np
+    import mpmsdem  # noqa: F401  (YADE's types)
+    from yade.minieigenHP import Quaternion, Vector3
+    from mpmsdem.analysis import barrierForce
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    spec = importlib.util.spec_from_file_location("probe", os.path.join(root, "scripts", "validation",
+                                                                        "flume_impact_probe.py"))
+    probe = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(probe)
+    core, radius, kc = (0.009, 0.009, 0.009), 0.001, 1e4
+    v0 = 1e-6 / 8
+    rp = (3 * v0 / (4 * math.pi)) ** (1 / 3)
+    R = rp + radius
+    tilt = math.radians(30)
+    ori = Quaternion(Vector3(0, 1, 0), tilt)  # leaning forward: the top turns downstream
+    pos = (0.5, 0.03, 0.01)
+    up = np.array([math.sin(tilt), 0, math.cos(tilt)])  # the top face's normal
+    back = np.array([-math.cos(tilt), 0, math.sin(tilt)])  # the upstream face's normal
+    gaps = (0.6 * R, 0.9 * R)
+    x = [np.array(pos) + (core[0] + gaps[0]) * up,                       # on the top face
+         np.array(pos) + (core[0] + gaps[1]) * back + 0.004 * up,        # on the upstream face, off centre
+         np.array(pos) + (core[0] + 0.5 * R) * up + 0.0095 * back,      # above the top's upstream edge: neither
+         np.array(pos) + (core[0] + 1.1 * R) * up]                       # too far: no contact
+    particles = {"x": np.array(x), "volume0": np.full(len(x), v0)}
+    top, upstream = probe.faceLoads(particles, pos, ori, core, radius, kc)
+    assert top == pytest.approx(barrierForce(R - gaps[0], R, kc), rel=1e-12)
+    assert upstream == pytest.approx(barrierForce(R - gaps[1], R, kc), rel=1e-12)
+    assert top > upstream > 0
