@@ -9,6 +9,8 @@ Figs 14, 16b and 19:
   (k = 1.6, α_f = 0.18) and its bound (k = α_f = 1).
 - Fig 19a, 19b: S_b/L0 against Fr and against Fr1 = v_f/√(g L0), with a line and Pearson's
   r for each submersion group (paper: r = 0.02 and −0.11 against Fr; 0.91 and 0.83 against Fr1).
+  A cube still carried at the end of its run (faster than 0.05 m/s) has a lower bound for its
+  travel: an arrow up from its point, and a note in the table (fits.json: still_moving).
 - Fig 18: the cube's largest kinetic energy over the flow's initial potential energy,
   E_k,max^b / E_p,0^f, against L0/h_b for each AR (paper: below 0.4 % in every case; our E_p,0^f
   is zero at the bed under the column's upstream end), and beside it the time of the flow's
@@ -34,6 +36,7 @@ import numpy as np  # noqa: E402
 from mpmsdem import analysis, sweep  # noqa: E402
 
 K_STATIC = 1.6  # the paper's static pressure coefficient: data fix only 2 α_f/k, α_f is quoted at this k
+MOVING = 0.05     # a cube faster than this at the end of its run [m/s] is still carried: its travel a lower bound
 GROUPS = (("complete", "o", "none", "completely submerged (h_f > h_b)"),
           ("partial", "s", None, "partially submerged (h_f < h_b)"))
 
@@ -66,6 +69,11 @@ def travelled(r):
     return not r.get("cube_at_end", False)
 
 
+def moving(r):
+    """Whether a run's cube was still carried at its end (its travel a lower bound)."""
+    return r.get("speed_end") is not None and r["speed_end"] > MOVING
+
+
 def fitGroups(runs, x):
     """Line and Pearson r of S_b/L0 against ``x`` (a function of a run) per submersion group;
     None for a group with fewer than two runs or no spread."""
@@ -96,7 +104,9 @@ def main():
         print("%5.2f %6g %7.4f %7.3f %6.2f %6.2f %9.4f %s %9.3f %s%s"
               % (r["AR"], r["L0_hb"], ff["h_f"], ff["v_f"], ff["Fr"], ff["Fr1"], r["travel_L0"], ratio,
                  r["peak_force"], r["submersion"],
-                 "" if travelled(r) else " (cube at the flume's end: not in the travel fits)"))
+                 " (cube at the flume's end: not in the travel fits)" if not travelled(r) else
+                 " (still carried at %.2f m/s at the run's end: the travel a lower bound)" % r["speed_end"]
+                 if moving(r) else ""))
     for r in sorted((r for r in runs if "block_kinetic_ratio" in r), key=lambda r: (r["AR"], r["L0_hb"])):
         print("%5.2f %6g   E_k,max^b/E_p,0^f %.2f %% (paper: < 0.4 %%) at %.3f s; flow kinetic peak %.1f J at %.3f s "
               "(paper, AR 3.0: ~0.38 s)" % (r["AR"], r["L0_hb"], 100 * r["block_kinetic_ratio"],
@@ -110,7 +120,8 @@ def main():
     eq21 = analysis.fitImpactForceRatio([r["free_flow"]["Fr"] for r in forced], [r["force_ratio"] for r in forced],
                                         k=K_STATIC) if forced else None
     fits = {"runs": len(allRuns), "stopped_short": len(short),
-            "cube_at_end": sum(not travelled(r) for r in runs), "eq21": eq21,
+            "cube_at_end": sum(not travelled(r) for r in runs),
+            "still_moving": sum(travelled(r) and moving(r) for r in runs), "eq21": eq21,
             "Fr": fitGroups(runs, lambda r: r["free_flow"]["Fr"]),
             "Fr1": fitGroups(runs, lambda r: r["free_flow"]["Fr1"])}
     if eq21:
@@ -169,6 +180,11 @@ def plot(runs, fits, path):
             sel = [r for r in runs if r["submersion"] == group and travelled(r)]
             x = [r["free_flow"][xname] for r in sel]
             a.plot(x, [r["travel_L0"] for r in sel], marker, mfc=face or color, color=color, ls="none")
+            for r in sel:
+                if moving(r):  # a lower bound: the cube was still carried when the run ended
+                    a.annotate("", xy=(r["free_flow"][xname], r["travel_L0"] * 1.12),
+                               xytext=(r["free_flow"][xname], r["travel_L0"]),
+                               arrowprops=dict(arrowstyle="->", color=color))
             f = fits[xname][group]
             if f:
                 xs = np.linspace(min(x), max(x), 2)

@@ -226,7 +226,8 @@ def test_parametric_study_summary_on_known_data(tmp_path):
         runs.append({"AR": AR, "L0_hb": L0hb, "h_b": hb, "L0": L0, "free_flow": {"h_f": hf, "v_f": vf, "Fr": Fr,
                      "Fr1": Fr1}, "submersion": analysis.submersion(hf, hb), "travel": travel,
                      "travel_L0": travel / L0, "peak_force": ratio * 0.5, "static_force": 0.5,
-                     "force_ratio": ratio, "cube_at_end": i == 7})
+                     "force_ratio": ratio, "cube_at_end": i == 7,
+                     "speed_end": {3: 0.4, 7: 0.9, 9: 0.05}.get(i, 0.0)})  # 3 still carried; 7 at the end; 9 at the bound
     out = tmp_path / "results"
     os.makedirs(out)
     with sweep.Store(str(out / "runs.jsonl")) as st:  # 15 from a sweep, 5 as yade-batch job files
@@ -246,6 +247,10 @@ def test_parametric_study_summary_on_known_data(tmp_path):
     assert "1.00 %" in energyLines[-1] and "at 0.380 s" in energyLines[-1]
     fits = json.load(open(out / "fits.json"))
     assert fits["runs"] == 20 and fits["cube_at_end"] == 1 and os.path.getsize(out / "parametric_study.png") > 10000
+    # a cube still carried at its run's end is flagged (its travel a lower bound) and stays in the fits
+    assert fits["still_moving"] == 1
+    flagged = [line.split()[:2] for line in proc.stdout.splitlines() if "the travel a lower bound" in line]
+    assert flagged == [["%.2f" % runs[3]["AR"], str(runs[3]["L0_hb"])]]
     Fr = np.array([r["free_flow"]["Fr"] for r in runs])
     assert fits["eq21"]["alphaF"] == pytest.approx(
         analysis.fitImpactForceRatio(Fr, [r["force_ratio"] for r in runs])["alphaF"], rel=1e-9)
