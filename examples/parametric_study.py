@@ -264,7 +264,7 @@ def _runCaseFolder(case, meta, until, drive, how, restart):
     """The free flow and the coupled run of one prepared case (``how``: backend, precision and
     driver, recorded); writes run.json at the end. What has finished is kept in run.partial.json
     as it finishes; with ``restart`` a case stopped part-way goes on from there (the coupled run
-    from coupled/coupled.checkpoint.json; the wall seconds then count the legs that finished)."""
+    from coupled/coupled.checkpoint.json; the wall seconds then count the leg that finished)."""
     partialPath = os.path.join(case, "run.partial.json")
     record = {}
     if restart and os.path.exists(partialPath):
@@ -284,20 +284,18 @@ def _runCaseFolder(case, meta, until, drive, how, restart):
     probe = _freeFlow(case)["probes"][0]
     if probe["complete"]:
         steps, _ = coupledSteps(probe["arrival"], meta["settle"], until, meta["dt"])
-        checkpoint = os.path.join(case, "coupled", "coupled.checkpoint.json")
         start = 0
-        if record.get("coupled_started") and os.path.exists(checkpoint):
-            with open(checkpoint) as f:
-                start = min(json.load(f)["step"], steps)
+        if record.get("coupled_started") and os.path.exists(_checkpointPath(case)):
+            start = min(_checkpointStep(case), steps)
         record.update(coupled_steps=steps, coupled_started=True)
         keep()
-        seconds = record.get("coupled_seconds", 0.0)
+        seconds = 0.0
         if start == 0:
             seconds = drive("coupled.json", "coupled", ["--steps", str(steps)])
         elif start < steps:
             print("%s: coupled run resumed from step %d of %d" % (name, start, steps))
             record.setdefault("resumed_from_steps", []).append(start)
-            seconds += drive("coupled.json", "coupled", ["--restart", "--steps", str(steps - start)])
+            seconds = drive("coupled.json", "coupled", ["--restart", "--steps", str(steps - start)])
         record["coupled_seconds"] = seconds
     record.pop("coupled_started", None)
     with open(os.path.join(case, "run.json"), "w") as f:
@@ -319,8 +317,7 @@ def _extend(case, meta, until, drive):
     steps, _ = coupledSteps(_freeFlow(case)["probes"][0]["arrival"], meta["settle"], until, meta["dt"])
     if steps <= record["coupled_steps"]:
         return False
-    with open(os.path.join(case, "coupled", "coupled.checkpoint.json")) as f:
-        start = json.load(f)["step"]
+    start = _checkpointStep(case)
     seconds = drive("coupled.json", "coupled", ["--restart", "--steps", str(steps - start)])
     record.update(coupled_steps=steps, coupled_seconds=record["coupled_seconds"] + seconds, until=until)
     with open(os.path.join(case, "run.json"), "w") as f:
@@ -328,6 +325,16 @@ def _extend(case, meta, until, drive):
     print("%s: coupled run continued from step %d to %d (until %g s), %.0f s" % (os.path.basename(case), start, steps,
                                                                                 until, seconds))
     return True
+
+
+def _checkpointPath(case):
+    return os.path.join(case, "coupled", "coupled.checkpoint.json")
+
+
+def _checkpointStep(case):
+    """The step of the coupled run's last snapshot, the one mpmsdem-run --restart goes on from."""
+    with open(_checkpointPath(case)) as f:
+        return json.load(f)["step"]
 
 
 def _freeFlow(case):

@@ -16,7 +16,6 @@ Defaults: the paper's numerics (dx 0.01 m, its blend as a PIC viscosity of 0.050
 docs/coupled-results.md quotes its output.
 """
 import argparse
-import math
 import sys
 
 
@@ -74,7 +73,7 @@ def main(argv):
         print("t %.3f s: depth %.3f m, front %.3f m, top/bottom layer %.2f | %s" % (
             O.time, z.max(), x[:, 0].max(), speeds[-1] / speeds[0],
             " ".join("%.0f:%.2f" % (1000 * h, s) for h, s, _ in layers)))
-        weight = GLASS_BEADS["density"] * 9.81 * math.cos(math.radians(scene.inclineDeg))
+        weight = GLASS_BEADS["density"] * -scene.mpm.gravity[2]  # the bed-normal part of the resolved gravity
         print("           pressure [Pa] (lithostatic) | %s" % " ".join(
             "%.0f:%.0f(%.0f)" % (1000 * h, q, weight * max(z.max() - h, 0.0)) for h, _, q in layers))
     return 0
