@@ -39,7 +39,26 @@ def _import_yade():
                           "(`make deps`), and run with /usr/bin/python3 or `yade`") from e
 
 
+def _import_core():
+    """The C++ module, or an ImportError that says which copy of the package lacks it."""
+    try:
+        from . import _mpmsdem
+        return _mpmsdem
+    except ImportError as e:
+        here = os.path.dirname(os.path.abspath(__file__))
+        built = [f for f in os.listdir(here) if f.startswith("_mpmsdem") and f.endswith(".so")]
+        if built:  # the file is there but does not load: a library or the Python version
+            why = "its C++ module %s is there but does not load (%s)" % (built[0], e)
+        else:
+            why = ("it has no C++ module _mpmsdem*.so: it is a source copy, not a built one. A folder named "
+                   "mpmsdem in the current directory, or on sys.path before the installed package, shadows "
+                   "the installed one")
+        raise ImportError("mpmsdem was imported from %s, and %s. Build and install it (`make install`), or put "
+                          "the build's python folder first on PYTHONPATH" % (here, why)) from e
+
+
 _import_yade()
+_import_core()
 
 from ._mpmsdem import SpheroPolyhedron, SdemMat, cudaAvailable  # noqa: E402
 from .sdem import SdemEngine, _dispatch  # noqa: E402,F401  (_dispatch: the engines' PyRunner commands)

@@ -92,3 +92,20 @@ def test_a_child_without_yade_on_its_path_finds_it_through_mpmsdem():
     import mpmsdem
     import yade
     assert yadeFile == yade.__file__ and pkgFile == mpmsdem.__file__
+
+
+def test_a_source_copy_of_the_package_is_named_when_it_shadows_the_built_one(tmp_path):
+    # A user who runs a script from the repository's py/ folder (or any folder holding an
+    # unbuilt mpmsdem) imports that copy first: the error must say which copy and why.
+    source = os.path.join(ROOT, "py", "mpmsdem")
+    shadow = tmp_path / "mpmsdem"
+    shadow.mkdir()
+    for name in os.listdir(source):
+        if name.endswith(".py"):
+            (shadow / name).write_text(open(os.path.join(source, name)).read())
+    r = subprocess.run([sys.executable, "-c", "import mpmsdem"], cwd=str(tmp_path), capture_output=True, text=True,
+                       env=children.env(), timeout=120)
+    assert r.returncode != 0
+    last = r.stderr.strip().splitlines()[-1]
+    assert "mpmsdem was imported from %s" % shadow in last, r.stderr
+    assert "no C++ module _mpmsdem" in last and "make install" in last, r.stderr
