@@ -21,7 +21,10 @@
 //                            for bit, on the CPU and on CUDA (whose sums have a fixed order)
 //   --bench                  write no files, take no diagnostics; print one JSON line on
 //                            stdout at the end: backend, precision, solver, particles,
-//                            steps, seconds (step loop wall time), particle_updates_per_s,
+//                            steps, seconds (step loop wall time), particle_updates_per_s
+//                            (over the steps after the first kBenchWarmupSteps, which sort the
+//                            particles from their seeded order and first touch the second
+//                            state buffer; their time is warmup_seconds), warmup_steps,
 //                            bytes_per_particle (solver memoryBytes()/particles), threads;
 //                            with blocks also time, stage_seconds, contact_step_min(_time)
 //                            and moving_blocks (BlockRecord: travel, rotation, peak flow
@@ -324,6 +327,11 @@ class BlockRecord {
   std::vector<Block> blocks_;
 };
 
+// Steps at the start of a benchmark that are timed apart: as many as a peer's warm-up
+// (scripts/bench/peers: one step per copy of the particles), so that both rates are of the
+// steps a long run repeats.
+constexpr long kBenchWarmupSteps = 2;
+
 int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
   MpmSolver& solver = st.solver;
   const std::size_t n = solver.numParticles();
@@ -332,7 +340,15 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
   const auto t0 = Clock::now();
   auto lastReport = t0;
   double nextReport = 0.05;
+  const long firstStep = solver.steps();
+  double warmupSeconds = 0;
+  long warmupSteps = 0;
   while (!finished(solver, scene.run, maxSteps)) {
+    if (solver.steps() - firstStep == kBenchWarmupSteps) {
+      solver.stableTimeStep();  // waits for outstanding device work
+      warmupSeconds = since(t0);
+      warmupSteps = kBenchWarmupSteps;
+    }
     st.step(nextStep(st, scene.run, maxSteps == 0));
     if (blocks) blocks->afterStep(*st.coupled);
     const double f = progressFraction(solver, scene.run, maxSteps);
@@ -353,7 +369,10 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
                         {"particles", n},
                         {"steps", solver.steps()},
                         {"seconds", seconds},
-                        {"particle_updates_per_s", n * double(solver.steps()) / seconds},
+                        {"warmup_steps", warmupSteps},
+                        {"warmup_seconds", warmupSeconds},
+                        {"particle_updates_per_s",
+                         n * double(solver.steps() - firstStep - warmupSteps) / (seconds - warmupSeconds)},
                         {"bytes_per_particle", n ? double(solver.memoryBytes()) / n : 0.0},
                         {"threads", omp_get_max_threads()},
                         {"flip_blend", mpm::describeFlipBlend(scene.params)},

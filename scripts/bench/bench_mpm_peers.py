@@ -16,10 +16,10 @@ agree (ours from a second, non-benchmark run that prints them). A mismatch is an
     scripts/bench/bench_mpm_peers.py --sizes 5e3 --steps 2000 --threads 2
 
 The peer runs in a virtual environment (.venv-peers/ at the repository root, created with
---peer-python and given the pinned Taichi from PyPI when missing). Our rate is particles x
-steps / wall time of the step loop (mpmsdem-run --bench); the peer's leaves out its first two
-steps, which compile its kernels (reported apart). Exit status 1 when a run fails or the
-solvers disagree.
+--peer-python and given the pinned Taichi from PyPI when missing). Both rates are particles x
+steps / wall time over the steps after the first two, which are timed apart: the peer's compile
+its kernels, ours sort the seeded particles from scratch (mpmsdem-run --bench). Exit status 1
+when a run fails or the solvers disagree.
 """
 import argparse
 import json

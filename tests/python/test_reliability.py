@@ -338,3 +338,22 @@ def test_driver_names_bad_scene_files_and_sizes(tmp_path):
     r = subprocess.run(["bash", "-c", 'ulimit -v 2000000 && exec "$0" "$1" --bench --steps 1', exe, str(path)],
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "out of memory" in r.stderr and "grid.cells = [600, 600, 600]" in r.stderr, r.stderr
+
+
+def test_driver_bench_rate_leaves_out_the_warmup_steps_as_the_peer_does(tmp_path):
+    # The Taichi peer times its steps after two warm-up steps; ours must count the same steps
+    # (the first step sorts the seeded particles from scratch), else the ratio is biased.
+    import subprocess
+    exe = _driver()
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(SCENE))
+    for steps, warm in ((6, 2), (2, 0)):
+        r = subprocess.run([exe, str(path), "--bench", "--steps", str(steps)], capture_output=True, text=True,
+                           timeout=60)
+        assert r.returncode == 0, r.stderr
+        out = json.loads(r.stdout.strip().splitlines()[-1])
+        assert out["steps"] == steps and out["warmup_steps"] == warm
+        assert 0 <= out["warmup_seconds"] < out["seconds"]
+        assert (warm == 0) == (out["warmup_seconds"] == 0)
+        rate = out["particles"] * (steps - warm) / (out["seconds"] - out["warmup_seconds"])
+        assert out["particle_updates_per_s"] == pytest.approx(rate, rel=1e-12)
