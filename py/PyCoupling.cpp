@@ -94,6 +94,38 @@ class PyCoupling {
   long totalContacts() const { return coupling_.totalContacts(); }
   long historyOverflow() const { return coupling_.historyOverflow(); }
 
+  // The last step's MP–block contacts as numpy arrays, one row per contact (CPU backends).
+  bp::dict contacts() const {
+    const std::vector<coupling::MpContactRecord> rec = coupling_.contacts();
+    const npy_intp n = static_cast<npy_intp>(rec.size());
+    std::vector<double> point(3 * n), normal(3 * n), force(3 * n), fn(n), overlap(n);
+    std::vector<long> particle(n), block(n);
+    bp::list feature;
+    for (npy_intp c = 0; c < n; ++c) {
+      const coupling::MpContactRecord& r = rec[c];
+      for (int k = 0; k < 3; ++k) {
+        point[3 * c + k] = r.point[k];
+        normal[3 * c + k] = r.normal[k];
+        force[3 * c + k] = r.force[k];
+      }
+      fn[c] = r.normalForce;
+      overlap[c] = r.overlap;
+      particle[c] = r.particle;
+      block[c] = sdem_.engine().externalId(r.block);
+      feature.append(featureName(static_cast<sdem::FeatureKind>(r.featureKind)));
+    }
+    bp::dict d;
+    d["particle"] = numpyArrayInt(particle);
+    d["block"] = numpyArrayInt(block);
+    d["point"] = numpyArray(point.data(), n, 3);
+    d["normal"] = numpyArray(normal.data(), n, 3);
+    d["force"] = numpyArray(force.data(), n, 3);
+    d["normalForce"] = numpyArray(fn.data(), n, 0);
+    d["overlap"] = numpyArray(overlap.data(), n, 0);
+    d["feature"] = feature;
+    return d;
+  }
+
   bp::dict energies() const {
     bp::dict d;
     d["barrier"] = coupling_.barrierEnergy();
@@ -283,6 +315,7 @@ void exportCoupling() {
       .def("faceForce", &PyCoupling::faceForce)
       .def("edgeForce", &PyCoupling::edgeForce)
       .def("contactCount", &PyCoupling::contactCount)
+      .def("contacts", &PyCoupling::contacts)
       .def("energies", &PyCoupling::energies)
       .def("timings", &PyCoupling::timings)
       .def("resetTimings", &PyCoupling::resetTimings)

@@ -206,6 +206,7 @@ void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
 void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
   const mpm::MpmParams& g = solver.params();
+  contactsIn_ = ContactsIn::None;
   syncBlocks();
   if (blocks_.empty() || solver.numParticles() == 0) {
     // Nothing can touch: no bins, no particle loop, and the force buffer stays closed (the MPM
@@ -305,6 +306,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
        << sdem::coreContactRemedy();
     throw RuntimeFailure(os.str());
   }
+  contactsIn_ = view.device ? ContactsIn::Device : hostFloat ? ContactsIn::HostFloat : ContactsIn::HostDouble;
   minParticleStep_ = out.minParticleStep;
   minApproachStep_ = out.minApproachStep;
   overflow_ += out.overflow;
@@ -423,6 +425,45 @@ Vec3 MpSdemCoupling::edgeForce(int i) const {
 int MpSdemCoupling::contactCount(int i) const { return static_cast<int>(*sums(i, kSumCount)); }
 double MpSdemCoupling::stiffnessSum(int i) const { return *sums(i, kSumK); }
 double MpSdemCoupling::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }
+template <typename T>
+void MpSdemCoupling::appendContacts(const HostSide<T>& side, std::vector<MpContactRecord>& out) {
+  out.reserve(side.sorted.size());
+  for (const MpContact<T>* ct : side.sorted) {
+    MpContactRecord r;
+    r.particle = ct->particle;
+    r.block = ct->block;
+    r.featureKind = ct->featureKind;
+    for (int d = 0; d < 3; ++d) {
+      r.point[d] = ct->point[d];
+      r.normal[d] = ct->normal[d];
+      r.force[d] = -double(ct->force[d]);
+    }
+    r.normalForce = ct->law.normalForce;
+    r.overlap = ct->overlap;
+    out.push_back(r);
+  }
+}
+
+std::vector<MpContactRecord> MpSdemCoupling::contacts() const {
+  std::vector<MpContactRecord> out;
+  switch (contactsIn_) {
+    case ContactsIn::None:
+      break;
+    case ContactsIn::HostDouble:
+      appendContacts(hostDouble_, out);
+      break;
+    case ContactsIn::HostFloat:
+      appendContacts(hostFloat_, out);
+      break;
+    case ContactsIn::Device:
+      throw RuntimeFailure(
+          "MP-block contacts: the CUDA backend keeps a step's contacts on the device and brings back only "
+          "their per-block sums (force, torque, face and edge shares); run the CPU backend for the contact "
+          "points");
+  }
+  return out;
+}
+
 long MpSdemCoupling::totalContacts() const {
   long n = 0;
   for (int i = 0; i < numBlocks(); ++i) n += contactCount(i);

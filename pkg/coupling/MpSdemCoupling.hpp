@@ -34,6 +34,18 @@
 namespace mpmsdem {
 namespace coupling {
 
+// One MP–block contact of the last coupling step (MpSdemCoupling::contacts()).
+struct MpContactRecord {
+  int particle = -1;      // the material point's number (its index in MpmSolver::setParticles)
+  int block = -1;         // SDEM body index
+  int featureKind = 0;    // feature of the block's core nearest the point: sdem::kFeatureFace / Edge / Vertex
+  Vec3 point;             // contact point, midway between the two sphere surfaces [m]
+  Vec3 normal;            // unit, from the block towards the point
+  Vec3 force;             // the flow's force on the block through this contact [N]; the point takes -force
+  double normalForce = 0; // F_n of the barrier law (Eq 10) [N]
+  double overlap = 0;     // delta (Eq 12) [m]
+};
+
 class MpSdemCoupling {
  public:
   explicit MpSdemCoupling(const sdem::SdemEngine& sdem);
@@ -70,6 +82,12 @@ class MpSdemCoupling {
   double rotationalStiffnessSum(int block) const;  // sum k_n |r x n|^2 + K_t |r|^2 [N m]
   int numBlocks() const { return static_cast<int>(blocks_.size()); }
   long totalContacts() const;
+  // The contacts behind these sums, by particle number (a point's contacts in the order it
+  // made them): where on each block the flow pressed, and how hard (§3.2.3's F_f and F_e, point
+  // by point). CPU backends only: on CUDA the contacts stay on the device and only their
+  // per-block sums come back (RuntimeFailure). Empty before the first step and after a step
+  // that had no blocks or no particles.
+  std::vector<MpContactRecord> contacts() const;
   // Smallest sqrt(m_p / max(k_n, K_t)) over the MP contacts [s]; +inf without contacts.
   double particleCriticalStep() const { return minParticleStep_; }
   // The longest next step [s] that stays within the contact step of the contacts the last step
@@ -152,6 +170,11 @@ class MpSdemCoupling {
   HostSide<double> hostDouble_;
   HostSide<float> hostFloat_;
   bool hostFloatRun_ = false;  // the last host step ran in float (hostFloat_.xi is current)
+  // Where the last step's contacts are: none (no step yet, nothing could touch, or the step
+  // failed), one of the host sides, or the device.
+  enum class ContactsIn { None, HostDouble, HostFloat, Device } contactsIn_ = ContactsIn::None;
+  template <typename T>
+  static void appendContacts(const HostSide<T>& side, std::vector<MpContactRecord>& out);
   bool historiesToDevice_ = false;  // setHistories() since the last step: the device takes them
   // Float copies for a float host solver: the shape table's real arrays (its index arrays are
   // shared), the blocks and the pair physics of the step.

@@ -513,6 +513,19 @@ class CoupledEngine(_AutoStep):
         """Number of material points touching the block."""
         return self._bridge.contactCount(self._index(yadeId))
 
+    def contacts(self):
+        """The material point–block contacts of the last step, one row per contact, as numpy
+        arrays: ``particle`` (the point's number, its row in ``mpm.particles()``), ``block``
+        (YADE body id), ``point`` (n×3, midway between the two sphere surfaces) [m], ``normal``
+        (n×3, unit, from the block towards the point), ``force`` (n×3, the flow's force on the
+        block through the contact; the point takes the opposite) [N], ``normalForce`` (F_n of
+        Eq 10) [N], ``overlap`` (δ of Eq 12) [m], ``feature`` (list: 'face', 'edge' or 'vertex',
+        the block's core feature nearest the point; 'face' rows make :meth:`faceForce`). Summed
+        per block they give :meth:`force` and :meth:`torque`; where on a block the flow pressed
+        is their ``point`` (paper §3.2.3). CPU backend only: on CUDA a step's contacts stay on
+        the device (RuntimeError). Empty before the first step."""
+        return self._bridge.contacts()
+
     @property
     def totalContacts(self):
         return self._bridge.totalContacts

@@ -16,13 +16,14 @@ from yade.wrapper import ForceResetter, NewtonIntegrator
 GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
 
 
-def blob_and_cube(fixed=False, **kw):
+def blob_and_cube(fixed=False, precision="double", **kw):
     sdem = mpmsdem.SdemEngine(verbose=False)
     mat = mpmsdem.material(density=2000, friction=0.3)
     cube = sdem.box((0.02,) * 3, 0.003, mat, pos=(0.125, 0.07, 0.07), fixed=fixed)
     mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [24, 14, 14], "origin": [0, 0, 0]}, material=GLASS,
                             particles=[{"lo": [0.04, 0.05, 0.05], "hi": [0.08, 0.09, 0.09], "ppc": 8,
-                                        "velocity": [1, 0, 0]}], gravity=(0, 0, 0), verbose=False)
+                                        "velocity": [1, 0, 0]}], gravity=(0, 0, 0), verbose=False,
+                            precision=precision)
     coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.3}, verbose=False, **kw)
     return sdem, mpm, coupled, cube
 
@@ -48,6 +49,28 @@ def test_blob_hitting_a_free_block_conserves_momentum_through_yade():
     assert np.linalg.norm(p1 - p0) == pytest.approx(0, abs=1e-9 * np.linalg.norm(p0))
     t = coupled.timings()
     assert t["steps"] == 3000 and t["coupling"] > 0 and t["mpm"] > 0
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_contacts_of_the_last_step_make_the_block_sums(precision):
+    sdem, mpm, coupled, cube = blob_and_cube(precision=precision)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    O.dt = 1e-5
+    assert len(coupled.contacts()["particle"]) == 0  # no step yet
+    while coupled.contactCount(cube) < 10:
+        mpmsdem.run(20, coupled)
+        assert O.time < 0.05, "the blob never reached the block"
+    c = coupled.contacts()
+    F = np.linalg.norm(coupled.force(cube))
+    tol = (1e-12 if precision == "double" else 1e-5) * F
+    assert len(c["particle"]) == coupled.contactCount(cube) and set(c["block"]) == {cube}
+    assert c["force"].sum(axis=0) == pytest.approx(np.array(coupled.force(cube)), abs=tol)
+    edges = np.array([f != "face" for f in c["feature"]])
+    assert c["force"][edges].sum(axis=0) == pytest.approx(np.array(coupled.edgeForce(cube)), abs=tol)
+    # the blob moves along +x into the cube's upstream face: the points push it downstream
+    assert np.all(c["normal"][:, 0] < 0) and c["force"][:, 0].sum() > 0
+    assert np.all(c["point"][:, 0] < O.bodies[cube].state.pos[0] - 0.02 + 1e-3)
+    assert len(set(c["particle"])) == len(c["particle"])  # one block: one contact per point
 
 
 def test_fixed_wall_carries_the_thrust_of_a_granular_layer_at_rest():
@@ -86,6 +109,24 @@ def test_fixed_wall_carries_the_thrust_of_a_granular_layer_at_rest():
     assert Ka <= K <= Kp, "K = %.3f outside [Ka %.3f, Kp %.3f]" % (K, Ka, Kp)
     assert abs(coupled.force(wall)[2]) < 0.02 * F  # smooth wall: no shear
     assert O.bodies[wall].state.vel.norm() == 0
+    # The contacts behind the sums: they add up to the wall's force and torque, each sits
+    # between its point's centre and the wall (R_p0 - δ/2 from the centre, along the normal),
+    # and the pressure grows with depth as in a layer at rest: the resultant acts a third of
+    # the way up (a linear pressure profile; K does not vary much with depth).
+    c = coupled.contacts()
+    n = len(c["particle"])
+    assert n == coupled.contactCount(wall) > 20 and set(c["block"]) == {wall}
+    assert c["force"].sum(axis=0) == pytest.approx(np.array(coupled.force(wall)), abs=1e-12 * F)
+    arm = c["point"] - np.array(O.bodies[wall].state.pos)
+    assert np.cross(arm, c["force"]).sum(axis=0) == pytest.approx(np.array(coupled.torque(wall)), abs=1e-12 * F)
+    faces = np.array([f == "face" for f in c["feature"]])
+    assert c["force"][faces].sum(axis=0) == pytest.approx(np.array(coupled.faceForce(wall)), abs=1e-12 * F)
+    centre = mpm.particles()["x"][c["particle"]]
+    gap = ((centre - c["point"]) * c["normal"]).sum(axis=1)
+    assert gap == pytest.approx(rp - c["overlap"] / 2, abs=1e-9)
+    assert np.all(c["normal"][:, 0] < -0.99) and np.all(c["normalForce"] > 0)
+    zc = (c["force"][:, 0] * c["point"][:, 2]).sum() / c["force"][:, 0].sum()
+    assert 0.25 * h < zc < 0.42 * h, "resultant %.4f m above the base, h = %.3f m" % (zc, h)
 
 
 def test_outputs_h5py_paraview_and_yade_plot(tmp_path):
