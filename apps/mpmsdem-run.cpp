@@ -698,7 +698,8 @@ class OutputRun {
   // checkpoint: also write the coupled state beside it (blocks and particles at one time).
   long writeSnapshot(bool checkpoint = true) {
     const long index = h5_.writeSnapshot(slices_, solver_.time(), solver_.steps());
-    if (coupled_ && scene_.run.vtk != "none") coupled_->writeVtk(solver_.time(), slices_, stepper_.coupled->world.engine);
+    if (coupled_ && scene_.run.vtk != "none") coupled_->writeVtk(solver_.time(), slices_, stepper_.coupled->world.engine,
+                                                                 stepper_.coupled->coupling);
     if (pvd_) {
       char name[64];
       std::snprintf(name, sizeof name, "vtk/particles_%06ld.vtp", index);

@@ -196,7 +196,7 @@ class PyCoupling {
   void writeVtk(const bp::object& bodies, double time) {
     requireOutput();
     sdem_.readStates(bodies);
-    output_->writeVtk(time, mpm_.outputParticles(), sdem_.engine());
+    output_->writeVtk(time, mpm_.outputParticles(), sdem_.engine(), coupling_);
   }
 
   // ---- checkpoint: tangential histories as raw bytes (int64 keys, float64 xi; the restart

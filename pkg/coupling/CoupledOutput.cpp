@@ -87,15 +87,34 @@ std::vector<io::RigidSurface> bodySurfaces(const sdem::SdemEngine& engine) {
   return bodies;
 }
 
-void CoupledOutput::writeVtk(double time, mpm::ParticleSlices& particles, const sdem::SdemEngine& engine) {
-  std::ostringstream p, b;
-  const std::size_t k = pvd_.size() / 2;
-  p << "vtk/scene_particles_" << std::setw(6) << std::setfill('0') << k << ".vtp";
-  b << "vtk/scene_bodies_" << std::setw(6) << std::setfill('0') << k << ".vtp";
-  io::writeParticlesVtp((fs::path(dir_) / p.str()).string(), particles);
-  io::writeRigidSurfacesVtp((fs::path(dir_) / b.str()).string(), bodySurfaces(engine));
-  pvd_.add(time, p.str(), 0);
-  pvd_.add(time, b.str(), 1);
+void CoupledOutput::writeVtk(double time, mpm::ParticleSlices& particles, const sdem::SdemEngine& engine,
+                             const MpSdemCoupling& coupling) {
+  const std::size_t k = pvd_.count(0);
+  auto file = [k](const char* what) {
+    std::ostringstream f;
+    f << "vtk/scene_" << what << "_" << std::setw(6) << std::setfill('0') << k << ".vtp";
+    return f.str();
+  };
+  io::writeParticlesVtp((fs::path(dir_) / file("particles")).string(), particles);
+  io::writeRigidSurfacesVtp((fs::path(dir_) / file("bodies")).string(), bodySurfaces(engine));
+  pvd_.add(time, file("particles"), 0);
+  pvd_.add(time, file("bodies"), 1);
+  if (!coupling.contactsOnHost()) return;
+  std::vector<io::ContactPoint> points;
+  for (const MpContactRecord& r : coupling.contacts()) {
+    io::ContactPoint c;
+    for (int d = 0; d < 3; ++d) {
+      c.point[d] = r.point[d];
+      c.force[d] = r.force[d];
+    }
+    c.normalForce = r.normalForce;
+    c.blockId = engine.externalId(r.block);
+    c.particle = r.particle;
+    c.feature = r.featureKind;
+    points.push_back(c);
+  }
+  io::writeContactsVtp((fs::path(dir_) / file("contacts")).string(), points);
+  pvd_.add(time, file("contacts"), 2);
 }
 
 }  // namespace coupling

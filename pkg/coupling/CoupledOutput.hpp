@@ -4,8 +4,11 @@
 //                     the block's reference orientation), flow_force F_t, face_force F_f,
 //                     edge_force F_e (§3.2.3), flow_torque (each records x 3 blocks), contacts
 //                     (records x blocks); energy series are appended by the caller.
-//   <dir>/scene.pvd   one ParaView time series: particles (part 0) and block surfaces (part 1)
-//                     in vtk/scene_particles_NNNNNN.vtp and vtk/scene_bodies_NNNNNN.vtp.
+//   <dir>/scene.pvd   one ParaView time series: particles (part 0), block surfaces (part 1) and
+//                     the material point–block contacts of the last step (part 2: points with
+//                     the force on the block; CPU backends, whose contacts are on the host) in
+//                     vtk/scene_particles_NNNNNN.vtp, vtk/scene_bodies_NNNNNN.vtp and
+//                     vtk/scene_contacts_NNNNNN.vtp.
 #pragma once
 #include <memory>
 #include <string>
@@ -31,7 +34,8 @@ class CoupledOutput {
 
   void record(double time, long step, const sdem::SdemEngine& engine, const MpSdemCoupling& coupling);
   void appendSeries(const std::string& name, double value) { h5_.appendScalar(name, value); }
-  void writeVtk(double time, mpm::ParticleSlices& particles, const sdem::SdemEngine& engine);
+  void writeVtk(double time, mpm::ParticleSlices& particles, const sdem::SdemEngine& engine,
+                const MpSdemCoupling& coupling);
   io::Hdf5Writer& h5() { return h5_; }
   // A restart from time t [s]: drop the records and ParaView entries written after t by the
   // run that went on past its checkpoint.

@@ -88,6 +88,7 @@ class MpSdemCoupling {
   // per-block sums come back (RuntimeFailure). Empty before the first step and after a step
   // that had no blocks or no particles.
   std::vector<MpContactRecord> contacts() const;
+  bool contactsOnHost() const { return contactsIn_ != ContactsIn::Device; }  // contacts() can answer
   // Smallest sqrt(m_p / max(k_n, K_t)) over the MP contacts [s]; +inf without contacts.
   double particleCriticalStep() const { return minParticleStep_; }
   // The longest next step [s] that stays within the contact step of the contacts the last step

@@ -346,6 +346,34 @@ void writeRigidSurfacesVtp(const std::string& path, const std::vector<RigidSurfa
                 {makeArray("bodyId", "Int32", 1, ids)}, "");
 }
 
+void writeContactsVtp(const std::string& path, const std::vector<ContactPoint>& contacts, VtkEncoding encoding) {
+  const std::size_t n = contacts.size();
+  std::vector<float> pts, force, fn;
+  std::vector<std::int32_t> block, particle;
+  std::vector<std::uint8_t> feature;
+  std::vector<std::int64_t> conn(n), offs(n);
+  for (std::size_t c = 0; c < n; ++c) {
+    const ContactPoint& k = contacts[c];
+    if (k.feature < 0 || k.feature > 2) throwParameter("contact " + std::to_string(c) + " feature", k.feature, "", "0, 1 or 2");
+    for (int d = 0; d < 3; ++d) {
+      pts.push_back(static_cast<float>(k.point[d]));
+      force.push_back(static_cast<float>(k.force[d]));
+    }
+    fn.push_back(static_cast<float>(k.normalForce));
+    block.push_back(k.blockId);
+    particle.push_back(k.particle);
+    feature.push_back(static_cast<std::uint8_t>(k.feature));
+    conn[c] = static_cast<std::int64_t>(c);
+    offs[c] = static_cast<std::int64_t>(c + 1);
+  }
+  writePolyData(path, encoding, makeArray("Points", "Float32", 3, pts),
+                {makeArray("force", "Float32", 3, force), makeArray("normalForce", "Float32", 1, fn),
+                 makeArray("blockId", "Int32", 1, block), makeArray("particle", "Int32", 1, particle),
+                 makeArray("feature", "UInt8", 1, feature)},
+                "Verts", n, makeArray("connectivity", "Int64", 1, conn), makeArray("offsets", "Int64", 1, offs), {},
+                " Scalars=\"normalForce\" Vectors=\"force\"");
+}
+
 // ------------------------------------------------------------------------------ PVD
 
 PvdCollection::PvdCollection(const std::string& path, bool append) : path_(path) {
@@ -366,6 +394,11 @@ PvdCollection::PvdCollection(const std::string& path, bool append) : path_(path)
 void PvdCollection::add(double time, const std::string& file, int part) {
   entries_.push_back({time, part, file});
   rewrite();
+}
+
+std::size_t PvdCollection::count(int part) const {
+  return static_cast<std::size_t>(
+      std::count_if(entries_.begin(), entries_.end(), [part](const Entry& e) { return e.part == part; }));
 }
 
 double PvdCollection::dropAfter(double time) {

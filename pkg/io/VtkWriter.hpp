@@ -43,6 +43,22 @@ struct RigidSurface {
 void writeRigidSurfacesVtp(const std::string& path, const std::vector<RigidSurface>& bodies,
                            VtkEncoding encoding = VtkEncoding::AppendedRaw);
 
+// One contact between a material point and a block (writeContactsVtp).
+struct ContactPoint {
+  std::array<double, 3> point{};  // contact point [m]
+  std::array<double, 3> force{};  // the flow's force on the block through it [N]
+  double normalForce = 0;         // F_n [N]
+  int blockId = 0;                // the block's body id (e.g. YADE's)
+  int particle = 0;               // the material point's number
+  int feature = 0;                // the block's core feature nearest the point: 0 face, 1 edge, 2 vertex
+};
+
+// Contacts as points, one vertex cell each. Point data: force (3) [N, on the block],
+// normalForce (1) [N], blockId (Int32), particle (Int32), feature (UInt8: 0 face, 1 edge,
+// 2 vertex). ParaView's Glyph filter on "force" draws where and how hard the flow pushed.
+void writeContactsVtp(const std::string& path, const std::vector<ContactPoint>& contacts,
+                      VtkEncoding encoding = VtkEncoding::AppendedRaw);
+
 // A ParaView .pvd collection: a list of (time, part, file) entries.
 class PvdCollection {
  public:
@@ -55,6 +71,7 @@ class PvdCollection {
   void add(double time, const std::string& file, int part = 0);
 
   std::size_t size() const { return entries_.size(); }
+  std::size_t count(int part) const;  // entries of one part
   // Drop the entries later than `time` (a restart from an earlier checkpoint) and rewrite
   // the .pvd; the continued run's files then take their places. Returns the time of the
   // last entry kept (NaN when none is left).

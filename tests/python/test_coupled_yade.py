@@ -154,9 +154,13 @@ def test_outputs_h5py_paraview_and_yade_plot(tmp_path):
         assert s["block_kinetic"][-1] > 0
     root = ET.parse(os.path.join(out, "scene.pvd")).getroot()
     parts = [int(d.get("part")) for d in root.iter("DataSet")]
-    assert parts.count(0) == parts.count(1) == 4
+    assert parts.count(0) == parts.count(1) == parts.count(2) == 4
     for d in root.iter("DataSet"):
         assert os.path.getsize(os.path.join(out, d.get("file"))) > 0
+    # the contacts of the last file are those of the run's last step (contacts())
+    last = [d.get("file") for d in root.iter("DataSet") if d.get("part") == "2"][-1]
+    text = open(os.path.join(out, last), "rb").read()
+    assert b'NumberOfPoints="%d"' % len(coupled.contacts()["particle"]) in text
     assert len(plot.data["t"]) == 16
     assert max(plot.data["Ft_%d" % cube]) > 0
 

@@ -535,6 +535,41 @@ TEST(VtkWriter, RigidSurfacesWithBodyIds) {
   }
 }
 
+TEST(VtkWriter, ContactsWithForcesAndFeatures) {
+  const fs::path path = scratch("contacts.vtp");
+  ContactPoint a, b;
+  a.point = {0.1, 0.2, 0.3};
+  a.force = {1.5, 0, -0.25};
+  a.normalForce = 1.5;
+  a.blockId = 4;
+  a.particle = 17;
+  b = a;
+  b.point[0] = 0.4;
+  b.particle = 99;
+  b.feature = 1;
+  writeContactsVtp(path.string(), {a, b}, VtkEncoding::Ascii);
+  const std::string text = slurp(path);
+  EXPECT_EQ(intAttribute(text, "NumberOfPoints"), 2);
+  EXPECT_EQ(intAttribute(text, "NumberOfVerts"), 2);  // one cell a contact: each is drawn and picked alone
+  const auto f = asciiArray(text, "force");
+  ASSERT_EQ(f.size(), 6u);
+  EXPECT_NEAR(f[5], -0.25, 1e-7);
+  EXPECT_EQ(asciiArray(text, "particle")[1], 99.0);
+  EXPECT_EQ(asciiArray(text, "feature")[1], 1.0);
+  EXPECT_EQ(asciiArray(text, "blockId")[0], 4.0);
+  EXPECT_NEAR(asciiArray(text, "Points")[3], 0.4, 1e-7);
+  EXPECT_EQ(asciiArray(text, "offsets")[1], 2.0);
+  writeContactsVtp(path.string(), {});  // a step without contacts: an empty, valid file
+  EXPECT_EQ(intAttribute(slurp(path), "NumberOfPoints"), 0);
+  b.feature = 3;
+  try {
+    writeContactsVtp(path.string(), {a, b});
+    FAIL() << "expected ParameterError";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("contact 1 feature"), std::string::npos) << e.what();
+  }
+}
+
 TEST(PvdCollection, RewrittenAfterEachAddAndResumable) {
   const fs::path path = scratch("series.pvd");
   {
@@ -549,6 +584,8 @@ TEST(PvdCollection, RewrittenAfterEachAddAndResumable) {
   }
   PvdCollection resumed(path.string(), true);
   EXPECT_EQ(resumed.size(), 3u);
+  EXPECT_EQ(resumed.count(0), 2u);
+  EXPECT_EQ(resumed.count(1), 1u);
   resumed.add(0.15, "vtk/p&q.vtp");
   const std::string text = slurp(path);
   EXPECT_NE(text.find("timestep=\"0.10000000000000001\" group=\"\" part=\"1\" file=\"vtk/bodies_000002.vtp\""),
