@@ -10,9 +10,9 @@ speed 30 ms after the touch. Writes the series to --out (npz: t, pos, vel, force
 yaw, contacts). At the first touch and every 4 ms for 20 ms after it, the state of the flow
 within 6 cm upstream of the cube (and 3 cm either side of its centre): how many points, the
 share of them gasified (stress-free), their mean density and mean pressure. With --faces, the
-normal load of the flow on the cube's top face and on its upstream face in each 20 ms window,
-from the barrier law (Eq 10) and the positions of the points whose nearest core feature is
-that face (points at edges and corners are left out; the tangential forces are not included).
+normal load of the flow on the cube's top face and on its upstream face in each 20 ms window:
+F_n (Eq 10) of the contacts of the step (CoupledEngine.contacts()) whose core feature is that
+face (contacts at edges and corners are left out; the tangential forces are not included).
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/flume_impact_probe.py [--dx 0.01]
         [--width 0.2] [--duration 0.6] [--viscosity 0.0503] [--yaw0 0] [--dy 0] [--out FILE]
@@ -51,8 +51,7 @@ def parse(argv):
                     help="the cube's blocked degrees of freedom (YADE's blockedDOFs): xyzXYZ holds it in place (the "
                          "flow's force on a cube it does not move), XYZ lets it slide without turning")
     ap.add_argument("--faces", action="store_true",
-                    help="the flow's normal load on the cube's top and upstream faces (slower: reads the points "
-                         "every record)")
+                    help="the flow's normal load on the cube's top and upstream faces (from the step's contacts)")
     ap.add_argument("--out", default=os.path.join("results", "flume_impact_probe.npz"), help="series file (npz)")
     a = ap.parse_args(argv)
     if not a.duration > 0.35:
@@ -74,27 +73,17 @@ def upstreamState(scene, x0, yc):
             float(pressure.mean()))
 
 
-def faceLoads(particles, pos, ori, core, radius, kc):
-    """(top, upstream) normal loads [N] of the flow on a box-shaped block whose core has the
-    half-extents ``core`` [m] and sweep radius ``radius`` [m], at ``pos`` with orientation
-    ``ori`` (a YADE Quaternion): Eq 10's barrier force of each point whose nearest core feature
-    is the top (+z) or the upstream (-x) face, in the block's frame. A point's radius is
-    R_p0 = (3 V0 / 4 pi)^(1/3) (Eq 13)."""
+def faceLoads(contacts, body, ori):
+    """(top, upstream) normal loads [N] of the flow on a box-shaped block: F_n (Eq 10) of the
+    block's face-interior contacts (``CoupledEngine.contacts()``) whose normal, in the block's
+    frame (orientation ``ori``, a YADE Quaternion), is the top face's (+z) or the upstream
+    face's (-x). Contacts at edges and corners count on neither face."""
     import numpy as np
-    from mpmsdem.analysis import barrierForce
     rot = np.array([[ori.toRotationMatrix()[i, j] for j in range(3)] for i in range(3)])
-    local = (particles["x"] - np.array([pos[0], pos[1], pos[2]])) @ rot  # into the block's frame
-    rp = (3.0 * particles["volume0"] / (4.0 * math.pi)) ** (1.0 / 3.0)
-    loads = []
-    for axis, sign in ((2, 1.0), (0, -1.0)):
-        others = [d for d in range(3) if d != axis]
-        gap = sign * local[:, axis] - core[axis]
-        inside = (np.abs(local[:, others[0]]) <= core[others[0]]) & (np.abs(local[:, others[1]]) <= core[others[1]])
-        R = rp + radius
-        delta = R - gap
-        touching = inside & (gap > 0) & (delta > 0)
-        loads.append(float(sum(barrierForce(d, r, kc) for d, r in zip(delta[touching], R[touching]))))
-    return tuple(loads)
+    mine = (np.asarray(contacts["block"]) == body) & np.array([f == "face" for f in contacts["feature"]], dtype=bool)
+    n = np.asarray(contacts["normal"])[mine] @ rot  # into the block's frame
+    fn = np.asarray(contacts["normalForce"])[mine]
+    return float(fn[n[:, 2] > 0.99].sum()), float(fn[n[:, 0] < -0.99].sum())
 
 
 def main(argv):
@@ -128,8 +117,7 @@ def main(argv):
         if touch is not None and round((O.time - touch) / 0.002) in (0, 2, 4, 6, 8, 10):
             upstream.append(upstreamState(scene, cube.x, st.pos[1]))
         tilt, yaw = tiltAndYaw(*st.ori.toAngleAxis())
-        faces = faceLoads(scene.mpm.particles(), st.pos, st.ori, [h - cube.sweepRadius for h in cube.half],
-                          cube.sweepRadius, a.flow_stiffness) if a.faces else (0.0, 0.0)
+        faces = faceLoads(scene.coupled.contacts(), body, st.ori) if a.faces else (0.0, 0.0)
         rows.append([O.time, *st.pos, *st.vel, *f, *t, tilt, yaw, scene.coupled.contactCount(body), *faces])
     r = np.array(rows)
     s = {"t": r[:, 0], "pos": r[:, 1:4], "vel": r[:, 4:7], "force": r[:, 7:10], "torque": r[:, 10:13],

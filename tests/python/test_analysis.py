@@ -50,36 +50,30 @@ def test_a_turn_then_a_tip_splits_into_both_angles(yawDeg, tiltDeg, tiltAxis):
     assert tiltAndYaw(angle, axis)[0] == pytest.approx(tiltDeg, abs=1e-9)
 
 
-def test_the_impact_probes_face_loads_follow_the_block_and_eq10():
-    """scripts/validation/flume_impact_probe.py faceLoads: a point's barrier force (Eq 10) counts
-    on the face it faces in the block's frame, points off the face's footprint do not."""
+def test_the_impact_probes_face_loads_follow_the_block():
+    """scripts/validation/flume_impact_probe.py faceLoads: a face contact's F_n counts on the face
+    its normal leaves in the block's frame (the block tilted); edge contacts, other faces and
+    other blocks do not count."""
     import importlib.util
     import os
     import numpy as np
     import mpmsdem  # noqa: F401  (YADE's types)
     from yade.minieigenHP import Quaternion, Vector3
-    from mpmsdem.analysis import barrierForce
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     spec = importlib.util.spec_from_file_location("probe", os.path.join(root, "scripts", "validation",
                                                                         "flume_impact_probe.py"))
     probe = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(probe)
-    core, radius, kc = (0.009, 0.009, 0.009), 0.001, 1e4
-    v0 = 1e-6 / 8
-    rp = (3 * v0 / (4 * math.pi)) ** (1 / 3)
-    R = rp + radius
     tilt = math.radians(30)
     ori = Quaternion(Vector3(0, 1, 0), tilt)  # leaning forward: the top turns downstream
-    pos = (0.5, 0.03, 0.01)
-    up = np.array([math.sin(tilt), 0, math.cos(tilt)])  # the top face's normal
-    back = np.array([-math.cos(tilt), 0, math.sin(tilt)])  # the upstream face's normal
-    gaps = (0.6 * R, 0.9 * R)
-    x = [np.array(pos) + (core[0] + gaps[0]) * up,                       # on the top face
-         np.array(pos) + (core[0] + gaps[1]) * back + 0.004 * up,        # on the upstream face, off centre
-         np.array(pos) + (core[0] + 0.5 * R) * up + 0.0095 * back,      # above the top's upstream edge: neither
-         np.array(pos) + (core[0] + 1.1 * R) * up]                       # too far: no contact
-    particles = {"x": np.array(x), "volume0": np.full(len(x), v0)}
-    top, upstream = probe.faceLoads(particles, pos, ori, core, radius, kc)
-    assert top == pytest.approx(barrierForce(R - gaps[0], R, kc), rel=1e-12)
-    assert upstream == pytest.approx(barrierForce(R - gaps[1], R, kc), rel=1e-12)
-    assert top > upstream > 0
+    up = [math.sin(tilt), 0, math.cos(tilt)]  # the top face's normal in the world
+    back = [-math.cos(tilt), 0, math.sin(tilt)]  # the upstream face's
+    front = [math.cos(tilt), 0, -math.sin(tilt)]  # the downstream face's
+    rows = [(up, 1.5, "face", 7), (up, 0.25, "face", 7), (back, 2.0, "face", 7), (front, 4.0, "face", 7),
+            (up, 8.0, "edge", 7), (back, 16.0, "face", 9)]
+    contacts = {"normal": np.array([r[0] for r in rows]), "normalForce": np.array([r[1] for r in rows]),
+                "feature": [r[2] for r in rows], "block": np.array([r[3] for r in rows])}
+    top, upstream = probe.faceLoads(contacts, 7, ori)
+    assert top == pytest.approx(1.75, rel=1e-12)
+    assert upstream == pytest.approx(2.0, rel=1e-12)
+    assert probe.faceLoads(contacts, 8, ori) == (0.0, 0.0)
