@@ -105,6 +105,29 @@ def tiltAndYaw(angle, axis):
     return tilt, yaw
 
 
+BOX_FACES = ("-x", "+x", "-y", "+y", "-z", "+z")
+
+
+def boxFaceLoads(contacts, rotation):
+    """The flow's normal load on each face of a box-shaped block [N]: a dict with the six faces
+    of its own frame ("-x" … "+z") and "edges", each the sum of F_n (Eq 10) of its contacts
+    (``CoupledEngine.contacts(id)``, that block's). A face contact's normal is its face's
+    outward normal; ``rotation`` is the block's orientation as a 3×3 matrix, body to world
+    (YADE's ``state.ori.toRotationMatrix()``). Contacts at edges and corners go to "edges". In
+    the flume frame a block placed square: "-x" faces upstream, "+z" is its top (paper §3.2.3:
+    F_f split by face)."""
+    loads = dict.fromkeys(BOX_FACES + ("edges",), 0.0)
+    R = [[float(rotation[i, j]) for j in range(3)] for i in range(3)]
+    for n, fn, feature in zip(contacts["normal"], contacts["normalForce"], contacts["feature"]):
+        if feature != "face":
+            loads["edges"] += float(fn)
+            continue
+        local = [sum(R[i][j] * float(n[i]) for i in range(3)) for j in range(3)]  # R^T n
+        axis = max(range(3), key=lambda j: abs(local[j]))
+        loads[("-" if local[axis] < 0 else "+") + "xyz"[axis]] += float(fn)
+    return loads
+
+
 def runoutLube(a):
     """Normalised runout ΔL/L_i of a quasi-2D granular column collapse of aspect ratio a:
     ≈ 1.2 a for a ≲ 1.8, ≈ 1.9 a^(2/3) above (Lube et al. 2005; Lajeunesse et al. 2005 report

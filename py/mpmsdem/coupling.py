@@ -513,8 +513,9 @@ class CoupledEngine(_AutoStep):
         """Number of material points touching the block."""
         return self._bridge.contactCount(self._index(yadeId))
 
-    def contacts(self):
-        """The material point–block contacts of the last step, one row per contact, as numpy
+    def contacts(self, yadeId=None):
+        """The material point–block contacts of the last step (of block ``yadeId``, or of every
+        block: None), one row per contact, as numpy
         arrays: ``particle`` (the point's number, its row in ``mpm.particles()``), ``block``
         (YADE body id), ``point`` (n×3, midway between the two sphere surfaces) [m], ``normal``
         (n×3, unit, from the block towards the point), ``force`` (n×3, the flow's force on the
@@ -524,7 +525,7 @@ class CoupledEngine(_AutoStep):
         per block they give :meth:`force` and :meth:`torque`; where on a block the flow pressed
         is their ``point`` (paper §3.2.3). CPU backend only: on CUDA a step's contacts stay on
         the device (RuntimeError). Empty before the first step."""
-        return self._bridge.contacts()
+        return self._bridge.contacts(-1 if yadeId is None else self._index(yadeId))
 
     @property
     def totalContacts(self):

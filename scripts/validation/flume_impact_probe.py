@@ -73,26 +73,13 @@ def upstreamState(scene, x0, yc):
             float(pressure.mean()))
 
 
-def faceLoads(contacts, body, ori):
-    """(top, upstream) normal loads [N] of the flow on a box-shaped block: F_n (Eq 10) of the
-    block's face-interior contacts (``CoupledEngine.contacts()``) whose normal, in the block's
-    frame (orientation ``ori``, a YADE Quaternion), is the top face's (+z) or the upstream
-    face's (-x). Contacts at edges and corners count on neither face."""
-    import numpy as np
-    rot = np.array([[ori.toRotationMatrix()[i, j] for j in range(3)] for i in range(3)])
-    mine = (np.asarray(contacts["block"]) == body) & np.array([f == "face" for f in contacts["feature"]], dtype=bool)
-    n = np.asarray(contacts["normal"])[mine] @ rot  # into the block's frame
-    fn = np.asarray(contacts["normalForce"])[mine]
-    return float(fn[n[:, 2] > 0.99].sum()), float(fn[n[:, 0] < -0.99].sum())
-
-
 def main(argv):
     import mpmsdem
     a = parse(argv)
     sys.path.insert(0, os.path.join(ROOT, "examples"))
     import numpy as np
     from flume_block import copperCube
-    from mpmsdem.analysis import tiltAndYaw
+    from mpmsdem.analysis import boxFaceLoads, tiltAndYaw
     from mpmsdem.flume import Flume
     from yade import O
     from yade.minieigenHP import Quaternion, Vector3
@@ -117,7 +104,11 @@ def main(argv):
         if touch is not None and round((O.time - touch) / 0.002) in (0, 2, 4, 6, 8, 10):
             upstream.append(upstreamState(scene, cube.x, st.pos[1]))
         tilt, yaw = tiltAndYaw(*st.ori.toAngleAxis())
-        faces = faceLoads(scene.coupled.contacts(), body, st.ori) if a.faces else (0.0, 0.0)
+        if a.faces:
+            loads = boxFaceLoads(scene.coupled.contacts(body), st.ori.toRotationMatrix())
+            faces = (loads["+z"], loads["-x"])
+        else:
+            faces = (0.0, 0.0)
         rows.append([O.time, *st.pos, *st.vel, *f, *t, tilt, yaw, scene.coupled.contactCount(body), *faces])
     r = np.array(rows)
     s = {"t": r[:, 0], "pos": r[:, 1:4], "vel": r[:, 4:7], "force": r[:, 7:10], "torque": r[:, 10:13],

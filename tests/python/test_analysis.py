@@ -50,30 +50,23 @@ def test_a_turn_then_a_tip_splits_into_both_angles(yawDeg, tiltDeg, tiltAxis):
     assert tiltAndYaw(angle, axis)[0] == pytest.approx(tiltDeg, abs=1e-9)
 
 
-def test_the_impact_probes_face_loads_follow_the_block():
-    """scripts/validation/flume_impact_probe.py faceLoads: a face contact's F_n counts on the face
-    its normal leaves in the block's frame (the block tilted); edge contacts, other faces and
-    other blocks do not count."""
-    import importlib.util
-    import os
+def test_box_face_loads_follow_the_block():
+    """analysis.boxFaceLoads: a face contact's F_n counts on the face its normal leaves in the
+    block's frame (the block tilted 30°); edge contacts count apart."""
     import numpy as np
-    import mpmsdem  # noqa: F401  (YADE's types)
-    from yade.minieigenHP import Quaternion, Vector3
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    spec = importlib.util.spec_from_file_location("probe", os.path.join(root, "scripts", "validation",
-                                                                        "flume_impact_probe.py"))
-    probe = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(probe)
+    from mpmsdem.analysis import boxFaceLoads
     tilt = math.radians(30)
-    ori = Quaternion(Vector3(0, 1, 0), tilt)  # leaning forward: the top turns downstream
-    up = [math.sin(tilt), 0, math.cos(tilt)]  # the top face's normal in the world
-    back = [-math.cos(tilt), 0, math.sin(tilt)]  # the upstream face's
-    front = [math.cos(tilt), 0, -math.sin(tilt)]  # the downstream face's
-    rows = [(up, 1.5, "face", 7), (up, 0.25, "face", 7), (back, 2.0, "face", 7), (front, 4.0, "face", 7),
-            (up, 8.0, "edge", 7), (back, 16.0, "face", 9)]
+    c, s = math.cos(tilt), math.sin(tilt)
+    rotation = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])  # about y: the top turns downstream
+    up, back, front = rotation @ [0, 0, 1], rotation @ [-1, 0, 0], rotation @ [1, 0, 0]
+    side = rotation @ [0, -1, 0]
+    rows = [(up, 1.5, "face"), (up, 0.25, "face"), (back, 2.0, "face"), (front, 4.0, "face"), (side, 0.5, "face"),
+            (up, 8.0, "edge"), ((up + back) / np.linalg.norm(up + back), 16.0, "vertex")]
     contacts = {"normal": np.array([r[0] for r in rows]), "normalForce": np.array([r[1] for r in rows]),
-                "feature": [r[2] for r in rows], "block": np.array([r[3] for r in rows])}
-    top, upstream = probe.faceLoads(contacts, 7, ori)
-    assert top == pytest.approx(1.75, rel=1e-12)
-    assert upstream == pytest.approx(2.0, rel=1e-12)
-    assert probe.faceLoads(contacts, 8, ori) == (0.0, 0.0)
+                "feature": [r[2] for r in rows]}
+    loads = boxFaceLoads(contacts, rotation)
+    assert loads == pytest.approx({"+z": 1.75, "-x": 2.0, "+x": 4.0, "-y": 0.5, "+y": 0.0, "-z": 0.0, "edges": 24.0},
+                                  rel=1e-12)
+    assert up[0] > 0.49  # tilted: the world's x would have taken the top's load
+    empty = {"normal": np.zeros((0, 3)), "normalForce": np.zeros(0), "feature": []}
+    assert set(boxFaceLoads(empty, rotation).values()) == {0.0}

@@ -54,6 +54,9 @@ def test_blob_hitting_a_free_block_conserves_momentum_through_yade():
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_contacts_of_the_last_step_make_the_block_sums(precision):
     sdem, mpm, coupled, cube = blob_and_cube(precision=precision)
+    wood = mpmsdem.material(density=500, friction=0.3)
+    far = sdem.box((0.01,) * 3, 0.003, wood, pos=(0.2, 0.03, 0.03), fixed=True)  # out of the blob's reach
+    coupled.setPair(wood, 0.3)
     O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
     O.dt = 1e-5
     assert len(coupled.contacts()["particle"]) == 0  # no step yet
@@ -71,6 +74,10 @@ def test_contacts_of_the_last_step_make_the_block_sums(precision):
     assert np.all(c["normal"][:, 0] < 0) and c["force"][:, 0].sum() > 0
     assert np.all(c["point"][:, 0] < O.bodies[cube].state.pos[0] - 0.02 + 1e-3)
     assert len(set(c["particle"])) == len(c["particle"])  # one block: one contact per point
+    mine, other = coupled.contacts(cube), coupled.contacts(far)
+    assert len(other["particle"]) == 0 and np.array_equal(mine["particle"], c["particle"])
+    with pytest.raises(ValueError):
+        coupled.contacts(10 ** 6)
 
 
 def test_fixed_wall_carries_the_thrust_of_a_granular_layer_at_rest():
