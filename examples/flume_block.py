@@ -14,8 +14,10 @@ Two runs: first the free flow without the block (calibration: flow depth h_f and
 at the block's station when the front arrives, Fr = v_f/√(g h_f), Fr1 = v_f/√(g L0)), then the
 coupled run with the cube. Writes to ``--out`` (default ``results/flume_block``): the coupled
 run's ``coupled.h5`` / ``sdem.h5`` / ``mpm/mpm.h5`` (h5py), ``scene.pvd`` (ParaView: particles
-and the cube), ``flume_block.png`` (travel distance and velocity; F_t with the hydrodynamic
-model of Eq 20 using α_f = 10.8 Fr^−1.3; F_f/F_t; rotation) and ``summary.json``.
+and the cube, and the flow's contact forces on it), ``flume_block.png`` (travel distance and
+velocity; F_t with the hydrodynamic model of Eq 20 using α_f = 10.8 Fr^−1.3; F_f/F_t;
+rotation), ``flume_block_faces.png`` (the flow's normal load on each face of the cube, CPU
+backend) and ``summary.json``.
 """
 import argparse
 import json
@@ -148,6 +150,29 @@ def plot(s, title, ff, path):
     fig.savefig(path, dpi=90)
 
 
+def plotFaces(s, title, path):
+    """The flow's normal load on each face of the cube against time (10 ms means), with its tilt:
+    which face the flow pushes, and whether any material rides on its top."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    t, f = s["t"], s["faces"]
+    smooth = lambda v: analysis.runningMean(t, v, 0.01)  # noqa: E731
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    for label, v in (("upstream face (-x)", f["-x"]), ("top (+z)", f["+z"]), ("downstream face (+x)", f["+x"]),
+                     ("sides (±y)", f["-y"] + f["+y"]), ("edges and corners", f["edges"])):
+        ax.plot(t, smooth(v), label=label)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("normal load F_n [N] (10 ms mean)")
+    ax.legend(fontsize=8, loc="upper left")
+    tilt = ax.twinx()
+    tilt.plot(t, s["tilt"], "k:", label="tilt")
+    tilt.set_ylabel("tilt [deg] (dotted)")
+    ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+
+
 def blockEvents(s, duration):
     """The §3.2 targets of a cube's series (keys of Flume.series): first touch, F_t at 0.4 s and
     over 0.4–0.7 s (10 ms means), rotation (and, where the series has them, tilt and yaw) at
@@ -243,11 +268,15 @@ def main(argv):
     if not a.no_plots:
         plot(scene.series(0), "Copper cube in a glass-bead flume (paper §3.2), dx = %g m, %d material points"
              % (scene.dx, scene.mpm.numParticles), ff, os.path.join(out, "flume_block.png"))
+        if "faces" in s:
+            plotFaces(s, "The flow's load on each face of the cube (its own frame), dx = %g m" % scene.dx,
+                      os.path.join(out, "flume_block_faces.png"))
     print("copper cube after %.2f s: travel distance %.4f m, rotation %.1f deg (tilt %.1f, yaw %.1f); peak downstream "
           "impact force %.3f N (10 ms mean) at %.3f s%s" % (
               duration, summary["travel"], summary["rotation_deg"], summary["tilt_deg"], summary["yaw_deg"], peak, tPeak,
               "; Eq 20: %.3f N" % summary["eq20_force"] if ff else ""))
-    print("outputs in %s (coupled.h5, scene.pvd, flume_block.png, summary.json); wall time %.0f s + %.0f s"
+    print("outputs in %s (coupled.h5, scene.pvd, flume_block.png, flume_block_faces.png, summary.json); wall time "
+          "%.0f s + %.0f s"
           % (out, tFree, tCoupled))
     return summary
 
