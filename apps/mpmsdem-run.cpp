@@ -44,8 +44,8 @@
 //   With blocks: coupled.h5 (pkg/coupling/CoupledOutput.hpp: per-block pos, vel, rotation,
 //                   flow_force, face_force, edge_force, flow_torque, contacts, and the energies
 //                   flow_kinetic, flow_potential, block_kinetic, dissipated, every
-//                   run.series_every) and scene.pvd (particles and blocks, every
-//                   run.output_every) in place of particles.pvd. The time step is the smaller
+//                   run.series_every) and scene.pvd (particles, blocks and the point–block
+//                   contacts, every run.output_every) in place of particles.pvd. The time step is the smaller
 //                   of the MPM step and the contact step (CoupledWorld::criticalTimeStep).
 //                   coupled.checkpoint.json after every snapshot: what --restart needs
 //                   besides the particles (block states, contact histories).
@@ -486,6 +486,8 @@ class OutputRun {
     if (stepper.coupled) {
       coupled_.emplace(dir_.string(), restart, stepper.coupled->world.engine);
       coupled_->h5().setAttribute("parameters", scene.sourceJson);
+      // the ParaView contacts: on CUDA they stay on the device unless recorded
+      stepper.coupled->coupling.setRecordContacts(scene.run.vtk != "none");
       if (restart) {
         coupled_->dropAfter(solver_.time() * (1 + 1e-12));
         coupled_->setReferenceOrientations(checkpoint->referenceOrientations);

@@ -41,6 +41,8 @@ class PyCoupling {
     coupling_.setPair(material, p);
   }
   int historySlots() const { return coupling_.historySlots(); }
+  bool recordContacts() const { return coupling_.recordContacts(); }
+  void setRecordContacts(bool on) { coupling_.setRecordContacts(on); }
   void setHistorySlots(int s) { coupling_.setHistorySlots(s); }
 
   void step(const bp::object& bodies, const bp::object& forces, double dt) {
@@ -342,6 +344,7 @@ void exportCoupling() {
       .add_property("totalContacts", &PyCoupling::totalContacts)
       .add_property("historyOverflow", &PyCoupling::historyOverflow)
       .add_property("historySlots", &PyCoupling::historySlots, &PyCoupling::setHistorySlots)
+      .add_property("recordContacts", &PyCoupling::recordContacts, &PyCoupling::setRecordContacts)
       .add_property("strict", &PyCoupling::strict, &PyCoupling::setStrict)
       .add_property("checkFactor", &PyCoupling::checkFactor, &PyCoupling::setCheckFactor)
       .def("approachStep", &PyCoupling::approachStep)

@@ -99,7 +99,7 @@ void CoupledOutput::writeVtk(double time, mpm::ParticleSlices& particles, const 
   io::writeRigidSurfacesVtp((fs::path(dir_) / file("bodies")).string(), bodySurfaces(engine));
   pvd_.add(time, file("particles"), 0);
   pvd_.add(time, file("bodies"), 1);
-  if (!coupling.contactsOnHost()) return;
+  if (!coupling.contactsAvailable()) return;
   std::vector<io::ContactPoint> points;
   for (const MpContactRecord& r : coupling.contacts()) {
     io::ContactPoint c;

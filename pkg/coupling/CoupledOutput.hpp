@@ -6,7 +6,7 @@
 //                     (records x blocks); energy series are appended by the caller.
 //   <dir>/scene.pvd   one ParaView time series: particles (part 0), block surfaces (part 1) and
 //                     the material point–block contacts of the last step (part 2: points with
-//                     the force on the block; CPU backends, whose contacts are on the host) in
+//                     the force on the block; on CUDA when the coupling records them) in
 //                     vtk/scene_particles_NNNNNN.vtp, vtk/scene_bodies_NNNNNN.vtp and
 //                     vtk/scene_contacts_NNNNNN.vtp.
 #pragma once

@@ -64,6 +64,13 @@ class CouplingDeviceBackend {
                                const std::vector<unsigned>& written) = 0;
   // Largest initial particle volume of the view [m^3].
   virtual double maxVolume0(const mpm::ParticleView& v) = 0;
+  // Keep each step's contacts on the device from the next step on (kContactValues doubles,
+  // 120 B, per contact), for downloadContacts().
+  virtual void recordContacts(bool on) = 0;
+  // The last step's contact records (contactRecord, kContactValues each) in the device list's
+  // order; false when that step recorded none: recording off, or more contacts than the list
+  // held (it holds them from the next step on).
+  virtual bool downloadContacts(std::vector<double>& records) = 0;
 };
 // Null when this build has no CUDA.
 std::unique_ptr<CouplingDeviceBackend> makeCouplingDeviceBackend(mpm::Precision precision);

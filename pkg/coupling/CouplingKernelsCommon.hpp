@@ -386,6 +386,34 @@ MPM_HD_INLINE void addBlockShare(const MpContact<T>& c, const BlockState<T>& b, 
     if (k < other || k >= other + 3) add(s + k, share[k]);
 }
 
+// A contact as MpSdemCoupling::contacts() hands it out, kContactValues doubles: the CPU loop
+// and the CUDA contact list write the same values.
+constexpr int kRecPoint = 0;        // 3: contact point [m]
+constexpr int kRecNormal = 3;       // 3: unit normal, from the block towards the point
+constexpr int kRecForce = 6;        // 3: force on the block [N]
+constexpr int kRecNormalForce = 9;  // F_n [N]
+constexpr int kRecOverlap = 10;     // delta [m]
+constexpr int kRecFeature = 11;     // the block core's feature kind (sdem::kFeature*)
+constexpr int kRecParticle = 12;    // the particle's number
+constexpr int kRecBlock = 13;       // the block's index
+constexpr int kRecOrder = 14;       // the contact's place among its particle's (device list only)
+constexpr int kContactValues = 15;
+
+template <typename T>
+MPM_HD_INLINE void contactRecord(const MpContact<T>& c, double r[kContactValues]) {
+  for (int d = 0; d < 3; ++d) {
+    r[kRecPoint + d] = static_cast<double>(c.point[d]);
+    r[kRecNormal + d] = static_cast<double>(c.normal[d]);
+    r[kRecForce + d] = -static_cast<double>(c.force[d]);
+  }
+  r[kRecNormalForce] = static_cast<double>(c.law.normalForce);
+  r[kRecOverlap] = static_cast<double>(c.overlap);
+  r[kRecFeature] = c.featureKind;
+  r[kRecParticle] = c.particle;
+  r[kRecBlock] = c.block;
+  r[kRecOrder] = 0;
+}
+
 // Stable-step bound of the particle side of a contact: sqrt(m_p / max(k_n, K_t)) [s].
 template <typename T>
 MPM_HD_INLINE T particleStepBound(const MpContact<T>& c) {

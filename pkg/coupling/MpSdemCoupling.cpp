@@ -221,6 +221,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     device_ = makeCouplingDeviceBackend(view.precision);
     devicePrecision_ = view.precision;
     if (!device_) throw RuntimeFailure("MpSdemCoupling: the solver runs on CUDA but this build has no CUDA coupling");
+    device_->recordContacts(recordContacts_);
   }
   const bool hostFloat = !view.device && view.precision == mpm::Precision::Float;
   if (maxParticleRadius_ < 0) {
@@ -425,23 +426,36 @@ Vec3 MpSdemCoupling::edgeForce(int i) const {
 int MpSdemCoupling::contactCount(int i) const { return static_cast<int>(*sums(i, kSumCount)); }
 double MpSdemCoupling::stiffnessSum(int i) const { return *sums(i, kSumK); }
 double MpSdemCoupling::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }
+namespace {
+MpContactRecord recordOf(const double* r) {
+  MpContactRecord c;
+  c.particle = static_cast<int>(r[kRecParticle]);
+  c.block = static_cast<int>(r[kRecBlock]);
+  c.featureKind = static_cast<int>(r[kRecFeature]);
+  for (int d = 0; d < 3; ++d) {
+    c.point[d] = r[kRecPoint + d];
+    c.normal[d] = r[kRecNormal + d];
+    c.force[d] = r[kRecForce + d];
+  }
+  c.normalForce = r[kRecNormalForce];
+  c.overlap = r[kRecOverlap];
+  return c;
+}
+}  // namespace
+
 template <typename T>
 void MpSdemCoupling::appendContacts(const HostSide<T>& side, std::vector<MpContactRecord>& out) {
   out.reserve(side.sorted.size());
+  double r[kContactValues];
   for (const MpContact<T>* ct : side.sorted) {
-    MpContactRecord r;
-    r.particle = ct->particle;
-    r.block = ct->block;
-    r.featureKind = ct->featureKind;
-    for (int d = 0; d < 3; ++d) {
-      r.point[d] = ct->point[d];
-      r.normal[d] = ct->normal[d];
-      r.force[d] = -double(ct->force[d]);
-    }
-    r.normalForce = ct->law.normalForce;
-    r.overlap = ct->overlap;
-    out.push_back(r);
+    contactRecord(*ct, r);
+    out.push_back(recordOf(r));
   }
+}
+
+void MpSdemCoupling::setRecordContacts(bool on) {
+  recordContacts_ = on;
+  if (device_) device_->recordContacts(on);
 }
 
 std::vector<MpContactRecord> MpSdemCoupling::contacts() const {
@@ -455,11 +469,30 @@ std::vector<MpContactRecord> MpSdemCoupling::contacts() const {
     case ContactsIn::HostFloat:
       appendContacts(hostFloat_, out);
       break;
-    case ContactsIn::Device:
-      throw RuntimeFailure(
-          "MP-block contacts: the CUDA backend keeps a step's contacts on the device and brings back only "
-          "their per-block sums (force, torque, face and edge shares); run the CPU backend for the contact "
-          "points");
+    case ContactsIn::Device: {
+      std::vector<double> rec;
+      if (!recordContacts_)
+        throw RuntimeFailure(
+            "MP-block contacts: the CUDA backend keeps a step's contacts on the device; turn their recording on "
+            "before the step (recordContacts, 120 B per contact on the device) or run the CPU backend");
+      if (!device_->downloadContacts(rec))
+        throw RuntimeFailure(
+            "MP-block contacts: the last step had more contacts than the device's list held, so it recorded "
+            "none; the list has room from the next step on");
+      // the device list holds them in the order the threads reached it: put them in the CPU
+      // loop's order, by particle number and then in the order each particle made them
+      const std::size_t n = rec.size() / kContactValues;
+      std::vector<std::size_t> order(n);
+      for (std::size_t i = 0; i < n; ++i) order[i] = i;
+      auto at = [&rec](std::size_t i, int k) { return rec[kContactValues * i + k]; };
+      std::sort(order.begin(), order.end(), [&at](std::size_t a, std::size_t b) {
+        return at(a, kRecParticle) != at(b, kRecParticle) ? at(a, kRecParticle) < at(b, kRecParticle)
+                                                          : at(a, kRecOrder) < at(b, kRecOrder);
+      });
+      out.reserve(n);
+      for (std::size_t i : order) out.push_back(recordOf(rec.data() + kContactValues * i));
+      break;
+    }
   }
   return out;
 }

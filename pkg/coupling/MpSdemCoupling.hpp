@@ -84,11 +84,17 @@ class MpSdemCoupling {
   long totalContacts() const;
   // The contacts behind these sums, by particle number (a point's contacts in the order it
   // made them): where on each block the flow pressed, and how hard (§3.2.3's F_f and F_e, point
-  // by point). CPU backends only: on CUDA the contacts stay on the device and only their
-  // per-block sums come back (RuntimeFailure). Empty before the first step and after a step
-  // that had no blocks or no particles.
+  // by point). Empty before the first step and after a step that had no blocks or no
+  // particles. On CUDA the contacts stay on the device unless setRecordContacts(true) was
+  // called before the step (RuntimeFailure otherwise, or when the step had more contacts than
+  // the device list held: it holds them from the next step on).
   std::vector<MpContactRecord> contacts() const;
-  bool contactsOnHost() const { return contactsIn_ != ContactsIn::Device; }  // contacts() can answer
+  // CUDA: keep each step's contacts on the device (120 B per contact) for contacts(). The CPU
+  // backends always have them (the loop's own list).
+  void setRecordContacts(bool on);
+  bool recordContacts() const { return recordContacts_; }
+  // contacts() can answer for the last step (false on CUDA without recording).
+  bool contactsAvailable() const { return contactsIn_ != ContactsIn::Device || recordContacts_; }
   // Smallest sqrt(m_p / max(k_n, K_t)) over the MP contacts [s]; +inf without contacts.
   double particleCriticalStep() const { return minParticleStep_; }
   // The longest next step [s] that stays within the contact step of the contacts the last step
@@ -174,6 +180,7 @@ class MpSdemCoupling {
   // Where the last step's contacts are: none (no step yet, nothing could touch, or the step
   // failed), one of the host sides, or the device.
   enum class ContactsIn { None, HostDouble, HostFloat, Device } contactsIn_ = ContactsIn::None;
+  bool recordContacts_ = false;
   template <typename T>
   static void appendContacts(const HostSide<T>& side, std::vector<MpContactRecord>& out);
   bool historiesToDevice_ = false;  // setHistories() since the last step: the device takes them

@@ -83,8 +83,9 @@ class CoupledEngine(_AutoStep):
         ``vel``, ``rotation`` (rotation vector since the first record) [rad], ``flow_force``
         F_t, ``face_force`` F_f, ``edge_force`` F_e (paper §3.2.3), ``flow_torque``,
         ``contacts``; energies ``flow_kinetic``, ``flow_potential``, ``block_kinetic``,
-        ``dissipated`` [J]) and, with ``vtkEvery``, ``scene.pvd`` (particles and blocks in
-        one ParaView time series). The SDEM and MPM engines keep their own outputs if given.
+        ``dissipated`` [J]) and, with ``vtkEvery``, ``scene.pvd`` (particles, blocks and the
+        point–block contacts of the step in one ParaView time series; on CUDA it sets
+        :attr:`recordContacts`). The SDEM and MPM engines keep their own outputs if given.
     :param plot: also feed ``yade.plot.addData`` every ``outputEvery`` s (``t``, and per
         block id ``Ft_<id>``, ``Ff_<id>``, ``Fe_<id>`` [N], ``x_<id>`` [m], ``vx_<id>``
         [m/s], ``rot_<id>`` [deg]), so ``plot.plots``/``plot.saveDataTxt`` work as with any
@@ -109,6 +110,7 @@ class CoupledEngine(_AutoStep):
         self.sdem, self.mpm = sdem, mpm
         self._bridge = _mpmsdem.CouplingBridge(sdem._bridge, mpm.solver)
         self._bridge.historySlots = int(historySlots)
+        self._bridge.recordContacts = vtkEvery is not None
         self.dtCheck = dtCheck
         self.dtAuto = dtAuto
         self.dtMax = dtMax
@@ -523,9 +525,21 @@ class CoupledEngine(_AutoStep):
         Eq 10) [N], ``overlap`` (δ of Eq 12) [m], ``feature`` (list: 'face', 'edge' or 'vertex',
         the block's core feature nearest the point; 'face' rows make :meth:`faceForce`). Summed
         per block they give :meth:`force` and :meth:`torque`; where on a block the flow pressed
-        is their ``point`` (paper §3.2.3). CPU backend only: on CUDA a step's contacts stay on
-        the device (RuntimeError). Empty before the first step."""
+        is their ``point`` (paper §3.2.3). On CUDA a step's contacts stay on the device unless
+        :attr:`recordContacts` was set before it (RuntimeError otherwise). Empty before the
+        first step."""
         return self._bridge.contacts(-1 if yadeId is None else self._index(yadeId))
+
+    @property
+    def recordContacts(self):
+        """CUDA backend: keep each step's point–block contacts on the device (120 B per
+        contact) so that :meth:`contacts` and the ParaView contacts can read them (on from the
+        next step; default: on with ``vtkEvery``, else off). The CPU backend always has them."""
+        return self._bridge.recordContacts
+
+    @recordContacts.setter
+    def recordContacts(self, on):
+        self._bridge.recordContacts = bool(on)
 
     @property
     def totalContacts(self):

@@ -102,6 +102,19 @@ class CouplingCuda : public CouplingDeviceBackend {
     return m;
   }
 
+  void recordContacts(bool on) override {
+    recording_ = on;
+    if (on && listCapacity_ > 0) record_.reserve(static_cast<std::size_t>(kContactValues) * listCapacity_);
+  }
+
+  bool downloadContacts(std::vector<double>& records) override {
+    if (recorded_ < 0) return false;
+    records.resize(static_cast<std::size_t>(kContactValues) * recorded_);
+    if (recorded_ > 0)
+      CUDA_CHECK(cudaMemcpy(records.data(), record_.ptr, records.size() * sizeof(double), cudaMemcpyDeviceToHost));
+    return true;
+  }
+
   void run(const CouplingStepInput& in, CouplingStepOutput& out) override {
     const mpm::ParticleView& v = in.particles;
     const sdem::ShapeTableView<double>& s = in.shapes;
@@ -173,7 +186,8 @@ class CouplingCuda : public CouplingDeviceBackend {
     if (listCapacity_ == 0) growList(kFirstListCapacity);
     sums_.reserve(out.sums.size());
     CUDA_CHECK(cudaMemsetAsync(sums_.ptr, 0, std::max<std::size_t>(out.sums.size(), 1) * sizeof(double)));
-    const cudak::ContactList list{share_.ptr, keys_[0].ptr, entries_[0].ptr, listCapacity_, numberBits};
+    const cudak::ContactList list{share_.ptr, keys_[0].ptr, entries_[0].ptr, recording_ ? record_.ptr : nullptr,
+                                  listCapacity_, numberBits};
 
     const CouplingParticles<T> P = couplingParticles<T>(v);
     const sdem::ShapeTableView<T> S{numShapes_,          vertex_.ptr,         faceNormal_.ptr,
@@ -194,6 +208,7 @@ class CouplingCuda : public CouplingDeviceBackend {
     }
     cudak::CouplingFlags res;
     CUDA_CHECK(cudaMemcpy(&res, flagsD, sizeof(res), cudaMemcpyDeviceToHost));
+    recorded_ = recording_ && res.contacts <= listCapacity_ ? static_cast<long>(res.contacts) : -1;
     if (res.contacts > listCapacity_)
       growList(2ull * res.contacts);  // this step keeps the atomic sums
     else if (res.contacts > 0)
@@ -222,6 +237,7 @@ class CouplingCuda : public CouplingDeviceBackend {
       keys_[b].reserve(listCapacity_);
       entries_[b].reserve(listCapacity_);
     }
+    if (recording_) record_.reserve(static_cast<std::size_t>(kContactValues) * listCapacity_);
     std::size_t bytes = 0;
     cub::DoubleBuffer<unsigned long long> k(keys_[0].ptr, keys_[1].ptr);
     cub::DoubleBuffer<int> e(entries_[0].ptr, entries_[1].ptr);
@@ -262,6 +278,9 @@ class CouplingCuda : public CouplingDeviceBackend {
   DeviceArray<double> sums_;
   unsigned int listCapacity_ = 0;
   DeviceArray<double> share_;
+  bool recording_ = false;
+  long recorded_ = -1;         // contacts the last step recorded, -1: none
+  DeviceArray<double> record_;  // kContactValues per list entry while recording
   DeviceArray<unsigned long long> keys_[2];
   DeviceArray<int> entries_[2];
   DeviceArray<unsigned char> sortScratch_;

@@ -29,6 +29,7 @@ struct ContactList {
   double* share;            // kBlockSums per entry
   unsigned long long* key;  // block << (numberBits + 8) | number << 8 | j
   int* entry;               // the entry's own place (the sort's values)
+  double* record;           // kContactValues per entry (contactRecord), or null: not recorded
   unsigned int capacity;
   int numberBits;
 };
@@ -63,6 +64,11 @@ struct DeviceSink {
       list.key[i] = (static_cast<unsigned long long>(c.block) << (list.numberBits + 8)) |
                     (static_cast<unsigned long long>(c.particle) << 8) | (j < 255u ? j : 255u);
       list.entry[i] = static_cast<int>(i);
+      if (list.record) {
+        double* r = list.record + static_cast<std::size_t>(kContactValues) * i;
+        contactRecord(c, r);
+        r[kRecOrder] = j;
+      }
     }
     ++j;
     const float bound = static_cast<float>(particleStepBound(c));

@@ -135,11 +135,13 @@ struct BlobHit {
   Vec3 position, impulse;
   int firstContact = -1;
   double minApproach = std::numeric_limits<double>::infinity();
+  std::vector<MpContactRecord> contacts;  // of the last step
 };
 BlobHit blobHitsCube(mpm::Backend backend, mpm::Precision precision) {
   int cube;
   auto world = blobAtCube(1.0, false, 1e4, &cube, backend, precision);
   CoupledWorld& w = *world;
+  w.coupling.setRecordContacts(true);
   BlobHit r;
   r.impulse = Vec3::Zero();
   for (int s = 0; s < 1500; ++s) {
@@ -149,6 +151,7 @@ BlobHit blobHitsCube(mpm::Backend backend, mpm::Precision precision) {
     r.minApproach = std::min(r.minApproach, w.coupling.particleApproachStep());
   }
   r.position = w.world.engine.position(cube);
+  r.contacts = w.coupling.contacts();
   return r;
 }
 
@@ -906,11 +909,51 @@ TEST(MpSdemCoupling, CpuAndCudaAgree) {
       EXPECT_NEAR(gpu.minApproach / cpu.minApproach, 1.0, 1e-6);
     EXPECT_NEAR((gpu.position - cpu.position).norm(), 0.0, tol * 0.1) << "precision " << ::testing::PrintToString(prec);
     EXPECT_NEAR((gpu.impulse - cpu.impulse).norm(), 0.0, tol * cpu.impulse.norm() * 10) << "precision " << ::testing::PrintToString(prec);
+    // The last step's contacts, read back from the device list: the CPU's, in its order.
+    ASSERT_EQ(gpu.contacts.size(), cpu.contacts.size()) << "precision " << ::testing::PrintToString(prec);
+    ASSERT_FALSE(cpu.contacts.empty());
+    for (std::size_t i = 0; i < cpu.contacts.size(); ++i) {
+      const MpContactRecord &g = gpu.contacts[i], &c = cpu.contacts[i];
+      EXPECT_EQ(g.particle, c.particle) << i;
+      EXPECT_EQ(g.block, c.block) << i;
+      EXPECT_EQ(g.featureKind, c.featureKind) << i;
+      EXPECT_NEAR((g.point - c.point).norm(), 0.0, tol * 0.1) << i;
+      EXPECT_NEAR((g.force - c.force).norm(), 0.0, tol * 10 * c.force.norm() + 1e-12) << i;
+    }
     // No sum on the device depends on thread timing: a second run gives the same bits.
     const BlobHit again = blobHitsCube(mpm::Backend::Cuda, prec);
     EXPECT_EQ(again.position, gpu.position) << "precision " << ::testing::PrintToString(prec);
     EXPECT_EQ(again.impulse, gpu.impulse) << "precision " << ::testing::PrintToString(prec);
   }
+}
+
+// The records contacts() hands out are the contacts the block sums were made of.
+TEST(MpSdemCoupling, ContactRecordsMakeTheBlockSums) {
+  int cube;
+  auto world = blobAtCube(1.0, false, 1e4, &cube, mpm::Backend::Cpu, mpm::Precision::Double);
+  CoupledWorld& w = *world;
+  EXPECT_TRUE(w.coupling.contacts().empty());  // no step yet
+  for (int s = 0; s < 1500; ++s) w.step(1e-5);
+  const auto rec = w.coupling.contacts();
+  ASSERT_FALSE(rec.empty()) << "the blob is not touching the cube at the end";
+  ASSERT_EQ(static_cast<int>(rec.size()), w.coupling.contactCount(cube));
+  Vec3 f = Vec3::Zero(), tq = Vec3::Zero(), face = Vec3::Zero();
+  int previous = -1;
+  for (const MpContactRecord& r : rec) {
+    EXPECT_EQ(r.block, cube);
+    EXPECT_GT(r.particle, previous);  // by particle number (one block: one contact each)
+    previous = r.particle;
+    f += r.force;
+    tq += (r.point - w.world.engine.position(cube)).cross(r.force);
+    if (r.featureKind == sdem::kFeatureFace) face += r.force;
+    EXPECT_NEAR(r.normal.norm(), 1.0, 1e-12);
+    EXPECT_GT(r.normalForce, 0.0);
+  }
+  const double scale = w.coupling.force(cube).norm();
+  EXPECT_NEAR((f - w.coupling.force(cube)).norm(), 0.0, 1e-12 * scale);
+  EXPECT_NEAR((tq - w.coupling.torque(cube)).norm(), 0.0, 1e-12 * scale);
+  EXPECT_NEAR((face - w.coupling.faceForce(cube)).norm(), 0.0, 1e-12 * scale);
+  EXPECT_TRUE(w.coupling.contactsAvailable());
 }
 
 // The same scene as CpuAndCudaAgree, cpu-float against cpu-double. Float positions round
