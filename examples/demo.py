@@ -13,7 +13,8 @@
 Run it with ``yade -n -x examples/demo.py`` or ``/usr/bin/python3 examples/demo.py``.
 Outputs go to ``demo-out/``: ``sliding_block.png``, ``column_collapse.png``, the MPM run's
 ``mpm.h5`` (h5py) and ``particles.pvd`` (ParaView), and ``flume_block/`` (``coupled.h5``,
-``scene.pvd`` with the flow and the cube, ``flume_block.png``, ``summary.json``).
+``scene.pvd`` with the flow, the cube and the flow's contact forces on it, ``flume_block.png``,
+``flume_block_faces.png`` (the load on each face of the cube), ``summary.json``).
 """
 import math
 import os
@@ -146,8 +147,9 @@ def main():
     sliding_block()
     column_collapse()
     flume_block()
-    print("\nplots: %s, %s, %s" % (os.path.join(OUT, "sliding_block.png"), os.path.join(OUT, "column_collapse.png"),
-                                   os.path.join(OUT, "flume_block", "flume_block.png")))
+    print("\nplots: %s, %s, %s, %s" % (os.path.join(OUT, "sliding_block.png"), os.path.join(OUT, "column_collapse.png"),
+                                       os.path.join(OUT, "flume_block", "flume_block.png"),
+                                       os.path.join(OUT, "flume_block", "flume_block_faces.png")))
 
 
 main()
