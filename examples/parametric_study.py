@@ -119,7 +119,7 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, max
     potential0 = scene.mpm.diagnostics()["potential_energy"]
     steps, every = coupledSteps(ff["arrival"], settle, until, O.dt)
     scene.run(steps * O.dt, sampleEvery=every * O.dt)
-    _coupledResults(out, ff, scene.series(0), steps * O.dt, potential0)
+    _coupledResults(out, ff, scene.series(0), steps * O.dt, potential0, scene.mpm.diagnostics()["front_x"])
     out["wall_seconds"] = {"free_flow": tFree, "coupled": time.time() - t1}
     return out
 
@@ -158,12 +158,13 @@ def _cube(station):
     return Block(half=(HB / 2,) * 3, x=station, density=8900, friction=0.67, flowFriction=0.21)
 
 
-def _coupledResults(out, ff, s, duration, potential0):
+def _coupledResults(out, ff, s, duration, potential0, frontEnd):
     """The coupled run's results into ``out`` from the cube's series ``s`` (the keys of
-    Flume.series), the free flow ``ff`` (FlowProbe.result) and the flow's potential energy at
-    the start, ``potential0`` [J] (zero at the bed under the column's upstream end): the
-    energies of the paper's Figs 17 and 18 (the flow's kinetic peak and its time; the cube's
-    largest kinetic energy E_k,max^b and its ratio to E_p,0^f)."""
+    Flume.series), the free flow ``ff`` (FlowProbe.result), the flow's potential energy at
+    the start, ``potential0`` [J] (zero at the bed under the column's upstream end), and its
+    front's position at the end, ``frontEnd`` [m]: the energies of the paper's Figs 17 and 18
+    (the flow's kinetic peak and its time; the cube's largest kinetic energy E_k,max^b and its
+    ratio to E_p,0^f)."""
     from mpmsdem import analysis
     peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
     late = s["t"] >= s["t"][-1] - 0.1
@@ -171,10 +172,12 @@ def _coupledResults(out, ff, s, duration, potential0):
     A = min(ff["h_f"], HB) * HB  # impact area: the flow's depth on the cube's face, at most its height
     travel = float(s["travel"][-1])
     # A cube carried to the flume's end, or pushed back by the flow the end wall turned (a
-    # negative force at the end: nothing else pushes upstream), has a travel cut short by the
-    # end wall: flagged, and left out of the travel fits by the summary (give such a case a
-    # larger margin).
-    atEnd = out["L_i"] + out["L0"] + travel + HB > out["flume_length"] - 0.1 or static < 0
+    # negative force at the end once the front has reached the wall), has a travel cut short
+    # by the end wall: flagged, and left out of the travel fits by the summary (give such a case
+    # a larger margin). A negative force while the front is still short of the wall is the
+    # flow holding back a cube that runs ahead of it: its travel stands.
+    wallReached = frontEnd > out["flume_length"] - 0.1
+    atEnd = out["L_i"] + out["L0"] + travel + HB > out["flume_length"] - 0.1 or (static < 0 and wallReached)
     out.update(reached=True, free_flow=ff, submersion=analysis.submersion(ff["h_f"], HB), travel=travel,
                travel_L0=travel / out["L0"], cube_at_end=atEnd, duration=duration, peak_force=peak, peak_time=tPeak,
                static_force=static, force_ratio=peak / static if static > STATIC_FLOOR * peak else None,
@@ -362,7 +365,11 @@ def collectCase(case):
           "Fr1": analysis.froudeDistance(v, out["L0"])}
     s, _ = analysis.driverBlockSeries(os.path.join(case, "coupled"))
     potential0 = float(s["flow_potential"][0])  # the driver's record at the start
-    _coupledResults(out, ff, {k: v[1:] for k, v in s.items()}, record["coupled_steps"] * meta["dt"], potential0)
+    import h5py
+    with h5py.File(os.path.join(case, "coupled", "mpm.h5"), "r", locking=False) as f:
+        frontEnd = float(f["series/front_x"][-1])
+    _coupledResults(out, ff, {k: v[1:] for k, v in s.items()}, record["coupled_steps"] * meta["dt"], potential0,
+                    frontEnd)
     out["wall_seconds"]["coupled"] = record["coupled_seconds"]
     return out
 
