@@ -231,17 +231,12 @@ def collect(a):
 
 def report(a):
     """The table of the cases whose results the store holds (the others are left out)."""
+    from mpmsdem import sweep
     path = os.path.join(a.out, "runs.jsonl")
-    stored = []
-    if os.path.exists(path):
-        with open(path) as f:
-            stored = [json.loads(line) for line in f if line.strip()]
-    names, records = [], []
-    for name in a.caseList:
-        done = [r for r in stored if r.get("params") == caseParams(a, name) and r.get("status") == "ok"]
-        if done:
-            names.append(name)
-            records.append(done[-1])
+    # (readStore skips the half-written last line of a design still running)
+    ok = {r["key"]: r for r in sweep.readStore(path) if r["status"] == "ok"}
+    names = [name for name in a.caseList if sweep.runKey(caseParams(a, name)) in ok]
+    records = [ok[sweep.runKey(caseParams(a, name))] for name in names]
     print("%d of the %d cases are in %s\n" % (len(names), len(a.caseList), path))
     print(table(names, records, a, {n: caseParams(a, n) for n in names}))
 
