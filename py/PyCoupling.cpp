@@ -4,7 +4,6 @@
 //   the MPM force buffer, block shares) -> MPM step -> block forces (contacts + flow) to
 //   O.forces; YADE's NewtonIntegrator then moves the blocks.
 // Particle data stays in the solver's memory (on the GPU for the CUDA backend).
-#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <cmath>
@@ -100,10 +99,7 @@ class PyCoupling {
   // The last step's MP–block contacts as numpy arrays, one row per contact (CPU backends):
   // those of SDEM body index `only`, or all of them for only < 0.
   bp::dict contacts(int only) const {
-    std::vector<coupling::MpContactRecord> rec = coupling_.contacts();
-    if (only >= 0)
-      rec.erase(std::remove_if(rec.begin(), rec.end(), [only](const auto& r) { return r.block != only; }),
-                rec.end());
+    const std::vector<coupling::MpContactRecord> rec = coupling_.contacts(only);
     const npy_intp n = static_cast<npy_intp>(rec.size());
     std::vector<double> point(3 * n), normal(3 * n), force(3 * n), fn(n), overlap(n);
     std::vector<long> particle(n), block(n);

@@ -444,10 +444,10 @@ MpContactRecord recordOf(const double* r) {
 }  // namespace
 
 template <typename T>
-void MpSdemCoupling::appendContacts(const HostSide<T>& side, std::vector<MpContactRecord>& out) {
-  out.reserve(side.sorted.size());
+void MpSdemCoupling::appendContacts(const HostSide<T>& side, int block, std::vector<MpContactRecord>& out) {
   double r[kContactValues];
   for (const MpContact<T>* ct : side.sorted) {
+    if (block >= 0 && ct->block != block) continue;
     contactRecord(*ct, r);
     out.push_back(recordOf(r));
   }
@@ -458,16 +458,16 @@ void MpSdemCoupling::setRecordContacts(bool on) {
   if (device_) device_->recordContacts(on);
 }
 
-std::vector<MpContactRecord> MpSdemCoupling::contacts() const {
+std::vector<MpContactRecord> MpSdemCoupling::contacts(int block) const {
   std::vector<MpContactRecord> out;
   switch (contactsIn_) {
     case ContactsIn::None:
       break;
     case ContactsIn::HostDouble:
-      appendContacts(hostDouble_, out);
+      appendContacts(hostDouble_, block, out);
       break;
     case ContactsIn::HostFloat:
-      appendContacts(hostFloat_, out);
+      appendContacts(hostFloat_, block, out);
       break;
     case ContactsIn::Device: {
       std::vector<double> rec;
@@ -483,13 +483,16 @@ std::vector<MpContactRecord> MpSdemCoupling::contacts() const {
       // loop's order, by particle number and then in the order each particle made them
       const std::size_t n = rec.size() / kContactValues;
       std::vector<std::size_t> order(n);
-      for (std::size_t i = 0; i < n; ++i) order[i] = i;
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < n; ++i)
+        if (block < 0 || rec[kContactValues * i + kRecBlock] == block) order[kept++] = i;
+      order.resize(kept);
       auto at = [&rec](std::size_t i, int k) { return rec[kContactValues * i + k]; };
       std::sort(order.begin(), order.end(), [&at](std::size_t a, std::size_t b) {
         return at(a, kRecParticle) != at(b, kRecParticle) ? at(a, kRecParticle) < at(b, kRecParticle)
                                                           : at(a, kRecOrder) < at(b, kRecOrder);
       });
-      out.reserve(n);
+      out.reserve(kept);
       for (std::size_t i : order) out.push_back(recordOf(rec.data() + kContactValues * i));
       break;
     }

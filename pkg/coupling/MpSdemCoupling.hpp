@@ -87,8 +87,9 @@ class MpSdemCoupling {
   // by point). Empty before the first step and after a step that had no blocks or no
   // particles. On CUDA the contacts stay on the device unless setRecordContacts(true) was
   // called before the step (RuntimeFailure otherwise, or when the step had more contacts than
-  // the device list held: it holds them from the next step on).
-  std::vector<MpContactRecord> contacts() const;
+  // the device list held: it holds them from the next step on). Those of SDEM body index
+  // `block` only, or all for block < 0.
+  std::vector<MpContactRecord> contacts(int block = -1) const;
   // CUDA: keep each step's contacts on the device (120 B per contact) for contacts(). The CPU
   // backends always have them (the loop's own list).
   void setRecordContacts(bool on);
@@ -182,7 +183,7 @@ class MpSdemCoupling {
   enum class ContactsIn { None, HostDouble, HostFloat, Device } contactsIn_ = ContactsIn::None;
   bool recordContacts_ = false;
   template <typename T>
-  static void appendContacts(const HostSide<T>& side, std::vector<MpContactRecord>& out);
+  static void appendContacts(const HostSide<T>& side, int block, std::vector<MpContactRecord>& out);
   bool historiesToDevice_ = false;  // setHistories() since the last step: the device takes them
   // Float copies for a float host solver: the shape table's real arrays (its index arrays are
   // shared), the blocks and the pair physics of the step.

@@ -40,10 +40,9 @@ def _import_yade():
 
 
 def _import_core():
-    """The C++ module, or an ImportError that says which copy of the package lacks it."""
+    """Import the C++ module, or raise an ImportError that says which copy of the package lacks it."""
     try:
-        from . import _mpmsdem
-        return _mpmsdem
+        from . import _mpmsdem  # noqa: F401
     except ImportError as e:
         here = os.path.dirname(os.path.abspath(__file__))
         built = [f for f in os.listdir(here) if f.startswith("_mpmsdem") and f.endswith(".so")]
