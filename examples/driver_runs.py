@@ -5,6 +5,7 @@ sides size the runs with :func:`stepsOf` and :func:`recordSteps`."""
 import os
 import subprocess
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 
 def runDriver(exe, scene, out, log, extra=(), backend=None, precision=None, threads=None):
@@ -34,3 +35,18 @@ def recordSteps(duration, dt, interval):
     every = stepsOf(interval, dt)
     steps = stepsOf(duration, dt)
     return -(-steps // every) * every, every
+
+
+def eachCase(run, cases, workers=1):
+    """``[run(case) for case in cases]``, ``workers`` at a time (an integer >= 1: each run
+    waits on its own driver process, so threads suffice). At the first exception the cases not
+    yet started are dropped and it is raised once those running have ended."""
+    if not (isinstance(workers, int) and workers >= 1):
+        raise ValueError("workers = %r: must be an integer >= 1" % (workers,))
+    if workers == 1:
+        return [run(case) for case in cases]
+    pool = ThreadPoolExecutor(workers)
+    try:
+        return list(pool.map(run, cases))
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)

@@ -18,7 +18,7 @@ Then: python3 examples/parametric_study_summary.py     (Figs 14, 16b, 19a, 19b)
 Through the plain C++ driver (a machine without YADE, e.g. a GPU machine; the same scenes,
 probe and results):
     python3 examples/parametric_study.py --prepare DIR --full         (here, with YADE)
-    python3 examples/parametric_study.py --run-prepared DIR [--backend cuda]   (needs only mpmsdem-run)
+    python3 examples/parametric_study.py --run-prepared DIR [--backend cuda] [--workers N]   (needs only mpmsdem-run)
     python3 examples/parametric_study.py --collect DIR                (h5py; then the summary on DIR)
 The coupled runs last until the front's arrival + 1.5 s; ``--until 4.5`` runs them to the
 paper's 4.5 s (§5.4: "when the system approaches quasi-steady state") in every mode, and with
@@ -56,7 +56,7 @@ SAMPLE_EVERY = 0.002  # coupled run: the cube's record interval [s]
 STATIC_FLOOR = 0.01   # a static force below this fraction of the peak: nothing rests against the cube (no ratio)
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from driver_runs import recordSteps, runDriver, stepsOf  # noqa: E402  (standard library only)
+from driver_runs import eachCase, recordSteps, runDriver, stepsOf  # noqa: E402  (standard library only)
 
 
 def resolution(full, dx=None, ppc=None):
@@ -229,21 +229,22 @@ def prepareCase(AR, L0_hb, folder, full=0, dx=None, ppc=None, settle=1.5, margin
     return folder
 
 
-def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads=None, rerun=False, until=None):
-    """Run the prepared cases under ``folder`` through the driver, one after the other: the
-    free flow, then (if its front reached the station) the coupled run to the arrival + settle,
-    or to ``until`` [s] if later (see runCase). Standard library only (no YADE, numpy or
-    h5py): it runs where only mpmsdem-run is built. A case with run.json is done and skipped
-    unless ``rerun``, or unless its coupled run ended before ``until``: that run then goes on
-    from its last snapshot (mpmsdem-run --restart, the same run as one to ``until``). A case
+def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads=None, rerun=False, until=None,
+                workers=1):
+    """Run the prepared cases under ``folder`` through the driver, ``workers`` at a time (each
+    its own mpmsdem-run; on a GPU, small cases leave room for several): the free flow, then
+    (if its front reached the station) the coupled run to the arrival + settle, or to
+    ``until`` [s] if later (see runCase). Standard library only (no YADE, numpy or h5py): it
+    runs where only mpmsdem-run is built. A case with run.json is done and skipped unless
+    ``rerun``, or unless its coupled run ended before ``until``: that run then goes on from
+    its last snapshot (mpmsdem-run --restart, the same run as one to ``until``). A case
     stopped part-way (killed, or the machine went away) resumes: its finished free flow is
     kept (run.partial.json) and its coupled run goes on from its last snapshot (every 0.5 s).
-    Returns the case folders run."""
-    done = []
-    for name in sorted(os.listdir(folder)):
-        case = os.path.join(folder, name)
-        if not os.path.isfile(os.path.join(case, "case.json")):
-            continue
+    Returns the case folders run, in name order."""
+    cases = [os.path.join(folder, name) for name in sorted(os.listdir(folder))
+             if os.path.isfile(os.path.join(folder, name, "case.json"))]
+
+    def runOne(case):
         with open(os.path.join(case, "case.json")) as f:
             meta = json.load(f)
 
@@ -253,14 +254,14 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
 
         if os.path.exists(os.path.join(case, "run.json")) and not rerun:
             if _extend(case, meta, until, drive):
-                done.append(case)
-            else:
-                print("%s: done before (run.json), skipped" % name)
-            continue
+                return True
+            print("%s: done before (run.json), skipped" % os.path.basename(case))
+            return False
         how = {"backend": backend or "scene's", "precision": precision or "scene's", "exe": exe}
         _runCaseFolder(case, meta, until, drive, how, restart=not rerun)
-        done.append(case)
-    return done
+        return True
+
+    return [case for case, ran in zip(cases, eachCase(runOne, cases, workers)) if ran]
 
 
 def _runCaseFolder(case, meta, until, drive, how, restart):
@@ -403,7 +404,8 @@ def parse(argv):
     ap.add_argument("--table", default=os.path.join(HERE, "parametric_study.table"),
                     help="cases, one per line (default: the 20 of examples/parametric_study.table)")
     ap.add_argument("--full", action="store_true", help="the paper's resolution (dx 0.01 m) for every case")
-    ap.add_argument("--workers", type=int, default=1, help="local runs at a time (default 1)")
+    ap.add_argument("--workers", type=int, default=1,
+                    help="local runs at a time, also of --run-prepared's cases (default 1)")
     ap.add_argument("--scheduler", default=None, metavar="ADDRESS",
                     help="Dask scheduler address (tcp://host:8786): run the cases on its workers instead")
     ap.add_argument("--retries", type=int, default=2, help="extra attempts of a failed case (default 2)")
@@ -498,7 +500,7 @@ def main(argv):
     if a.prepare:
         return prepareMain(a)
     if a.run_prepared:
-        if not runPrepared(a.run_prepared, a.exe, a.backend, a.precision, a.threads, a.rerun, a.until):
+        if not runPrepared(a.run_prepared, a.exe, a.backend, a.precision, a.threads, a.rerun, a.until, a.workers):
             print("--run-prepared %s: nothing to run (no case folder without run.json; --rerun runs them again)"
                   % a.run_prepared)
         return

@@ -15,9 +15,12 @@
 #                                                      # with HDF5 (scripts/bench/gpu_bundle.sh);
 #                                                      # results in $OUT/study.tgz, for --collect
 #   ... --study DIR --until 4.5                        # its coupled runs to 4.5 s (the paper's end)
+#                                                      # (runs last, with what is left of the budget)
 #   ... --design DIR                                   # the §3.2 cases prepared in DIR
 #                                                      # (scripts/validation/paper_flume_design.py
 #                                                      # --prepare), likewise: $OUT/design.tgz
+#   ... --workers N                                    # prepared cases N at a time (small scenes
+#                                                      # leave most of a GPU idle; default 1)
 #   ... --baseline DIR                                 # an older mpmsdem-run in DIR: the MPM
 #                                                      # benchmark and the flume's first 4,000
 #                                                      # steps run with it too (new/old speed)
@@ -26,8 +29,9 @@
 #   GPU_RUN_STAGES='test_|coarse' bash ...             # only the stages whose names match this
 #                                                      # extended regular expression
 #
-# Stages, most telling first: the whole of test_mpm and test_coupling (the CPU-vs-CUDA
-# agreement tests are the ones a machine without a GPU skips); bench_mpm.py --cuda (MPM
+# Stages, most telling first: the whole of test_mpm and test_coupling side by side (stage
+# "tests"; the CPU-vs-CUDA agreement tests are the ones a machine without a GPU skips); the
+# prepared §3.2 design (--design); bench_mpm.py --cuda (MPM
 # updates/s at 1e5..1e7 points, against the CPU and the baseline); the flume at the paper's
 # resolution (flume_block_full.json): 4,000 steps on the CPU and on CUDA (new and baseline: the
 # coupling's share of the step is in each JSON line), then the whole 2 s on CUDA in double and
@@ -49,6 +53,7 @@ baseline=""
 study=""
 design=""
 until=""
+workers=1
 while [ $# -gt 0 ]; do
   case $1 in
     --prebuilt) prebuilt=${2:?"--prebuilt needs a folder"}; shift 2 ;;
@@ -56,6 +61,7 @@ while [ $# -gt 0 ]; do
     --study) study=${2:?"--study needs a folder of prepared cases"}; shift 2 ;;
     --design) design=${2:?"--design needs a folder of prepared cases"}; shift 2 ;;
     --until) until=${2:?"--until needs a time [s]"}; shift 2 ;;
+    --workers) workers=${2:?"--workers needs a number of cases"}; shift 2 ;;
     *) echo "gpu_run.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -100,27 +106,45 @@ stage() {
   (( rc == 0 )) || echo "== $name: exit $rc$( (( rc == 124 )) && echo ' (time limit)')"
 }
 
-# tests: the failures in full, the summary of each
-for t in test_mpm test_coupling; do
-  stage "$t" 240 bash -c "'$bin/$t' --gtest_output=xml:'$out/$t.xml' > '$out/$t.log' 2>&1; rc=\$?; \
-    grep -E '^\[  (FAILED|PASSED|SKIPPED) +\] ([0-9]+ tests?|[^ ]+$)' '$out/$t.log'; grep -B30 '^\[  FAILED  \]' '$out/$t.log' | head -150; exit \$rc"
-done
+# tests: the failures in full, the summary of each; the two suites side by side (each uses a
+# fraction of the GPU)
+run_test() {
+  local t=$1
+  "$bin/$t" --gtest_output=xml:"$out/$t.xml" > "$out/$t.log" 2>&1
+  local rc=$?
+  { grep -E '^\[  (FAILED|PASSED|SKIPPED) +\] ([0-9]+ tests?|[^ ]+$)' "$out/$t.log"
+    grep -B30 '^\[  FAILED  \]' "$out/$t.log" | head -150; } | sed "s/^/$t: /"
+  return "$rc"
+}
+both_tests() {
+  run_test test_mpm & local a=$!
+  run_test test_coupling & local b=$!
+  wait "$a"; local ra=$?
+  wait "$b"; local rb=$?
+  return $(( ra | rb ))
+}
+export -f run_test both_tests
+export bin out workers
+stage tests 240 both_tests
 
-# prepared cases through the CUDA driver (a case run before is skipped: a second call goes on),
-# their outputs but the particle snapshots in $out/NAME.tgz: prepared_run NAME DIR SCRIPT [OPTION...]
+# prepared cases through the CUDA driver, --workers at a time (a case run before is skipped: a
+# second call goes on), their outputs but the particle snapshots and restart points in
+# $out/NAME.tgz, written also when the runs are stopped at LIMIT seconds (the cases not finished
+# have no done.json/run.json and are run again by the next call): prepared_run NAME LIMIT DIR
+# SCRIPT [OPTION...]
 prepared_run() {
-  local name=$1 dir=$2 script=$3
-  shift 3
-  python3 "$script" --run-prepared "$dir" --backend cuda --exe "$bin/mpmsdem-run" --threads "$(nproc)" "$@" 2>&1 |
-    tee "$out/$name.log"
+  local name=$1 limit=$2 dir=$3 script=$4
+  shift 4
+  timeout -k 5 "$limit" python3 "$script" --run-prepared "$dir" --backend cuda --exe "$bin/mpmsdem-run" \
+    --workers "$workers" --threads "$(( $(nproc) / workers > 0 ? $(nproc) / workers : 1 ))" "$@" 2>&1 | tee "$out/$name.log"
   local rc=${PIPESTATUS[0]}
-  tar czf "$out/$name.tgz" --exclude=mpm.snapshots --exclude='*.restart' -C "$(dirname "$dir")" "$(basename "$dir")"
+  (( rc == 124 )) && echo "$name: stopped at its ${limit} s; the cases above that say so are done"
+  tar czf "$out/$name.tgz" --exclude=mpm.snapshots --exclude='*.restart' --exclude='*.checkpoint.json' \
+    -C "$(dirname "$dir")" "$(basename "$dir")"
   return "$rc"
 }
 export -f prepared_run
-export bin out
-[ -n "$study" ] && stage study 420 prepared_run study "$study" examples/parametric_study.py ${until:+--until "$until"}
-[ -n "$design" ] && stage design 420 prepared_run design "$design" scripts/validation/paper_flume_design.py
+[ -n "$design" ] && stage design 420 prepared_run design 400 "$design" scripts/validation/paper_flume_design.py
 
 # flume_run NAME SCENE BACKEND PRECISION [ARGS...]: one --bench run, its JSON line in $out/NAME.json
 # (FLUME_EXE: another mpmsdem-run)
@@ -222,5 +246,12 @@ if [ -n "$nsys" ]; then
     grep -A14 -E 'cuda_api_sum|cuda_gpu_kern_sum' '$out/nsys_flume.txt' | cut -c1-160"
 else
   echo "== nsys_flume: skipped (no nsys on this machine)"
+fi
+# the §5 cases last: they take what is left of the budget (a case not finished by then is run
+# again from its start by the next call)
+if [ -n "$study" ]; then
+  left=$(( budget - (SECONDS - start) - 20 ))
+  (( left > 60 )) || left=60
+  stage study $(( left + 15 )) prepared_run study "$left" "$study" examples/parametric_study.py ${until:+--until "$until"}
 fi
 echo "== done in $(( SECONDS - start )) s"

@@ -43,7 +43,7 @@ Through the plain C++ driver (a GPU machine has no YADE): the same cases written
 scenes here, run there, read back here (the same numbers as the YADE runs, to round-off):
 
     /usr/bin/python3 scripts/validation/paper_flume_design.py --prepare DIR [--cases ...] [--lhs 20]
-    python3 scripts/validation/paper_flume_design.py --run-prepared DIR --exe PATH/mpmsdem-run --backend cuda
+    python3 scripts/validation/paper_flume_design.py --run-prepared DIR --exe PATH/mpmsdem-run --backend cuda [--workers N]
     /usr/bin/python3 scripts/validation/paper_flume_design.py --collect DIR       (table in DIR/design.md)
 """
 import argparse
@@ -103,7 +103,7 @@ def parse(argv):
     ap.add_argument("--cases", default=",".join(CASES), help="comma-separated subset of: " + ", ".join(CASES))
     ap.add_argument("--duration", type=float, default=0.8, help="simulated time per case [s], in [0.7, 3] (0.8)")
     ap.add_argument("--dx", type=float, default=0.01, help="grid spacing [m] (0.01, the paper's)")
-    ap.add_argument("--workers", type=int, default=1, help="cases at a time (1)")
+    ap.add_argument("--workers", type=int, default=1, help="cases at a time, also of --run-prepared (1)")
     ap.add_argument("--out", default=os.path.join("results", "paper_flume_design"), help="results folder")
     ap.add_argument("--lhs", type=int, default=0, help="add N joint cases by a Latin hypercube (0)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the Latin hypercube (1)")
@@ -199,20 +199,24 @@ def prepare(a):
 
 
 def runPrepared(a):
-    """The prepared cases without YADE or numpy (a case with its out/done.json is skipped)."""
+    """The prepared cases without YADE or numpy, ``--workers`` at a time (a case with its
+    done.json is skipped)."""
     sys.path.insert(0, os.path.join(ROOT, "examples"))
-    from driver_runs import runDriver
-    for name in sorted(os.listdir(a.run_prepared)):
-        case = os.path.join(a.run_prepared, name)
-        if not os.path.isfile(os.path.join(case, "case.json")) or os.path.exists(os.path.join(case, "done.json")):
-            continue
+    from driver_runs import eachCase, runDriver
+    cases = [os.path.join(a.run_prepared, name) for name in sorted(os.listdir(a.run_prepared))]
+    cases = [c for c in cases if os.path.isfile(os.path.join(c, "case.json"))
+             and not os.path.exists(os.path.join(c, "done.json"))]
+
+    def runOne(case):
         with open(os.path.join(case, "case.json")) as f:
             steps = json.load(f)["steps"]
         seconds = runDriver(a.exe, os.path.join(case, "scene.json"), os.path.join(case, "out"),
                             os.path.join(case, "out.log"), ["--steps", str(steps)], a.backend, None, a.threads)
         with open(os.path.join(case, "done.json"), "w") as f:
             json.dump({"seconds": seconds, "backend": a.backend or "scene's", "exe": a.exe}, f)
-        print("%s: %d steps in %.0f s" % (name, steps, seconds))
+        print("%s: %d steps in %.0f s" % (os.path.basename(case), steps, seconds))
+
+    eachCase(runOne, cases, a.workers)
 
 
 def collect(a):

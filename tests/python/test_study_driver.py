@@ -207,3 +207,42 @@ def test_a_cube_at_the_end_wall_is_told_from_one_held_back_by_the_flow():
     assert case(1.9, -1.3, 9.0)       # pushed back by the flow the wall turned
     assert case(5.95, 2.0, 9.0)       # at the wall itself
     assert not case(1.9, 2.0, 9.0)    # pushed downstream, away from the wall
+
+
+def test_prepared_cases_run_workers_at_a_time_in_order_and_stop_at_a_failure():
+    import threading
+    import time
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    from driver_runs import eachCase
+    # two workers: two cases are inside run() together (else the barrier times out)
+    together = threading.Barrier(2, timeout=10)
+    assert eachCase(lambda c: (together.wait(), c * c)[1], [3, 1, 2, 5], workers=2) == [9, 1, 4, 25]
+    # one worker: never two at once
+    inside, most = [0], [0]
+    lock = threading.Lock()
+
+    def counted(c):
+        with lock:
+            inside[0] += 1
+            most[0] = max(most[0], inside[0])
+        time.sleep(0.01)
+        with lock:
+            inside[0] -= 1
+        return c
+
+    assert eachCase(counted, list(range(5)), workers=1) == list(range(5)) and most[0] == 1
+    # a failure: raised, and the cases not yet started are dropped
+    ran = []
+
+    def failFirst(c):
+        if c == 0:
+            raise RuntimeError("mpmsdem-run case0 exited 1")
+        time.sleep(0.1)
+        ran.append(c)
+
+    with pytest.raises(RuntimeError, match="case0 exited 1"):
+        eachCase(failFirst, list(range(12)), workers=2)
+    assert 1 <= len(ran) <= 4, ran
+    for bad in (0, 1.5, "2"):
+        with pytest.raises(ValueError, match=r"workers = .*: must be an integer >= 1"):
+            eachCase(abs, [1], workers=bad)
