@@ -19,6 +19,11 @@
 #   ... --design DIR                                   # the §3.2 cases prepared in DIR
 #                                                      # (scripts/validation/paper_flume_design.py
 #                                                      # --prepare), likewise: $OUT/design.tgz
+#   ... --profile-scene FILE                           # (repeatable) where a driver scene's step
+#                                                      # goes on CUDA: GPU_PROFILE_STEPS steps
+#                                                      # (2000) with --bench --device-stages, and
+#                                                      # with its outputs and probes
+#   GPU_TEST_FILTER='*uda*' bash ...                   # the tests' gtest filter (default all)
 #   ... --workers N                                    # prepared cases N at a time (small scenes
 #                                                      # leave most of a GPU idle; default 1)
 #   ... --baseline DIR                                 # an older mpmsdem-run in DIR: the MPM
@@ -54,6 +59,7 @@ study=""
 design=""
 until=""
 workers=1
+profile=()
 while [ $# -gt 0 ]; do
   case $1 in
     --prebuilt) prebuilt=${2:?"--prebuilt needs a folder"}; shift 2 ;;
@@ -61,6 +67,7 @@ while [ $# -gt 0 ]; do
     --study) study=${2:?"--study needs a folder of prepared cases"}; shift 2 ;;
     --design) design=${2:?"--design needs a folder of prepared cases"}; shift 2 ;;
     --until) until=${2:?"--until needs a time [s]"}; shift 2 ;;
+    --profile-scene) profile+=("${2:?"--profile-scene needs a driver scene"}"); shift 2 ;;
     --workers) workers=${2:?"--workers needs a number of cases"}; shift 2 ;;
     *) echo "gpu_run.sh: unknown argument $1" >&2; exit 2 ;;
   esac
@@ -106,26 +113,14 @@ stage() {
   (( rc == 0 )) || echo "== $name: exit $rc$( (( rc == 124 )) && echo ' (time limit)')"
 }
 
-# tests: the failures in full, the summary of each; the two suites side by side (each uses a
-# fraction of the GPU)
-run_test() {
-  local t=$1
-  "$bin/$t" --gtest_output=xml:"$out/$t.xml" > "$out/$t.log" 2>&1
-  local rc=$?
-  { grep -E '^\[  (FAILED|PASSED|SKIPPED) +\] ([0-9]+ tests?|[^ ]+$)' "$out/$t.log"
-    grep -B30 '^\[  FAILED  \]' "$out/$t.log" | head -150; } | sed "s/^/$t: /"
-  return "$rc"
-}
-both_tests() {
-  run_test test_mpm & local a=$!
-  run_test test_coupling & local b=$!
-  wait "$a"; local ra=$?
-  wait "$b"; local rb=$?
-  return $(( ra | rb ))
-}
-export -f run_test both_tests
+# tests: the failures in full, the summary of each (one suite at a time: two OpenMP suites side
+# by side on the machine's cores took 171 s for a test of seconds)
+for t in test_mpm test_coupling; do
+  stage "$t" 240 bash -c "OMP_WAIT_POLICY=PASSIVE '$bin/$t' --gtest_filter='${GPU_TEST_FILTER:-*}' \
+    --gtest_output=xml:'$out/$t.xml' > '$out/$t.log' 2>&1; rc=\$?; \
+    grep -E '^\[  (FAILED|PASSED|SKIPPED) +\] ([0-9]+ tests?|[^ ]+$)' '$out/$t.log'; grep -B30 '^\[  FAILED  \]' '$out/$t.log' | head -150; exit \$rc"
+done
 export bin out workers
-stage tests 240 both_tests
 
 # prepared cases through the CUDA driver, --workers at a time (a case run before is skipped: a
 # second call goes on), their outputs but the particle snapshots and restart points in
@@ -247,6 +242,30 @@ if [ -n "$nsys" ]; then
 else
   echo "== nsys_flume: skipped (no nsys on this machine)"
 fi
+# scene_profile FILE: where the step of a driver scene goes on CUDA (the scene's precision)
+scene_profile() {
+  local scene=$1 steps=${GPU_PROFILE_STEPS:-2000} name
+  name=$(basename "$(dirname "$scene")")_$(basename "$scene" .json)
+  "$bin/mpmsdem-run" "$scene" --backend cuda --bench --device-stages --steps "$steps" 2> /dev/null | tail -1 \
+    > "$out/profile_$name.json" || return 1
+  local t0=$SECONDS
+  "$bin/mpmsdem-run" "$scene" --backend cuda --steps "$steps" --out "/tmp/profile_$name" > "$out/profile_$name.log" 2>&1 \
+    || { tail -5 "$out/profile_$name.log"; return 1; }
+  python3 - "$out/profile_$name.json" "$(( SECONDS - t0 ))" "$(grep -a 'step loop' "$out/profile_$name.log" | tail -1)" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+d = r.get("device_stage_seconds", {})
+print("%s: %d points x %d steps --bench: loop %.2f s (%.3g upd/s; %s); device %s (sum %.2f s); with outputs: %s s wall, %s" % (
+    sys.argv[1].split("/")[-1], r["particles"], r["steps"], r["seconds"], r["particle_updates_per_s"],
+    ", ".join("%s %.2f" % kv for kv in r.get("stage_seconds", {}).items()),
+    ", ".join("%s %.2f" % kv for kv in d.items()), sum(d.values()), sys.argv[2], sys.argv[3]))
+PY
+}
+export -f scene_profile
+for f in "${profile[@]}"; do
+  stage "profile_$(basename "$(dirname "$f")")" 120 scene_profile "$f"
+done
+
 # the §5 cases last: they take what is left of the budget (a case not finished by then is run
 # again from its start by the next call)
 if [ -n "$study" ]; then
