@@ -376,12 +376,9 @@ void MpmCpu<T>::bin(const ParticleIn<T>& in) {
   for (int b = 0; b < nBlocks; ++b) {
     if (blockStart_[b + 1] == blockStart_[b]) continue;
     int bc[3];
-    blockCoords(b, bc);
-    const int bx = bc[0], by = bc[1], bz = bc[2];
-    colourBlocks_[(bx & 1) * 4 + (by & 1) * 2 + (bz & 1)].push_back(b);
-    for (int tx = bx; tx <= std::min(bx + 1, tiles_[0] - 1); ++tx)
-      for (int ty = by; ty <= std::min(by + 1, tiles_[1] - 1); ++ty)
-        for (int tz = bz; tz <= std::min(bz + 1, tiles_[2] - 1); ++tz) tileMark_[(tx * tiles_[1] + ty) * tiles_[2] + tz] = 1;
+    blockCoordsOf(b, blocks_, bc);
+    colourBlocks_[blockColourOf(bc)].push_back(b);
+    forTilesOfBlock(bc, tiles_, [this](int t) { tileMark_[t] = 1; });
   }
   activeTiles_.clear();
   const int nTiles = static_cast<int>(tileMark_.size());
@@ -420,7 +417,7 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
     for (long i = 0; i < nb; ++i) {
       const int b = list[i];
       int b0[3];
-      blockCoords(b, b0);
+      blockCoordsOf(b, blocks_, b0);
       for (int& x : b0) x *= 3;  // the block's first stencil-base node
       // The block's particles add into a private copy of the nodes they reach (in L1), which
       // is then added to the grid once: the grid is touched once per block, not per particle.

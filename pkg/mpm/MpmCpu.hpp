@@ -17,13 +17,11 @@
 // Blocks are filled by number, so the sums are those of number order: results, snapshots and
 // restarts do not depend on the storage order.
 //
-// Grid work follows the particles, not the box: the nodes are grouped in tiles of 3x3x3, and
-// the stencil of a particle in block b lies in tiles b and b + 1 per axis. A step zeroes,
-// updates and wall-corrects only the tiles next to occupied blocks (the active tiles), and
-// scatters only the occupied blocks. Every other node is zero at every stage, as a dense
-// sweep would leave it (an empty node's update writes zeros), so the results are bit-identical
-// to sweeping the whole grid and a grid hook still sees the whole grid. A flow filling 5 % of
-// a long runout box then costs what it would in a box around it.
+// Grid work follows the particles, not the box (the active tiles of MpmKernelsCommon.hpp,
+// forTilesOfBlock): a step scatters only the occupied blocks and zeroes, updates and
+// wall-corrects only the tiles next to them, with results bit-identical to sweeping the whole
+// grid; a grid hook still sees the whole grid. A flow filling 5 % of a long runout box then
+// costs what it would in a box around it.
 //
 // The mutable particle state is double-buffered: a step reads buffer `cur_` and writes the
 // other one, and only swaps when every particle passed the NaN/blow-up check. After a
@@ -98,12 +96,6 @@ class MpmCpu : public MpmSolver {
   void bin(const ParticleIn<T>& in);
   template <typename F>
   void forActiveNodes(F&& f);
-  // Block indices (bx, by, bz) of block id b.
-  void blockCoords(int b, int c[3]) const {
-    c[2] = b % blocks_[2];
-    c[1] = (b / blocks_[2]) % blocks_[1];
-    c[0] = b / (blocks_[2] * blocks_[1]);
-  }
 
   MpmParams params_;
   GridConst<T> grid_{};

@@ -185,6 +185,39 @@ MPM_HD_INLINE int blockCellOf(const T gc[3], const int nb[3]) {
   return kBlockCells * ((b[0] * nb[1] + b[1]) * nb[2] + b[2]) + c;
 }
 
+// Block (or tile) b's coordinates in a grid of n per axis.
+MPM_HD_INLINE void blockCoordsOf(int b, const int n[3], int c[3]) {
+  c[2] = b % n[2];
+  c[1] = (b / n[2]) % n[1];
+  c[0] = b / (n[2] * n[1]);
+}
+
+// Parity colour of the block at coordinates c: 4 (c0 % 2) + 2 (c1 % 2) + c2 % 2.
+MPM_HD_INLINE int blockColourOf(const int c[3]) { return (c[0] & 1) * 4 + (c[1] & 1) * 2 + (c[2] & 1); }
+
+// Grid work follows the occupied blocks on both backends: the nodes are grouped in tiles of
+// 3x3x3 (tile t holds nodes 3t .. 3t + 2 per axis; a grid has as many tiles per axis as blocks),
+// and the particles of block b reach tiles b and b + 1 per axis. A step zeroes, updates and
+// wall-corrects only the tiles next to occupied blocks (the active tiles); every other node is
+// zero at every stage, as a sweep of the whole grid would leave it (an empty node's update
+// writes zeros). f(tile) for the tiles the particles of the block at coordinates c reach.
+template <typename F>
+MPM_HD_INLINE void forTilesOfBlock(const int c[3], const int n[3], F&& f) {
+  for (int t0 = c[0]; t0 <= c[0] + 1 && t0 < n[0]; ++t0)
+    for (int t1 = c[1]; t1 <= c[1] + 1 && t1 < n[1]; ++t1)
+      for (int t2 = c[2]; t2 <= c[2] + 1 && t2 < n[2]; ++t2) f((t0 * n[1] + t1) * n[2] + t2);
+}
+
+// Node k (0..26: 9 i + 3 j + l, its place in the tile) of tile t, in a grid of n tiles and
+// `nodes` nodes per axis: its index, or -1 past the grid's far faces.
+MPM_HD_INLINE int tileNodeOf(int t, int k, const int n[3], const int nodes[3]) {
+  int c[3];
+  blockCoordsOf(t, n, c);
+  const int a = 3 * c[0] + k / 9, b = 3 * c[1] + (k / 3) % 3, d = 3 * c[2] + k % 3;
+  if (a >= nodes[0] || b >= nodes[1] || d >= nodes[2]) return -1;
+  return (a * nodes[1] + b) * nodes[2] + d;
+}
+
 // A particle as the gather of its base keeps it: its offset from the base node per axis (the f of
 // Stencil::compute) and P2GParticle's coefficients without those that are always zero (cx, cy,
 // cz are non-zero only for the new momentum, values kNodeVNew..+2).

@@ -72,10 +72,6 @@ while [ $# -gt 0 ]; do
     *) echo "gpu_run.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
-if [ -n "$baseline" ] && ! "$baseline/mpmsdem-run" --help > /dev/null 2>&1; then
-  echo "gpu_run.sh: no mpmsdem-run that starts in $baseline" >&2
-  exit 2
-fi
 mkdir -p "$out"
 start=$SECONDS
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv | tee "$out/gpu.txt"
@@ -87,6 +83,11 @@ bin=build-gpu
 for d in "$prebuilt" "$baseline"; do
   [ -n "$d" ] && [ -d "$d/lib" ] && export LD_LIBRARY_PATH="$(cd "$d/lib" && pwd)${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 done
+# (a baseline folder may hold mpmsdem-run alone and use the bundle's libraries)
+if [ -n "$baseline" ] && ! "$baseline/mpmsdem-run" --help > /dev/null 2>&1; then
+  echo "gpu_run.sh: no mpmsdem-run that starts in $baseline" >&2
+  exit 2
+fi
 if [ -n "$prebuilt" ] && "$prebuilt/mpmsdem-run" --help > /dev/null 2>&1; then
   bin=$prebuilt
   echo "binaries: $prebuilt (built elsewhere)" | tee -a "$out/gpu.txt"
@@ -120,7 +121,7 @@ for t in test_mpm test_coupling; do
     --gtest_output=xml:'$out/$t.xml' > '$out/$t.log' 2>&1; rc=\$?; \
     grep -E '^\[  (FAILED|PASSED|SKIPPED) +\] ([0-9]+ tests?|[^ ]+$)' '$out/$t.log'; grep -B30 '^\[  FAILED  \]' '$out/$t.log' | head -150; exit \$rc"
 done
-export bin out workers
+export bin out workers baseline
 
 # prepared cases through the CUDA driver, --workers at a time (a case run before is skipped: a
 # second call goes on), their outputs but the particle snapshots and restart points in
@@ -242,12 +243,25 @@ if [ -n "$nsys" ]; then
 else
   echo "== nsys_flume: skipped (no nsys on this machine)"
 fi
-# scene_profile FILE: where the step of a driver scene goes on CUDA (the scene's precision)
+# scene_profile FILE: where the step of a driver scene goes on CUDA (the scene's precision);
+# with --baseline, the baseline's --bench run of the same steps right after, and new/old
 scene_profile() {
   local scene=$1 steps=${GPU_PROFILE_STEPS:-2000} name
   name=$(basename "$(dirname "$scene")")_$(basename "$scene" .json)
   "$bin/mpmsdem-run" "$scene" --backend cuda --bench --device-stages --steps "$steps" 2> /dev/null | tail -1 \
     > "$out/profile_$name.json" || return 1
+  if [ -n "$baseline" ]; then
+    "$baseline/mpmsdem-run" "$scene" --backend cuda --bench --device-stages --steps "$steps" 2> /dev/null | tail -1 \
+      > "$out/profile_${name}_baseline.json" || return 1
+    python3 - "$out/profile_$name.json" "$out/profile_${name}_baseline.json" <<'PY'
+import json, sys
+new, old = (json.load(open(f)) for f in sys.argv[1:3])
+dn, do = new.get("device_stage_seconds", {}), old.get("device_stage_seconds", {})
+print("%s: step loop new %.3f s, baseline %.3f s: new/old speed %.2f; device stages new/baseline: %s" % (
+    sys.argv[1].split("/")[-1], new["seconds"], old["seconds"], old["seconds"] / new["seconds"],
+    ", ".join("%s %.3f/%.3f" % (k, dn[k], do.get(k, float("nan"))) for k in dn)))
+PY
+  fi
   local t0=$SECONDS
   "$bin/mpmsdem-run" "$scene" --backend cuda --steps "$steps" --out "/tmp/profile_$name" > "$out/profile_$name.log" 2>&1 \
     || { tail -5 "$out/profile_$name.log"; return 1; }

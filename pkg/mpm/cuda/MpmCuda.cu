@@ -54,6 +54,19 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
   deviceAlloc(&flags_, 1, bytes_);
   deviceAlloc(&cellStart_, static_cast<std::size_t>(kBlockCells) * nBlocks_, bytes_);
   deviceAlloc(&cellEnd_, static_cast<std::size_t>(kBlockCells) * nBlocks_, bytes_);
+  deviceAlloc(&colourBlocks_, nBlocks_, bytes_);
+  deviceAlloc(&activeTiles_, nBlocks_, bytes_);
+  deviceAlloc(&listCounts_, kTileLists, bytes_);
+  deviceAlloc(&tileMark_, nBlocks_, bytes_);
+  // the state between steps: no active tile, so every node zero
+  CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
+  CUDA_CHECK(cudaMemset(listCounts_, 0, kTileLists * sizeof(int)));
+  CUDA_CHECK(cudaMemset(tileMark_, 0, nBlocks_));
+  // enough blocks to fill the device; the kernels over the active tiles' nodes loop over them
+  int device = 0, sms = 1;
+  CUDA_CHECK(cudaGetDevice(&device));
+  CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
+  gridLaunch_ = std::max(1, std::min(blocksFor(static_cast<std::size_t>(kBlockCells) * nBlocks_), 8 * sms));
 }
 
 template <typename T>
@@ -64,6 +77,10 @@ MpmCuda<T>::~MpmCuda() {
   deviceFree(flags_);
   deviceFree(cellStart_);
   deviceFree(cellEnd_);
+  deviceFree(colourBlocks_);
+  deviceFree(activeTiles_);
+  deviceFree(listCounts_);
+  deviceFree(tileMark_);
 }
 
 template <typename T>
@@ -91,7 +108,8 @@ void MpmCuda<T>::freeParticles() {
   sortScratchBytes_ = 0;
   sorted_ = nullptr;
   bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags) +
-           2 * static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int);
+           2 * static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int) +
+           static_cast<std::size_t>(nBlocks_) * (2 * sizeof(int) + 1) + kTileLists * sizeof(int);
   hasFext_ = false;
   forcesIncomplete_ = false;
 }
@@ -341,6 +359,12 @@ ParticleOut<T> MpmCuda<T>::output() const {
 }
 
 template <typename T>
+cudak::ActiveLists MpmCuda<T>::activeLists() const {
+  static_assert(kTileLists == cudak::kTilesCount + 1, "a count per colour and one for the tiles");
+  return {colourBlocks_, activeTiles_, listCounts_, tileMark_};
+}
+
+template <typename T>
 void MpmCuda<T>::sortParticles() {
   slotOfValid_ = false;  // the sort takes slots_ back
   const int n = static_cast<int>(n_);
@@ -356,6 +380,10 @@ void MpmCuda<T>::sortParticles() {
   CUDA_CHECK(cudaMemsetAsync(cellEnd_, 0, cells * sizeof(int)));
   sortedkeys::rangesKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, cellStart_, cellEnd_);
   CUDA_CHECK(cudaGetLastError());
+  cudak::occupiedBlocksKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, bg, activeLists());
+  CUDA_CHECK(cudaGetLastError());
+  cudak::activeTilesKernel<<<blocksFor(nBlocks_), kThreads>>>(nBlocks_, activeLists());
+  CUDA_CHECK(cudaGetLastError());
   sorted_ = v.Current();
 }
 
@@ -365,7 +393,11 @@ void MpmCuda<T>::step(double dt) {
   if (steps_ % 100 == 0) checkTimeStep(dt);
   const int n = static_cast<int>(n_);
   const T dtT = static_cast<T>(dt);
-  CUDA_CHECK(cudaMemsetAsync(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
+  const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
+  // Only the last step's active tiles hold non-zero values; the lists are then built anew.
+  cudak::clearTilesKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
+  CUDA_CHECK(cudaGetLastError());
+  CUDA_CHECK(cudaMemsetAsync(listCounts_, 0, kTileLists * sizeof(int)));
   CUDA_CHECK(cudaMemsetAsync(&flags_->firstBad, 0xff, sizeof(flags_->firstBad)));
   CUDA_CHECK(cudaMemsetAsync(&flags_->maxSpeedBits, 0, sizeof(flags_->maxSpeedBits)));
   const ParticleIn<T> in = input();
@@ -377,21 +409,20 @@ void MpmCuda<T>::step(double dt) {
   if (n > 0) {
     sortParticles();
     mark(1);
-    const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
     for (int colour = 0; colour < 8; ++colour) {
-      const int count = bg.count(colour, 0) * bg.count(colour, 1) * bg.count(colour, 2);
+      const int count = bg.colourCapacity(colour);
       if (count == 0) continue;
-      cudak::p2gBaseKernel<T><<<count, cudak::kBaseThreads>>>(bg, colour, in, sorted_, cellStart_, cellEnd_, grid_,
-                                                               dtT, nodes_);
+      cudak::p2gBaseKernel<T><<<count, cudak::kBaseThreads>>>(bg, colour, activeLists(), in, sorted_, cellStart_,
+                                                               cellEnd_, grid_, dtT, nodes_);
       CUDA_CHECK(cudaGetLastError());
     }
   }
   mark(2);
   if (hooks_.empty()) {
-    cudak::gridKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_, dtT);
+    cudak::gridKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_, dtT);
     CUDA_CHECK(cudaGetLastError());
   } else {
-    cudak::gridVelocityKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_, dtT);
+    cudak::gridVelocityKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_, dtT);
     CUDA_CHECK(cudaGetLastError());
     GridView view = gridViewFrame(dt);
     view.precision = sizeof(T) == sizeof(float) ? Precision::Float : Precision::Double;
@@ -400,7 +431,7 @@ void MpmCuda<T>::step(double dt) {
     view.mass = nodes_ + kNodeMass;
     for (int d = 0; d < 3; ++d) view.v[d] = nodes_ + kNodeVNew + d;
     applyGridHooks(view);
-    cudak::gridWallsKernel<T><<<blocksFor(nNodes_), kThreads>>>(nNodes_, nodes_, grid_);
+    cudak::gridWallsKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
     CUDA_CHECK(cudaGetLastError());
   }
   mark(3);

@@ -9,14 +9,18 @@
 // storage order (a restart included), and a node is written once per block instead of taking
 // 7 atomic adds per particle. G2P writes each particle into the slot of its sorted place, so
 // that the next step reads the particles nearly in turn; a particle keeps its number (id[slot],
-// what setParticles/getParticles index by), and its mass and volume0 move with it.
+// what setParticles/getParticles index by), and its mass and volume0 move with it. Grid work
+// follows the particles, as on the CPU: the sort's keys give the step's occupied blocks (P2G
+// launches only their work) and the tiles next to them (the only nodes zeroed and updated), so
+// a flow filling a few per cent of a long runout box does not pay for the box.
 //
 // Device memory (T = float, N particles, G grid nodes): particle state double-buffered
 // (x, v, stress, J, gammaDotP, mass, volume0: 16 values, phase 1 byte, number 4 bytes, twice)
 // = 138 bytes/particle; the sort (two keys of 8 bytes, two slots of 4) 24 bytes/particle;
 // + 12 bytes/particle once external forces are set; + kNodeValues (8) values per grid node
 // (32 bytes; at 8 particles per cell 4 bytes/particle for a fully filled grid) and two ints per
-// cell (the sorted ranges of the block cells). Double-buffering makes a failed step leave the
+// cell (the sorted ranges of the block cells), two ints and a byte per block of 27 cells (the
+// active lists). Double-buffering makes a failed step leave the
 // previous state intact at no bandwidth cost.
 #pragma once
 #include <cstdint>
@@ -28,6 +32,9 @@
 
 namespace mpmsdem {
 namespace mpm {
+namespace cudak {
+struct ActiveLists;
+}
 
 template <typename T>
 class MpmCuda : public MpmSolver {
@@ -78,7 +85,8 @@ class MpmCuda : public MpmSolver {
   // count values of src for the particles numbered [first, first + count), into host dst
   template <typename U, typename H>
   void gatherByNumber(const U* src, std::size_t first, std::size_t count, std::vector<H>& dst, int stride, int offset);
-  void sortParticles();              // sorted_, cellStart_/End_ for this step
+  void sortParticles();              // sorted_, cellStart_/End_ and the active lists for this step
+  cudak::ActiveLists activeLists() const;
 
   MpmParams params_;
   GridConst<T> grid_{};
@@ -97,6 +105,14 @@ class MpmCuda : public MpmSolver {
   int nBlocks_;
   int* cellStart_ = nullptr;  // per block cell (kBlockCells b + base): its sorted range
   int* cellEnd_ = nullptr;
+  // The step's occupied blocks by colour and active tiles (cudak::ActiveLists); between steps
+  // only the active tiles' nodes may be non-zero.
+  int* colourBlocks_ = nullptr;
+  int* activeTiles_ = nullptr;
+  static constexpr int kTileLists = 9;
+  int* listCounts_ = nullptr;  // kTileLists: 8 colours, then the active tiles
+  unsigned char* tileMark_ = nullptr;
+  int gridLaunch_ = 1;  // CUDA blocks of the kernels over the active tiles' nodes
   int numberBits_ = 0;
   int keyBits_ = 0;
   unsigned long long* keys_[2] = {};

@@ -15,14 +15,60 @@ struct BlockGrid {
     const int parity = (colour >> (2 - d)) & 1;
     return (blocks[d] - parity + 1) / 2;
   }
-  __device__ void colourBlock(int colour, int i, int b[3]) const {
-    for (int d = 2; d >= 0; --d) {
-      const int m = count(colour, d);
-      b[d] = 2 * (i % m) + ((colour >> (2 - d)) & 1);
-      i /= m;
-    }
+  // Blocks of the colour in the whole grid: its list's capacity.
+  __host__ __device__ int colourCapacity(int colour) const { return count(colour, 0) * count(colour, 1) * count(colour, 2); }
+  // Where the colour's list starts in the array of all colours' lists.
+  __host__ __device__ int colourStart(int colour) const {
+    int s = 0;
+    for (int c = 0; c < colour; ++c) s += colourCapacity(c);
+    return s;
   }
 };
+
+// The step's occupied blocks and active tiles (MpmKernelsCommon.hpp, forTilesOfBlock), built on
+// the device from the sorted keys: each colour's occupied blocks in its part of `blocks` (from
+// BlockGrid::colourStart), their numbers in count[colour]; the active tiles in `tiles`, their
+// number in count[8]. Lists fill in no fixed order: blocks of one colour share no node and a
+// tile's nodes are updated independently, so no result depends on it.
+struct ActiveLists {
+  int* blocks;
+  int* tiles;
+  int* count;
+  unsigned char* tileMark;  // all zero between steps
+};
+constexpr int kTilesCount = 8;  // count[] index of the active tiles
+
+// The first sorted particle of each block lists the block under its colour and marks its tiles.
+__global__ inline void occupiedBlocksKernel(int n, const unsigned long long* key, int shift, BlockGrid bg,
+                                            ActiveLists a) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  const int b = static_cast<int>((key[i] >> shift) / kBlockCells);
+  if (i > 0 && static_cast<int>((key[i - 1] >> shift) / kBlockCells) == b) return;
+  int c[3];
+  blockCoordsOf(b, bg.blocks, c);
+  const int colour = blockColourOf(c);
+  a.blocks[bg.colourStart(colour) + atomicAdd(&a.count[colour], 1)] = b;
+  forTilesOfBlock(c, bg.blocks, [&a](int t) { a.tileMark[t] = 1; });
+}
+
+// The marked tiles as a list; the marks are cleared for the next step.
+__global__ inline void activeTilesKernel(int nTiles, ActiveLists a) {
+  const int t = blockIdx.x * blockDim.x + threadIdx.x;
+  if (t >= nTiles || !a.tileMark[t]) return;
+  a.tileMark[t] = 0;
+  a.tiles[atomicAdd(&a.count[kTilesCount], 1)] = t;
+}
+
+// f(node) for every node of the active tiles, a thread per node over the whole launch.
+template <typename F>
+__device__ void forActiveTileNodes(const ActiveLists& a, const int tilesPerAxis[3], const int nodes[3], F&& f) {
+  const int total = kBlockCells * a.count[kTilesCount];
+  for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < total; i += gridDim.x * blockDim.x) {
+    const int node = tileNodeOf(a.tiles[i / kBlockCells], i % kBlockCells, tilesPerAxis, nodes);
+    if (node >= 0) f(node);
+  }
+}
 
 // What a particle carries from slot to slot besides its state.
 template <typename T>
@@ -59,11 +105,14 @@ template <typename T>
 constexpr int kBaseChunk = sizeof(T) == 8 ? 16 : 32;  // double: the shared arrays within 48 kB
 template <typename T>
 __global__ void __launch_bounds__(kBaseThreads)
-    p2gBaseKernel(BlockGrid bg, int colour, ParticleIn<T> in, const int* sorted, const int* start, const int* end,
-                  GridConst<T> g, T dt, T* grid) {
+    p2gBaseKernel(BlockGrid bg, int colour, ActiveLists lists, ParticleIn<T> in, const int* sorted, const int* start,
+                  const int* end, GridConst<T> g, T dt, T* grid) {
+  // launched for every block of the colour; those past the colour's occupied ones have no work
+  if (static_cast<int>(blockIdx.x) >= lists.count[colour]) return;
+  const int block = lists.blocks[bg.colourStart(colour) + blockIdx.x];
   int b[3];
-  bg.colourBlock(colour, blockIdx.x, b);
-  const int first = kBlockCells * ((b[0] * bg.blocks[1] + b[1]) * bg.blocks[2] + b[2]);
+  blockCoordsOf(block, bg.blocks, b);
+  const int first = kBlockCells * block;
   const int t = threadIdx.x, warp = t / 32, lane = t % 32;
   __shared__ int range[kBlockCells][2];
   if (t < kBlockCells) {
@@ -101,26 +150,29 @@ __global__ void __launch_bounds__(kBaseThreads)
   }
 }
 
+// The grid update (gridKernel), or its two halves with the grid hooks launched between them,
+// over the active tiles' nodes.
 template <typename T>
-__global__ void gridKernel(int nNodes, T* grid, GridConst<T> g, T dt) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= nNodes) return;
-  gridNodeUpdate(i, grid, g, dt);
-}
-
-// The grid update in two halves, with the grid hooks launched between them.
-template <typename T>
-__global__ void gridVelocityKernel(int nNodes, T* grid, GridConst<T> g, T dt) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= nNodes) return;
-  gridNodeVelocity(i, grid, g, dt);
+__global__ void gridKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<T> g, T dt) {
+  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) { gridNodeUpdate(node, grid, g, dt); });
 }
 
 template <typename T>
-__global__ void gridWallsKernel(int nNodes, T* grid, GridConst<T> g) {
-  const int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= nNodes) return;
-  gridNodeWalls(i, grid, g);
+__global__ void gridVelocityKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<T> g, T dt) {
+  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) { gridNodeVelocity(node, grid, g, dt); });
+}
+
+template <typename T>
+__global__ void gridWallsKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<T> g) {
+  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) { gridNodeWalls(node, grid, g); });
+}
+
+// The last step's active tiles back to zero before P2G (every other node is zero).
+template <typename T>
+__global__ void clearTilesKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<T> g) {
+  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) {
+    for (int c = 0; c < kNodeValues; ++c) grid[kNodeValues * node + c] = T(0);
+  });
 }
 
 // Largest value over the warp; every lane calls it (inactive lanes must pass 0 via the

@@ -1,15 +1,25 @@
-// The CPU backend's active grid (MpmCpu): grid work only in the tiles next to occupied blocks.
-// Nodes a flow has left must read as empty, and empty space around a flow must change nothing.
+// The active grid of both backends (MpmKernelsCommon.hpp, forTilesOfBlock; MpmCpu, MpmCuda):
+// grid work only in the tiles next to occupied blocks. Nodes a flow has left must read as
+// empty, empty space around a flow must change nothing, and updating the active tiles alone
+// must give the whole grid's update.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <numeric>
+#include <random>
+#include <set>
+#include <vector>
 
+#include "mpm/MpmKernelsCommon.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "mpm/Seeding.hpp"
+#ifdef MPMSDEM_WITH_CUDA
+#include <cuda_runtime.h>
+#endif
 
+#include "AgreementHelpers.hpp"
 #include "GranularColumn.hpp"
 
 using namespace mpmsdem;
@@ -17,26 +27,55 @@ using namespace mpmsdem::mpm;
 
 namespace {
 
+// Values every `stride` from `src` (a grid view's array, on the host or the device) for `nodes`
+// nodes, as host doubles.
+template <typename T>
+std::vector<double> readStrided(const void* src, std::size_t nodes, int stride, bool device) {
+  const std::size_t span = (nodes - 1) * stride + 1;
+  std::vector<T> raw(span);
+  if (device) {
+#ifdef MPMSDEM_WITH_CUDA
+    EXPECT_EQ(cudaMemcpy(raw.data(), src, span * sizeof(T), cudaMemcpyDeviceToHost), cudaSuccess);
+#else
+    ADD_FAILURE() << "a device view in a build without CUDA";
+#endif
+  } else {
+    std::copy(static_cast<const T*>(src), static_cast<const T*>(src) + span, raw.begin());
+  }
+  std::vector<double> out(nodes);
+  for (std::size_t i = 0; i < nodes; ++i) out[i] = static_cast<double>(raw[i * stride]);
+  return out;
+}
+
 // Sums the node mass over the whole grid and counts nodes that are empty but moving.
 struct WholeGridProbe : GridHook {
   double mass = 0;
   long movingEmpty = 0;
   void apply(const GridView& g) override {
-    const double* m = static_cast<const double*>(g.mass);
+    const std::size_t nodes = static_cast<std::size_t>(g.nodes[0]) * g.nodes[1] * g.nodes[2];
+    auto read = [&](const void* a) {
+      return g.precision == Precision::Float ? readStrided<float>(a, nodes, g.stride, g.device)
+                                             : readStrided<double>(a, nodes, g.stride, g.device);
+    };
+    const std::vector<double> m = read(g.mass);
+    const std::vector<double> v[3] = {read(g.v[0]), read(g.v[1]), read(g.v[2])};
     mass = 0;
     movingEmpty = 0;
-    for (int i = 0; i < g.nodes[0] * g.nodes[1] * g.nodes[2]; ++i) {
-      const int e = i * g.stride;
-      mass += m[e];
+    for (std::size_t i = 0; i < m.size(); ++i) {
+      mass += m[i];
       for (int d = 0; d < 3; ++d)
-        if (m[e] == 0 && static_cast<const double*>(g.v[d])[e] != 0) ++movingEmpty;
+        if (m[i] == 0 && v[d][i] != 0) ++movingEmpty;
     }
   }
 };
 
 }  // namespace
 
-TEST(ActiveGrid, TranslatingBlobLeavesNoMassBehind) {
+class ActiveGridEveryBackend : public agreement::EveryBackend {};
+INSTANTIATE_TEST_SUITE_P(Kinds, ActiveGridEveryBackend, ::testing::ValuesIn(agreement::everyKind()),
+                         agreement::kindName);
+
+TEST_P(ActiveGridEveryBackend, TranslatingBlobLeavesNoMassBehind) {
   // Zero gravity, a stress-free blob moving at a uniform velocity across 30 cells diagonally:
   // a uniform velocity field has no strain rate, so the blob translates rigidly. Each step the
   // whole grid must hold exactly the particles' mass (the B-spline weights sum to one); a node
@@ -52,15 +91,17 @@ TEST(ActiveGrid, TranslatingBlobLeavesNoMassBehind) {
   const ParticleSet start = ps;
   const double M = std::accumulate(ps.mass.begin(), ps.mass.end(), 0.0);
 
-  auto s = makeSolver(prm, Backend::Cpu, Precision::Double);
+  auto s = solver(prm);
   s->setParticles(ps);
   auto probe = std::make_shared<WholeGridProbe>();
   s->addGridHook(probe);
   const double dt = 5e-4;
   const int steps = 400;  // 0.3 m along x, 0.2 m along z: 30 and 20 cells
+  // 1e-12 in double; the same number of round-offs in float
+  const double tol = 4500 * agreement::roundOff(precision());
   for (int n = 0; n < steps; ++n) {
     s->step(dt);
-    ASSERT_NEAR(probe->mass, M, 1e-12 * M) << "step " << n + 1;
+    ASSERT_NEAR(probe->mass, M, tol * M) << "step " << n + 1;
     ASSERT_EQ(probe->movingEmpty, 0) << "step " << n + 1;
   }
   ParticleSet end;
@@ -68,20 +109,20 @@ TEST(ActiveGrid, TranslatingBlobLeavesNoMassBehind) {
   const double t = steps * dt;
   for (std::size_t p = 0; p < end.size(); ++p)
     for (int d = 0; d < 3; ++d) {
-      ASSERT_NEAR(end.x[3 * p + d], start.x[3 * p + d] + vel[d] * t, 1e-12) << "particle " << p << " axis " << d;
-      ASSERT_NEAR(end.v[3 * p + d], vel[d], 1e-12) << "particle " << p << " axis " << d;
+      ASSERT_NEAR(end.x[3 * p + d], start.x[3 * p + d] + vel[d] * t, tol) << "particle " << p << " axis " << d;
+      ASSERT_NEAR(end.v[3 * p + d], vel[d], tol) << "particle " << p << " axis " << d;
     }
 }
 
-TEST(ActiveGrid, EmptySpaceAroundAFlowChangesNothing) {
+TEST_P(ActiveGridEveryBackend, EmptySpaceAroundAFlowChangesNothing) {
   // The same collapsing column in its own box and in a box four times as long and twice as
   // high (same origin, so the same node positions): the flow never reaches the far walls, so
   // the two runs must agree bit for bit.
-  auto run = [](std::array<int, 3> cells) {
+  auto run = [this](std::array<int, 3> cells) {
     MpmParams prm = testing_scenes::granularColumnParams(0.01, cells, 2e5);
     ParticleSet ps;
     seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
-    auto s = makeSolver(prm, Backend::Cpu, Precision::Double);
+    auto s = solver(prm);
     s->setParticles(ps);
     for (int n = 0; n < 1000; ++n) s->step(2e-4);
     ParticleSet out;
@@ -98,4 +139,122 @@ TEST(ActiveGrid, EmptySpaceAroundAFlowChangesNothing) {
   EXPECT_TRUE(snug.x == wide.x);
   EXPECT_TRUE(snug.v == wide.v);
   EXPECT_TRUE(snug.stress == wide.stress);
+}
+
+TEST(ActiveTiles, TilesPartitionTheGridNodes) {
+  // Grids whose node counts are and are not multiples of 3: over all tiles, tileNodeOf names
+  // every node exactly once, and as many tiles per axis as blocks of stencil bases.
+  for (const std::array<int, 3> cells : {std::array<int, 3>{13, 11, 10}, {8, 5, 2}, {3, 3, 3}, {1, 7, 4}}) {
+    const int nb[3] = {blocksAlong(cells[0]), blocksAlong(cells[1]), blocksAlong(cells[2])};
+    const int nodes[3] = {cells[0] + 1, cells[1] + 1, cells[2] + 1};
+    std::vector<int> seen(static_cast<std::size_t>(nodes[0]) * nodes[1] * nodes[2], 0);
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(nb[d], (nodes[d] + 2) / 3);  // tiles of 3 nodes cover the axis
+    for (int t = 0; t < nb[0] * nb[1] * nb[2]; ++t) {
+      int c[3];
+      blockCoordsOf(t, nb, c);
+      EXPECT_EQ((c[0] * nb[1] + c[1]) * nb[2] + c[2], t);
+      for (int k = 0; k < kBlockCells; ++k) {
+        const int node = tileNodeOf(t, k, nb, nodes);
+        if (node < 0) continue;
+        ASSERT_LT(node, static_cast<int>(seen.size()));
+        const int i = node / (nodes[1] * nodes[2]), j = (node / nodes[2]) % nodes[1], l = node % nodes[2];
+        EXPECT_EQ(i / 3, c[0]);
+        EXPECT_EQ(j / 3, c[1]);
+        EXPECT_EQ(l / 3, c[2]);
+        ++seen[node];
+      }
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<long>(seen.size()));
+  }
+}
+
+TEST(ActiveTiles, UpdatingTheActiveTilesIsUpdatingTheWholeGrid) {
+  // Particles clustered in part of a grid: the occupied blocks and their tiles as the CUDA step
+  // finds them (the first particle of each block in key order marks forTilesOfBlock), then the
+  // P2G grid updated on those tiles' nodes only and on every node: the same bits (an empty node's
+  // update writes zeros), and every node reached by a particle's stencil lies in a marked tile.
+  MpmParams prm;
+  prm.dx = 0.01;
+  prm.cells = {80, 7, 14};
+  prm.origin = {0, 0, 0};
+  const GridConst<double> g = makeGridConst<double>(prm, 0.0);
+  const int nb[3] = {blocksAlong(prm.cells[0]), blocksAlong(prm.cells[1]), blocksAlong(prm.cells[2])};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0, 1);
+  const int n = 500;
+  std::vector<double> x[3], v[3], s[6], J(n, 1.0), mass(n, 2e-4), vol0(n, 1.25e-7);
+  std::vector<int> id(n);
+  for (int d = 0; d < 3; ++d) x[d].resize(n), v[d].resize(n);
+  for (int k = 0; k < 6; ++k) s[k].assign(n, 0.0);
+  for (int p = 0; p < n; ++p) {
+    const double lo[3] = {0.05, 0.02, 0.02}, span[3] = {0.12, 0.03, 0.06};  // a corner of the box
+    for (int d = 0; d < 3; ++d) {
+      x[d][p] = lo[d] + span[d] * u(rng);
+      v[d][p] = 2 * u(rng) - 1;
+    }
+    s[0][p] = -1e3 * u(rng);
+    id[p] = p;
+  }
+  ParticleIn<double> in{};
+  for (int d = 0; d < 3; ++d) in.x[d] = x[d].data(), in.v[d] = v[d].data();
+  for (int k = 0; k < 6; ++k) in.s[k] = s[k].data();
+  in.J = J.data(), in.mass = mass.data(), in.vol0 = vol0.data(), in.id = id.data();
+
+  std::vector<long long> key(n);
+  for (int p = 0; p < n; ++p) {
+    double gc[3];
+    gridCoordinate(in, p, g, gc);
+    key[p] = blockCellOf(gc, nb);
+  }
+  std::sort(key.begin(), key.end());
+  std::set<int> tiles;
+  std::set<int> occupied;
+  for (int i = 0; i < n; ++i) {
+    const int b = static_cast<int>(key[i] / kBlockCells);
+    if (i > 0 && key[i - 1] / kBlockCells == b) continue;
+    occupied.insert(b);
+    int c[3];
+    blockCoordsOf(b, nb, c);
+    forTilesOfBlock(c, nb, [&tiles](int t) { tiles.insert(t); });
+  }
+  const int nTiles = nb[0] * nb[1] * nb[2];
+  ASSERT_GT(static_cast<int>(tiles.size()), 8);
+  ASSERT_LT(static_cast<int>(tiles.size()), nTiles / 3);  // the point: most of the grid is idle
+
+  const int nNodes = g.nodes[0] * g.nodes[1] * g.nodes[2];
+  std::vector<double> grid(static_cast<std::size_t>(kNodeValues) * nNodes, 0.0);
+  std::vector<char> reached(nNodes, 0);
+  auto add = [&grid, &reached](int node, const double* r) {
+    reached[node] = 1;
+    for (int c = 0; c < kNodeValues; ++c) grid[kNodeValues * node + c] += r[c];
+  };
+  for (int p = 0; p < n; ++p) p2gParticle(p, in, g, 5e-5, add);
+  std::vector<char> active(nNodes, 0);
+  for (int t : tiles)
+    for (int k = 0; k < kBlockCells; ++k) {
+      const int node = tileNodeOf(t, k, nb, g.nodes);
+      if (node >= 0) active[node] = 1;
+    }
+  for (int i = 0; i < nNodes; ++i) ASSERT_TRUE(!reached[i] || active[i]) << "node " << i;
+  std::vector<double> whole = grid, tilesOnly = grid;
+  for (int i = 0; i < nNodes; ++i) gridNodeUpdate(i, whole.data(), g, 5e-5);
+  for (int i = 0; i < nNodes; ++i)
+    if (active[i]) gridNodeUpdate(i, tilesOnly.data(), g, 5e-5);
+  EXPECT_TRUE(whole == tilesOnly);
+  double moving = 0;
+  for (int i = 0; i < nNodes; ++i) moving += std::abs(whole[kNodeValues * i + kNodeVNew]);
+  EXPECT_GT(moving, 0.1);  // the update did something
+  // every colour's blocks are two apart along some axis from one another: their tiles of 5x5x5
+  // nodes share none (P2G adds a colour's tiles without atomics)
+  for (int a : occupied)
+    for (int b : occupied) {
+      if (a >= b) continue;
+      int ca[3], cb[3];
+      blockCoordsOf(a, nb, ca);
+      blockCoordsOf(b, nb, cb);
+      if (blockColourOf(ca) != blockColourOf(cb)) continue;
+      bool apart = false;
+      for (int d = 0; d < 3; ++d) apart = apart || std::abs(ca[d] - cb[d]) >= 2;
+      EXPECT_TRUE(apart) << a << " " << b;
+    }
 }
