@@ -3,6 +3,8 @@
 
     yade -n -x examples/flume_block.py [--full] [--out DIR] [--duration T] [--dx DX]
                                        [--backend cpu|cuda] [--precision double|float]
+                                       [--basal-friction MU] [--mu-2 MU] [--flow-friction MU]
+                                       [--side-wall-friction MU] [--flip-viscosity NU]
     /usr/bin/python3 examples/flume_block.py ...          (same, without YADE's GUI shell)
     /usr/bin/python3 examples/flume_block.py --full --driver-scene flume.json   (scene for mpmsdem-run)
     /usr/bin/python3 examples/flume_block.py --from-driver DIR   (plot a finished mpmsdem-run from DIR)
@@ -28,7 +30,7 @@ import time
 import mpmsdem
 import mpmsdem.driver
 from mpmsdem import analysis
-from mpmsdem.flume import Block, Flume
+from mpmsdem.flume import GLASS_BEADS, Block, Flume
 from mpmsdem.mpm import PAPER_VISCOSITY
 
 HB = 0.02          # cube side h_b [m]
@@ -51,6 +53,16 @@ def parse(argv):
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"))
     ap.add_argument("--precision", default="double", choices=("double", "float"))
     ap.add_argument("--no-plots", action="store_true", help="skip the PNG")
+    ap.add_argument("--basal-friction", type=float, default=0.21, help="flow–bed friction (Table 1: 0.21), >= 0")
+    ap.add_argument("--mu-2", type=float, default=GLASS_BEADS["mu_2"],
+                    help="the flow's maximum dynamic friction μ₂ (Table 1: 0.65), > μ_s = %g" % GLASS_BEADS["mu_s"])
+    ap.add_argument("--flow-friction", type=float, default=0.21,
+                    help="flow–cube friction (not in the paper; our reading: 0.21), >= 0")
+    ap.add_argument("--side-wall-friction", type=float, default=0.0,
+                    help="flow–side wall friction (0: smooth walls), >= 0")
+    ap.add_argument("--flip-viscosity", type=float, default=None,
+                    help="PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0 (default: the paper's, %g, with "
+                         "--full; the scene default, 0.005, on the coarse grid; docs/physics.md)" % PAPER_VISCOSITY)
     ap.add_argument("--driver-scene", metavar="JSON", default=None,
                     help="write the coupled scene (with the cube, same O.dt) for the C++ driver mpmsdem-run to "
                          "JSON and exit (e.g. to run it on a GPU machine: mpmsdem-run JSON --backend cuda)")
@@ -67,11 +79,28 @@ def copperCube(y=None, friction=0.67, flowFriction=0.21):
     return Block(half=(HB / 2,) * 3, x=COLUMN + L0, y=y, density=8900, friction=friction, flowFriction=flowFriction)
 
 
-def blend(a):
-    """The flow's FLIP/PIC blend as Flume keywords: the paper's (α 0.99 per its 5e-6 s step at
-    dx 0.01 m, a PIC viscosity of 0.0503 m²/s, which keeps that flow at any --dx) with --full,
-    the scene default (0.005 m²/s) on the coarse grid (docs/physics.md)."""
-    return {"flipViscosity": PAPER_VISCOSITY} if a.full else {}
+def flumeKeywords(a):
+    """The flow's settings as Flume keywords: its FLIP/PIC blend (--flip-viscosity; by default
+    the paper's, α 0.99 per its 5e-6 s step at dx 0.01 m, a PIC viscosity of 0.0503 m²/s that
+    keeps that flow at any --dx, with --full, and the scene default, 0.005 m²/s, on the coarse
+    grid; docs/physics.md), μ₂, the basal and the side walls' friction. ValueError naming the
+    option out of its range."""
+    for name, value in (("--basal-friction", a.basal_friction), ("--flow-friction", a.flow_friction),
+                        ("--side-wall-friction", a.side_wall_friction)):
+        if not (value >= 0 and value < float("inf")):
+            raise ValueError("%s = %r: must be >= 0 and finite" % (name, value))
+    if not (a.mu_2 > GLASS_BEADS["mu_s"] and a.mu_2 < float("inf")):
+        raise ValueError("--mu-2 = %r: must be > mu_s = %g (the mu(I) friction rises from mu_s to mu_2)"
+                         % (a.mu_2, GLASS_BEADS["mu_s"]))
+    kw = {"granular": dict(GLASS_BEADS, mu_2=a.mu_2), "basalFriction": a.basal_friction,
+          "sideWallFriction": a.side_wall_friction}
+    if a.flip_viscosity is not None:
+        if not (a.flip_viscosity > 0 and a.flip_viscosity < float("inf")):
+            raise ValueError("--flip-viscosity = %r m²/s: must be > 0 and finite" % (a.flip_viscosity,))
+        kw["flipViscosity"] = a.flip_viscosity
+    elif a.full:
+        kw["flipViscosity"] = PAPER_VISCOSITY
+    return kw
 
 
 def settings(a):
@@ -85,7 +114,7 @@ def settings(a):
 def freeFlow(dx, a, verbose=True):
     """The flume without the cube until the front has passed the cube's station."""
     station = COLUMN + L0
-    scene = Flume(dx=dx, width=a.width, backend=a.backend, precision=a.precision, verbose=verbose, **blend(a))
+    scene = Flume(dx=dx, width=a.width, backend=a.backend, precision=a.precision, verbose=verbose, **flumeKeywords(a))
     probe = analysis.FlowProbe(station, halfWidth=dx, bedZ=0.0, L0=L0, window=0.05)
     from yade import O
     while True:
@@ -99,8 +128,8 @@ def freeFlow(dx, a, verbose=True):
 
 
 def coupled(dx, duration, a, out, verbose=True):
-    cube = copperCube()
-    scene = Flume(dx=dx, width=a.width, blocks=[cube], backend=a.backend, precision=a.precision, **blend(a),
+    cube = copperCube(flowFriction=a.flow_friction)
+    scene = Flume(dx=dx, width=a.width, blocks=[cube], backend=a.backend, precision=a.precision, **flumeKeywords(a),
                   output=out, outputEvery=0.01,
                   vtkEvery=0.05, verbose=verbose)
     scene.run(duration, sampleEvery=0.002)
@@ -203,9 +232,9 @@ def blockEvents(s, duration):
 def driverScene(dx, duration, a):
     """Write the coupled scene as the C++ driver's JSON (mpmsdem.driver.writeScene)."""
     from yade import O
-    cube = copperCube()
+    cube = copperCube(flowFriction=a.flow_friction)
     scene = Flume(dx=dx, width=a.width, blocks=[cube], backend=a.backend, precision=a.precision, verbose=False,
-                  **blend(a))
+                  **flumeKeywords(a))
     mpmsdem.driver.writeScene(a.driver_scene, scene.coupled, duration=duration, dt=O.dt, outputDir=a.out,
                               outputEvery=0.05, seriesEvery=0.002)
     print("driver scene for the cube in the flume (dx %g m, %d material points, O.dt %.3g s, %g s) written to %s: "
@@ -257,6 +286,8 @@ def main(argv):
     from yade import O
     summary = {"dx": dx, "width": a.width, "particles": scene.mpm.numParticles, "duration": duration, "dt": O.dt,
                "flip_blend": scene.flipBlend(), "free_flow": ff,
+               "settings": {"basal_friction": a.basal_friction, "mu_2": a.mu_2, "flow_friction": a.flow_friction,
+                            "side_wall_friction": a.side_wall_friction},
                "travel": scene.travel(0), "peak_force": peak, "peak_time": tPeak,
                "rotation_deg": float(s["rotation"][-1]), "tilt_deg": float(s["tilt"][-1]),
                "yaw_deg": float(s["yaw"][-1]), "events": blockEvents(s, duration),

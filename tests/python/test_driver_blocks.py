@@ -331,3 +331,28 @@ def test_stored_flume_scenes_are_what_the_example_writes(tmp_path, name, flags):
     assert difference is None, ("examples/scenes/%s differs from what examples/flume_block.py %s--driver-scene "
                                 "writes (%s): write it again" % (name, " ".join(flags) + " " if flags else "",
                                                                   difference))
+
+
+def test_flume_example_takes_the_flow_and_friction_settings(tmp_path):
+    # examples/flume_block.py --basal-friction/--mu-2/--flow-friction/--side-wall-friction/
+    # --flip-viscosity reach the scene (the joint design's sets are run with them); a value out of
+    # range is refused naming the option.
+    repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+    example = os.path.join(repo, "examples", "flume_block.py")
+    written = str(tmp_path / "set.json")
+    proc = subprocess.run([sys.executable, example, "--driver-scene", written, "--out", str(tmp_path / "o"),
+                           "--mu-2", "0.72", "--basal-friction", "0.28", "--flow-friction", "0.39",
+                           "--side-wall-friction", "0.11", "--flip-viscosity", "0.036"],
+                          capture_output=True, text=True, env=children.env())
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    scene = json.load(open(written))
+    assert scene["material"]["mu_2"] == 0.72 and scene["flip_viscosity"] == 0.036
+    assert scene["walls"]["+y"] == scene["walls"]["-y"] == 0.11
+    flows = sorted(m["flow"]["friction"] for m in scene["block_materials"].values())
+    assert flows == [0.28, 0.39]  # the bed takes the basal friction, the cube the flow-cube friction
+    for flag, value, words in (("--mu-2", "0.2", "--mu-2 = 0.2: must be > mu_s = 0.24"),
+                               ("--basal-friction", "-0.1", "--basal-friction = -0.1: must be >= 0"),
+                               ("--flip-viscosity", "0", "--flip-viscosity = 0.0 m²/s: must be > 0")):
+        proc = subprocess.run([sys.executable, example, "--driver-scene", written, flag, value],
+                              capture_output=True, text=True, env=children.env())
+        assert proc.returncode != 0 and words in proc.stderr, proc.stderr[-2000:]
