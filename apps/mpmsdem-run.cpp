@@ -275,14 +275,19 @@ double progressFraction(const MpmSolver& solver, const RunSettings& run, long ma
                       : solver.time() / run.duration;
 }
 
-// Where the step loop's wall time went in a coupled run: "MPM step 71.2 %, ...".
-std::string stageSplit(const coupling::CoupledWorld& world, double loopSeconds) {
+// Where the step loop's wall time went in a coupled run: "MPM step 71.2 %, ...". The records
+// (diagnostics read from every particle, series, progress) and the snapshots are timed by the
+// loop; the rest is the time-step control.
+std::string stageSplit(const coupling::CoupledWorld& world, double loopSeconds, double recordSeconds,
+                       double snapshotSeconds) {
   const auto& s = world.stageSeconds();
-  char buf[256];
+  char buf[320];
   std::snprintf(buf, sizeof buf,
-                "MPM step %.1f %%, MP-block coupling %.1f %%, blocks %.1f %%, time-step control and outputs %.1f %%",
+                "MPM step %.1f %%, MP-block coupling %.1f %%, blocks %.1f %%, records %.1f %%, snapshots %.1f %%, "
+                "time-step control %.1f %%",
                 100 * s.mpm / loopSeconds, 100 * s.coupling / loopSeconds, 100 * s.blocks / loopSeconds,
-                100 * (loopSeconds - s.mpm - s.coupling - s.blocks) / loopSeconds);
+                100 * recordSeconds / loopSeconds, 100 * snapshotSeconds / loopSeconds,
+                100 * (loopSeconds - s.mpm - s.coupling - s.blocks - recordSeconds - snapshotSeconds) / loopSeconds);
   return buf;
 }
 
@@ -522,7 +527,7 @@ class OutputRun {
                        : (std::to_string(maxSteps) + " steps").c_str(),
                 dir_.string().c_str());
     std::fflush(stdout);
-    double dt = 0;
+    double dt = 0, recordSeconds = 0, snapshotSeconds = 0;
     try {
       while (!finished(solver_, run, maxSteps) && stopReason_.empty()) {
         dt = nextStep(stepper_, run, byTime);
@@ -532,6 +537,7 @@ class OutputRun {
         const double f = progressFraction(solver_, run, maxSteps, firstStep);
         bool report = f >= nextReport || finished(solver_, run, maxSteps) || since(lastReport) >= run.progressEvery;
         // one pass over the particles serves the series record and the progress line
+        const auto recordStart = Clock::now();
         std::optional<mpm::Diagnostics> d;
         if (series || report) d = diagnose();
         if (series) {
@@ -539,8 +545,11 @@ class OutputRun {
           report = report || !stopReason_.empty();  // a stop rule ended the run at this record
           while (nextSeries <= t * (1 + 1e-12)) nextSeries += run.seriesEvery;
         }
+        recordSeconds += since(recordStart);
         if (output) {
+          const auto snapshotStart = Clock::now();
           writeSnapshot();
+          snapshotSeconds += since(snapshotStart);
           while (nextOutput <= t * (1 + 1e-12)) nextOutput += run.outputEvery;
         }
         if (report) {
@@ -580,7 +589,11 @@ class OutputRun {
       writeProbeResults("failure");
       return 3;
     }
-    if (solver_.time() > state_time_) writeSnapshot();
+    if (solver_.time() > state_time_) {
+      const auto snapshotStart = Clock::now();
+      writeSnapshot();
+      snapshotSeconds += since(snapshotStart);
+    }
     const double loop = since(t0);
     if (!stopReason_.empty())
       std::printf("mpmsdem-run: stopped before run.duration: %s\n",
@@ -589,13 +602,19 @@ class OutputRun {
     writeProbeResults(stopReason_.empty() ? (maxSteps > 0 ? "steps" : "duration") : stopReason_);
     std::printf("mpmsdem-run: done, t = %.6g s, %ld steps, %.3g s wall\n", solver_.time(), solver_.steps(), loop);
     if (stepper_.coupled) {
-      std::printf("mpmsdem-run: step loop: %s\n", stageSplit(*stepper_.coupled, loop).c_str());
+      std::printf("mpmsdem-run: step loop: %s\n",
+                  stageSplit(*stepper_.coupled, loop, recordSeconds, snapshotSeconds).c_str());
       const auto& low = stepper_.coupled->contactStepLow();
       if (std::isfinite(low.step))
         std::printf("mpmsdem-run: smallest contact step %.4g s at t = %.6g s (a fixed run.dt must stay below it)\n",
                     low.step, low.time);
       else
         std::printf("mpmsdem-run: no contact in this run\n");
+    } else {
+      std::printf("mpmsdem-run: step loop: records %.1f %%, snapshots %.1f %%, the rest (MPM step, time-step control) "
+                  "%.1f %%\n",
+                  100 * recordSeconds / loop, 100 * snapshotSeconds / loop,
+                  100 * (loop - recordSeconds - snapshotSeconds) / loop);
     }
     return 0;
   }

@@ -5,6 +5,7 @@ NewtonIntegrator's, blockedDOFs included), and bad block entries are refused by 
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -71,6 +72,14 @@ def test_driver_matches_yade_for_the_same_coupled_scene(tmp_path):
     mpmsdem.run(steps, coupled)
     r = subprocess.run([exe, path, "--steps", str(steps)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
+    # where the step loop went, in shares that add up: the records (every step here) and the
+    # snapshots (every 0.02 s) are timed apart from the time-step control
+    split = re.search(r"step loop: MPM step ([-\d.]+) %, MP-block coupling ([-\d.]+) %, blocks ([-\d.]+) %, "
+                      r"records ([-\d.]+) %, snapshots ([-\d.]+) %, time-step control ([-\d.]+) %", r.stdout)
+    assert split, r.stdout[-2000:]
+    shares = [float(v) for v in split.groups()]
+    assert sum(shares) == pytest.approx(100, abs=0.5) and min(shares) >= -0.1
+    assert shares[3] > 1 and shares[4] > 0.1  # records every step, a snapshot every 0.02 s
     y, yid = series(tmp_path / "yade" / "coupled.h5")
     d, did = series(tmp_path / "driver" / "coupled.h5")
     assert yid == did == [bed, hull, box]
