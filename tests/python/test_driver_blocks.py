@@ -3,7 +3,6 @@ a scene written from a YADE set-up by mpmsdem.driver.writeScene gives the same b
 and flow forces through mpmsdem-run as through YADE (its rigid-body update is YADE's
 NewtonIntegrator's, blockedDOFs included), and bad block entries are refused by name."""
 import json
-import math
 import os
 import re
 import subprocess
