@@ -29,7 +29,7 @@ install: build
 
 # The demo runs through the installed package, the way a user's `yade -x script.py` does.
 demo: install
-	env -u PYTHONPATH yade -n -x examples/demo.py
+	env -u PYTHONPATH yade -n -j $(JOBS) -x examples/demo.py
 
 # ctest runs JOBS tests at once, each with OMP_NUM_THREADS threads: more threads than cores.
 # Threads that spin at OpenMP barriers then wait for descheduled ones at every barrier (two

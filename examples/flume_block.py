@@ -34,6 +34,9 @@ from mpmsdem.flume import GLASS_BEADS, Block, Flume
 from mpmsdem.mpm import PAPER_VISCOSITY
 
 HB = 0.02          # cube side h_b [m]
+# Table 1's flow and friction settings (flow–cube and side walls: our reading), the options' defaults
+DEFAULT_SETTINGS = {"basal_friction": 0.21, "mu_2": GLASS_BEADS["mu_2"], "flow_friction": 0.21,
+                    "side_wall_friction": 0.0}
 L0 = 0.21          # from the column front (the gate) to the cube's upstream face [m] (our reading of §3.2)
 COLUMN = 0.3       # L_i [m]
 
@@ -53,12 +56,13 @@ def parse(argv):
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"))
     ap.add_argument("--precision", default="double", choices=("double", "float"))
     ap.add_argument("--no-plots", action="store_true", help="skip the PNG")
-    ap.add_argument("--basal-friction", type=float, default=0.21, help="flow–bed friction (Table 1: 0.21), >= 0")
-    ap.add_argument("--mu-2", type=float, default=GLASS_BEADS["mu_2"],
+    ap.add_argument("--basal-friction", type=float, default=DEFAULT_SETTINGS["basal_friction"],
+                    help="flow–bed friction (Table 1: 0.21), >= 0")
+    ap.add_argument("--mu-2", type=float, default=DEFAULT_SETTINGS["mu_2"],
                     help="the flow's maximum dynamic friction μ₂ (Table 1: 0.65), > μ_s = %g" % GLASS_BEADS["mu_s"])
-    ap.add_argument("--flow-friction", type=float, default=0.21,
+    ap.add_argument("--flow-friction", type=float, default=DEFAULT_SETTINGS["flow_friction"],
                     help="flow–cube friction (not in the paper; our reading: 0.21), >= 0")
-    ap.add_argument("--side-wall-friction", type=float, default=0.0,
+    ap.add_argument("--side-wall-friction", type=float, default=DEFAULT_SETTINGS["side_wall_friction"],
                     help="flow–side wall friction (0: smooth walls), >= 0")
     ap.add_argument("--flip-viscosity", type=float, default=None,
                     help="PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0 (default: the paper's, %g, with "
@@ -175,7 +179,7 @@ def plot(s, title, ff, path):
     ax[1, 1].set_xlabel("t [s]")
     ax[1, 1].set_ylabel("angle [deg]")
     fig.suptitle(title)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.035 * title.count("\n")))  # room for a two-line title
     fig.savefig(path, dpi=90)
 
 
@@ -297,8 +301,12 @@ def main(argv):
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     if not a.no_plots:
-        plot(scene.series(0), "Copper cube in a glass-bead flume (paper §3.2), dx = %g m, %d material points"
-             % (scene.dx, scene.mpm.numParticles), ff, os.path.join(out, "flume_block.png"))
+        names = {"basal_friction": "basal friction", "mu_2": "μ₂", "flow_friction": "flow–cube friction",
+                 "side_wall_friction": "side-wall friction"}
+        changed = ", ".join("%s %g" % (names[k], v) for k, v in summary["settings"].items() if v != DEFAULT_SETTINGS[k])
+        plot(scene.series(0), "Copper cube in a glass-bead flume (paper §3.2), dx = %g m, %d material points%s"
+             % (scene.dx, scene.mpm.numParticles, "\n%s; %s" % (changed, scene.flipBlend()) if changed else ""), ff,
+             os.path.join(out, "flume_block.png"))
         if "faces" in s:
             plotFaces(s, "The flow's load on each face of the cube (its own frame), dx = %g m" % scene.dx,
                       os.path.join(out, "flume_block_faces.png"))
