@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""Check: the paper's §3.2 scene at its resolution (dx 0.01 m, 8 points per cell, the whole
+0.2 m flume) with the flow and friction set of our joint design that tells the paper's story
+(lhs02 of scripts/validation/paper_flume_design.py --lhs 20; docs/coupled-results.md, "Joint
+calibration": PIC viscosity 0.036 m²/s, basal friction 0.28, μ₂ 0.72, flow–cube friction 0.39,
+side-wall friction 0.11), 0.77 s, against stored reference numbers. About five minutes on one
+core: it holds the behaviour `make demo` shows.
+
+Asserts:
+- conservation: the flow's mass is the seeded mass, exactly;
+- symmetry: the scene is symmetric about the centre line, so the cube must not turn on the bed
+  (|yaw| < 1e-6 deg);
+- the story: the flow reaches the cube at the reference time (0.319 s; paper ~0.25 s,
+  experiment 0.3 s) within 5 %; F_t at 0.4 s (0.27 N; paper 0.32 N) within 30 %; the cube turns
+  slowly (rotation at 0.7 s, 36° stored, within 25 %) through 45° at the reference time (0.752 s;
+  paper 0.72 s) within 5 %, and has not tumbled: its largest rotation by 0.77 s stays below 100°
+  (a cube thrown over at the impact, or one that tumbles, fails; so does one that never turns).
+
+    /usr/bin/python3 scripts/checks/check_flume_block_joint.py [--regenerate]
+
+``--regenerate`` stores the numbers of this run as the new reference (after a deliberate
+change of the method; say why in the commit).
+"""
+import math
+import os
+
+import numpy as np
+
+import mpmsdem
+from mpmsdem import analysis
+from mpmsdem.flume import GLASS_BEADS, Block, Flume
+from yade import O
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REF = os.path.join(HERE, "reference", "flume_block_joint.json")
+TOL = {"first_touch": 0.05, "force_04": 0.30, "rotation_07": 0.25, "t45": 0.05}
+MAX_TURN = 100.0  # [deg] past its next face a cube has tumbled
+
+
+def run(duration=0.77):
+    cube = Block(half=(0.01,) * 3, x=0.51, density=8900, friction=0.67, flowFriction=0.3938)
+    scene = Flume(width=0.2, dx=0.01, blocks=[cube], granular=dict(GLASS_BEADS, mu_2=0.7221), basalFriction=0.2778,
+                  sideWallFriction=0.111, flipViscosity=0.0360141, verbose=False)
+    m0 = float(scene.mpm.particles()["mass"].sum())
+    scene.run(duration, sampleEvery=0.002)
+    s = scene.series(0)
+    t, rot = s["t"], s["rotation"]
+    touched = t[np.abs(s["Ft"]) > 0]
+    smooth = analysis.runningMean(t, s["Ft"], 0.01)
+    turned = t[rot >= 45.0]
+    state = O.bodies[scene.blockIds[0]].state
+    return {"first_touch": float(touched[0]) if len(touched) else duration,
+            "force_04": float(np.interp(0.4, t, smooth)), "rotation_07": float(np.interp(0.7, t, rot)),
+            "t45": float(turned[0]) if len(turned) else duration, "max_rotation": float(rot.max()),
+            "max_yaw": float(np.abs(s["yaw"]).max()),
+            "mass_error": abs(float(scene.mpm.particles()["mass"].sum()) - m0),
+            "finite": all(math.isfinite(v) for v in state.pos), "particles": scene.mpm.numParticles,
+            "flip_blend": scene.flipBlend()}
+
+
+def main():
+    args = analysis.referenceCheckArguments(__doc__)
+    r = run()
+    print("flume block with the joint design's set lhs02 (§3.2, 0.2 m flume): %d material points, %s; first touch "
+          "%.3f s, F_t %.2f N at 0.4 s, rotation %.1f deg at 0.7 s, 45 deg at %.3f s, largest rotation %.1f deg, "
+          "largest |yaw| %.2g deg" % (r["particles"], r["flip_blend"], r["first_touch"], r["force_04"],
+                                      r["rotation_07"], r["t45"], r["max_rotation"], r["max_yaw"]))
+    failures = []
+    if r["mass_error"] != 0:
+        failures.append("flow mass changed by %g kg" % r["mass_error"])
+    if not r["finite"]:
+        failures.append("the cube's state is not finite")
+    if not r["max_yaw"] < 1e-6:
+        failures.append("the cube turned %.3g deg on the bed in a scene symmetric about its centre line" % r["max_yaw"])
+    if not 45.0 <= r["max_rotation"] < MAX_TURN:
+        failures.append("the cube's largest rotation is %.1f deg: it must turn through 45 deg without tumbling "
+                        "(below %g deg)" % (r["max_rotation"], MAX_TURN))
+    failures += analysis.checkAgainstReference(r, REF, TOL, args.regenerate,
+                                               stored=("first_touch", "force_04", "rotation_07", "t45", "particles"))
+    analysis.finishCheck(failures)
+
+
+main()
