@@ -362,6 +362,37 @@ def finishCheck(failures):
     print("OK")
 
 
+def runFlumeCheck(scene, duration, sampleEvery=0.002):
+    """Run a check's flume scene (:class:`mpmsdem.flume.Flume` with one cube) for ``duration``
+    [s], sampled every ``sampleEvery`` [s]. Returns (the cube's series, the numbers every flume
+    check looks at: ``mass_error`` [kg], ``finite``, ``max_yaw`` [deg], ``particles``,
+    ``flip_blend``), for :func:`flumeCheckFailures`."""
+    import math
+    import numpy as np
+    from yade import O
+    m0 = float(scene.mpm.particles()["mass"].sum())
+    scene.run(duration, sampleEvery=sampleEvery)
+    s = scene.series(0)
+    state = O.bodies[scene.blockIds[0]].state
+    return s, {"mass_error": abs(float(scene.mpm.particles()["mass"].sum()) - m0),
+               "finite": all(math.isfinite(v) for v in state.pos), "max_yaw": float(np.abs(s["yaw"]).max()),
+               "particles": scene.mpm.numParticles, "flip_blend": scene.flipBlend()}
+
+
+def flumeCheckFailures(r, symmetric=True):
+    """What every flume check refuses in its result dict ``r``, as messages: a change of the
+    flow's mass (``mass_error`` [kg]: a material point method conserves it exactly), a cube
+    whose state is not finite (``finite``), and a cube (``max_yaw`` [deg]) turning on the bed in a scene ``symmetric`` about its centre line (beyond 1e-6°)."""
+    failures = []
+    if r["mass_error"] != 0:
+        failures.append("flow mass changed by %g kg" % r["mass_error"])
+    if not r["finite"]:
+        failures.append("the cube's state is not finite")
+    if symmetric and not r["max_yaw"] < 1e-6:
+        failures.append("the cube turned %.3g deg on the bed in a scene symmetric about its centre line" % r["max_yaw"])
+    return failures
+
+
 def checkAgainstReference(values, path, tolerances, regenerate=False, stored=None):
     """Regression check of a scene's numbers against a stored reference (JSON), the way the
     project's checks and a user's regression scripts use it.
