@@ -304,8 +304,10 @@ def main(argv):
         names = {"basal_friction": "basal friction", "mu_2": "μ₂", "flow_friction": "flow–cube friction",
                  "side_wall_friction": "side-wall friction"}
         changed = ", ".join("%s %g" % (names[k], v) for k, v in summary["settings"].items() if v != DEFAULT_SETTINGS[k])
+        if a.flip_viscosity is not None:
+            changed += "%sPIC viscosity %g m²/s" % ("; " if changed else "", a.flip_viscosity)
         plot(scene.series(0), "Copper cube in a glass-bead flume (paper §3.2), dx = %g m, %d material points%s"
-             % (scene.dx, scene.mpm.numParticles, "\n%s; %s" % (changed, scene.flipBlend()) if changed else ""), ff,
+             % (scene.dx, scene.mpm.numParticles, "\n" + changed if changed else ""), ff,
              os.path.join(out, "flume_block.png"))
         if "faces" in s:
             plotFaces(s, "The flow's load on each face of the cube (its own frame), dx = %g m" % scene.dx,
