@@ -168,10 +168,14 @@ def table(names, records, a, params):
             continue
         v = r["result"]
         m, losses[name] = misfits(v)
-        cells = [(fmt % v[k]) if k in v else "—" for k, _, _, fmt in COLUMNS]
+        # a 45° time at the run's end is "not reached by then": shown as a bound
+        unturned = "t45" in v and v["t45"] >= a.duration * (1 - 1e-9)
+        cells = [("> %.2f" % a.duration if k == "t45" and unturned else fmt % v[k]) if k in v else "—"
+                 for k, _, _, fmt in COLUMNS]
         rows.append("| %s | %s | %s | %s | %s | %.2f |" % (
             name, setting(params[name]), v.get("flip_blend", "?"), " | ".join(cells),
-            " / ".join("%+.0f %%" % (100 * m[k]) if k in m else "—" for k, _ in LOSS_TARGETS), losses[name]))
+            " / ".join(("≥ " if k == "t45" and unturned else "") + "%+.0f %%" % (100 * m[k]) if k in m else "—"
+                       for k, _ in LOSS_TARGETS), losses[name]))
     byName = dict(zip(names, records))
     scored = [n for n in losses if losses[n] == losses[n] and byName[n]["result"].get("max_rotation_deg", 0) <= MAX_TURN]
     rows.append("")

@@ -246,3 +246,26 @@ def test_prepared_cases_run_workers_at_a_time_in_order_and_stop_at_a_failure():
     for bad in (0, 1.5, "2"):
         with pytest.raises(ValueError, match=r"workers = .*: must be an integer >= 1"):
             eachCase(abs, [1], workers=bad)
+
+
+def test_the_design_table_scores_the_cases_and_shows_an_unreached_45_degrees_as_a_bound():
+    spec = importlib.util.spec_from_file_location("paper_flume_design", os.path.join(
+        ROOT, "scripts", "validation", "paper_flume_design.py"))
+    design = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(design)
+    a = design.parse(["--cases", "paper"])
+    base = {"first_touch": 0.25, "force_04": 0.32, "force_mean": 0.20, "rotation_07": 45.0, "max_rotation_deg": 60.0}
+    records = [{"status": "ok", "result": dict(base, t45=0.72)},                      # the paper's numbers
+               {"status": "ok", "result": dict(base, t45=a.duration, first_touch=0.30)},  # never turned 45°
+               {"status": "ok", "result": dict(base, t45=0.5, max_rotation_deg=180.0)}]   # tumbled: not ranked
+    params = {n: {"dx": 0.01, "duration": a.duration} for n in ("exact", "unturned", "tumbled")}
+    text = design.table(["exact", "unturned", "tumbled"], records, a, params)
+    rows = {line.split("|")[1].strip(): line for line in text.splitlines() if line.startswith("| ")}
+    assert rows["exact"].rstrip().endswith("| 0.00 |")
+    # 45° not reached by the end: a bound, and its misfit a lower bound (0.8 against 0.72 s)
+    assert "> %.2f" % a.duration in rows["unturned"] and "≥ +11 %" in rows["unturned"]
+    assert "+20 % / +0 % / +0 % / ≥ +11 % / +0 %" in rows["unturned"]
+    assert "> " not in rows["tumbled"] and "-31 %" in rows["tumbled"]
+    assert "Lowest loss" in text and ": exact (" in text  # the tumbled case is not ranked however it scores
+    m, loss = design.misfits(dict(base, t45=0.72))
+    assert loss == 0 and set(m) == {k for k, _ in design.LOSS_TARGETS}
