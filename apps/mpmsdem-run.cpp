@@ -528,6 +528,11 @@ class OutputRun {
                 dir_.string().c_str());
     std::fflush(stdout);
     double dt = 0, recordSeconds = 0, snapshotSeconds = 0;
+    auto timedSnapshot = [this, &snapshotSeconds] {
+      const auto start = Clock::now();
+      writeSnapshot();
+      snapshotSeconds += since(start);
+    };
     try {
       while (!finished(solver_, run, maxSteps) && stopReason_.empty()) {
         dt = nextStep(stepper_, run, byTime);
@@ -547,9 +552,7 @@ class OutputRun {
         }
         recordSeconds += since(recordStart);
         if (output) {
-          const auto snapshotStart = Clock::now();
-          writeSnapshot();
-          snapshotSeconds += since(snapshotStart);
+          timedSnapshot();
           while (nextOutput <= t * (1 + 1e-12)) nextOutput += run.outputEvery;
         }
         if (report) {
@@ -589,11 +592,7 @@ class OutputRun {
       writeProbeResults("failure");
       return 3;
     }
-    if (solver_.time() > state_time_) {
-      const auto snapshotStart = Clock::now();
-      writeSnapshot();
-      snapshotSeconds += since(snapshotStart);
-    }
+    if (solver_.time() > state_time_) timedSnapshot();
     const double loop = since(t0);
     if (!stopReason_.empty())
       std::printf("mpmsdem-run: stopped before run.duration: %s\n",

@@ -34,7 +34,8 @@ from mpmsdem.flume import GLASS_BEADS, Block, Flume
 from mpmsdem.mpm import PAPER_VISCOSITY
 
 HB = 0.02          # cube side h_b [m]
-# Table 1's flow and friction settings (flow–cube and side walls: our reading), the options' defaults
+# Table 1's flow and friction settings (flow–cube and side walls: our reading): the options' defaults,
+# keyed by their argparse names
 DEFAULT_SETTINGS = {"basal_friction": 0.21, "mu_2": GLASS_BEADS["mu_2"], "flow_friction": 0.21,
                     "side_wall_friction": 0.0}
 L0 = 0.21          # from the column front (the gate) to the cube's upstream face [m] (our reading of §3.2)
@@ -290,8 +291,7 @@ def main(argv):
     from yade import O
     summary = {"dx": dx, "width": a.width, "particles": scene.mpm.numParticles, "duration": duration, "dt": O.dt,
                "flip_blend": scene.flipBlend(), "free_flow": ff,
-               "settings": {"basal_friction": a.basal_friction, "mu_2": a.mu_2, "flow_friction": a.flow_friction,
-                            "side_wall_friction": a.side_wall_friction},
+               "settings": {k: getattr(a, k) for k in DEFAULT_SETTINGS},
                "travel": scene.travel(0), "peak_force": peak, "peak_time": tPeak,
                "rotation_deg": float(s["rotation"][-1]), "tilt_deg": float(s["tilt"][-1]),
                "yaw_deg": float(s["yaw"][-1]), "events": blockEvents(s, duration),

@@ -396,13 +396,11 @@ void MpmCpu<T>::forActiveNodes(F&& f) {
   const int* nodes = grid_.nodes;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < nt; ++i) {
-    const int t = activeTiles_[i];
-    const int tz = t % tiles_[2];
-    const int ty = (t / tiles_[2]) % tiles_[1];
-    const int tx = t / (tiles_[2] * tiles_[1]);
-    for (int a = 3 * tx; a < std::min(3 * tx + 3, nodes[0]); ++a)
-      for (int b = 3 * ty; b < std::min(3 * ty + 3, nodes[1]); ++b)
-        for (int c = 3 * tz; c < std::min(3 * tz + 3, nodes[2]); ++c) f((a * nodes[1] + b) * nodes[2] + c);
+    int tc[3];
+    blockCoordsOf(activeTiles_[i], tiles_, tc);
+    for (int a = 3 * tc[0]; a < std::min(3 * tc[0] + 3, nodes[0]); ++a)
+      for (int b = 3 * tc[1]; b < std::min(3 * tc[1] + 3, nodes[1]); ++b)
+        for (int c = 3 * tc[2]; c < std::min(3 * tc[2] + 3, nodes[2]); ++c) f((a * nodes[1] + b) * nodes[2] + c);
   }
 }
 
