@@ -7,7 +7,8 @@
    the runout fit of Lube et al. 2005.
 3. MPM–SDEM coupled (paper §3.2 at its resolution, dx 0.01 m): a copper cube hit by a
    glass-bead flow in the inclined 0.2 m flume (examples/flume_block.py), 0.8 s, with the flow
-   and friction set of our joint design that tells the paper's story (JOINT_SET): first touch,
+   and friction set of our joint design that tells the paper's story (``--settings joint``,
+   mpmsdem.flume.FLUME_SETTINGS): first touch,
    the force at 0.4 s, the cube's turn through 45°, beside the paper's.
 
 Run it with ``yade -n -x examples/demo.py`` or ``/usr/bin/python3 examples/demo.py``.
@@ -32,12 +33,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 OUT = os.path.abspath("demo-out")
-# The flow and friction set of the joint §3.2 design that tells the paper's story (lhs02 of
-# scripts/validation/paper_flume_design.py --lhs 20; docs/coupled-results.md, "Joint
-# calibration"): PIC viscosity 0.036 m²/s (1441 /s of PIC damping at dx 0.01 m), basal friction
-# 0.28, μ₂ 0.72, flow–cube friction 0.39, side-wall friction 0.11.
-JOINT_SET = {"--flip-viscosity": 0.0360141, "--basal-friction": 0.2778, "--mu-2": 0.7221, "--flow-friction": 0.3938,
-             "--side-wall-friction": 0.111}
 os.makedirs(OUT, exist_ok=True)
 
 
@@ -133,11 +128,12 @@ def flume_block():
     spec.loader.exec_module(example)
     print("\n=== MPM-SDEM: copper cube in a glass-bead flume (paper §3.2 at its resolution, dx 0.01 m, 0.8 s; "
           "the flow and friction set lhs02 of our joint design) ===")
-    s = example.main(["--full", "--duration", "0.8", "--no-free-flow", "--out", os.path.join(OUT, "flume_block")]
-                     + [x for k, v in JOINT_SET.items() for x in (k, str(v))])
+    s = example.main(["--full", "--settings", "joint", "--duration", "0.8", "--no-free-flow",
+                      "--out", os.path.join(OUT, "flume_block")])
     e = s["events"]
     print("beside the paper (§3.2, Figs 7-9; here dx %g m, %d material points, %s; %s):"
-          % (s["dx"], s["particles"], s["flip_blend"], ", ".join("%s %s" % kv for kv in JOINT_SET.items())))
+          % (s["dx"], s["particles"], s["flip_blend"],
+             ", ".join("%s %s" % (k.replace("_", " "), v) for k, v in s["settings"].items() if k != "name")))
     print("  flow first touches the cube:  paper ~0.25 s (experiment 0.3 s);  here %.3f s" % e["first_touch"])
     print("  flow force on the cube at 0.4 s:  paper 0.32 N;  here %.2f N" % e["force_04"])
     print("  the cube turns through 45 deg:  paper at 0.72 s;  here at %s, %.0f deg by %.1f s, still moving at %.2f m/s "

@@ -3,7 +3,7 @@
 
     yade -n -x examples/flume_block.py [--full] [--out DIR] [--duration T] [--dx DX]
                                        [--backend cpu|cuda] [--precision double|float]
-                                       [--basal-friction MU] [--mu-2 MU] [--flow-friction MU]
+                                       [--settings joint|table1] [--basal-friction MU] [--mu-2 MU] [--flow-friction MU]
                                        [--side-wall-friction MU] [--flip-viscosity NU]
     /usr/bin/python3 examples/flume_block.py ...          (same, without YADE's GUI shell)
     /usr/bin/python3 examples/flume_block.py --full --driver-scene flume.json   (scene for mpmsdem-run)
@@ -11,6 +11,12 @@
 
 Default: a coarse version (dx = 0.02 m, 12,000 material points, a few minutes on 2 cores).
 ``--full``: the paper's resolution (dx = 0.01 m, 8 points per cell, 96,000 material points).
+
+The flow and friction settings (``--settings``, ``mpmsdem.flume.FLUME_SETTINGS``): with ``--full``
+by default ``joint``, the set of our joint design at that resolution that tells the paper's story
+(the cube pushed, turning through 45° near 0.72 s, no tumbling; docs/coupled-results.md); on the
+coarse grid, where nothing was calibrated, Table 1's (``table1``). The options
+``--basal-friction`` … ``--flip-viscosity`` change single values of the chosen set.
 
 Two runs: first the free flow without the block (calibration: flow depth h_f and velocity v_f
 at the block's station when the front arrives, Fr = v_f/√(g h_f), Fr1 = v_f/√(g L0)), then the
@@ -30,14 +36,11 @@ import time
 import mpmsdem
 import mpmsdem.driver
 from mpmsdem import analysis
-from mpmsdem.flume import GLASS_BEADS, Block, Flume
+from mpmsdem.flume import FLUME_SETTINGS, GLASS_BEADS, Block, Flume
 from mpmsdem.mpm import PAPER_VISCOSITY
 
 HB = 0.02          # cube side h_b [m]
-# Table 1's flow and friction settings (flow–cube and side walls: our reading): the options' defaults,
-# keyed by their argparse names
-DEFAULT_SETTINGS = {"basal_friction": 0.21, "mu_2": GLASS_BEADS["mu_2"], "flow_friction": 0.21,
-                    "side_wall_friction": 0.0}
+SETTING_OPTIONS = ("basal_friction", "mu_2", "flow_friction", "side_wall_friction", "flip_viscosity")
 L0 = 0.21          # from the column front (the gate) to the cube's upstream face [m] (our reading of §3.2)
 COLUMN = 0.3       # L_i [m]
 
@@ -57,24 +60,36 @@ def parse(argv):
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"))
     ap.add_argument("--precision", default="double", choices=("double", "float"))
     ap.add_argument("--no-plots", action="store_true", help="skip the PNG")
-    ap.add_argument("--basal-friction", type=float, default=DEFAULT_SETTINGS["basal_friction"],
-                    help="flow–bed friction (Table 1: 0.21), >= 0")
-    ap.add_argument("--mu-2", type=float, default=DEFAULT_SETTINGS["mu_2"],
-                    help="the flow's maximum dynamic friction μ₂ (Table 1: 0.65), > μ_s = %g" % GLASS_BEADS["mu_s"])
-    ap.add_argument("--flow-friction", type=float, default=DEFAULT_SETTINGS["flow_friction"],
-                    help="flow–cube friction (not in the paper; our reading: 0.21), >= 0")
-    ap.add_argument("--side-wall-friction", type=float, default=DEFAULT_SETTINGS["side_wall_friction"],
-                    help="flow–side wall friction (0: smooth walls), >= 0")
+    ap.add_argument("--settings", choices=sorted(FLUME_SETTINGS), default=None,
+                    help="named flow and friction set (mpmsdem.flume.FLUME_SETTINGS): joint (our joint design's, "
+                         "calibrated at dx 0.01 m; the default with --full) or table1 (Table 1's; the default on the "
+                         "coarse grid)")
+    ap.add_argument("--basal-friction", type=float, default=None,
+                    help="flow–bed friction, >= 0 (table1: 0.21, joint: 0.2778)")
+    ap.add_argument("--mu-2", type=float, default=None,
+                    help="the flow's maximum dynamic friction μ₂, > μ_s = %g (table1: 0.65, joint: 0.7221)"
+                         % GLASS_BEADS["mu_s"])
+    ap.add_argument("--flow-friction", type=float, default=None,
+                    help="flow–cube friction, >= 0 (not in the paper; table1, our reading: 0.21, joint: 0.3938)")
+    ap.add_argument("--side-wall-friction", type=float, default=None,
+                    help="flow–side wall friction, >= 0 (0: smooth walls; table1: 0, joint: 0.111)")
     ap.add_argument("--flip-viscosity", type=float, default=None,
-                    help="PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0 (default: the paper's, %g, with "
-                         "--full; the scene default, 0.005, on the coarse grid; docs/physics.md)" % PAPER_VISCOSITY)
+                    help="PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0 (joint: 0.0360141; table1: the "
+                         "paper's, %g, with --full, the scene default, 0.005, on the coarse grid; docs/physics.md)"
+                         % PAPER_VISCOSITY)
     ap.add_argument("--driver-scene", metavar="JSON", default=None,
                     help="write the coupled scene (with the cube, same O.dt) for the C++ driver mpmsdem-run to "
                          "JSON and exit (e.g. to run it on a GPU machine: mpmsdem-run JSON --backend cuda)")
     ap.add_argument("--from-driver", metavar="DIR", default=None,
                     help="plot and summarise a finished mpmsdem-run of this scene from its output folder DIR "
                          "(coupled.h5) instead of running; the Eq 20 line needs the free flow and is left out")
-    return ap.parse_known_args(argv)[0]
+    a = ap.parse_known_args(argv)[0]
+    if a.settings is None:
+        a.settings = "joint" if a.full else "table1"
+    for k in SETTING_OPTIONS:
+        if getattr(a, k) is None:
+            setattr(a, k, FLUME_SETTINGS[a.settings][k])
+    return a
 
 
 def copperCube(y=None, friction=0.67, flowFriction=0.21):
@@ -291,7 +306,7 @@ def main(argv):
     from yade import O
     summary = {"dx": dx, "width": a.width, "particles": scene.mpm.numParticles, "duration": duration, "dt": O.dt,
                "flip_blend": scene.flipBlend(), "free_flow": ff,
-               "settings": {k: getattr(a, k) for k in DEFAULT_SETTINGS},
+               "settings": dict({k: getattr(a, k) for k in SETTING_OPTIONS}, name=a.settings),
                "travel": scene.travel(0), "peak_force": peak, "peak_time": tPeak,
                "rotation_deg": float(s["rotation"][-1]), "tilt_deg": float(s["tilt"][-1]),
                "yaw_deg": float(s["yaw"][-1]), "events": blockEvents(s, duration),
@@ -302,12 +317,12 @@ def main(argv):
         json.dump(summary, f, indent=1)
     if not a.no_plots:
         names = {"basal_friction": "basal friction", "mu_2": "μ₂", "flow_friction": "flow–cube friction",
-                 "side_wall_friction": "side-wall friction"}
-        changed = ", ".join("%s %g" % (names[k], v) for k, v in summary["settings"].items() if v != DEFAULT_SETTINGS[k])
-        if a.flip_viscosity is not None:
-            changed += "%sPIC viscosity %g m²/s" % ("; " if changed else "", a.flip_viscosity)
+                 "side_wall_friction": "side-wall friction", "flip_viscosity": "PIC viscosity [m²/s]"}
+        changed = ", ".join("%s %g" % (names[k], getattr(a, k)) for k in SETTING_OPTIONS
+                            if getattr(a, k) != FLUME_SETTINGS[a.settings][k])
+        changed = "settings %s%s" % (a.settings, ", with " + changed if changed else "")
         plot(scene.series(0), "Copper cube in a glass-bead flume (paper §3.2), dx = %g m, %d material points%s"
-             % (scene.dx, scene.mpm.numParticles, "\n" + changed if changed else ""), ff,
+             % (scene.dx, scene.mpm.numParticles, "\n" + changed), ff,
              os.path.join(out, "flume_block.png"))
         if "faces" in s:
             plotFaces(s, "The flow's load on each face of the cube (its own frame), dx = %g m" % scene.dx,

@@ -31,6 +31,22 @@ from . import material as _material
 GLASS_BEADS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65,
                "I0": 0.279, "grain_diameter": 0.002, "solid_density": 2500}
 
+# The §3.2 flow and friction settings by name, keyed as examples/flume_block.py's options:
+# basal (flow–bed) friction, the flow's μ₂, flow–cube friction, flow–side wall friction, and the
+# PIC viscosity of the FLIP/PIC blend [m²/s] (None: the paper's, α 0.99 per its 5e-6 s step).
+# - "table1": Table 1 (basal 0.21, μ₂ 0.65); flow–cube 0.21 and smooth side walls are our reading.
+# - "joint": lhs02 of the joint design at the paper's resolution (dx 0.01 m;
+#   scripts/validation/paper_flume_design.py --lhs 20, docs/coupled-results.md "Joint
+#   calibration"): 1441 /s of PIC damping at dx 0.01 m, basal 0.28, μ₂ 0.72, flow–cube 0.39,
+#   side walls 0.11. The cube is pushed and turns through 45° near the paper's 0.72 s without
+#   tumbling; its force plateau stays above the paper's.
+FLUME_SETTINGS = {
+    "table1": {"basal_friction": 0.21, "mu_2": 0.65, "flow_friction": 0.21, "side_wall_friction": 0.0,
+               "flip_viscosity": None},
+    "joint": {"basal_friction": 0.2778, "mu_2": 0.7221, "flow_friction": 0.3938, "side_wall_friction": 0.111,
+              "flip_viscosity": 0.0360141},
+}
+
 
 class Block:
     """A box-shaped block standing on the bed.

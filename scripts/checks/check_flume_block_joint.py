@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Check: the paper's §3.2 scene at its resolution (dx 0.01 m, 8 points per cell, the whole
 0.2 m flume) with the flow and friction set of our joint design that tells the paper's story
-(lhs02 of scripts/validation/paper_flume_design.py --lhs 20; docs/coupled-results.md, "Joint
-calibration": PIC viscosity 0.036 m²/s, basal friction 0.28, μ₂ 0.72, flow–cube friction 0.39,
-side-wall friction 0.11), 0.77 s, against stored reference numbers. About five minutes on one
+(mpmsdem.flume.FLUME_SETTINGS["joint"], lhs02 of scripts/validation/paper_flume_design.py --lhs 20;
+docs/coupled-results.md, "Joint calibration": PIC viscosity 0.036 m²/s, basal friction 0.28, μ₂
+0.72, flow–cube friction 0.39, side-wall friction 0.11), 0.77 s, against stored reference numbers. About five minutes on one
 core: it holds the behaviour `make demo` shows.
 
 Asserts:
@@ -27,7 +27,7 @@ import numpy as np
 
 import mpmsdem
 from mpmsdem import analysis
-from mpmsdem.flume import GLASS_BEADS, Block, Flume
+from mpmsdem.flume import FLUME_SETTINGS, GLASS_BEADS, Block, Flume
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REF = os.path.join(HERE, "reference", "flume_block_joint.json")
@@ -36,9 +36,11 @@ MAX_TURN = 100.0  # [deg] past its next face a cube has tumbled
 
 
 def run(duration=0.77):
-    cube = Block(half=(0.01,) * 3, x=0.51, density=8900, friction=0.67, flowFriction=0.3938)
-    scene = Flume(width=0.2, dx=0.01, blocks=[cube], granular=dict(GLASS_BEADS, mu_2=0.7221), basalFriction=0.2778,
-                  sideWallFriction=0.111, flipViscosity=0.0360141, verbose=False)
+    joint = FLUME_SETTINGS["joint"]
+    cube = Block(half=(0.01,) * 3, x=0.51, density=8900, friction=0.67, flowFriction=joint["flow_friction"])
+    scene = Flume(width=0.2, dx=0.01, blocks=[cube], granular=dict(GLASS_BEADS, mu_2=joint["mu_2"]),
+                  basalFriction=joint["basal_friction"], sideWallFriction=joint["side_wall_friction"],
+                  flipViscosity=joint["flip_viscosity"], verbose=False)
     s, common = analysis.runFlumeCheck(scene, duration)
     t, rot = s["t"], s["rotation"]
     touched = t[np.abs(s["Ft"]) > 0]

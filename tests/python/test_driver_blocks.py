@@ -341,6 +341,33 @@ def test_stored_flume_scenes_are_what_the_example_writes(tmp_path, name, flags):
                                                                   difference))
 
 
+def test_flume_example_defaults_to_the_named_settings_of_its_resolution(tmp_path):
+    # --full runs the joint design's set (calibrated at dx 0.01 m), the coarse grid Table 1's;
+    # --settings picks one by name and a single option changes one value of it.
+    repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+    example = os.path.join(repo, "examples", "flume_block.py")
+    from mpmsdem.flume import FLUME_SETTINGS
+    from mpmsdem.mpm import PAPER_VISCOSITY
+
+    def scene(*flags):
+        written = str(tmp_path / "scene.json")
+        proc = subprocess.run([sys.executable, example, *flags, "--driver-scene", written, "--out", str(tmp_path / "o")],
+                              capture_output=True, text=True, env=children.env())
+        assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+        s = json.load(open(written))
+        flows = sorted(m["flow"]["friction"] for m in s["block_materials"].values())
+        return (s["material"]["mu_2"], s.get("flip_viscosity"), s["walls"]["+y"], flows)
+
+    joint, table1 = FLUME_SETTINGS["joint"], FLUME_SETTINGS["table1"]
+    assert scene("--full") == (0.7221, 0.0360141, 0.111, [0.2778, 0.3938])
+    assert (joint["mu_2"], joint["flip_viscosity"], joint["side_wall_friction"]) == (0.7221, 0.0360141, 0.111)
+    assert scene("--full", "--settings", "table1") == (0.65, pytest.approx(PAPER_VISCOSITY, rel=1e-12), 0.0,
+                                                       [0.21, 0.21])
+    assert (table1["mu_2"], table1["basal_friction"]) == (0.65, 0.21)
+    assert scene() == (0.65, None, 0.0, [0.21, 0.21])  # None: the scenes' default blend on the coarse grid
+    assert scene("--settings", "joint", "--mu-2", "0.7") == (0.7, 0.0360141, 0.111, [0.2778, 0.3938])
+
+
 def test_flume_example_takes_the_flow_and_friction_settings(tmp_path):
     # examples/flume_block.py --basal-friction/--mu-2/--flow-friction/--side-wall-friction/
     # --flip-viscosity reach the scene (the joint design's sets are run with them); a value out of
