@@ -98,6 +98,10 @@ MpmCpu<T>::MpmCpu(const MpmParams& params)
   }
   blockStart_.assign(static_cast<std::size_t>(blocks_[0]) * blocks_[1] * blocks_[2] + 1, 0);
   tileMark_.assign(static_cast<std::size_t>(tiles_[0]) * tiles_[1] * tiles_[2], 0);
+  if (params.terrain.enabled()) {
+    terrainZ_.assign(params.terrain.heights.begin(), params.terrain.heights.end());
+    grid_.terrain.z = terrainZ_.data();
+  }
 }
 
 template <typename T>
@@ -277,6 +281,7 @@ std::size_t MpmCpu<T>::memoryBytes() const {
   add(scratch_);
   for (const auto& a : fext_) add(a);
   add(nodes_);
+  add(terrainZ_);
   add(blockStart_);
   add(order_);
   add(cellOf_);
@@ -526,6 +531,8 @@ void MpmCpu<T>::step(double dt) {
       g2pUpdateBatch<true>(a, m, slot, id, out, g, sc, phase, firstBad, vmax);
     else
       g2pUpdateBatch<false>(a, m, slot, id, out, g, sc, phase, firstBad, vmax);
+    if (g.terrain.z)
+      for (int l = 0; l < m; ++l) liftAboveTerrain(out.x[0][slot[l]], out.x[1][slot[l]], out.x[2][slot[l]], g.terrain);
     for (int l = 0; l < m; ++l) {
       out.phase[slot[l]] = static_cast<std::uint8_t>(phase[l]);
       if (inPlace) continue;

@@ -112,6 +112,7 @@ class MpmCpu : public MpmSolver {
   std::vector<T> fext_[3];
   bool hasFext_ = false;
   std::vector<T> nodes_;  // kNodeValues * nNodes_
+  std::vector<T> terrainZ_;  // the terrain's heights (grid_.terrain.z), empty without one
   double maxSpeed_ = 0;   // largest particle speed of the current state [m/s]
   // P2G colouring and the active grid
   int blocks_[3];

@@ -23,6 +23,7 @@
 #include "mpm/GridBoundary.hpp"
 #include "mpm/MathHD.hpp"
 #include "mpm/MpmTypes.hpp"
+#include "mpm/Terrain.hpp"
 
 namespace mpmsdem {
 namespace mpm {
@@ -42,6 +43,7 @@ struct GridConst {
   T wallFriction[6];
   T massEps;        // nodes with mass <= massEps are treated as empty [kg]
   T lo[3], hi[3];   // admissible particle box (kWallLayer cells inside the faces) [m]
+  TerrainView<T> terrain;  // its heights in the backend's memory, set by the backend; null z: none
 };
 
 // Per-step constants.
@@ -296,7 +298,7 @@ MPM_HD_INLINE void gridNodeVelocity(int node, T* grid, const GridConst<T>& g, T 
   }
 }
 
-// The walls on the new velocity of one node.
+// The terrain, then the walls, on the new velocity of one node.
 template <typename T>
 MPM_HD_INLINE void gridNodeWalls(int node, T* grid, const GridConst<T>& g) {
   int idx[3];
@@ -306,6 +308,10 @@ MPM_HD_INLINE void gridNodeWalls(int node, T* grid, const GridConst<T>& g) {
   idx[0] = q / g.nodes[1];
   T* r = grid + kNodeValues * node + kNodeVNew;
   Vec3T<T> vn{r[0], r[1], r[2]};
+  if (g.terrain.z) {
+    const Vec3T<T> p{g.origin[0] + T(idx[0]) * g.dx, g.origin[1] + T(idx[1]) * g.dx, g.origin[2] + T(idx[2]) * g.dx};
+    applyTerrain(vn, p, g.terrain);
+  }
   applyWalls(vn, idx, g.cells, g.wallFriction);
   for (int d = 0; d < 3; ++d) r[d] = vn[d];
 }
@@ -514,6 +520,7 @@ MPM_HD_INLINE G2PResult<T> g2pParticle(int p, const ParticleIn<T>& P, int q, con
   G2PResult<T> r;
   int phase;
   r.ok = g2pUpdate(a, 1, q, Q, g, sc, r.speed, phase);
+  if (g.terrain.z) liftAboveTerrain(Q.x[0][q], Q.x[1][q], Q.x[2][q], g.terrain);
   Q.phase[q] = static_cast<std::uint8_t>(phase);
   return r;
 }
@@ -564,6 +571,14 @@ inline GridConst<T> makeGridConst(const MpmParams& prm, double massEps) {
   }
   for (int w = 0; w < 6; ++w) g.wallFriction[w] = static_cast<T>(prm.walls[w].friction);
   g.massEps = static_cast<T>(massEps);
+  if (prm.terrain.enabled()) {  // its heights: the backend's copy (terrain.z)
+    g.terrain.nx = prm.terrain.nx;
+    g.terrain.ny = prm.terrain.ny;
+    g.terrain.x0 = static_cast<T>(prm.terrain.x0);
+    g.terrain.y0 = static_cast<T>(prm.terrain.y0);
+    g.terrain.invSpacing = static_cast<T>(1.0 / prm.terrain.spacing);
+    g.terrain.friction = static_cast<T>(prm.terrain.friction);
+  }
   return g;
 }
 

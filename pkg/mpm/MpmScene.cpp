@@ -12,6 +12,7 @@
 #include "common/Error.hpp"
 #include "common/SceneJson.hpp"
 #include "io/MeshReader.hpp"
+#include "io/TerrainRaster.hpp"
 #include "mpm/GridBoundary.hpp"
 #include "mpm/MpmKernelsCommon.hpp"
 #include "mpm/Seeding.hpp"
@@ -100,6 +101,16 @@ void parseFlipBlend(const json& root, MpmParams& p) {
   p.flipReferenceDt = v.get<double>();
 }
 
+// A wall's or the terrain's friction: "free" (0), "noslip" (-1) or a Coulomb coefficient >= 0.
+double parseFriction(const json& v, const std::string& name) {
+  if (v.is_string() && v.get<std::string>() == "free") return 0;
+  if (v.is_string() && v.get<std::string>() == "noslip") return -1;
+  if (!v.is_number()) throwParameter(name, v.dump(), "", "\"free\", \"noslip\" or a friction coefficient >= 0");
+  const double mu = v.get<double>();
+  checkRange(name, mu, "", 0, false, kInf, true);
+  return mu;
+}
+
 void parseWalls(const json& root, MpmParams& p) {
   if (!root.contains("walls")) return;
   const json& w = root.at("walls");
@@ -108,18 +119,7 @@ void parseWalls(const json& root, MpmParams& p) {
   checkKeys(w, "walls", {names[0], names[1], names[2], names[3], names[4], names[5]});
   for (int i = 0; i < 6; ++i) {
     if (!w.contains(names[i])) continue;
-    const json& v = w.at(names[i]);
-    const std::string name = std::string("walls.") + names[i];
-    if (v.is_string() && v.get<std::string>() == "free") {
-      p.walls[i].friction = 0;
-    } else if (v.is_string() && v.get<std::string>() == "noslip") {
-      p.walls[i].friction = -1;
-    } else if (v.is_number()) {
-      p.walls[i].friction = v.get<double>();
-      checkRange(name, p.walls[i].friction, "", 0, false, kInf, true);
-    } else {
-      throwParameter(name, v.dump(), "", "\"free\", \"noslip\" or a friction coefficient >= 0");
-    }
+    p.walls[i].friction = parseFriction(w.at(names[i]), std::string("walls.") + names[i]);
   }
 }
 
@@ -141,6 +141,58 @@ void parseGate(const json& root, MpmParams& p) {
   g.friction = optNumber(j, "gate", "friction", g.friction);
   checkRange("gate.friction", g.friction, "", 0, false, kInf, true);
 }
+// "terrain": an ESRI ASCII grid {file, origin, friction} (the file's point `origin` [m] goes to
+// the grid frame's zero; the file relative to the scene's folder) or the heights themselves {nx,
+// ny, x0, y0, spacing, heights (nx * ny, i-major: heights[i * ny + j]), friction}. friction:
+// "free", "noslip" or a Coulomb coefficient >= 0, as for the walls (default "free").
+void parseTerrain(const json& root, MpmParams& p, const std::string& baseDir) {
+  if (!root.contains("terrain")) return;
+  const json& j = root.at("terrain");
+  if (!j.is_object())
+    throwParameter("terrain", j.dump(), "", "a JSON object {file, origin, friction} or {nx, ny, x0, y0, spacing, "
+                   "heights, friction}");
+  TerrainSpec& t = p.terrain;
+  if (j.contains("file")) {
+    checkKeys(j, "terrain", {"file", "origin", "friction"});
+    const json& f = j.at("file");
+    if (!f.is_string() || f.get<std::string>().empty())
+      throwParameter("terrain.file", f.dump(), "", "a non-empty path to an ESRI ASCII grid (.asc)");
+    const std::filesystem::path file(f.get<std::string>());
+    const std::string path = (baseDir.empty() || file.is_absolute()) ? file.string() : (std::filesystem::path(baseDir) / file).string();
+    io::TerrainRaster r = io::readEsriAscii(path);
+    const std::array<double, 3> o = j.contains("origin") ? vec3(j.at("origin"), "terrain.origin") : std::array<double, 3>{0, 0, 0};
+    t.nx = r.nx;
+    t.ny = r.ny;
+    t.x0 = r.x0 - o[0];
+    t.y0 = r.y0 - o[1];
+    t.spacing = r.spacing;
+    t.heights = std::move(r.heights);
+    for (double& z : t.heights) z -= o[2];
+  } else {
+    checkKeys(j, "terrain", {"nx", "ny", "x0", "y0", "spacing", "heights", "friction"});
+    const double nx = requireNumber(j, "terrain", "nx"), ny = requireNumber(j, "terrain", "ny");
+    checkRange("terrain.nx", nx, "", 2, false, 1e8, false);
+    checkRange("terrain.ny", ny, "", 2, false, 1e8, false);
+    if (nx != std::floor(nx)) throwParameter("terrain.nx", nx, "", "a whole number >= 2");
+    if (ny != std::floor(ny)) throwParameter("terrain.ny", ny, "", "a whole number >= 2");
+    t.nx = static_cast<int>(nx);
+    t.ny = static_cast<int>(ny);
+    t.x0 = requireNumber(j, "terrain", "x0");
+    t.y0 = requireNumber(j, "terrain", "y0");
+    t.spacing = requireNumber(j, "terrain", "spacing");
+    checkRange("terrain.spacing", t.spacing, "m", 0, true, kInf, true);
+    if (!j.contains("heights") || !j.at("heights").is_array())
+      throw ParameterError("terrain.heights: required, an array of nx * ny heights [m] (heights[i * ny + j])");
+    const json& h = j.at("heights");
+    if (double(h.size()) != nx * ny)
+      throwParameter("terrain.heights", std::to_string(h.size()) + " values", "", "nx * ny = " + std::to_string(t.nx) +
+                     " x " + std::to_string(t.ny) + " values");
+    t.heights.reserve(h.size());
+    for (std::size_t k = 0; k < h.size(); ++k) t.heights.push_back(number(h[k], "terrain.heights[" + std::to_string(k) + "]"));
+  }
+  t.friction = j.contains("friction") ? parseFriction(j.at("friction"), "terrain.friction") : 0;
+}
+
 void parseMaterial(const json& root, MpmParams& p) {
   const json& m = requireObject(root, "", "material");
   checkKeys(m, "material", {"density", "young_modulus", "poisson_ratio", "mu_s", "mu_2", "I0", "grain_diameter",
@@ -410,7 +462,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   }
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
   // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
-  checkKeys(root, "", {"description", "grid", "gravity", "flip_viscosity", "flip_alpha", "flip_reference_dt", "cfl", "keep_last_good_state", "walls", "gate", "material", "particles",
+  checkKeys(root, "", {"description", "grid", "gravity", "flip_viscosity", "flip_alpha", "flip_reference_dt", "cfl", "keep_last_good_state", "walls", "gate", "terrain", "material", "particles",
                        "flow_probes", "run", "blocks", "block_materials"});
   if (root.contains("description") && !root.at("description").is_string())
     throwParameter("description", root.at("description").dump(), "", "a string");
@@ -427,6 +479,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   }
   parseWalls(root, s.params);
   parseGate(root, s.params);
+  parseTerrain(root, s.params, baseDir);
   parseMaterial(root, s.params);
   parseParticles(root, s, baseDir);
   parseProbes(root, s);
@@ -475,12 +528,36 @@ std::string sceneSizeDescription(const MpmScene& scene) {
 
 namespace {
 
+// With a terrain, a region's points below its surface are not seeded: a box reaching into the
+// ground seeds the material above it.
+class AboveTerrain : public SeedSink {
+ public:
+  AboveTerrain(const TerrainSpec& t, SeedSink& out) : out_(out) {
+    view_.z = t.heights.data();
+    view_.nx = t.nx;
+    view_.ny = t.ny;
+    view_.x0 = t.x0;
+    view_.y0 = t.y0;
+    view_.invSpacing = 1.0 / t.spacing;
+  }
+  void add(const double x[3], double mass, double volume0, const std::array<double, 3>& velocity) override {
+    double gx, gy;
+    if (x[2] >= terrainHeight(view_, x[0], x[1], gx, gy)) out_.add(x, mass, volume0, velocity);
+  }
+
+ private:
+  TerrainView<double> view_;
+  SeedSink& out_;
+};
+
 void seedScene(const MpmScene& scene, SeedSink& sink) {
+  AboveTerrain above(scene.params.terrain, sink);
+  SeedSink& to = scene.params.terrain.enabled() ? static_cast<SeedSink&>(above) : sink;
   for (const ParticleBox& b : scene.boxes) {
     if (!b.mesh.empty())
-      seedMesh(scene.params, b.vertices, b.triangles, b.ppc, b.velocity, sink, b.mesh);
+      seedMesh(scene.params, b.vertices, b.triangles, b.ppc, b.velocity, to, b.mesh);
     else
-      seedBox(scene.params, b.lo, b.hi, b.ppc, b.velocity, sink);
+      seedBox(scene.params, b.lo, b.hi, b.ppc, b.velocity, to);
   }
 }
 

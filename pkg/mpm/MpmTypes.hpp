@@ -49,6 +49,21 @@ struct GateSpec {
   double friction = 0;   // Coulomb coefficient between material and gate [-], finite and >= 0 (0 = smooth)
 };
 
+// A terrain under the flow (mpm/Terrain.hpp): heights z(x, y) in the grid frame on a raster of
+// nx x ny nodes, node (i, j) at (x0 + i spacing, y0 + j spacing) with height heights[i * ny + j],
+// bilinear between nodes and continued flat outside. The flow cannot enter it (grid nodes at or
+// below the surface lose their velocity into it, Coulomb friction on the rest) and points are kept
+// on or above it. Use it with gravity along -z (a real slope, not a rotated one). Range checks:
+// makeSolver (ParameterError naming "terrain.<field>").
+struct TerrainSpec {
+  std::vector<double> heights;  // [m], nx * ny finite values; empty: no terrain (the default)
+  int nx = 0, ny = 0;           // raster nodes along x and y, >= 2 each
+  double x0 = 0, y0 = 0;        // position of node (0, 0) in the grid frame [m], finite
+  double spacing = 0;           // raster spacing [m], > 0 and finite
+  double friction = 0;          // flow–terrain friction [-], finite: < 0 no-slip, 0 free slip, > 0 Coulomb
+  bool enabled() const { return !heights.empty(); }
+};
+
 struct MpmParams {
   double dx = 0.01;                        // grid spacing Delta x [m], > 0
   std::array<double, 3> origin{0, 0, 0};   // lower corner of the grid domain [m]
@@ -104,6 +119,7 @@ struct MpmParams {
   bool keepLastGoodState = true;
   std::array<WallSpec, 6> walls{};         // box walls of the grid domain
   GateSpec gate{};                         // release gate (default: none)
+  TerrainSpec terrain{};                   // terrain under the flow (default: none)
   GranularMaterial material{};
 };
 

@@ -62,6 +62,12 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
   CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
   CUDA_CHECK(cudaMemset(listCounts_, 0, kTileLists * sizeof(int)));
   CUDA_CHECK(cudaMemset(tileMark_, 0, nBlocks_));
+  if (params.terrain.enabled()) {
+    const std::vector<T> z(params.terrain.heights.begin(), params.terrain.heights.end());
+    deviceAlloc(&terrain_, z.size(), bytes_);
+    CUDA_CHECK(cudaMemcpy(terrain_, z.data(), z.size() * sizeof(T), cudaMemcpyHostToDevice));
+    grid_.terrain.z = terrain_;
+  }
   // enough blocks to fill the device; the kernels over the active tiles' nodes loop over them
   int device = 0, sms = 1;
   CUDA_CHECK(cudaGetDevice(&device));
@@ -74,6 +80,7 @@ MpmCuda<T>::~MpmCuda() {
   setStageTiming(false);
   freeParticles();
   deviceFree(nodes_);
+  deviceFree(terrain_);
   deviceFree(flags_);
   deviceFree(cellStart_);
   deviceFree(cellEnd_);
@@ -109,7 +116,8 @@ void MpmCuda<T>::freeParticles() {
   sorted_ = nullptr;
   bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags) +
            2 * static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int) +
-           static_cast<std::size_t>(nBlocks_) * (2 * sizeof(int) + 1) + kTileLists * sizeof(int);
+           static_cast<std::size_t>(nBlocks_) * (2 * sizeof(int) + 1) + kTileLists * sizeof(int) +
+           params_.terrain.heights.size() * sizeof(T);
   hasFext_ = false;
   forcesIncomplete_ = false;
 }

@@ -99,6 +99,7 @@ class MpmCuda : public MpmSolver {
   T* fext_[3] = {};
   bool hasFext_ = false;
   T* nodes_ = nullptr;
+  T* terrain_ = nullptr;  // the terrain's heights (grid_.terrain.z); null without one
   StepFlags* flags_ = nullptr;
   // P2G order: blocks of stencil bases, the sort's double buffers and its scratch space.
   int blocks_[3];
