@@ -1,6 +1,8 @@
 // Binding of the MPM solver (py/PyMpm.hpp).
 #include "PyMpm.hpp"
 
+#include "io/TerrainRaster.hpp"
+
 namespace mpmsdem {
 namespace py {
 
@@ -9,11 +11,26 @@ namespace {
 bool cudaAvailable() { return mpm::cudaAvailable(); }
 std::string sceneOf(const std::string& path) { return io::readStringAttribute(path, "parameters"); }
 
+bp::dict readEsriAscii(const std::string& path) {
+  const io::TerrainRaster r = io::readEsriAscii(path);
+  bp::dict d;
+  d["nx"] = r.nx;
+  d["ny"] = r.ny;
+  d["x0"] = r.x0;
+  d["y0"] = r.y0;
+  d["spacing"] = r.spacing;
+  d["heights"] = numpyArray(r.heights.data(), r.nx, r.ny);
+  return d;
+}
+
 }  // namespace
 
 void exportMpm() {
   bp::def("cudaAvailable", &cudaAvailable, "True when this build has CUDA and a GPU is present.");
   bp::def("sceneOf", &sceneOf, (bp::arg("path")), "The scene JSON stored in an mpm.h5 or checkpoint file.");
+  bp::def("readEsriAscii", &readEsriAscii, (bp::arg("path")),
+          "An ESRI ASCII grid as {nx, ny, x0, y0, spacing, heights}: heights[i, j] at (x0 + i spacing, y0 + j "
+          "spacing), i west to east, j south to north, at the cell centres (the driver's reader).");
   bp::class_<PyMpm, boost::noncopyable>("MpmSolver",
                                         "MPM solver built from a JSON scene (use mpmsdem.MpmEngine instead).",
                                         bp::init<std::string>(bp::arg("sceneJson")))

@@ -86,6 +86,11 @@ class MpmEngine:
         grows as the step shrinks). ``flipAlpha`` needs ``flipReferenceDt``.
         ``solver.flipBlend`` names the blend in force, ``solver.flipViscosity(dt)`` and
         ``solver.flipDampingRate(dt)`` give it as numbers; docs/physics.md.
+    :param terrain: a :class:`mpmsdem.terrain.Terrain` (a raster height field in the grid frame,
+        with its flow–terrain friction) the flow cannot enter, or its scene entry as a dict
+        (``{"file", "origin", "friction"}`` or ``{"nx", "ny", "x0", "y0", "spacing", "heights",
+        "friction"}``); the boxes of ``particles`` are seeded only above its surface. None
+        (default): no terrain.
     :param cfl: CFL number of :meth:`stableTimeStep`, in (0, 1].
     :param keepLastGoodState: True (default): the solver keeps a second copy of the particles,
         so that a step that fails (NaN, blow-up) leaves them as they were at its start, and they
@@ -103,7 +108,7 @@ class MpmEngine:
 
     def __init__(self, grid, material, particles, gravity=(0, 0, -9.81), walls=None, flipAlpha=None, cfl=0.3,
                  backend="cpu", precision="double", output=None, outputEvery=None, label="mpm", verbose=True,
-                 gate=None, flipReferenceDt=None, keepLastGoodState=True, flipViscosity=None):
+                 gate=None, flipReferenceDt=None, keepLastGoodState=True, flipViscosity=None, terrain=None):
         scene = {"grid": grid, "material": material, "particles": list(particles),
                  "gravity": list(gravity) if not isinstance(gravity, dict) else gravity,
                  "cfl": cfl, "keep_last_good_state": keepLastGoodState,
@@ -120,6 +125,15 @@ class MpmEngine:
             scene["gate"] = dict(gate)
             if scene["gate"].get("speed") == math.inf:  # JSON has no infinity; 0 means the same
                 scene["gate"]["speed"] = 0
+        self.terrain = None  # the Terrain object, when given as one
+        if terrain is not None:
+            if hasattr(terrain, "scene"):
+                self.terrain = terrain
+                scene["terrain"] = terrain.scene()
+            elif isinstance(terrain, dict):
+                scene["terrain"] = dict(terrain)
+            else:
+                raise ValueError("terrain = %r: must be an mpmsdem.terrain.Terrain or a scene entry dict" % (terrain,))
         self._setup(json.dumps(_plain(scene, ""), allow_nan=False), output, outputEvery, label, verbose)
 
     def _setup(self, sceneJson, output, outputEvery, label, verbose):

@@ -380,3 +380,38 @@ TEST_P(TerrainEveryBackend, BlockSlidesDownASlopeAsTheAnalyticBlock) {
     EXPECT_NEAR(r.massChange, 0.0, 1e4 * agreement::roundOff(precision())) << "mu " << mu;
   }
 }
+
+TEST(Terrain, CpuAndCudaAgree) {
+  if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine: CPU-vs-CUDA terrain check skipped";
+  // A column collapsing onto a bumpy terrain (random heights on a coarse raster) with Coulomb
+  // friction 0.3: the terrain's law and the lift on both backends, 200 steps.
+  MpmParams prm = testing_scenes::granularColumnParams(0.01, {30, 12, 24}, 2e5);
+  prm.walls[4].friction = 0;
+  prm.terrain = planeRaster(0.05, -0.1, 0.0, 7, 4, 0.0, 0.0, 0.05);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> bump(-0.01, 0.01);
+  for (double& z : prm.terrain.heights) z += bump(rng);
+  prm.terrain.friction = 0.3;
+  ParticleSet ps;
+  {
+    MpmScene scene;
+    scene.params = prm;
+    ParticleBox box;
+    box.lo = {0.06, 0.04, 0.02};
+    box.hi = {0.14, 0.08, 0.20};
+    box.ppc = {2, 2, 2};
+    scene.boxes.push_back(box);
+    ps = seedParticles(scene);
+  }
+  auto probe = makeSolver(prm);
+  probe->setParticles(ps);
+  const double dt = 0.8 * probe->stableTimeStep();
+  for (auto prec : {Precision::Double, Precision::Float}) {
+    auto cpu = makeSolver(prm, Backend::Cpu, Precision::Double);
+    auto gpu = makeSolver(prm, Backend::Cuda, prec);
+    ParticleSet a, b;
+    agreement::runPair(*cpu, *gpu, ps, dt, 200, a, b);
+    // as MpmSolver.CpuAndCudaAgree: double 1e-9 (summation order only), float 1e-4
+    agreement::expectAgree(a, b, prec == Precision::Double ? 1e-9 : 1e-4, 0.3, 100.0, gpu->name());
+  }
+}

@@ -1,0 +1,198 @@
+"""Terrain under the flow: a raster height field for ``MpmEngine(terrain=...)``.
+
+A :class:`Terrain` is heights ``z[i, j]`` [m] at ``(x0 + i·spacing, y0 + j·spacing)`` in the
+grid frame (i along x, west to east; j along y, south to north), read between nodes by bilinear
+interpolation and continued flat beyond the raster (``pkg/mpm/Terrain.hpp``, the same formula on
+CPU and CUDA). The flow cannot enter it: grid nodes at or below the surface lose their velocity
+into it, with Coulomb friction on the rest (the walls' law of Appendix A, along the surface's
+normal), and material points carried below it are lifted back onto it. Use it with vertical
+gravity (a real slope, not the flumes' rotated one).
+
+Rasters come from files (:meth:`Terrain.read`: ESRI ASCII grids with the driver's own reader,
+GeoTIFF and whatever else GDAL reads through Debian's ``python3-gdal``) or are made
+(:meth:`Terrain.plane`, :meth:`Terrain.valley`). A georeferenced raster is moved into the grid
+frame by ``origin`` (the world point that becomes the grid frame's zero), which keeps float runs
+accurate far from the map's origin; :attr:`Terrain.georeference` keeps what maps written back on
+the raster's own grid need.
+"""
+import math
+import os
+
+import numpy as np
+
+from . import _mpmsdem
+
+
+def _friction(value):
+    """A friction as the scene takes it: "free", "noslip" or a Coulomb coefficient >= 0."""
+    if value in ("free", "noslip"):
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (0 <= value < math.inf):
+        raise ValueError("friction = %r: must be 'free', 'noslip' or a Coulomb coefficient >= 0" % (value,))
+    return float(value)
+
+
+class Terrain:
+    """A height field in the grid frame.
+
+    :param heights: array (nx, ny) of heights [m], nx, ny >= 2, finite (fill a raster's no-data
+        cells first).
+    :param spacing: raster spacing [m] > 0.
+    :param x0, y0: position of node (0, 0) in the grid frame [m].
+    :param friction: flow–terrain friction: ``"free"`` (default), ``"noslip"`` or a Coulomb
+        coefficient >= 0 (the basal friction of the flow on the ground).
+    :param georeference: for rasters read from a file: ``{"x0", "y0"}`` of node (0, 0) in the
+        file's coordinates, ``"origin"`` (the world point at the grid frame's zero), ``"crs"``
+        (the file's coordinate reference system as WKT, or None), ``"path"``.
+    """
+
+    def __init__(self, heights, spacing, x0=0.0, y0=0.0, friction="free", georeference=None):
+        z = np.array(heights, dtype=float)
+        if z.ndim != 2 or z.shape[0] < 2 or z.shape[1] < 2:
+            raise ValueError("heights: must be a 2-D array of at least 2 x 2 nodes, got shape %s" % (z.shape,))
+        bad = np.argwhere(~np.isfinite(z))
+        if len(bad):
+            raise ValueError("heights: %d values are not finite, the first at node i %d, j %d (fill the raster's "
+                             "no-data cells first)" % (len(bad), bad[0][0], bad[0][1]))
+        if not (spacing > 0 and math.isfinite(spacing)):
+            raise ValueError("spacing = %r m: must be > 0 and finite" % (spacing,))
+        for name, v in (("x0", x0), ("y0", y0)):
+            if not math.isfinite(v):
+                raise ValueError("%s = %r m: must be finite" % (name, v))
+        self.heights = z
+        self.spacing = float(spacing)
+        self.x0, self.y0 = float(x0), float(y0)
+        self.friction = _friction(friction)
+        self.georeference = georeference
+
+    @property
+    def shape(self):
+        return self.heights.shape
+
+    @property
+    def extent(self):
+        """(x_min, x_max, y_min, y_max) of the raster's nodes in the grid frame [m]."""
+        nx, ny = self.heights.shape
+        return (self.x0, self.x0 + (nx - 1) * self.spacing, self.y0, self.y0 + (ny - 1) * self.spacing)
+
+    @classmethod
+    def read(cls, path, origin=(0.0, 0.0, 0.0), friction="free"):
+        """A terrain from a raster file: ``.asc`` (ESRI ASCII grid, read as the driver reads it)
+        or any raster GDAL reads (GeoTIFF, …; band 1). Heights at the cell centres; the world
+        point ``origin`` (x, y, z) [m] goes to the grid frame's zero. ValueError naming the file
+        for unreadable or incomplete rasters and no-data cells."""
+        origin = [float(v) for v in origin]
+        if len(origin) != 3 or not all(math.isfinite(v) for v in origin):
+            raise ValueError("origin = %r: must be three finite coordinates [m]" % (origin,))
+        if str(path).lower().endswith(".asc"):
+            r = _mpmsdem.readEsriAscii(str(path))
+            z, x0, y0, spacing, crs = r["heights"], r["x0"], r["y0"], r["spacing"], None
+        else:
+            z, x0, y0, spacing, crs = _readGdal(str(path))
+        geo = {"x0": x0, "y0": y0, "origin": tuple(origin), "crs": crs, "path": os.path.abspath(str(path))}
+        return cls(np.asarray(z) - origin[2], spacing, x0 - origin[0], y0 - origin[1], friction, geo)
+
+    @classmethod
+    def plane(cls, lo, hi, spacing, z0=0.0, slope_x_deg=0.0, slope_y_deg=0.0, friction="free"):
+        """A plane over [lo, hi] (x, y) [m]: height z0 at lo, falling along +x at slope_x_deg and
+        along +y at slope_y_deg (negative: rising)."""
+        nx = int(round((hi[0] - lo[0]) / spacing)) + 1
+        ny = int(round((hi[1] - lo[1]) / spacing)) + 1
+        x = lo[0] + spacing * np.arange(nx)
+        y = lo[1] + spacing * np.arange(ny)
+        z = (z0 - math.tan(math.radians(slope_x_deg)) * (x - lo[0])[:, None]
+             - math.tan(math.radians(slope_y_deg)) * (y - lo[1])[None, :])
+        return cls(z, spacing, lo[0], lo[1], friction)
+
+    @classmethod
+    def valley(cls, length, width, spacing, slope_deg=15.0, side_slope_deg=25.0, floor_width=None, runout=0.0,
+               z_low=0.0, friction="free"):
+        """A synthetic valley along +x: a V-shaped (or flat-floored) cross-section whose flanks
+        rise at side_slope_deg from a floor ``floor_width`` wide (default a fifth of the width)
+        on the centre line y = width/2, the floor falling at slope_deg along +x and levelling
+        out over the last ``runout`` metres (a run-out plain at height z_low)."""
+        if not (0 <= runout < length):
+            raise ValueError("runout = %r m: must be in [0, length)" % (runout,))
+        floor = width / 5.0 if floor_width is None else floor_width
+        nx = int(round(length / spacing)) + 1
+        ny = int(round(width / spacing)) + 1
+        x = spacing * np.arange(nx)
+        y = spacing * np.arange(ny)
+        slope_end = length - runout
+        along = z_low + math.tan(math.radians(slope_deg)) * np.maximum(slope_end - x, 0.0)
+        across = math.tan(math.radians(side_slope_deg)) * np.maximum(np.abs(y - width / 2.0) - floor / 2.0, 0.0)
+        return cls(along[:, None] + across[None, :], spacing, 0.0, 0.0, friction)
+
+    def height(self, x, y):
+        """Surface height [m] at (x, y) in the grid frame (arrays broadcast): bilinear between
+        nodes, flat beyond the raster, as the solver reads it."""
+        nx, ny = self.heights.shape
+
+        def axis(u, n):
+            uc = np.clip(u, 0.0, n - 1.0)
+            c = np.minimum(uc.astype(int), n - 2)
+            return c, uc - c
+
+        i, fx = axis((np.asarray(x, dtype=float) - self.x0) / self.spacing, nx)
+        j, fy = axis((np.asarray(y, dtype=float) - self.y0) / self.spacing, ny)
+        z = self.heights
+        a = z[i, j] + fy * (z[i, j + 1] - z[i, j])
+        b = z[i + 1, j] + fy * (z[i + 1, j + 1] - z[i + 1, j])
+        return a + fx * (b - a)
+
+    def scene(self):
+        """The scene's ``"terrain"`` entry (heights inline, i-major)."""
+        nx, ny = self.heights.shape
+        return {"nx": nx, "ny": ny, "x0": self.x0, "y0": self.y0, "spacing": self.spacing,
+                "heights": self.heights.ravel().tolist(), "friction": self.friction}
+
+    def writeAsc(self, path, values=None, nodata=-9999.0):
+        """Write ``values`` (default: the heights; an array of the raster's shape, NaN for no
+        data) as an ESRI ASCII grid on this raster's nodes, in the file's own coordinates for a
+        read raster (cell centres, north row first)."""
+        v = self.heights if values is None else np.asarray(values, dtype=float)
+        if v.shape != self.heights.shape:
+            raise ValueError("values: shape %s, must be the raster's %s" % (v.shape, self.heights.shape))
+        x0, y0 = self.x0, self.y0
+        if self.georeference:
+            x0, y0 = self.georeference["x0"], self.georeference["y0"]
+        nx, ny = v.shape
+        with open(path, "w") as f:
+            f.write("ncols %d\nnrows %d\nxllcenter %.10g\nyllcenter %.10g\ncellsize %.10g\nNODATA_value %g\n"
+                    % (nx, ny, x0, y0, self.spacing, nodata))
+            rows = np.where(np.isfinite(v), v, nodata).T[::-1]  # north row first
+            for row in rows:
+                f.write(" ".join("%.9g" % z for z in row) + "\n")
+
+
+def _readGdal(path):
+    try:
+        from osgeo import gdal
+    except ImportError as e:
+        raise ValueError("terrain file '%s': reading this format needs GDAL's Python bindings (Debian: "
+                         "python3-gdal, installed by `make`); ESRI ASCII grids (.asc) need nothing more" % path) from e
+    gdal.UseExceptions()
+    try:
+        ds = gdal.Open(path)
+    except RuntimeError as e:
+        raise ValueError("terrain file '%s': GDAL cannot read it (%s)" % (path, e)) from e
+    gt = ds.GetGeoTransform()
+    if gt[2] != 0 or gt[4] != 0 or abs(abs(gt[5]) - gt[1]) > 1e-9 * gt[1]:
+        raise ValueError("terrain file '%s': cells must be square and the raster north-up (geotransform %s)"
+                         % (path, gt))
+    band = ds.GetRasterBand(1)
+    rows = band.ReadAsArray().astype(float)  # (rows, cols), row 0 at the top
+    nodata = band.GetNoDataValue()
+    spacing = gt[1]
+    north_up = gt[5] < 0
+    z = (rows[::-1] if north_up else rows).T  # (cols, rows), j from the south
+    if nodata is not None:
+        z[z == nodata] = np.nan
+    missing = np.argwhere(~np.isfinite(z))
+    if len(missing):
+        raise ValueError("terrain file '%s': %d no-data values, the first at column %d, row %d from the south: fill "
+                         "them before using the raster as a terrain" % (path, len(missing), missing[0][0],
+                                                                         missing[0][1]))
+    x0 = gt[0] + 0.5 * spacing
+    y0 = (gt[3] - rows.shape[0] * spacing if north_up else gt[3]) + 0.5 * spacing
+    return z, x0, y0, spacing, ds.GetProjection() or None

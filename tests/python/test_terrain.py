@@ -1,0 +1,137 @@
+"""Terrain under the flow from a YADE script (mpmsdem.terrain, MpmEngine(terrain=...)): rasters
+read and written, and a flow down a planar terrain against the same flow in today's inclined
+flume (grid along the slope, gravity rotated, the bed a grid wall)."""
+import math
+
+import numpy as np
+import pytest
+
+import mpmsdem
+from mpmsdem.terrain import Terrain
+from yade import O
+
+MATERIAL = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
+
+
+def test_heights_between_nodes_are_bilinear_and_flat_beyond_the_raster():
+    t = Terrain.plane((-1.0, 2.0), (0.5, 3.0), 0.25, z0=1.2, slope_x_deg=20.0, slope_y_deg=-10.0)
+    x, y = np.random.default_rng(1).uniform((-1.0, 2.0), (0.5, 3.0), size=(100, 2)).T
+    plane = 1.2 - math.tan(math.radians(20)) * (x + 1.0) + math.tan(math.radians(10)) * (y - 2.0)
+    assert np.allclose(t.height(x, y), plane, rtol=0, atol=1e-12)
+    assert t.height(-5.0, 2.5) == pytest.approx(t.height(-1.0, 2.5), abs=1e-15)  # flat to the west
+    assert t.height(0.0, 9.0) == pytest.approx(t.height(0.0, 3.0), abs=1e-15)   # and to the north
+    v = Terrain.valley(2.0, 1.0, 0.05, slope_deg=15, side_slope_deg=30, floor_width=0.2, runout=0.5)
+    assert v.height(1.5, 0.5) == pytest.approx(0.0, abs=1e-12)  # the run-out plain on the centre line
+    assert v.height(0.5, 0.5) == pytest.approx(math.tan(math.radians(15)) * 1.0, rel=1e-12)
+    assert v.height(1.5, 0.9) == pytest.approx(math.tan(math.radians(30)) * 0.3, rel=1e-12)  # the flank
+    with pytest.raises(ValueError, match="heights: 1 values are not finite, the first at node i 1, j 0"):
+        Terrain([[0, 0], [np.nan, 0]], 1.0)
+    with pytest.raises(ValueError, match="spacing = 0"):
+        Terrain([[0, 0], [0, 0]], 0)
+    with pytest.raises(ValueError, match="friction = -0.1"):
+        Terrain([[0, 0], [0, 0]], 1.0, friction=-0.1)
+
+
+def test_rasters_read_back_from_ascii_and_geotiff_with_their_georeference(tmp_path):
+    gdal = pytest.importorskip("osgeo.gdal")
+    z = np.arange(12, dtype=float).reshape(4, 3) * 0.5 + 100.0  # (nx 4, ny 3)
+    t = Terrain(z, 10.0, 0.0, 0.0)
+    asc = str(tmp_path / "dem.asc")
+    t.writeAsc(asc)
+    # a GeoTIFF of the same heights, north-up, its south-west cell centred at (5e5, 4e6)
+    tif = str(tmp_path / "dem.tif")
+    ds = gdal.GetDriverByName("GTiff").Create(tif, 4, 3, 1, gdal.GDT_Float64)
+    ds.SetGeoTransform((5e5 - 5.0, 10.0, 0.0, 4e6 + 3 * 10.0 - 5.0, 0.0, -10.0))
+    ds.GetRasterBand(1).WriteArray(z.T[::-1])  # rows from the north
+    ds.GetRasterBand(1).SetNoDataValue(-9999.0)
+    ds = None
+    origin = (5e5, 4e6, 100.0)
+    a = Terrain.read(asc)
+    g = Terrain.read(tif, origin=origin, friction=0.3)
+    assert np.array_equal(a.heights, z)
+    assert np.allclose(g.heights, z - 100.0, rtol=0, atol=1e-12)
+    assert (g.x0, g.y0, g.spacing, g.friction) == (0.0, 0.0, 10.0, 0.3)
+    assert g.georeference["x0"] == 5e5 and g.georeference["y0"] == 4e6 and g.georeference["origin"] == origin
+    # a map written on a read raster's grid goes back to the file's own coordinates
+    out = str(tmp_path / "map.asc")
+    g.writeAsc(out, values=np.ones((4, 3)))
+    back = mpmsdem._mpmsdem.readEsriAscii(out)
+    assert (back["x0"], back["y0"]) == (5e5, 4e6)
+    with pytest.raises(ValueError, match="no-data values, the first at column 0, row 1 from the north"):
+        bad = str(tmp_path / "hole.asc")
+        with open(bad, "w") as f:
+            f.write("ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value -9999\n1 2\n-9999 4\n")
+        Terrain.read(bad)
+
+
+def pile(theta_deg, terrain, tmp_path, duration=0.25, dx=0.01):
+    """A pile of glass beads (0.1 x 0.1 m in a 1-cell slot, 8 points per cell) released on a slope
+    of theta_deg with basal friction 0.3, away from every wall; the slope either the flume's (grid
+    along the slope, gravity rotated, the bed the -z grid wall) or a planar terrain under a level
+    grid with vertical gravity. Returns the points' (along-slope, normal) coordinates from the
+    slope's top and their masses at the start and after ``duration``."""
+    th = math.radians(theta_deg)
+    k = int(round(0.01 / dx))  # cells per centimetre
+    if not terrain:
+        mpm = mpmsdem.MpmEngine(grid={"dx": dx, "cells": [80 * k, 5, 25 * k], "origin": [0, 0.02 - 2 * dx, 0.02 - 2 * dx]},
+                                material=MATERIAL,
+                                particles=[{"lo": [0.2, 0.02, 0.02], "hi": [0.3, 0.02 + dx, 0.12], "ppc": [2, 2, 2]}],
+                                gravity={"g": 9.81, "incline_deg": theta_deg}, walls={"-z": 0.3}, verbose=False)
+
+        def slope(x):
+            return x[:, 0], x[:, 2] - 0.02
+    else:
+        top = 0.35  # the slope's surface at x = 0 (the along-slope origin)
+        ground = Terrain.plane((0.0, 0.0), (0.8, 0.05), 0.05, z0=top, slope_x_deg=theta_deg, friction=0.3)
+        es, en = np.array([math.cos(th), 0, -math.sin(th)]), np.array([math.sin(th), 0, math.cos(th)])
+        corner = np.array([0.0, 0.0, top])
+
+        def world(s, y, n):
+            return corner + s * es + n * en + np.array([0, y, 0])
+
+        # the flume's column as a rotated box mesh (OBJ), its bottom on the terrain
+        v = [world(s, y, n) for s in (0.2, 0.3) for y in (0.02, 0.02 + dx) for n in (0.0, 0.1)]
+        faces = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+        obj = str(tmp_path / "column.obj")
+        with open(obj, "w") as f:
+            f.write("".join("v %.17g %.17g %.17g\n" % tuple(p) for p in v))
+            f.write("".join("f %d %d %d %d\n" % q for q in faces))
+        mpm = mpmsdem.MpmEngine(grid={"dx": dx, "cells": [80 * k, 5, 55 * k], "origin": [0, 0.02 - 2 * dx, 0]},
+                                material=MATERIAL,
+                                particles=[{"mesh": obj, "ppc": [2, 2, 2]}], gravity=(0, 0, -9.81),
+                                terrain=ground, verbose=False)
+
+        def slope(x):
+            d = x - corner
+            return d @ es, d @ en
+    O.reset()
+    O.engines = [mpm.runner]
+    O.dt = 0.5 * mpm.stableTimeStep()
+    p0 = mpm.particles()
+    mpmsdem.run(int(round(duration / O.dt)), mpm)
+    p1 = mpm.particles()
+    return slope(p0["x"]), slope(p1["x"]), p0["mass"], p1["mass"]
+
+
+def test_a_pile_on_a_planar_terrain_runs_as_in_the_inclined_flume(tmp_path):
+    # The same pile on the same 20 deg slope with the same basal friction: in the flume the bed is
+    # a grid wall along the grid's axes, on the terrain a plane crossing a level grid's nodes as a
+    # staircase. The slope's law is the same; what differs is where the grid puts the boundary,
+    # within a cell: so the piles run out alike, with a difference of first order in dx. Measured:
+    # the centres of mass travel 6.56 cm (flume) and 6.92 cm (terrain) at dx 0.01 m (+5.5 %),
+    # 6.56 and 6.78 cm at dx 0.005 m (+3.3 %); the fronts 1.07 and 0.48 cm apart. No point of the
+    # terrain's pile goes below the surface; mass is conserved.
+    gaps = []
+    for dx in (0.01, 0.005):
+        (s0f, n0f), (s1f, n1f), m0f, m1f = pile(20.0, False, tmp_path, dx=dx)
+        (s0t, n0t), (s1t, n1t), m0t, m1t = pile(20.0, True, tmp_path, dx=dx)
+        travel_f = (m1f @ s1f - m0f @ s0f) / m0f.sum()
+        travel_t = (m1t @ s1t - m0t @ s0t) / m0t.sum()
+        assert travel_f == pytest.approx(0.0656, abs=0.003)  # it flowed, the same at both dx
+        assert travel_t == pytest.approx(travel_f, rel=0.08)
+        assert abs(s1t.max() - s1f.max()) < 1.5 * dx
+        assert n1t.min() > -1e-9
+        assert m1t.sum() == m0t.sum() and m1f.sum() == m0f.sum()
+        assert len(m0t) == pytest.approx(len(m0f), rel=0.05)  # the rotated column holds as many points
+        gaps.append(abs(travel_t / travel_f - 1))
+    assert gaps[1] < 0.75 * gaps[0]  # the staircase's error shrinks with the cell
