@@ -51,7 +51,7 @@ struct GateSpec {
 
 // A terrain under the flow (mpm/Terrain.hpp): heights z(x, y) in the grid frame on a raster of
 // nx x ny nodes, node (i, j) at (x0 + i spacing, y0 + j spacing) with height heights[i * ny + j],
-// bilinear between nodes and continued flat outside. The flow cannot enter it (grid nodes at or
+// linear on the two triangles of each raster cell and continued flat outside. The flow cannot enter it (grid nodes at or
 // below the surface lose their velocity into it, Coulomb friction on the rest) and points are kept
 // on or above it. Use it with gravity along -z (a real slope, not a rotated one). Range checks:
 // makeSolver (ParameterError naming "terrain.<field>").

@@ -1,6 +1,7 @@
 // A terrain under the flow: a height field z(x, y) in the grid frame, given on a raster and read
-// between its nodes by bilinear interpolation (continuous heights, gradient constant along each
-// raster cell's edges). It is a boundary of the flow: on every grid node at or below the surface
+// between its nodes linearly on the two triangles of each raster cell (split along the diagonal
+// from node (i+1, j) to node (i, j+1)): continuous heights, a plane per triangle, so that the
+// surface is a triangle mesh a contact search can use as it is. It is a boundary of the flow: on every grid node at or below the surface
 // the velocity into the terrain, along its upward normal, is removed, with Coulomb friction on
 // what remains as for the box walls (mpm/GridBoundary.hpp, Appendix A corrected); material points
 // carried below the surface are lifted back onto it. Outside the raster the edge heights continue
@@ -37,7 +38,8 @@ MPM_HD_INLINE void terrainAxis(T u, int n, int& c, T& f, bool& inside) {
   f = uc - T(c);
 }
 
-// Height of the surface at (x, y) [m] and its slopes dz/dx, dz/dy.
+// Height of the surface at (x, y) [m] and its slopes dz/dx, dz/dy (those of the triangle the
+// point is over; the lower one, fx + fy <= 1, on the diagonal).
 template <typename T>
 MPM_HD_INLINE T terrainHeight(const TerrainView<T>& t, T x, T y, T& dzdx, T& dzdy) {
   int i, j;
@@ -48,11 +50,19 @@ MPM_HD_INLINE T terrainHeight(const TerrainView<T>& t, T x, T y, T& dzdx, T& dzd
   const T* r0 = t.z + i * t.ny + j;
   const T* r1 = r0 + t.ny;
   const T z00 = r0[0], z01 = r0[1], z10 = r1[0], z11 = r1[1];
-  const T a = z00 + fy * (z01 - z00);  // along y at i
-  const T b = z10 + fy * (z11 - z10);  // along y at i + 1
-  dzdx = inX ? (b - a) * t.invSpacing : T(0);
-  dzdy = inY ? ((z01 - z00) + fx * ((z11 - z10) - (z01 - z00))) * t.invSpacing : T(0);
-  return a + fx * (b - a);
+  T h, sx, sy;
+  if (fx + fy <= T(1)) {  // the triangle (i, j), (i+1, j), (i, j+1)
+    sx = z10 - z00;
+    sy = z01 - z00;
+    h = z00 + fx * sx + fy * sy;
+  } else {  // the triangle (i+1, j+1), (i, j+1), (i+1, j)
+    sx = z11 - z01;
+    sy = z11 - z10;
+    h = z11 - (T(1) - fx) * sx - (T(1) - fy) * sy;
+  }
+  dzdx = inX ? sx * t.invSpacing : T(0);
+  dzdy = inY ? sy * t.invSpacing : T(0);
+  return h;
 }
 
 // The terrain on the new velocity v of a grid node at p [m]: nothing above the surface; at or

@@ -1,8 +1,9 @@
 """Terrain under the flow: a raster height field for ``MpmEngine(terrain=...)``.
 
 A :class:`Terrain` is heights ``z[i, j]`` [m] at ``(x0 + i·spacing, y0 + j·spacing)`` in the
-grid frame (i along x, west to east; j along y, south to north), read between nodes by bilinear
-interpolation and continued flat beyond the raster (``pkg/mpm/Terrain.hpp``, the same formula on
+grid frame (i along x, west to east; j along y, south to north), read between nodes linearly on
+the two triangles of each raster cell (split along the diagonal from node (i+1, j) to node
+(i, j+1)) and continued flat beyond the raster (``pkg/mpm/Terrain.hpp``, the same formula on
 CPU and CUDA). The flow cannot enter it: grid nodes at or below the surface lose their velocity
 into it, with Coulomb friction on the rest (the walls' law of Appendix A, along the surface's
 normal), and material points carried below it are lifted back onto it. Use it with vertical
@@ -124,8 +125,8 @@ class Terrain:
         return cls(along[:, None] + across[None, :], spacing, 0.0, 0.0, friction)
 
     def height(self, x, y):
-        """Surface height [m] at (x, y) in the grid frame (arrays broadcast): bilinear between
-        nodes, flat beyond the raster, as the solver reads it."""
+        """Surface height [m] at (x, y) in the grid frame (arrays broadcast): linear on the two
+        triangles of each raster cell, flat beyond the raster, as the solver reads it."""
         nx, ny = self.heights.shape
 
         def axis(u, n):
@@ -136,9 +137,10 @@ class Terrain:
         i, fx = axis((np.asarray(x, dtype=float) - self.x0) / self.spacing, nx)
         j, fy = axis((np.asarray(y, dtype=float) - self.y0) / self.spacing, ny)
         z = self.heights
-        a = z[i, j] + fy * (z[i, j + 1] - z[i, j])
-        b = z[i + 1, j] + fy * (z[i + 1, j + 1] - z[i + 1, j])
-        return a + fx * (b - a)
+        z00, z01, z10, z11 = z[i, j], z[i, j + 1], z[i + 1, j], z[i + 1, j + 1]
+        lower = fx + fy <= 1.0
+        return np.where(lower, z00 + fx * (z10 - z00) + fy * (z01 - z00),
+                        z11 - (1.0 - fx) * (z11 - z01) - (1.0 - fy) * (z11 - z10))
 
     def scene(self):
         """The scene's ``"terrain"`` entry (heights inline, i-major)."""

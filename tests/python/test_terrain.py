@@ -13,13 +13,21 @@ from yade import O
 MATERIAL = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
 
 
-def test_heights_between_nodes_are_bilinear_and_flat_beyond_the_raster():
+def test_heights_between_nodes_are_linear_on_triangles_and_flat_beyond_the_raster():
     t = Terrain.plane((-1.0, 2.0), (0.5, 3.0), 0.25, z0=1.2, slope_x_deg=20.0, slope_y_deg=-10.0)
     x, y = np.random.default_rng(1).uniform((-1.0, 2.0), (0.5, 3.0), size=(100, 2)).T
     plane = 1.2 - math.tan(math.radians(20)) * (x + 1.0) + math.tan(math.radians(10)) * (y - 2.0)
     assert np.allclose(t.height(x, y), plane, rtol=0, atol=1e-12)
     assert t.height(-5.0, 2.5) == pytest.approx(t.height(-1.0, 2.5), abs=1e-15)  # flat to the west
     assert t.height(0.0, 9.0) == pytest.approx(t.height(0.0, 3.0), abs=1e-15)   # and to the north
+    # a random raster: inside each cell, the plane through the three nodes of its triangle
+    rng = np.random.default_rng(2)
+    r = Terrain(rng.uniform(-1, 1, (4, 3)), 0.5)
+    fx, fy = rng.uniform(0, 1, (2, 200))
+    z = r.heights
+    lower = z[1, 1] + fx * (z[2, 1] - z[1, 1]) + fy * (z[1, 2] - z[1, 1])
+    upper = z[2, 2] + (1 - fx) * (z[1, 2] - z[2, 2]) + (1 - fy) * (z[2, 1] - z[2, 2])
+    assert np.allclose(r.height(0.5 * (1 + fx), 0.5 * (1 + fy)), np.where(fx + fy <= 1, lower, upper), atol=1e-12)
     v = Terrain.valley(2.0, 1.0, 0.05, slope_deg=15, side_slope_deg=30, floor_width=0.2, runout=0.5)
     assert v.height(1.5, 0.5) == pytest.approx(0.0, abs=1e-12)  # the run-out plain on the centre line
     assert v.height(0.5, 0.5) == pytest.approx(math.tan(math.radians(15)) * 1.0, rel=1e-12)

@@ -82,7 +82,7 @@ TEST(TerrainHeight, PlaneIsExactInsideAndContinuesFlatOutside) {
   EXPECT_EQ(gy, 0.0);
 }
 
-TEST(TerrainHeight, NodesAreTheRasterAndCellEdgesAreContinuous) {
+TEST(TerrainHeight, CellsAreTwoPlanarTrianglesThroughTheNodes) {
   TerrainSpec t = planeRaster(0, 0, 0, 6, 4, 0.0, 0.0, 0.5);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> uz(-2.0, 2.0);
@@ -95,6 +95,28 @@ TEST(TerrainHeight, NodesAreTheRasterAndCellEdgesAreContinuous) {
   for (double y : {0.1, 0.7, 1.3}) {
     const double below = terrainHeight(v, 1.0 - 1e-9, y, gx, gy), above = terrainHeight(v, 1.0 + 1e-9, y, gx, gy);
     EXPECT_NEAR(below, above, 1e-8);
+  }
+  // Each cell is two planar triangles split along the diagonal from (i+1, j) to (i, j+1): inside
+  // one, the height is the plane through its three nodes, with that plane's slopes; the two
+  // planes meet on the diagonal.
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int i = 2, j = 1;
+  auto z = [&t](int a, int b) { return t.heights[a * t.ny + b]; };
+  for (int k = 0; k < 100; ++k) {
+    const double fx = u(rng), fy = u(rng);
+    const double h = terrainHeight(v, 0.5 * (i + fx), 0.5 * (j + fy), gx, gy);
+    if (fx + fy <= 1) {
+      EXPECT_NEAR(h, z(i, j) + fx * (z(i + 1, j) - z(i, j)) + fy * (z(i, j + 1) - z(i, j)), 1e-12);
+      EXPECT_NEAR(gx, (z(i + 1, j) - z(i, j)) / 0.5, 1e-12);
+      EXPECT_NEAR(gy, (z(i, j + 1) - z(i, j)) / 0.5, 1e-12);
+    } else {
+      EXPECT_NEAR(h, z(i + 1, j + 1) + (1 - fx) * (z(i, j + 1) - z(i + 1, j + 1)) + (1 - fy) * (z(i + 1, j) - z(i + 1, j + 1)),
+                  1e-12);
+      EXPECT_NEAR(gx, (z(i + 1, j + 1) - z(i, j + 1)) / 0.5, 1e-12);
+      EXPECT_NEAR(gy, (z(i + 1, j + 1) - z(i + 1, j)) / 0.5, 1e-12);
+    }
+    const double on = terrainHeight(v, 0.5 * (i + fx), 0.5 * (j + 1 - fx) + 1e-10, gx, gy);
+    EXPECT_NEAR(on, (1 - fx) * z(i, j + 1) + fx * z(i + 1, j), 1e-9);
   }
 }
 
