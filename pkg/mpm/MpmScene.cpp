@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -260,7 +261,9 @@ std::array<int, 3> parsePpc(const json& c, const std::string& path) {
   return ppc;
 }
 
-// Box corners lo/hi: on grid lines, hi > lo, inside the material region.
+// Box corners lo/hi: on grid lines, hi > lo, inside the material region. Over a terrain that
+// lies inside the region everywhere, a box may reach down into the ground below the region: its
+// points there would be under the terrain, so it is cut at the region's floor.
 void parseBoxCorners(const json& j, const std::string& path, const MpmParams& p, ParticleBox& box) {
   const auto lo = materialRegionLo(p), hi = materialRegionHi(p);
   const double tol = 1e-9 * p.dx;
@@ -268,6 +271,9 @@ void parseBoxCorners(const json& j, const std::string& path, const MpmParams& p,
   if (!j.contains("hi")) throw ParameterError("missing required key '" + path + ".hi'");
   box.lo = vec3(j.at("lo"), path + ".lo");
   box.hi = vec3(j.at("hi"), path + ".hi");
+  const std::vector<double>& ground = p.terrain.heights;
+  if (!ground.empty() && *std::min_element(ground.begin(), ground.end()) >= lo[2] && box.hi[2] > lo[2])
+    box.lo[2] = std::max(box.lo[2], lo[2]);
   static const char axis[3] = {'x', 'y', 'z'};
   for (int a = 0; a < 3; ++a) {
     const std::string ax(1, axis[a]);

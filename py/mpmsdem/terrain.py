@@ -148,6 +148,21 @@ class Terrain:
         return {"nx": nx, "ny": ny, "x0": self.x0, "y0": self.y0, "spacing": self.spacing,
                 "heights": self.heights.ravel().tolist(), "friction": self.friction}
 
+    def writeVtk(self, path):
+        """The surface for ParaView: a legacy VTK structured grid of the raster's nodes in the
+        grid frame (the flow's frame), heights as a point field."""
+        nx, ny = self.heights.shape
+        x = self.x0 + self.spacing * np.arange(nx)
+        y = self.y0 + self.spacing * np.arange(ny)
+        with open(path, "w") as f:
+            f.write("# vtk DataFile Version 3.0\nmpmsdem terrain\nASCII\nDATASET STRUCTURED_GRID\n")
+            f.write("DIMENSIONS %d %d 1\nPOINTS %d double\n" % (nx, ny, nx * ny))
+            for j in range(ny):  # VTK: x fastest
+                f.write("".join("%.10g %.10g %.10g\n" % (x[i], y[j], self.heights[i, j]) for i in range(nx)))
+            f.write("POINT_DATA %d\nSCALARS height double 1\nLOOKUP_TABLE default\n" % (nx * ny))
+            f.write("".join("%.10g\n" % self.heights[i, j] for j in range(ny) for i in range(nx)))
+        return path
+
     def writeAsc(self, path, values=None, nodata=-9999.0):
         """Write ``values`` (default: the heights; an array of the raster's shape, NaN for no
         data) as an ESRI ASCII grid on this raster's nodes, in the file's own coordinates for a
@@ -198,3 +213,126 @@ def _readGdal(path):
     x0 = gt[0] + 0.5 * spacing
     y0 = (gt[3] - rows.shape[0] * spacing if north_up else gt[3]) + 0.5 * spacing
     return z, x0, y0, spacing, ds.GetProjection() or None
+
+
+class FlowMaps:
+    """Maps of a flow over a terrain on the terrain's raster: the material's thickness (its
+    volume per unit area, each point's current volume J·V₀ binned to the raster node nearest it,
+    over the node's square of side ``spacing``), its largest value over the samples, and the
+    largest depth-averaged speed (the column's momentum over its mass). Call :meth:`sample` with
+    the engine's particles at the times to take (the last sample is the deposit); :meth:`write`
+    writes them as ESRI ASCII grids (and GeoTIFF where GDAL is installed) on the raster's own
+    georeference, and as a PNG.
+
+    :param terrain: the :class:`Terrain` the flow runs on.
+    """
+
+    NAMES = ("deposit_thickness", "max_thickness", "max_speed")
+    UNITS = {"deposit_thickness": "m", "max_thickness": "m", "max_speed": "m/s"}
+
+    def __init__(self, terrain):
+        self.terrain = terrain
+        shape = terrain.heights.shape
+        self.deposit_thickness = np.zeros(shape)
+        self.max_thickness = np.zeros(shape)
+        self.max_speed = np.zeros(shape)
+        self.samples = 0
+        self.outside = 0  # points of the last sample beyond the raster (not mapped)
+
+    def _bins(self, x):
+        t = self.terrain
+        nx, ny = t.heights.shape
+        i = np.rint((x[:, 0] - t.x0) / t.spacing).astype(np.int64)
+        j = np.rint((x[:, 1] - t.y0) / t.spacing).astype(np.int64)
+        on = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
+        return i * ny + j, on
+
+    def sample(self, particles):
+        """Add one sample of ``particles`` (the dict of ``MpmEngine.particles()``: x, v, mass,
+        volume0, J)."""
+        x, v = np.asarray(particles["x"]), np.asarray(particles["v"])
+        m = np.asarray(particles["mass"])
+        vol = np.asarray(particles["volume0"]) * np.asarray(particles["J"])
+        k, on = self._bins(x)
+        self.outside = int((~on).sum())
+        k, m, v, vol = k[on], m[on], v[on], vol[on]
+        n = self.deposit_thickness.size
+        shape = self.deposit_thickness.shape
+        thickness = (np.bincount(k, vol, n) / self.terrain.spacing ** 2).reshape(shape)
+        mass = np.bincount(k, m, n)
+        momentum = np.stack([np.bincount(k, m * v[:, d], n) for d in range(3)])
+        speed = (np.sqrt((momentum ** 2).sum(axis=0)) / np.where(mass > 0, mass, 1.0)).reshape(shape)
+        self.deposit_thickness = thickness
+        self.max_thickness = np.maximum(self.max_thickness, thickness)
+        self.max_speed = np.maximum(self.max_speed, speed)
+        self.samples += 1
+
+    def write(self, folder, blocks=None, title=None):
+        """Write ``deposit_thickness``, ``max_thickness`` and ``max_speed`` as ``.asc`` (and
+        ``.tif`` with GDAL) into ``folder``, and ``flow_maps.png`` (the three maps over the
+        terrain's contours; ``blocks``: optional (x, y) positions [m] in the grid frame to draw).
+        Returns the paths written."""
+        os.makedirs(folder, exist_ok=True)
+        paths = []
+        for name in self.NAMES:
+            path = os.path.join(folder, name + ".asc")
+            self.terrain.writeAsc(path, getattr(self, name))
+            paths.append(path)
+            tif = _writeGeoTiff(self.terrain, os.path.join(folder, name + ".tif"), getattr(self, name))
+            if tif:
+                paths.append(tif)
+        paths.append(self._plot(os.path.join(folder, "flow_maps.png"), blocks, title))
+        return paths
+
+    def _plot(self, path, blocks, title):
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        t = self.terrain
+        x0, x1, y0, y1 = t.extent
+        half = 0.5 * t.spacing
+        box = (x0 - half, x1 + half, y0 - half, y1 + half)
+        fig, axes = plt.subplots(3, 1, figsize=(10, 10), sharex=True)
+        for ax, name in zip(axes, self.NAMES):
+            values = getattr(self, name)
+            shown = np.ma.masked_where(values <= 0, values)
+            im = ax.imshow(shown.T, origin="lower", extent=box, cmap="viridis", aspect="equal")
+            if np.ptp(t.heights) > 0:
+                ax.contour(x0 + t.spacing * np.arange(t.shape[0]), y0 + t.spacing * np.arange(t.shape[1]),
+                           t.heights.T, levels=12, colors="0.5", linewidths=0.5)
+            if blocks is not None and len(blocks):
+                b = np.asarray(blocks)
+                ax.plot(b[:, 0], b[:, 1], "s", mfc="none", mec="r", ms=4)
+            fig.colorbar(im, ax=ax, label="%s [%s]" % (name.replace("_", " "), self.UNITS[name]))
+            ax.set_ylabel("y [m]")
+        axes[-1].set_xlabel("x [m] (grid frame; contours: the terrain)")
+        if title:
+            fig.suptitle(title)
+        fig.tight_layout()
+        fig.savefig(path, dpi=90)
+        plt.close(fig)
+        return path
+
+
+def _writeGeoTiff(terrain, path, values):
+    """The map as a GeoTIFF on the raster's own georeference, or None without GDAL."""
+    try:
+        from osgeo import gdal
+    except ImportError:
+        return None
+    gdal.UseExceptions()
+    nx, ny = values.shape
+    x0, y0 = terrain.x0, terrain.y0
+    crs = None
+    if terrain.georeference:
+        x0, y0, crs = terrain.georeference["x0"], terrain.georeference["y0"], terrain.georeference.get("crs")
+    s = terrain.spacing
+    ds = gdal.GetDriverByName("GTiff").Create(path, nx, ny, 1, gdal.GDT_Float64)
+    ds.SetGeoTransform((x0 - 0.5 * s, s, 0.0, y0 + (ny - 0.5) * s, 0.0, -s))
+    if crs:
+        ds.SetProjection(crs)
+    band = ds.GetRasterBand(1)
+    band.WriteArray(np.asarray(values, dtype=float).T[::-1])
+    band.SetNoDataValue(-9999.0)
+    ds.FlushCache()
+    return path

@@ -2,6 +2,7 @@
 read and written, and a flow down a planar terrain against the same flow in today's inclined
 flume (grid along the slope, gravity rotated, the bed a grid wall)."""
 import math
+import os
 
 import numpy as np
 import pytest
@@ -143,3 +144,36 @@ def test_a_pile_on_a_planar_terrain_runs_as_in_the_inclined_flume(tmp_path):
         assert len(m0t) == pytest.approx(len(m0f), rel=0.05)  # the rotated column holds as many points
         gaps.append(abs(travel_t / travel_f - 1))
     assert gaps[1] < 0.75 * gaps[0]  # the staircase's error shrinks with the cell
+
+
+def test_flow_maps_of_a_block_at_rest_are_its_height_and_speed(tmp_path):
+    # A block of material 8 cells high on a flat terrain whose raster nodes are the grid cells'
+    # centres: every point lands on its cell's node, so the thickness map is the block's height
+    # over its footprint and zero elsewhere, the mapped volume is the block's, and with a uniform
+    # velocity the speed map is that speed.
+    gdal = pytest.importorskip("osgeo.gdal")
+    dx = 0.01
+    ground = Terrain.plane((0.005, 0.005), (0.195, 0.195), dx, z0=0.02)
+    mpm = mpmsdem.MpmEngine(grid={"dx": dx, "cells": [20, 20, 14], "origin": [0, 0, 0]}, material=MATERIAL,
+                            particles=[{"lo": [0.05, 0.06, 0.0], "hi": [0.12, 0.10, 0.10], "ppc": 8,
+                                        "velocity": [0.3, -0.4, 0.0]}],
+                            terrain=ground, verbose=False)
+    p = mpm.particles()
+    maps = mpmsdem.terrain.FlowMaps(ground)
+    maps.sample(p)
+    footprint = np.zeros(ground.shape, bool)
+    footprint[5:12, 6:10] = True  # nodes at x 0.055 ... 0.115, y 0.065 ... 0.095
+    assert np.allclose(maps.deposit_thickness[footprint], 0.08, rtol=1e-12)  # z from 0.02 (the ground) to 0.10
+    assert np.all(maps.deposit_thickness[~footprint] == 0)
+    assert maps.deposit_thickness.sum() * dx * dx == pytest.approx((p["volume0"] * p["J"]).sum(), rel=1e-12)
+    assert np.allclose(maps.max_speed[footprint], 0.5, rtol=1e-12) and np.all(maps.max_speed[~footprint] == 0)
+    assert maps.outside == 0
+    paths = maps.write(str(tmp_path / "maps"), blocks=[(0.1, 0.1)], title="block at rest")
+    back = Terrain.read(str(tmp_path / "maps" / "deposit_thickness.asc"))
+    assert np.allclose(back.heights, maps.deposit_thickness, atol=1e-9)
+    tif = gdal.Open(str(tmp_path / "maps" / "max_speed.tif"))
+    assert tif.GetGeoTransform() == pytest.approx((0.0, dx, 0.0, 0.2, 0.0, -dx))
+    assert np.allclose(tif.GetRasterBand(1).ReadAsArray().T[:, ::-1], maps.max_speed)
+    assert os.path.getsize(str(tmp_path / "maps" / "flow_maps.png")) > 10000 and len(paths) == 7
+    vtk = ground.writeVtk(str(tmp_path / "terrain.vtk"))
+    assert "DIMENSIONS 20 20 1" in open(vtk).read()

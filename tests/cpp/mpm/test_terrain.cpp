@@ -253,6 +253,19 @@ TEST(TerrainScene, FileOrHeightsPlaceTheTerrainAndItsGroundSeedsNoPoints) {
   EXPECT_EQ(ps.size(), expected);
   EXPECT_LT(ps.size(), 24u * 8 * 20);
   for (std::size_t p = 0; p < ps.size(); ++p) EXPECT_GE(ps.x[3 * p + 2], 0.02 + 0.4 * ps.x[3 * p + 1] - 1e-12);
+  // A box reaching into the ground below the grid's material region is cut at the region's
+  // floor when the terrain lies above it everywhere, and refused otherwise.
+  const std::string deep =
+      R"("grid": {"dx": 0.01, "origin": [0, 0, 0], "cells": [16, 8, 16]},
+         "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65},
+         "particles": [{"lo": [0.02, 0.02, -0.05], "hi": [0.14, 0.06, 0.12], "ppc": 8}], "run": {"duration": 0.1})";
+  const MpmScene cut = parseScene(
+      "{" + deep + R"(, "terrain": {"nx": 2, "ny": 2, "x0": 0.0, "y0": 0.0, "spacing": 0.1,
+                                    "heights": [0.02, 0.06, 0.02, 0.06]}})", "t");
+  EXPECT_EQ(seedParticles(cut).size(), expected);
+  EXPECT_THROW(parseScene("{" + deep + R"(, "terrain": {"nx": 2, "ny": 2, "x0": 0.0, "y0": 0.0, "spacing": 0.1,
+                                                        "heights": [0.01, 0.06, 0.02, 0.06]}})", "t"),
+               ParameterError);
   EXPECT_THROW(parseScene("{" + common + R"(, "terrain": {"nx": 2, "ny": 2, "x0": 0, "y0": 0, "spacing": 0.1,
                                               "heights": [1, 2, 3]}})", "t"), ParameterError);
   EXPECT_THROW(parseScene("{" + common + R"(, "terrain": {"file": ")" + asc + R"(", "friction": -0.2}})", "t"),
