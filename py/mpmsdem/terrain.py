@@ -217,8 +217,11 @@ def _readGdal(path):
 
 class FlowMaps:
     """Maps of a flow over a terrain on the terrain's raster: the material's thickness (its
-    volume per unit area, each point's current volume J·V₀ binned to the raster node nearest it,
-    over the node's square of side ``spacing``), its largest value over the samples, and the
+    volume at its initial bulk density per unit area: each point's initial volume V₀ = m/ρ₀
+    shared among the four raster nodes around it with linear weights, over a node's square of
+    side ``spacing``; points
+    spread thin by the flow, whose current volume J·V₀ is far larger, count as the material
+    they carry, not as the space they fill), its largest value over the samples, and the
     largest depth-averaged speed (the column's momentum over its mass). Call :meth:`sample` with
     the engine's particles at the times to take (the last sample is the deposit); :meth:`write`
     writes them as ESRI ASCII grids (and GeoTIFF where GDAL is installed) on the raster's own
@@ -239,28 +242,37 @@ class FlowMaps:
         self.samples = 0
         self.outside = 0  # points of the last sample beyond the raster (not mapped)
 
-    def _bins(self, x):
+    def _weights(self, x):
+        """The four raster nodes around each point and their linear weights (summing to one),
+        and which points lie on the raster (within half a spacing of its outer nodes)."""
         t = self.terrain
         nx, ny = t.heights.shape
-        i = np.rint((x[:, 0] - t.x0) / t.spacing).astype(np.int64)
-        j = np.rint((x[:, 1] - t.y0) / t.spacing).astype(np.int64)
-        on = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
-        return i * ny + j, on
+        u = (x[:, 0] - t.x0) / t.spacing
+        w = (x[:, 1] - t.y0) / t.spacing
+        on = (u >= -0.5) & (u <= nx - 0.5) & (w >= -0.5) & (w <= ny - 0.5)
+        u, w = np.clip(u, 0.0, nx - 1.0), np.clip(w, 0.0, ny - 1.0)
+        i, j = np.minimum(u.astype(np.int64), nx - 2), np.minimum(w.astype(np.int64), ny - 2)
+        fx, fy = u - i, w - j
+        nodes = [i * ny + j, (i + 1) * ny + j, i * ny + j + 1, (i + 1) * ny + j + 1]
+        weights = [(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy]
+        return nodes, weights, on
 
     def sample(self, particles):
         """Add one sample of ``particles`` (the dict of ``MpmEngine.particles()``: x, v, mass,
-        volume0, J)."""
+        volume0)."""
         x, v = np.asarray(particles["x"]), np.asarray(particles["v"])
         m = np.asarray(particles["mass"])
-        vol = np.asarray(particles["volume0"]) * np.asarray(particles["J"])
-        k, on = self._bins(x)
+        vol = np.asarray(particles["volume0"])
+        nodes, weights, on = self._weights(x)
         self.outside = int((~on).sum())
-        k, m, v, vol = k[on], m[on], v[on], vol[on]
         n = self.deposit_thickness.size
         shape = self.deposit_thickness.shape
-        thickness = (np.bincount(k, vol, n) / self.terrain.spacing ** 2).reshape(shape)
-        mass = np.bincount(k, m, n)
-        momentum = np.stack([np.bincount(k, m * v[:, d], n) for d in range(3)])
+
+        def spread(values):
+            return sum(np.bincount(k[on], (w * values)[on], n) for k, w in zip(nodes, weights))
+        thickness = (spread(vol) / self.terrain.spacing ** 2).reshape(shape)
+        mass = spread(m)
+        momentum = np.stack([spread(m * v[:, d]) for d in range(3)])
         speed = (np.sqrt((momentum ** 2).sum(axis=0)) / np.where(mass > 0, mass, 1.0)).reshape(shape)
         self.deposit_thickness = thickness
         self.max_thickness = np.maximum(self.max_thickness, thickness)

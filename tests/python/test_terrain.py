@@ -147,10 +147,10 @@ def test_a_pile_on_a_planar_terrain_runs_as_in_the_inclined_flume(tmp_path):
 
 
 def test_flow_maps_of_a_block_at_rest_are_its_height_and_speed(tmp_path):
-    # A block of material 8 cells high on a flat terrain whose raster nodes are the grid cells'
-    # centres: every point lands on its cell's node, so the thickness map is the block's height
-    # over its footprint and zero elsewhere, the mapped volume is the block's, and with a uniform
-    # velocity the speed map is that speed.
+    # A block of material 8 cm high on a flat terrain whose raster nodes are the grid cells'
+    # centres: inside the block's footprint the thickness map is its height (each node's square
+    # takes as much as it gives), its edge nodes share their points with the nodes outside, the
+    # mapped volume is the block's; with a uniform velocity the speed map is that speed.
     gdal = pytest.importorskip("osgeo.gdal")
     dx = 0.01
     ground = Terrain.plane((0.005, 0.005), (0.195, 0.195), dx, z0=0.02)
@@ -161,12 +161,14 @@ def test_flow_maps_of_a_block_at_rest_are_its_height_and_speed(tmp_path):
     p = mpm.particles()
     maps = mpmsdem.terrain.FlowMaps(ground)
     maps.sample(p)
-    footprint = np.zeros(ground.shape, bool)
-    footprint[5:12, 6:10] = True  # nodes at x 0.055 ... 0.115, y 0.065 ... 0.095
-    assert np.allclose(maps.deposit_thickness[footprint], 0.08, rtol=1e-12)  # z from 0.02 (the ground) to 0.10
-    assert np.all(maps.deposit_thickness[~footprint] == 0)
-    assert maps.deposit_thickness.sum() * dx * dx == pytest.approx((p["volume0"] * p["J"]).sum(), rel=1e-12)
-    assert np.allclose(maps.max_speed[footprint], 0.5, rtol=1e-12) and np.all(maps.max_speed[~footprint] == 0)
+    inner = np.zeros(ground.shape, bool)
+    inner[6:11, 7:9] = True  # nodes at x 0.065 ... 0.105, y 0.075 ... 0.085: a node from the edge
+    reached = np.zeros(ground.shape, bool)
+    reached[4:13, 5:11] = True  # the footprint and one node around it
+    assert np.allclose(maps.deposit_thickness[inner], 0.08, rtol=1e-12)  # z from 0.02 (the ground) to 0.10
+    assert np.all(maps.deposit_thickness[~reached] == 0) and np.all(maps.deposit_thickness[reached] > 0)
+    assert maps.deposit_thickness.sum() * dx * dx == pytest.approx(p["volume0"].sum(), rel=1e-12)
+    assert np.allclose(maps.max_speed[reached], 0.5, rtol=1e-12) and np.all(maps.max_speed[~reached] == 0)
     assert maps.outside == 0
     paths = maps.write(str(tmp_path / "maps"), blocks=[(0.1, 0.1)], title="block at rest")
     back = Terrain.read(str(tmp_path / "maps" / "deposit_thickness.asc"))

@@ -1,0 +1,40 @@
+"""examples/field_valley.py, the field-scale example, on a coarse grid for a short time: it runs
+from a YADE-less Python as a user would, conserves the debris, keeps it above the ground, and
+writes maps whose deposit holds the source's volume."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import children
+
+REPO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+
+
+def test_field_example_runs_and_its_maps_hold_the_debris(tmp_path):
+    out = str(tmp_path / "field")
+    proc = subprocess.run([sys.executable, os.path.join(REPO, "examples", "field_valley.py"), "--dx", "1.0",
+                           "--duration", "3", "--out", out, "--no-plots"],
+                          capture_output=True, text=True, env=children.env(OMP_NUM_THREADS=1), timeout=600)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    s = json.load(open(os.path.join(out, "summary.json")))
+    assert s["mass"] == s["mass_seeded"] and s["below_ground"] == 0 and s["unmapped_points"] == 0
+    assert s["flip_damping_rate"] == pytest.approx(4 * 1.25 / 1.0 ** 2, rel=1e-12)
+    assert s["front_x"] > 15.0  # the debris left its source (x 2-8 m) and ran down the valley
+    assert "about" in proc.stdout and "s left" in proc.stdout  # progress with the time left
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(os.path.join(out, "mpm.h5"), "r") as f:
+        last = sorted(f["snapshots"].keys())[-1]
+        volume = f["snapshots"][last]["volume0"][:].sum()
+    header = dict(line.split() for line in open(os.path.join(out, "maps", "deposit_thickness.asc")).readlines()[:6])
+    thickness = np.loadtxt(os.path.join(out, "maps", "deposit_thickness.asc"), skiprows=6)
+    assert thickness.sum() * float(header["cellsize"]) ** 2 == pytest.approx(volume, rel=1e-6)
+    for name in ("max_thickness.tif", "max_speed.asc", "flow_maps.png"):
+        assert os.path.getsize(os.path.join(out, "maps", name)) > 0
+    assert os.path.getsize(os.path.join(out, "terrain.vtk")) > 0 and os.path.exists(os.path.join(out, "particles.pvd"))
+    bad = subprocess.run([sys.executable, os.path.join(REPO, "examples", "field_valley.py"), "--dx", "0", "--out", out],
+                         capture_output=True, text=True, env=children.env())
+    assert bad.returncode != 0 and "--dx = 0.0 m: must be > 0" in bad.stderr, bad.stderr[-2000:]
