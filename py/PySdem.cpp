@@ -66,6 +66,7 @@ void exportSdem() {
   bp::class_<YadeSdemBridge, boost::noncopyable>("SdemBridge",
                                                  "C++ side of mpmsdem.SdemEngine (use that class instead).")
       .def("addMaterial", &YadeSdemBridge::addMaterial)
+      .def("setTerrain", &YadeSdemBridge::setTerrain)
       .def("addBody", &YadeSdemBridge::addBody)
       .def("refresh", &YadeSdemBridge::refresh)
       .def("step", &YadeSdemBridge::step)

@@ -47,6 +47,19 @@ inline const char* featureName(sdem::FeatureKind k) {
 class YadeSdemBridge {
  public:
   int addMaterial(const SdemMaterial& m) { return engine_.addMaterial(m); }
+  // The terrain under the blocks: heights i-major (nx * ny), node (i, j) at (x0 + i s, y0 + j s).
+  void setTerrain(const bp::object& heights, int nx, int ny, double x0, double y0, double spacing, int material) {
+    mpm::TerrainSpec t;
+    t.nx = nx;
+    t.ny = ny;
+    t.x0 = x0;
+    t.y0 = y0;
+    t.spacing = spacing;
+    const long n = bp::len(heights);
+    t.heights.reserve(n);
+    for (long k = 0; k < n; ++k) t.heights.push_back(bp::extract<double>(heights[k]));
+    engine_.setTerrain(t, material);
+  }
 
   int addBody(std::shared_ptr<sdem::SpheroPolyhedron> shape, int material, double mass, const bp::object& inertia,
               int yadeId, bool fixed) {

@@ -205,44 +205,9 @@ void SdemEngine::computeForces(Real dt) {
     const BarrierPhys& phys = pairPhys_[material_[a] * nm + material_[b]];
     const Real R = shapes_[a]->sweepRadius + shapes_[b]->sweepRadius;
     const Real meff = fixed_[a] ? mass_[b] : fixed_[b] ? mass_[a] : mass_[a] * mass_[b] / (mass_[a] + mass_[b]);
-    for (const SdemGeom& g : geoms_) {
-      ContactKey key{a, b, g.kindA, g.kindB, g.indexA, g.indexB};
-      ContactHistory h;
-      auto it = history_.find(key);
-      if (it != history_.end()) h = it->second;
-      const Vec3 ra = g.contactPoint - pos_[a], rb = g.contactPoint - pos_[b];
-      const Vec3 relVel = (vel_[b] + angVel_[b].cross(rb)) - (vel_[a] + angVel_[a].cross(ra));
-      const LawResult r =
-          Law2_SdemGeom_BarrierPhys_Coulomb::go(g, R, phys, relVel, meff, dt, h, external_[a], external_[b]);
-      nextHistory_.emplace(key, h);
-      const Vec3 f = r.normalForce * g.normal + r.tangentialForce;  // on B
-      force_[b] += f;
-      force_[a] -= f;
-      torque_[b] += rb.cross(f);
-      torque_[a] -= ra.cross(f);
-      const Real kmax = std::max(r.normalStiffness, r.tangentialStiffness);
-      sumK_[a] += kmax;
-      sumK_[b] += kmax;
-      sumKr_[a] += r.normalStiffness * ra.cross(g.normal).squaredNorm() + r.tangentialStiffness * ra.squaredNorm();
-      sumKr_[b] += r.normalStiffness * rb.cross(g.normal).squaredNorm() + r.tangentialStiffness * rb.squaredNorm();
-      barrierEnergy_ += r.barrierEnergy;
-      springEnergy_ += r.springEnergy;
-      frictionWork_ += r.frictionDissipation;
-      dampingWork_ += r.dampingDissipation;
-      ContactRecord rec;
-      rec.key = key;
-      rec.externalA = external_[a];
-      rec.externalB = external_[b];
-      rec.point = g.contactPoint;
-      rec.normal = g.normal;
-      rec.normalForce = r.normalForce;
-      rec.tangentialForce = r.tangentialForce;
-      rec.overlap = g.overlap;
-      rec.normalStiffness = r.normalStiffness;
-      rec.sliding = r.sliding;
-      records_.push_back(rec);
-    }
+    for (const SdemGeom& g : geoms_) addContact(a, b, g, phys, R, meff, dt);
   }
+  if (hasTerrain()) terrainContacts(dt);
   history_.swap(nextHistory_);
   if (dt > checkFactor_ * criticalTimeStep()) {
     if (strict_) {
@@ -253,6 +218,109 @@ void SdemEngine::computeForces(Real dt) {
       throw RuntimeFailure(os.str());
     }
     ++warnings_;
+  }
+}
+
+void SdemEngine::addContact(int a, int b, const SdemGeom& g, const BarrierPhys& phys, Real R, Real meff, Real dt) {
+  const bool terrain = b == kTerrainBody;
+  ContactKey key{a, b, g.kindA, g.kindB, g.indexA, g.indexB};
+  ContactHistory h;
+  auto it = history_.find(key);
+  if (it != history_.end()) h = it->second;
+  const Vec3 ra = g.contactPoint - pos_[a];
+  const Vec3 rb = terrain ? Vec3::Zero() : Vec3(g.contactPoint - pos_[b]);
+  const Vec3 velB = terrain ? Vec3::Zero() : Vec3(vel_[b] + angVel_[b].cross(rb));
+  const Vec3 relVel = velB - (vel_[a] + angVel_[a].cross(ra));
+  const int externalB = terrain ? -1 : external_[b];
+  const LawResult r = Law2_SdemGeom_BarrierPhys_Coulomb::go(g, R, phys, relVel, meff, dt, h, external_[a], externalB);
+  nextHistory_.emplace(key, h);
+  const Vec3 f = r.normalForce * g.normal + r.tangentialForce;  // on B
+  force_[a] -= f;
+  torque_[a] -= ra.cross(f);
+  const Real kmax = std::max(r.normalStiffness, r.tangentialStiffness);
+  sumK_[a] += kmax;
+  sumKr_[a] += r.normalStiffness * ra.cross(g.normal).squaredNorm() + r.tangentialStiffness * ra.squaredNorm();
+  if (!terrain) {
+    force_[b] += f;
+    torque_[b] += rb.cross(f);
+    sumK_[b] += kmax;
+    sumKr_[b] += r.normalStiffness * rb.cross(g.normal).squaredNorm() + r.tangentialStiffness * rb.squaredNorm();
+  }
+  barrierEnergy_ += r.barrierEnergy;
+  springEnergy_ += r.springEnergy;
+  frictionWork_ += r.frictionDissipation;
+  dampingWork_ += r.dampingDissipation;
+  ContactRecord rec;
+  rec.key = key;
+  rec.externalA = external_[a];
+  rec.externalB = externalB;
+  rec.point = g.contactPoint;
+  rec.normal = g.normal;
+  rec.normalForce = r.normalForce;
+  rec.tangentialForce = r.tangentialForce;
+  rec.overlap = g.overlap;
+  rec.normalStiffness = r.normalStiffness;
+  rec.sliding = r.sliding;
+  records_.push_back(rec);
+}
+
+void SdemEngine::setTerrain(const mpm::TerrainSpec& terrain, int material) {
+  if (material < 0 || material >= numMaterials())
+    throwParameter("terrain material", material, "",
+                   "a registered material index in [0, " + std::to_string(numMaterials()) + ")");
+  if (terrain.nx < 2 || terrain.ny < 2 || terrain.heights.size() != std::size_t(terrain.nx) * std::size_t(terrain.ny))
+    throwParameter("terrain.heights", std::to_string(terrain.heights.size()) + " values", "",
+                   "nx * ny with nx, ny >= 2 (nx " + std::to_string(terrain.nx) + ", ny " + std::to_string(terrain.ny) + ")");
+  if (!(terrain.spacing > 0) || !std::isfinite(terrain.spacing)) throwParameter("terrain.spacing", terrain.spacing, "m", "> 0");
+  if (!std::isfinite(terrain.x0) || !std::isfinite(terrain.y0))
+    throwParameter("terrain.x0, y0", std::to_string(terrain.x0) + ", " + std::to_string(terrain.y0), "m", "finite");
+  for (std::size_t k = 0; k < terrain.heights.size(); ++k)
+    if (!std::isfinite(terrain.heights[k])) throwParameter("terrain.heights[" + std::to_string(k) + "]", terrain.heights[k], "m", "finite");
+  terrain_ = terrain;
+  terrainView_.z = terrain_.heights.data();
+  terrainView_.nx = terrain_.nx;
+  terrainView_.ny = terrain_.ny;
+  terrainView_.x0 = terrain_.x0;
+  terrainView_.y0 = terrain_.y0;
+  terrainView_.invSpacing = 1.0 / terrain_.spacing;
+  terrainMaterial_ = material;
+}
+
+// Each core vertex of a moving body against the plane of the terrain triangle under it.
+void SdemEngine::terrainContacts(Real dt) {
+  const int nm = numMaterials();
+  for (int i = 0; i < numBodies(); ++i) {
+    if (fixed_[i]) continue;
+    const PosedSpheroPolyhedron& P = posed_[i];
+    const Real R = shapes_[i]->sweepRadius;
+    const BarrierPhys& phys = pairPhys_[material_[i] * nm + terrainMaterial_];
+    for (std::size_t v = 0; v < P.vertices.size(); ++v) {
+      const Vec3& p = P.vertices[v];
+      Real gx, gy;
+      const Real h = mpm::terrainHeight(terrainView_, p.x(), p.y(), gx, gy);
+      const Real s = std::sqrt(1 + gx * gx + gy * gy);
+      const Real d = (p.z() - h) / s;
+      if (d >= R) continue;
+      if (!(d > 0)) {
+        std::ostringstream os;
+        os << "SDEM body " << external_[i] << ": core vertex " << v << " at (" << p.x() << ", " << p.y() << ", " << p.z()
+           << ") m is at or below the terrain (height " << h << " m there); " << coreContactRemedy();
+        throw RuntimeFailure(os.str());
+      }
+      const Vec3 n(-gx / s, -gy / s, 1 / s);  // the terrain's upward normal
+      SdemGeom g;
+      g.kindA = FeatureKind::Vertex;
+      g.indexA = static_cast<int>(v);
+      g.kindB = FeatureKind::Face;
+      g.indexB = -1;  // the terrain as one face: the history follows the vertex across triangles
+      g.pointA = p;
+      g.pointB = p - d * n;
+      g.normal = -n;
+      g.distance = d;
+      g.overlap = R - d;
+      g.contactPoint = 0.5 * ((p - R * n) + g.pointB);
+      addContact(i, kTerrainBody, g, phys, R, mass_[i], dt);
+    }
   }
 }
 
@@ -286,8 +354,10 @@ void SdemEngine::setContactHistories(const std::vector<ContactHistoryEntry>& ent
   std::unordered_map<ContactKey, ContactHistory, ContactKeyHash> h;
   for (const ContactHistoryEntry& e : entries) {
     checkBody(e.key.bodyA, "contact history bodyA");
-    checkBody(e.key.bodyB, "contact history bodyB");
-    if (!(e.key.bodyA < e.key.bodyB))
+    if (e.key.bodyB == kTerrainBody && !hasTerrain())
+      throw ParameterError("contact history bodyB = the terrain: this engine has no terrain (setTerrain first)");
+    if (e.key.bodyB != kTerrainBody) checkBody(e.key.bodyB, "contact history bodyB");
+    if (e.key.bodyB != kTerrainBody && !(e.key.bodyA < e.key.bodyB))
       throwParameter("contact history bodyB", e.key.bodyB, "", "> bodyA = " + std::to_string(e.key.bodyA));
     if (!e.xi.allFinite()) throw ParameterError("contact history xi: must be finite");
     h[e.key].xi = e.xi;

@@ -16,6 +16,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include "mpm/MpmTypes.hpp"
+#include "mpm/Terrain.hpp"
 #include "sdem/Ig2_SpheroPolyhedron_SpheroPolyhedron.hpp"
 #include "sdem/Ip2_SdemMat_SdemMat_BarrierPhys.hpp"
 #include "sdem/Law2_SdemGeom_BarrierPhys_Coulomb.hpp"
@@ -24,7 +26,11 @@
 namespace mpmsdem {
 namespace sdem {
 
-// Identity of a contact: the two body indices (bodyA < bodyB) and the two core features.
+// The terrain's place in a contact key (bodyB) and record (externalB = -1).
+constexpr int kTerrainBody = -2;
+
+// Identity of a contact: the two body indices (bodyA < bodyB; bodyB kTerrainBody for a contact
+// with the terrain) and the two core features.
 struct ContactKey {
   int bodyA = -1, bodyB = -1;
   FeatureKind kindA = FeatureKind::Vertex, kindB = FeatureKind::Face;
@@ -87,6 +93,19 @@ class SdemEngine {
   // effective mass, and it does not limit criticalTimeStep().
   void setFixed(int i, bool fixed);
   bool isFixed(int i) const;
+
+  // A terrain under the blocks (the flow's, mpm/Terrain.hpp: a height field, linear on the two
+  // triangles of each raster cell) with its SDEM material (a registered index): each core vertex
+  // of a moving body closer to the plane of the terrain triangle under it than the body's sweep
+  // radius R is a vertex–face contact with it (the terrain's own radius 0: overlap R − d, the
+  // barrier and Coulomb laws of the block pairs, history kept while the vertex slides from
+  // triangle to triangle). A cube face-down carries its weight on its 4 corners, edge-down on 2.
+  // The cost is each moving body's core vertices, whatever the raster's size; relief finer than
+  // a block's core edges (a crest between two corners) is not felt between its corners. A core
+  // vertex at or below the terrain stops the run (RuntimeFailure), as interpenetrating cores do.
+  // ParameterError for an invalid terrain (the checks of the flow's) or material.
+  void setTerrain(const mpm::TerrainSpec& terrain, int material);
+  bool hasTerrain() const { return terrainMaterial_ >= 0; }
 
   // World-frame state: centroid position [m], orientation (x_world = pos + ori * x_body),
   // velocity [m/s], angular velocity [rad/s] (world frame).
@@ -179,6 +198,10 @@ class SdemEngine {
  private:
   void checkBody(int i, const char* what) const;
   void broadPhase();
+  void terrainContacts(Real dt);
+  // The law on one contact geometry g of bodies a and b (b = kTerrainBody: the terrain, at rest),
+  // its forces, stiffness sums, energies, history and record.
+  void addContact(int a, int b, const SdemGeom& g, const BarrierPhys& phys, Real R, Real meff, Real dt);
 
   std::vector<SdemMaterial> materials_;
   std::vector<BarrierPhys> pairPhys_;  // numMaterials^2, row-major
@@ -201,6 +224,9 @@ class SdemEngine {
   std::vector<SdemGeom> geoms_;
   std::vector<ContactRecord> records_;
   std::unordered_map<ContactKey, ContactHistory, ContactKeyHash> history_, nextHistory_;
+  mpm::TerrainSpec terrain_;
+  mpm::TerrainView<Real> terrainView_;
+  int terrainMaterial_ = -1;
 
   Real safety_ = 1.0;
   Real checkFactor_ = 1.0;

@@ -159,6 +159,7 @@ class SdemEngine(_AutoStep):
         self._outputsOpen = None  # the per-body output file being written (no bodies may be added then)
         self._materials = []      # (SdemMat, index)
         self._recipes = []        # how each body was made, for save()/restore()
+        self._terrain = None      # the ground under the blocks (terrain()), for save()/restore()
         self._index = {}          # YADE id -> engine index
         self._shapes = {}         # YADE id -> SpheroPolyhedron
         self._warned = 0
@@ -211,6 +212,23 @@ class SdemEngine(_AutoStep):
         recipe = {"kind": "mesh", "vertices": [list(v) for v in verts], "triangles": [list(t) for t in tris],
                   "sweepRadius": sweepRadius, "source": str(path), "scale": scale}
         return self._add(shape, recipe, material, pos, ori, fixed, color, centroidPlacement=pos is not None)
+
+    def terrain(self, terrain, material):
+        """The ground under the blocks: an :class:`mpmsdem.terrain.Terrain` (the flow's, so that
+        flow and blocks stand on one surface: linear on the two triangles of each raster cell)
+        with the blocks' SDEM material against it (its friction, stiffness and damping mix with
+        each block's as for a block pair). Each core vertex of a moving block closer than its
+        sweep radius to the plane of the terrain triangle under it is a contact (vertex–face; the
+        terrain's own radius is 0): a cube face-down rests on its 4 corners, at any yaw. The cost
+        is the blocks' core vertices, whatever the raster's size; relief finer than a block's
+        core edges is not felt between its corners. Set it before the first step."""
+        if self._outputsOpen:
+            raise ValueError("terrain(): set the terrain before the first step")
+        z = terrain.heights
+        k = self._materialIndex(material)
+        self._bridge.setTerrain(z.ravel().tolist(), z.shape[0], z.shape[1], terrain.x0, terrain.y0, terrain.spacing, k)
+        self._terrain = {"heights": z.tolist(), "x0": terrain.x0, "y0": terrain.y0, "spacing": terrain.spacing,
+                         "material": _matDict(material)}
 
     def _materialIndex(self, mat):
         if not isinstance(mat, _mpmsdem.SdemMat):
@@ -484,7 +502,7 @@ class SdemEngine(_AutoStep):
                 "time": self._bridge.goodTime if rolledBack else O.time,
                 "frictionDissipation": self._bridge.frictionDissipation,
                 "dampingDissipation": self._bridge.dampingDissipation,
-                "bodies": self._recipes, "histories": hist,
+                "bodies": self._recipes, "histories": hist, "terrain": self._terrain,
                 # before the first step no output is open yet (unless restored onto one): a restore
                 # then starts it afresh, whatever a killed run left of it (none of it is this
                 # checkpoint's)
@@ -539,6 +557,11 @@ class SdemEngine(_AutoStep):
             rec = {k: v for k, v in r.items() if k not in ("yadeId", "fixed", "material")}
             eng._add(shape, rec, mats[key], None, None, r["fixed"], None, centroidPlacement=False,
                      yadeId=r["yadeId"])
+        if data.get("terrain"):
+            from .terrain import Terrain
+            t = data["terrain"]
+            key = json.dumps(t["material"], sort_keys=True)
+            eng.terrain(Terrain(t["heights"], t["spacing"], t["x0"], t["y0"]), mats.get(key) or _material(t["material"]))
         eng._bridge.setHistories([tuple(h[:6]) + (Vector3(*h[6]),) for h in data["histories"]])
         eng._bridge.setDissipation(float(data.get("frictionDissipation", 0.0)),
                                    float(data.get("dampingDissipation", 0.0)))

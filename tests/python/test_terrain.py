@@ -179,3 +179,68 @@ def test_flow_maps_of_a_block_at_rest_are_its_height_and_speed(tmp_path):
     assert os.path.getsize(str(tmp_path / "maps" / "flow_maps.png")) > 10000 and len(paths) == 7
     vtk = ground.writeVtk(str(tmp_path / "terrain.vtk"))
     assert "DIMENSIONS 20 20 1" in open(vtk).read()
+
+
+def _cube_on_terrain_slope(theta_deg, mu, spacing=0.03, yaw_deg=10.0, damping=(0.3, 0.5)):
+    """A 0.1 m sphero-cube (R 5 mm, 3000 kg/m³) at rest on a planar terrain falling along +x at
+    theta_deg, its corners at the 4-contact equilibrium overlap; gravity vertical."""
+    from yade.minieigenHP import Quaternion, Vector3
+    from yade.wrapper import ForceResetter, NewtonIntegrator
+    O.reset()
+    th = math.radians(theta_deg)
+    eng = mpmsdem.SdemEngine(dtCheck="raise")
+    mat = mpmsdem.material(density=3000, friction=mu, normalDamping=damping[0], tangentialDamping=damping[1])
+    ground = Terrain.plane((-2.0, -2.0), (2.0, 2.0), spacing, z0=-math.tan(th) * -2.0, slope_x_deg=theta_deg)
+    eng.terrain(ground, mat)
+    mass = 3000 * mpmsdem.SpheroPolyhedron.box((0.05,) * 3, 0.005).volume
+    delta = mpmsdem.analysis.equilibriumOverlap(mass * 9.81 * math.cos(th), 0.005, 1e4, contacts=4)
+    n = Vector3(math.sin(th), 0, math.cos(th))
+    ori = Quaternion(Vector3(0, 1, 0), th) * Quaternion(Vector3(0, 0, 1), math.radians(yaw_deg))
+    cube = eng.box((0.05,) * 3, 0.005, mat, pos=n * (0.045 + 0.005 - delta), ori=ori)
+    O.engines = [ForceResetter(), eng.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    O.dt = 1e-4
+    return eng, cube, mass
+
+
+def test_a_block_at_rest_on_a_terrain_slope_below_its_friction_angle_stays(tmp_path):
+    # 20 deg, mu 0.5 (26.6 deg): through YADE, the block loads its tangential springs and creeps
+    # less than 1e-4 m over 1 s (C++: 4e-7 m); the ground carries its weight on its 4 corners. A
+    # checkpoint keeps the terrain and its contacts' histories: the restored run continues it.
+    from yade.minieigenHP import Vector3
+    from yade.wrapper import ForceResetter, NewtonIntegrator
+    eng, cube, mass = _cube_on_terrain_slope(20.0, 0.5)
+    mpmsdem.run(2000, eng)
+    x1 = Vector3(O.bodies[cube].state.pos)
+    eng.save(str(tmp_path / "sdem.json"))
+    O.save(str(tmp_path / "scene.yade.gz"))
+    mpmsdem.run(10000, eng)
+    x2 = Vector3(O.bodies[cube].state.pos)
+    assert (x2 - x1).norm() < 1e-4
+    c = eng.contacts()
+    assert len(c["normalForce"]) == 4 and set(c["id2"]) == {-1} and not c["sliding"].any()
+    w = mass * 9.81
+    assert eng.force(cube)[2] == pytest.approx(w, rel=5e-3)  # the ground holds the weight, normal and friction
+    O.reset()
+    O.load(str(tmp_path / "scene.yade.gz"))
+    eng2 = mpmsdem.SdemEngine.restore(str(tmp_path / "sdem.json"))
+    O.engines = [ForceResetter(), eng2.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    mpmsdem.run(10000, eng2)
+    assert (O.bodies[cube].state.pos - x2).norm() < 1e-12
+
+
+def test_a_block_slides_down_a_terrain_slope_as_on_the_inclined_bed():
+    # Paper §3.1 on a terrain: 30 deg, mu 0.1, 0.5 s; Eq 19 with the stick stage of the springs
+    # (analysis.slidingDistanceElastic, as test_sdem_scenes for the bed: each of the 4 contacts'
+    # dashpots at 10 % of critical for its share of the mass, 20 % for the block mode), within 1 %.
+    eng, cube, mass = _cube_on_terrain_slope(30.0, 0.1, spacing=0.1, yaw_deg=0.0, damping=(0.0, 0.1))
+    x0 = np.array(O.bodies[cube].state.pos)
+    mpmsdem.run(5000, eng)
+    th = math.radians(30.0)
+    d = np.array(O.bodies[cube].state.pos) - x0
+    s = d @ np.array([math.cos(th), 0, -math.sin(th)])
+    load = mass * 9.81 * math.cos(th)
+    kn = mpmsdem.analysis.barrierStiffness(mpmsdem.analysis.equilibriumOverlap(load, 0.005, 1e4, contacts=4), 0.005,
+                                           1e4)
+    s_ref = mpmsdem.analysis.slidingDistanceElastic(O.time, 30.0, 0.1, 4 * kn / (2 * 1.3), mass, zeta=0.2)
+    assert s == pytest.approx(s_ref, rel=0.01)
+    assert abs(d[1]) < 1e-9
