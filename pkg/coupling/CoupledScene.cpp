@@ -39,14 +39,19 @@ void readPhys(const json& j, const std::string& path, sdem::BarrierPhys& p) {
   checkRange(join(path, "tangential_damping"), p.tangentialDamping, "", 0, false, inf, true);
 }
 
-BlockMaterialSpec readMaterial(const json& j, const std::string& path, const std::string& name) {
+// withFlow: a block material (its "flow" pair required); else the terrain's (no flow key, no
+// density needed: the ground does not move).
+BlockMaterialSpec readMaterial(const json& j, const std::string& path, const std::string& name, bool withFlow = true) {
   if (!j.is_object()) throwParameter(path, j.dump(), "", "a JSON object");
-  checkKeys(j, path, {"density", "friction", "poisson", "barrier_stiffness", "normal_damping", "tangential_damping",
-                      "flow"});
+  if (withFlow)
+    checkKeys(j, path, {"density", "friction", "poisson", "barrier_stiffness", "normal_damping", "tangential_damping",
+                        "flow"});
+  else
+    checkKeys(j, path, {"density", "friction", "poisson", "barrier_stiffness", "normal_damping", "tangential_damping"});
   BlockMaterialSpec m;
   m.name = name;
   sdem::SdemMaterial& s = m.material;
-  s.density = requireNumber(j, path, "density");
+  s.density = withFlow ? requireNumber(j, path, "density") : optNumber(j, path, "density", s.density);
   s.friction = optNumber(j, path, "friction", s.friction);
   s.poisson = optNumber(j, path, "poisson", s.poisson);
   s.barrierStiffness = optNumber(j, path, "barrier_stiffness", s.barrierStiffness);
@@ -57,7 +62,7 @@ BlockMaterialSpec readMaterial(const json& j, const std::string& path, const std
   } catch (const ParameterError& e) {  // name the scene key, not the C++ field
     throw ParameterError(path + "." + e.what());
   }
-  readPhys(requireObject(j, path, "flow"), join(path, "flow"), m.flow);
+  if (withFlow) readPhys(requireObject(j, path, "flow"), join(path, "flow"), m.flow);
   return m;
 }
 
@@ -209,6 +214,18 @@ SceneBlocks parseBlocks(const std::string& sceneJson) {
     if (!ids.insert(s.id).second) throwParameter(join(path, "id"), s.id, "", "unique among the blocks");
     out.blocks.push_back(s);
   }
+  if (root.contains("terrain_material")) {
+    if (!root.contains("terrain"))
+      throw ParameterError("terrain_material without terrain: add the flow's \"terrain\" or remove \"terrain_material\"");
+    out.terrainMaterial.reset(new sdem::SdemMaterial(
+        readMaterial(root.at("terrain_material"), "terrain_material", "terrain", false).material));
+  } else if (root.contains("terrain")) {
+    for (const BlockSpec& b : out.blocks)
+      if (!b.fixed)
+        throw ParameterError("terrain_material: required in a scene with a terrain and moving blocks (the blocks' "
+                             "contact with the ground: friction, barrier_stiffness, poisson, normal_damping, "
+                             "tangential_damping), else they fall through it");
+  }
   return out;
 }
 
@@ -287,6 +304,7 @@ void addBlocks(const SceneBlocks& scene, CoupledWorld& world) {
     engine.setFixed(i, b.fixed);
     if (!b.blockedDofs.empty()) world.world.setBlockedDofs(i, b.blockedDofs);
   }
+  if (scene.terrainMaterial) engine.setTerrain(world.mpm().params().terrain, engine.addMaterial(*scene.terrainMaterial));
 }
 
 }  // namespace coupling

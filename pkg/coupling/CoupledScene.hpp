@@ -36,7 +36,12 @@
 //       "blocked_dofs": "",         YADE's blockedDOFs: letters among x y z X Y Z
 //       "id": 0                     label in the outputs, an integer >= 0, unique; default its
 //     }                             position in the list
-//   ]
+//   ],
+//   "terrain_material": {           (req with "terrain" and moving blocks) the blocks' contact
+//     "friction": 0.5, "poisson": 0.3,   with the flow's terrain (sdem::SdemEngine::setTerrain):
+//     "barrier_stiffness": 1e4,          the keys of a block material but "flow" (its laws mix
+//     "normal_damping": 0, "tangential_damping": 0.1   with each block's, as a block pair's)
+//   }
 #pragma once
 #include <memory>
 #include <string>
@@ -70,6 +75,7 @@ struct BlockSpec {
 struct SceneBlocks {
   std::vector<BlockMaterialSpec> materials;
   std::vector<BlockSpec> blocks;
+  std::shared_ptr<const sdem::SdemMaterial> terrainMaterial;  // null: no terrain contacts
   bool empty() const { return blocks.empty(); }
 };
 

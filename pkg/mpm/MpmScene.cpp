@@ -469,7 +469,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
   // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
   checkKeys(root, "", {"description", "grid", "gravity", "flip_viscosity", "flip_alpha", "flip_reference_dt", "cfl", "keep_last_good_state", "walls", "gate", "terrain", "material", "particles",
-                       "flow_probes", "run", "blocks", "block_materials"});
+                       "flow_probes", "run", "blocks", "block_materials", "terrain_material"});
   if (root.contains("description") && !root.at("description").is_string())
     throwParameter("description", root.at("description").dump(), "", "a string");
   MpmScene s;

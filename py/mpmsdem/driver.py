@@ -94,6 +94,16 @@ def sceneDict(coupled, duration, dt="auto", flowProbes=(), **run):
             "fixed": not b.dynamic, **_dofs(b)})
     scene["block_materials"] = materials
     scene["blocks"] = blocks
+    if sdem._terrain is not None:  # the blocks' ground: the flow's terrain, with the SDEM material set on it
+        t, flow = sdem._terrain, scene.get("terrain")
+        if flow is None or [flow.get(k) for k in ("x0", "y0", "spacing")] != [t["x0"], t["y0"], t["spacing"]] or \
+                flow.get("heights") != [z for row in t["heights"] for z in row]:
+            raise ValueError("the SDEM engine's terrain is not the flow's (MpmEngine(terrain=...)): a driver scene has "
+                             "one ground for both; give them the same Terrain")
+        m = t["material"]
+        scene["terrain_material"] = {"friction": m["friction"], "poisson": m["poisson"],
+                                     "barrier_stiffness": m["barrierStiffness"], "normal_damping": m["normalDamping"],
+                                     "tangential_damping": m["tangentialDamping"]}
     return scene
 
 

@@ -3,6 +3,7 @@ a scene written from a YADE set-up by mpmsdem.driver.writeScene gives the same b
 and flow forces through mpmsdem-run as through YADE (its rigid-body update is YADE's
 NewtonIntegrator's, blockedDOFs included), and bad block entries are refused by name."""
 import json
+import math
 import os
 import re
 import subprocess
@@ -141,6 +142,55 @@ def test_driver_runs_a_coupled_scene_without_particles_as_yade_does(tmp_path):
     with h5py.File(tmp_path / "driver" / "mpm.h5", "r", locking=False) as f:
         assert np.isnan(f["series/front_x"][:]).all() and (f["series/kinetic_energy"][:] == 0).all()
         assert f["series/time"][-1] == pytest.approx(steps * O.dt, rel=1e-12)
+
+
+def test_driver_matches_yade_on_a_terrain(tmp_path):
+    """A blob falls onto a 10 deg planar terrain and pushes a box that rests on it: the flow's
+    ground and the block's are the scene's terrain (MpmEngine(terrain=...), SdemEngine.terrain),
+    and the driver runs the scene YADE writes with the same trajectories to round-off."""
+    from mpmsdem.terrain import Terrain
+    from yade.minieigenHP import Quaternion, Vector3
+    exe = driver_exe()
+    th = math.radians(10.0)
+    ground = Terrain.plane((-0.05, -0.05), (0.3, 0.2), 0.02, z0=0.08, slope_x_deg=10.0, friction=0.3)
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    wood = mpmsdem.material(density=700, friction=0.5)
+    sdem.terrain(ground, mpmsdem.material(density=2500, friction=0.4))
+    n = Vector3(math.sin(th), 0, math.cos(th))
+    foot = Vector3(0.14, 0.07, float(ground.height(0.14, 0.07)))
+    box = sdem.box((0.012, 0.015, 0.01), 0.002, wood, pos=foot + n * (0.01 + 0.0005),
+                   ori=Quaternion(Vector3(0, 1, 0), th))
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [26, 16, 16], "origin": [-0.01, -0.01, -0.01]},
+                            material=GLASS, particles=[{"lo": [0.03, 0.03, 0.0], "hi": [0.08, 0.11, 0.12], "ppc": 8,
+                                                        "velocity": [1.0, 0, 0]}],
+                            gravity=G, terrain=ground, verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={wood: {"friction": 0.2}}, output=str(tmp_path / "yade"),
+                                    outputEvery=4e-5, verbose=False)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=G, damping=0)]
+    O.dt = 4e-5
+    steps = 2000
+    path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=O.dt, seriesEvery=O.dt,
+                             outputEvery=0.02, outputDir=str(tmp_path / "driver"), vtk="none")
+    assert json.load(open(path))["terrain_material"]["friction"] == 0.4
+    mpmsdem.run(steps, coupled)
+    r = subprocess.run([exe, path, "--steps", str(steps)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    y, _ = series(tmp_path / "yade" / "coupled.h5")
+    d, _ = series(tmp_path / "driver" / "coupled.h5")
+    assert len(y["time"]) == len(d["time"]) == steps + 1
+    assert np.linalg.norm(d["pos"][-1] - d["pos"][0]) > 1e-3  # landed, pushed down the slope
+    assert np.abs(d["flow_force"]).max() > 0.01
+    for k in ("pos", "vel", "rotation", "flow_force"):
+        assert np.abs(y[k] - d[k]).max() <= 1e-11 * np.abs(y[k]).max(), k
+    # the box stands on the ground: its lowest core corner stays above the surface
+    corner = d["pos"][-1] - 0.008 * np.array([n[0], n[1], n[2]])
+    assert corner[2] > float(ground.height(corner[0], corner[1])) - 0.01
+    # a scene whose blocks have no ground contact is refused by the driver, naming the key
+    bad = json.load(open(path))
+    del bad["terrain_material"]
+    json.dump(bad, open(str(tmp_path / "bad.json"), "w"))
+    r = subprocess.run([exe, str(tmp_path / "bad.json"), "--steps", "1"], capture_output=True, text=True)
+    assert r.returncode != 0 and "terrain_material: required" in r.stderr + r.stdout
 
 
 @pytest.mark.parametrize("stiffness, steps", [(1e5, 1500), (1e7, 3000)])
