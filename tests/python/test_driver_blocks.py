@@ -158,8 +158,7 @@ def test_driver_matches_yade_on_a_terrain(tmp_path):
     sdem.terrain(ground, mpmsdem.material(density=2500, friction=0.4))
     n = Vector3(math.sin(th), 0, math.cos(th))
     foot = Vector3(0.14, 0.07, float(ground.height(0.14, 0.07)))
-    sdem.box((0.012, 0.015, 0.01), 0.002, wood, pos=foot + n * (0.01 + 0.0005),
-                   ori=Quaternion(Vector3(0, 1, 0), th))
+    sdem.box((0.012, 0.015, 0.01), 0.002, wood, pos=foot + n * (0.01 + 0.0005), ori=Quaternion(Vector3(0, 1, 0), th))
     mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [26, 16, 16], "origin": [-0.01, -0.01, -0.01]},
                             material=GLASS, particles=[{"lo": [0.03, 0.03, 0.0], "hi": [0.08, 0.11, 0.12], "ppc": 8,
                                                         "velocity": [1.0, 0, 0]}],
