@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
-"""A debris avalanche down a synthetic valley onto a run-out plain (field scale, MPM).
+"""A debris avalanche down a synthetic valley onto a run-out plain with 200 blocks on it (field
+scale, MPM–SDEM).
 
     yade -n -x examples/field_valley.py [--dx 0.5] [--duration 20] [--out DIR]
                                         [--backend cpu|cuda] [--precision double|float]
+                                        [--blocks N | --block-table CSV]
                                         [--terrain FILE --origin X Y Z]
     /usr/bin/python3 examples/field_valley.py ...          (same, without YADE's GUI shell)
 
@@ -11,13 +13,19 @@ falls at 28° over 26 m and levels out into a 34 m run-out plain; its flanks ris
 volume of granular debris, 6 × 8 m in plan and up to 4 m above the ground, is released at rest
 near the top and runs down under gravity (vertical: the slope is the terrain's), with Coulomb
 basal friction 0.45 on the ground (24°, above the plain's slope and below the valley's), and
-comes to rest on the plain. Its FLIP/PIC blend is a PIC viscosity of 1.25 m²/s (20 /s of damping at
+comes to rest on the plain. ``--blocks N`` (default 200) 1 m blocks of 2 t (sheds, boulders)
+stand on a jittered grid over the plain and the lower flanks, turned at random, resting on the
+ground (block–ground friction 0.7); ``--block-table`` places your own (CSV ``id, shape, x, y,
+heading_deg, mass``, shape ``box:LxWxH`` or a mesh file: ``mpmsdem.field``); ``--blocks 0`` runs
+the flow alone. Its FLIP/PIC blend is a PIC viscosity of 1.25 m²/s (20 /s of damping at
 dx 0.5 m; ``--flip-viscosity``): at field scale the run-out depends on it (docs/field.md). ``--terrain`` runs the same source on a raster of your own (ESRI ASCII
 or GeoTIFF, moved by ``--origin``, the world point that becomes the grid's zero), the source box
 then at ``--source X0 Y0 X1 Y1`` in the grid frame.
 
-Outputs (``--out``, default ``results/field_valley``): ``mpm.h5`` (h5py) and ``particles.pvd``
-(ParaView) of the flow, ``terrain.vtk`` (the ground, for ParaView), ``maps/`` (deposit thickness,
+Outputs (``--out``, default ``results/field_valley``): ``blocks.csv`` and ``blocks.h5`` (per block:
+final position, travel, rotation, peak flow force and its time, first contact, its cover of debris
+and whether it is buried), ``blocks_input.csv`` (the table placed), ``coupled.h5``, ``scene.pvd``
+(ParaView: flow and blocks), ``mpm.h5`` (h5py) and ``particles.pvd`` (ParaView) of the flow, ``terrain.vtk`` (the ground, for ParaView), ``maps/`` (deposit thickness,
 largest thickness and largest depth-averaged speed as ESRI ASCII grids and GeoTIFF on the
 terrain's own georeference, and ``flow_maps.png``), ``field_valley.png`` (the flow's front and
 kinetic energy against time) and ``summary.json``. Default: dx 0.5 m, about 12,000 material
@@ -30,7 +38,10 @@ import os
 import sys
 import time
 
+import numpy as np
+
 import mpmsdem
+from mpmsdem import field
 from mpmsdem.terrain import FlowMaps, Terrain
 
 DEBRIS = {"density": 1800, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.38, "mu_2": 0.64, "I0": 0.279,
@@ -41,6 +52,11 @@ BASAL_FRICTION = 0.45
 # 34-44 m for 80-5 /s; at the scenes' default, 0.005 m²/s, 0.08 /s here, 0.8 % of the points spray
 # to the valley's end and the debris still moves after 20 s).
 FIELD_VISCOSITY = 1.25
+# Contacts at field scale: the barrier stiffness of Eq 10 that lets a 1 m, 2 t block rest on its
+# corners at a tenth of its sweep radius (5 mm: k_c = F R / (3 delta^2) with F a quarter of its
+# weight), for the blocks, the ground and the flow's points alike.
+FIELD_STIFFNESS = 3e6
+BLOCK_GROUND_FRICTION = 0.7  # blocks and ground (a pair takes the smaller): above the flanks' 30 deg (0.577)
 
 
 def parse(argv):
@@ -59,6 +75,9 @@ def parse(argv):
     ap.add_argument("--flip-viscosity", type=float, default=FIELD_VISCOSITY,
                     help="PIC viscosity of the FLIP/PIC blend [m²/s] > 0 (default %g: 20 /s of PIC damping at dx "
                          "0.5 m; docs/field.md)" % FIELD_VISCOSITY)
+    ap.add_argument("--blocks", type=int, default=200, help="1 m blocks on the plain (default 200; 0: the flow alone)")
+    ap.add_argument("--block-table", default=None, help="CSV of the blocks to place instead (mpmsdem.field)")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the blocks' jitter and headings")
     ap.add_argument("--no-plots", action="store_true")
     a = ap.parse_args(argv)
     if not (a.dx > 0 and math.isfinite(a.dx)):
@@ -69,6 +88,8 @@ def parse(argv):
         raise ValueError("--source = %r: must be X0 Y0 X1 Y1 with X1 > X0 and Y1 > Y0" % (a.source,))
     if not (a.flip_viscosity > 0 and math.isfinite(a.flip_viscosity)):
         raise ValueError("--flip-viscosity = %r m²/s: must be > 0 and finite" % (a.flip_viscosity,))
+    if a.blocks < 0:
+        raise ValueError("--blocks = %d: must be >= 0" % a.blocks)
     if not (a.source_depth > 0):
         raise ValueError("--source-depth = %r m: must be > 0" % (a.source_depth,))
     return a
@@ -106,53 +127,121 @@ def scene(a):
     return ground, {"dx": dx, "cells": cells, "origin": lo}, box
 
 
+def village(n, ground, seed):
+    """n blocks of 1 m and 2 t on a regular grid over the plain and its flanks (x 28-59 m, y
+    0.5-15.5 m), turned by up to 10 deg either way, at least 1.45 m apart: their corners stay
+    clear of each other, also where one stands on the floor and its neighbour on a 30 deg flank."""
+    import numpy as np
+    rng = np.random.default_rng(seed)
+    x0, x1, y0, y1 = 28.0, 59.0, 0.5, 15.5
+    nx = max(1, int(math.ceil(math.sqrt(n * (x1 - x0) / (y1 - y0)))))
+    ny = int(math.ceil(n / nx))
+    xs = np.linspace(x0, x1, nx) if nx > 1 else np.array([0.5 * (x0 + x1)])
+    ys = np.linspace(y0, y1, ny) if ny > 1 else np.array([0.5 * (y0 + y1)])
+    if n > 1 and min((x1 - x0) / max(nx - 1, 1), (y1 - y0) / max(ny - 1, 1)) < 1.45:
+        raise ValueError("--blocks = %d: too many for the plain (1 m blocks need 1.45 m spacing there; at most "
+                         "about %d)" % (n, int((x1 - x0) / 1.45 + 1) * int((y1 - y0) / 1.45 + 1)))
+    rows = []
+    for k in range(n):
+        rows.append({"id": k, "shape": "box:1.0x1.0x1.0", "x": float(xs[k % nx]), "y": float(ys[k // nx]),
+                     "heading_deg": float(rng.uniform(-10.0, 10.0)), "mass": 2000.0})
+    return rows
+
+
 def main(argv):
     a = parse(argv)
     from yade import O
+    from yade.wrapper import ForceResetter, NewtonIntegrator
     ground, grid, box = scene(a)
     out = os.path.abspath(a.out)
     os.makedirs(out, exist_ok=True)
     O.reset()
+    rows = field.readBlockTable(a.block_table) if a.block_table else village(a.blocks, ground, a.seed)
+    coupled = tracker = None
     mpm = mpmsdem.MpmEngine(grid=grid, material=DEBRIS, particles=[box], gravity=(0, 0, -9.81), terrain=ground,
-                            flipViscosity=a.flip_viscosity, backend=a.backend, precision=a.precision, output=out, outputEvery=1.0, verbose=False)
-    O.engines = [mpm.runner]
+                            flipViscosity=a.flip_viscosity, backend=a.backend, precision=a.precision,
+                            output=out, outputEvery=1.0, verbose=False)
+    if rows:
+        field.writeBlockTable(os.path.join(out, "blocks_input.csv"), rows)
+        sdem = mpmsdem.SdemEngine(verbose=False)
+        sdem.terrain(ground, mpmsdem.material(density=2500, friction=BLOCK_GROUND_FRICTION,
+                                              barrierStiffness=FIELD_STIFFNESS))
+        materials = {}
+
+        def blockMaterial(density):
+            key = round(density, 6)
+            if key not in materials:
+                materials[key] = mpmsdem.material(density=density, friction=BLOCK_GROUND_FRICTION,
+                                                  barrierStiffness=FIELD_STIFFNESS,
+                                                  normalDamping=0.3)
+            return materials[key]
+        ids = field.placeBlocks(sdem, ground, rows, blockMaterial,
+                                folder=os.path.dirname(os.path.abspath(a.block_table)) if a.block_table else ".")
+        pairs = {m: {"friction": BASAL_FRICTION, "barrierStiffness": FIELD_STIFFNESS} for m in materials.values()}
+        coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs=pairs, dtAuto=0.5, output=out, outputEvery=1.0,
+                                        vtkEvery=1.0, verbose=False)
+        tracker = field.BlockTracker(coupled, ids)
+        O.engines = [ForceResetter(), coupled.runner, tracker.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+        O.dt = 0.5 * mpm.stableTimeStep()
+    else:
+        O.engines = [mpm.runner]
     ground.writeVtk(os.path.join(out, "terrain.vtk"))
     maps = FlowMaps(ground)
     p0 = mpm.particles()
     mass0 = float(p0["mass"].sum())
     maps.sample(p0)
-    print("field valley: %d material points (%.0f m³ of debris, %.0f t), grid %s cells of %g m, terrain %d x %d nodes of "
-          "%g m, %s, %s" % (len(p0["mass"]), (p0["volume0"]).sum(), mass0 / 1000.0, "x".join(map(str, grid["cells"])),
-                            a.dx, ground.shape[0], ground.shape[1], ground.spacing, mpm.solver.flipBlend,
-                            mpm.solver.name))
+    print("field valley: %d material points (%.0f m³ of debris, %.0f t), %d blocks, grid %s cells of %g m, terrain "
+          "%d x %d nodes of %g m, %s, %s" % (len(p0["mass"]), (p0["volume0"]).sum(), mass0 / 1000.0, len(rows),
+                                             "x".join(map(str, grid["cells"])), a.dx, ground.shape[0],
+                                             ground.shape[1], ground.spacing, mpm.solver.flipBlend, mpm.solver.name))
     sample = 0.1  # [s] between map samples
     t0 = time.time()
     series = []
+    steps = 0
     while O.time < a.duration - 1e-9:
-        O.dt = 0.5 * mpm.stableTimeStep()  # the bound falls as the flow speeds up
-        mpmsdem.run(max(1, int(round(min(sample, a.duration - O.time) / O.dt))), mpm)
+        target = min(O.time + sample, a.duration)
+        if coupled:
+            while O.time < target - 1e-9:  # dtAuto sets each step
+                mpmsdem.run(5, coupled)
+                steps += 5
+        else:
+            O.dt = 0.5 * mpm.stableTimeStep()  # the bound falls as the flow speeds up
+            n = max(1, int(round((target - O.time) / O.dt)))
+            mpmsdem.run(n, mpm)
+            steps += n
         p = mpm.particles()
         maps.sample(p)
         speed = (p["v"] ** 2).sum(axis=1) ** 0.5
         series.append((O.time, float(p["x"][:, 0].max()), mpm.kineticEnergy(), float(speed.max())))
         if len(series) % 20 == 0 or O.time >= a.duration - 1e-9:
             wall = time.time() - t0
-            print("  t %5.1f s: front x %.1f m, kinetic energy %.3g J, largest speed %.1f m/s; %.0f s so far, about "
-                  "%.0f s left" % (O.time, series[-1][1], series[-1][2], series[-1][3], wall,
+            touched = int((~np.isnan(tracker.firstContact)).sum()) if tracker else 0
+            print("  t %5.1f s: front x %.1f m, kinetic energy %.3g J, largest speed %.1f m/s%s; %.0f s so far, about "
+                  "%.0f s left" % (O.time, series[-1][1], series[-1][2], series[-1][3],
+                                   ", %d blocks reached" % touched if tracker else "", wall,
                                    wall * max(0.0, a.duration - O.time) / O.time))
-    mpm.finish(True)
+    (coupled or mpm).finish(True)
     wall = time.time() - t0
     p = mpm.particles()
-    written = maps.write(os.path.join(out, "maps"), title="Debris in the valley after %g s, dx %g m" % (O.time, a.dx))
+    blocks = tracker.report(p) if tracker else []
+    written = maps.write(os.path.join(out, "maps"), blocks=[(b["x"], b["y"]) for b in blocks],
+                         title="Debris in the valley after %g s, dx %g m" % (O.time, a.dx))
+    if blocks:
+        written += list(field.writeReport(out, blocks))
     deposited = maps.deposit_thickness > 0.05
-    summary = {"dx": a.dx, "duration": O.time, "points": int(len(p["mass"])), "mass": float(p["mass"].sum()),
-               "mass_seeded": mass0, "flip_blend": mpm.solver.flipBlend,
+    summary = {"dx": a.dx, "duration": O.time, "steps": steps, "points": int(len(p["mass"])),
+               "mass": float(p["mass"].sum()), "mass_seeded": mass0, "flip_blend": mpm.solver.flipBlend,
                "flip_damping_rate": mpm.solver.flipDampingRate(O.dt), "basal_friction": BASAL_FRICTION,
                "front_x": float(p["x"][:, 0].max()), "kinetic_energy": mpm.kineticEnergy(),
                "below_ground": int((p["x"][:, 2] < ground.height(p["x"][:, 0], p["x"][:, 1]) - 1e-9).sum()),
                "deposit_area": float(deposited.sum() * ground.spacing ** 2),
                "max_deposit_thickness": float(maps.deposit_thickness.max()),
                "max_speed": float(maps.max_speed.max()), "unmapped_points": maps.outside,
+               "blocks": len(blocks), "blocks_reached": sum(1 for b in blocks if b["first_contact"] == b["first_contact"]),
+               "blocks_buried": sum(1 for b in blocks if b["buried"]),
+               "blocks_below_ground": sum(1 for b in blocks if b["z"] < float(ground.height(b["x"], b["y"]))),
+               "largest_block_travel": max((b["travel"] for b in blocks), default=0.0),
+               "largest_block_force": max((b["peak_force"] for b in blocks), default=0.0),
                "wall_seconds": wall, "maps": written}
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
@@ -165,6 +254,13 @@ def main(argv):
                                                summary["max_speed"],
                                                "conserved" if summary["mass"] == mass0 else "CHANGED",
                                                summary["below_ground"], wall, out))
+    if blocks:
+        print("blocks: %d reached by the flow, %d buried, %d below the ground; the most displaced (blocks.csv):"
+              % (summary["blocks_reached"], summary["blocks_buried"], summary["blocks_below_ground"]))
+        for b in sorted(blocks, key=lambda b: -b["travel"])[:5]:
+            print("  block %3d: from (%.1f, %.1f) to (%.1f, %.1f) m, %.1f m, turned %.0f deg, peak force %.3g N at "
+                  "%.2f s, cover %.2f m" % (b["id"], b["x0"], b["y0"], b["x"], b["y"], b["travel"], b["rotation_deg"],
+                                           b["peak_force"], b["peak_force_time"], b["cover"]))
     return summary
 
 

@@ -17,15 +17,21 @@ REPO = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 def test_field_example_runs_and_its_maps_hold_the_debris(tmp_path):
     out = str(tmp_path / "field")
     proc = subprocess.run([sys.executable, os.path.join(REPO, "examples", "field_valley.py"), "--dx", "1.0",
-                           "--duration", "3", "--out", out, "--no-plots"],
+                           "--duration", "3", "--out", out, "--no-plots", "--blocks", "12"],
                           capture_output=True, text=True, env=children.env(OMP_NUM_THREADS=1), timeout=600)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     s = json.load(open(os.path.join(out, "summary.json")))
     assert s["mass"] == s["mass_seeded"] and s["below_ground"] == 0 and s["unmapped_points"] == 0
+    h5py = pytest.importorskip("h5py")
     assert s["flip_damping_rate"] == pytest.approx(4 * 1.25 / 1.0 ** 2, rel=1e-12)
     assert s["front_x"] > 15.0  # the debris left its source (x 2-8 m) and ran down the valley
+    assert s["blocks"] == 12 and s["blocks_below_ground"] == 0
+    with h5py.File(os.path.join(out, "blocks.h5"), "r") as f:
+        assert len(f["id"]) == 12 and f["cover"].attrs["unit"] == "m"
+        assert np.all(f["travel"][:] < 0.05)  # out of the flow's reach in 3 s: standing where placed
+    lines = open(os.path.join(out, "blocks.csv")).read().splitlines()
+    assert lines[0].startswith("id,x0 [m]") and len(lines) == 13
     assert "about" in proc.stdout and "s left" in proc.stdout  # progress with the time left
-    h5py = pytest.importorskip("h5py")
     with h5py.File(os.path.join(out, "mpm.h5"), "r") as f:
         last = sorted(f["snapshots"].keys())[-1]
         volume = f["snapshots"][last]["volume0"][:].sum()
@@ -34,7 +40,7 @@ def test_field_example_runs_and_its_maps_hold_the_debris(tmp_path):
     assert thickness.sum() * float(header["cellsize"]) ** 2 == pytest.approx(volume, rel=1e-6)
     for name in ("max_thickness.tif", "max_speed.asc", "flow_maps.png"):
         assert os.path.getsize(os.path.join(out, "maps", name)) > 0
-    assert os.path.getsize(os.path.join(out, "terrain.vtk")) > 0 and os.path.exists(os.path.join(out, "particles.pvd"))
+    assert os.path.getsize(os.path.join(out, "terrain.vtk")) > 0 and os.path.exists(os.path.join(out, "scene.pvd"))
     bad = subprocess.run([sys.executable, os.path.join(REPO, "examples", "field_valley.py"), "--dx", "0", "--out", out],
                          capture_output=True, text=True, env=children.env())
     assert bad.returncode != 0 and "--dx = 0.0 m: must be > 0" in bad.stderr, bad.stderr[-2000:]

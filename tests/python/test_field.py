@@ -1,0 +1,104 @@
+"""Blocks on a terrain by table (mpmsdem.field): the table read and refused clearly, each block
+placed resting on the ground's slope, and the per-block report: travel, rotation, force, first
+contact and the cover of debris over its top, against hand-made cases."""
+import math
+
+import numpy as np
+import pytest
+
+import mpmsdem
+from mpmsdem import field
+from mpmsdem.terrain import Terrain
+from yade import O
+from yade.wrapper import ForceResetter, NewtonIntegrator
+
+MATERIAL = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
+
+
+def test_block_tables_are_read_and_bad_rows_refused_by_line(tmp_path):
+    good = tmp_path / "blocks.csv"
+    rows = [{"id": 3, "shape": "box:4.4x1.8x1.5", "x": 1.0, "y": 2.0, "heading_deg": 30.0, "mass": 1400.0},
+            {"id": 5, "shape": "car.obj*0.001", "x": -1.0, "y": 0.5, "heading_deg": 0.0, "mass": 900.0}]
+    field.writeBlockTable(str(good), rows)
+    assert field.readBlockTable(str(good)) == rows
+    head = "id,shape,x,y,heading_deg,mass\n"
+    for body, words in (("1,box:1x1,0,0,0,10\n", "line 2: shape 'box:1x1': a box is 'box:LxWxH'"),
+                        ("1,box:1x1x1,0,0,0,0\n", "line 2: mass = 0.0 kg: must be > 0"),
+                        ("1,box:1x1x1,0,0,0,1\n1,box:1x1x1,2,0,0,1\n", "line 3: id 1 given twice"),
+                        ("1,house.ply,0,0,0,1\n", "must be 'box:LxWxH' or a mesh file"),
+                        ("1,box:1x1x1,zero,0,0,1\n", "line 2: could not convert"),
+                        ("1,box:1x1x1,nan,0,0,1\n", "line 2: x, y, heading_deg and mass must be finite")):
+        bad = tmp_path / "bad.csv"
+        bad.write_text(head + body)
+        with pytest.raises(ValueError, match=words.replace("(", r"\(").replace(")", r"\)")):
+            field.readBlockTable(str(bad))
+    (tmp_path / "nocol.csv").write_text("id,shape,x,y,mass\n1,box:1x1x1,0,0,1\n")
+    with pytest.raises(ValueError, match="missing column"):
+        field.readBlockTable(str(tmp_path / "nocol.csv"))
+
+
+def test_blocks_are_placed_resting_on_the_slope_and_stay(tmp_path):
+    # Two boxes on a 20 deg terrain slope (friction 0.7 > tan 20 deg), turned by their headings:
+    # their bases lie along the slope (the box's own z is the ground's normal), their mass is the
+    # table's; they settle onto their corners (a tenth of their sweep radius of drop and the
+    # barrier's overlap, about a centimetre; their rocking decays by half every 0.08 s) and then
+    # stay: less than 0.1 mm over the second half of a second.
+    O.reset()
+    ground = Terrain.plane((-3.0, -3.0), (3.0, 3.0), 0.25, z0=1.0, slope_x_deg=20.0)
+    sdem = mpmsdem.SdemEngine(dtCheck="raise", verbose=False)
+    sdem.terrain(ground, mpmsdem.material(density=2500, friction=0.7, barrierStiffness=3e6))
+    rows = [{"id": 0, "shape": "box:1.0x1.0x1.0", "x": -1.0, "y": 0.0, "heading_deg": 25.0, "mass": 2000.0},
+            {"id": 1, "shape": "box:2.0x1.0x0.5", "x": 1.0, "y": 1.0, "heading_deg": -10.0, "mass": 1000.0}]
+    mats = {}
+    ids = field.placeBlocks(sdem, ground, rows, lambda rho: mats.setdefault(
+        round(rho, 6), mpmsdem.material(density=rho, friction=0.7, barrierStiffness=3e6, normalDamping=0.3,
+                                        tangentialDamping=0.5)))
+    th = math.radians(20.0)
+    n = np.array([math.sin(th), 0, math.cos(th)])
+    for i, r in zip(ids, rows):
+        b = O.bodies[i]
+        assert b.state.mass == pytest.approx(r["mass"], rel=1e-9)
+        up = np.array(list(b.state.ori * mpmsdem.sdem.Vector3(0, 0, 1)))
+        assert np.allclose(up, n, atol=1e-9)  # its base along the slope
+    placed = [np.array(list(O.bodies[i].state.pos)) for i in ids]
+    O.engines = [ForceResetter(), sdem.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    O.dt = 2e-4
+    mpmsdem.run(2500, sdem)
+    settled = [np.array(list(O.bodies[i].state.pos)) for i in ids]
+    mpmsdem.run(2500, sdem)
+    for i, p, q in zip(ids, placed, settled):
+        assert np.linalg.norm(q - p) < 0.02
+        assert np.linalg.norm(np.array(list(O.bodies[i].state.pos)) - q) < 1e-4
+    assert len(sdem.contacts()["normalForce"]) == 8  # 4 corners each on the ground
+
+
+def test_the_report_gives_each_block_its_travel_force_contact_and_cover():
+    # A column of material resting on a block and a block beside it, on flat ground: the first is
+    # buried under the column's material above its top (its thickness over the block's plan
+    # circle), the second is not; a block shifted by hand reports its travel and turn.
+    O.reset()
+    ground = Terrain.plane((0.0, 0.0), (0.4, 0.2), 0.01, z0=0.02)
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=700, friction=0.5)
+    sdem.terrain(ground, mat)
+    a = sdem.box((0.02, 0.02, 0.02), 0.002, mat, pos=(0.1, 0.1, 0.0405))
+    b = sdem.box((0.02, 0.02, 0.02), 0.002, mat, pos=(0.3, 0.1, 0.0405))
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [44, 24, 20], "origin": [-0.02, -0.02, 0.0]},
+                            material=MATERIAL, particles=[{"lo": [0.07, 0.07, 0.07], "hi": [0.13, 0.13, 0.1],
+                                                           "ppc": 8}],
+                            terrain=ground, verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: {"friction": 0.3}}, verbose=False)
+    tracker = field.BlockTracker(coupled, [a, b])
+    O.bodies[b].state.pos = O.bodies[b].state.pos + mpmsdem.sdem.Vector3(0.03, 0.04, 0.0)
+    rows = tracker.report(mpm.particles())
+    ra, rb = rows
+    # a: the material above its top (z 0.061) within its plan circle (radius 0.02 sqrt 2): the
+    # column's part over the circle, 3.0 cm thick (z 0.07 to 0.10)
+    x = mpm.particles()["x"]
+    inside = np.hypot(x[:, 0] - 0.1, x[:, 1] - 0.1) <= 0.02 * math.sqrt(2) + 1e-12
+    expected = mpm.particles()["volume0"][inside & (x[:, 2] > ra["top"])].sum() / (math.pi * 2 * 0.02 ** 2)
+    assert ra["top"] == pytest.approx(0.0405 + 0.02, abs=1e-9)
+    assert ra["cover"] == pytest.approx(expected, rel=1e-12) and ra["cover"] > 0.02 and ra["buried"]
+    assert rb["cover"] == 0 and not rb["buried"]
+    assert rb["travel"] == pytest.approx(0.05, rel=1e-9) and ra["travel"] == 0
+    assert math.isnan(ra["first_contact"]) and ra["peak_force"] == 0  # no step taken yet
