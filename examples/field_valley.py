@@ -75,7 +75,8 @@ def parse(argv):
     ap.add_argument("--flip-viscosity", type=float, default=FIELD_VISCOSITY,
                     help="PIC viscosity of the FLIP/PIC blend [m²/s] > 0 (default %g: 20 /s of PIC damping at dx "
                          "0.5 m; docs/field.md)" % FIELD_VISCOSITY)
-    ap.add_argument("--blocks", type=int, default=200, help="1 m blocks on the plain (default 200; 0: the flow alone)")
+    ap.add_argument("--blocks", type=int, default=None,
+                    help="1 m blocks on the valley's plain (default 200; 0: the flow alone; with --terrain only 0)")
     ap.add_argument("--block-table", default=None, help="CSV of the blocks to place instead (mpmsdem.field)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the blocks' jitter and headings")
     ap.add_argument("--no-plots", action="store_true")
@@ -88,8 +89,13 @@ def parse(argv):
         raise ValueError("--source = %r: must be X0 Y0 X1 Y1 with X1 > X0 and Y1 > Y0" % (a.source,))
     if not (a.flip_viscosity > 0 and math.isfinite(a.flip_viscosity)):
         raise ValueError("--flip-viscosity = %r m²/s: must be > 0 and finite" % (a.flip_viscosity,))
+    if a.blocks is None:
+        a.blocks = 0 if a.terrain else 200
     if a.blocks < 0:
         raise ValueError("--blocks = %d: must be >= 0" % a.blocks)
+    if a.terrain and a.blocks:
+        raise ValueError("--blocks = %d: the generated blocks stand on the valley's plain; on your own --terrain "
+                         "place them with --block-table" % a.blocks)
     if not (a.source_depth > 0):
         raise ValueError("--source-depth = %r m: must be > 0" % (a.source_depth,))
     return a
