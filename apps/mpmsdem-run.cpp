@@ -28,7 +28,9 @@
 //                            bytes_per_particle (solver memoryBytes()/particles), threads;
 //                            with blocks also time, stage_seconds, contact_step_min(_time)
 //                            and moving_blocks (BlockRecord: travel, rotation, peak flow
-//                            force of each moving block)
+//                            force of each moving block), narrow_phase_pairs (block pairs
+//                            the narrow phase computed, all steps) and block_contacts (the
+//                            blocks' contacts with blocks and terrain after the last step)
 //   --device-stages          with --bench on CUDA: time the MPM step's stages on the device
 //                            (events; sort, p2g, grid, g2p) and add device_stage_seconds to
 //                            the JSON line
@@ -395,6 +397,9 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
     out["contact_step_min_time"] = std::isfinite(low.step) ? nlohmann::json(low.time) : nlohmann::json();
     out["moving_blocks"] = blocks->summary(st.coupled->world.engine);
     out["time"] = solver.time();
+    const sdem::SdemEngine& e = st.coupled->world.engine;
+    out["narrow_phase_pairs"] = e.narrowPhasePairs();
+    out["block_contacts"] = e.contacts().size();
   }
   std::cout << out.dump() << std::endl;
   return 0;

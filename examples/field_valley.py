@@ -41,6 +41,7 @@ import time
 import numpy as np
 
 import mpmsdem
+import mpmsdem.driver
 from mpmsdem import field
 from mpmsdem.terrain import FlowMaps, Terrain
 
@@ -78,7 +79,10 @@ def parse(argv):
     ap.add_argument("--blocks", type=int, default=None,
                     help="1 m blocks on the valley's plain (default 200; 0: the flow alone; with --terrain only 0)")
     ap.add_argument("--block-table", default=None, help="CSV of the blocks to place instead (mpmsdem.field)")
-    ap.add_argument("--seed", type=int, default=1, help="seed of the blocks' jitter and headings")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the blocks' headings")
+    ap.add_argument("--driver-scene", metavar="JSON", default=None,
+                    help="write the scene (flow, terrain, blocks) for the C++ driver mpmsdem-run to JSON and exit: "
+                         "e.g. to run it on a GPU machine without YADE (mpmsdem-run JSON --backend cuda)")
     ap.add_argument("--no-plots", action="store_true")
     a = ap.parse_args(argv)
     if not (a.dx > 0 and math.isfinite(a.dx)):
@@ -191,6 +195,18 @@ def main(argv):
         O.dt = 0.5 * mpm.stableTimeStep()
     else:
         O.engines = [mpm.runner]
+    if a.driver_scene:
+        if coupled:
+            mpmsdem.driver.writeScene(a.driver_scene, coupled, duration=a.duration, dt="auto", outputEvery=1.0,
+                                      outputDir=out)
+        else:
+            s = json.loads(mpm.solver.sceneJson)
+            s["run"] = {"duration": a.duration, "dt": "auto", "output_every": 1.0, "output_dir": out}
+            with open(a.driver_scene, "w") as f:
+                json.dump(s, f, allow_nan=False)
+        print("driver scene of the field valley (%d blocks, dx %g m) written to %s: mpmsdem-run %s"
+              % (len(rows), a.dx, a.driver_scene, a.driver_scene))
+        return None
     ground.writeVtk(os.path.join(out, "terrain.vtk"))
     maps = FlowMaps(ground)
     p0 = mpm.particles()
