@@ -571,14 +571,7 @@ inline GridConst<T> makeGridConst(const MpmParams& prm, double massEps) {
   }
   for (int w = 0; w < 6; ++w) g.wallFriction[w] = static_cast<T>(prm.walls[w].friction);
   g.massEps = static_cast<T>(massEps);
-  if (prm.terrain.enabled()) {  // its heights: the backend's copy (terrain.z)
-    g.terrain.nx = prm.terrain.nx;
-    g.terrain.ny = prm.terrain.ny;
-    g.terrain.x0 = static_cast<T>(prm.terrain.x0);
-    g.terrain.y0 = static_cast<T>(prm.terrain.y0);
-    g.terrain.invSpacing = static_cast<T>(1.0 / prm.terrain.spacing);
-    g.terrain.friction = static_cast<T>(prm.terrain.friction);
-  }
+  if (prm.terrain.enabled()) g.terrain = terrainViewOf<T>(prm.terrain, nullptr);  // z: the backend's copy
   return g;
 }
 

@@ -538,14 +538,7 @@ namespace {
 // ground seeds the material above it.
 class AboveTerrain : public SeedSink {
  public:
-  AboveTerrain(const TerrainSpec& t, SeedSink& out) : out_(out) {
-    view_.z = t.heights.data();
-    view_.nx = t.nx;
-    view_.ny = t.ny;
-    view_.x0 = t.x0;
-    view_.y0 = t.y0;
-    view_.invSpacing = 1.0 / t.spacing;
-  }
+  AboveTerrain(const TerrainSpec& t, SeedSink& out) : view_(terrainViewOf(t, t.heights.data())), out_(out) {}
   void add(const double x[3], double mass, double volume0, const std::array<double, 3>& velocity) override {
     double gx, gy;
     if (x[2] >= terrainHeight(view_, x[0], x[1], gx, gy)) out_.add(x, mass, volume0, velocity);

@@ -25,6 +25,21 @@ struct TerrainView {
   T friction = T(0);     // flow–terrain friction: < 0 no-slip, 0 free slip, > 0 Coulomb
 };
 
+// The view of a terrain description (mpm::TerrainSpec: nx, ny, x0, y0, spacing, friction) over
+// heights z in the backend's memory (null: set later). Host set-up.
+template <typename T, typename Spec>
+inline TerrainView<T> terrainViewOf(const Spec& s, const T* z) {
+  TerrainView<T> v;
+  v.z = z;
+  v.nx = s.nx;
+  v.ny = s.ny;
+  v.x0 = static_cast<T>(s.x0);
+  v.y0 = static_cast<T>(s.y0);
+  v.invSpacing = static_cast<T>(1.0 / s.spacing);
+  v.friction = static_cast<T>(s.friction);
+  return v;
+}
+
 // One raster coordinate: the cell c (0 <= c <= n - 2) and the fraction f in [0, 1] within it of
 // u (in raster spacings from node 0); inside reports whether u lies on the raster (the gradient
 // along this axis is zero outside, where the edge heights continue flat).

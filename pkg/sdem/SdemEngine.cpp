@@ -277,12 +277,7 @@ void SdemEngine::setTerrain(const mpm::TerrainSpec& terrain, int material) {
   for (std::size_t k = 0; k < terrain.heights.size(); ++k)
     if (!std::isfinite(terrain.heights[k])) throwParameter("terrain.heights[" + std::to_string(k) + "]", terrain.heights[k], "m", "finite");
   terrain_ = terrain;
-  terrainView_.z = terrain_.heights.data();
-  terrainView_.nx = terrain_.nx;
-  terrainView_.ny = terrain_.ny;
-  terrainView_.x0 = terrain_.x0;
-  terrainView_.y0 = terrain_.y0;
-  terrainView_.invSpacing = 1.0 / terrain_.spacing;
+  terrainView_ = mpm::terrainViewOf(terrain_, terrain_.heights.data());
   terrainMaterial_ = material;
 }
 

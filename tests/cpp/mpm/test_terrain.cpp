@@ -40,17 +40,7 @@ TerrainSpec planeRaster(double a, double b, double c, int nx, int ny, double x0,
   return t;
 }
 
-TerrainView<double> viewOf(const TerrainSpec& t) {
-  TerrainView<double> v;
-  v.z = t.heights.data();
-  v.nx = t.nx;
-  v.ny = t.ny;
-  v.x0 = t.x0;
-  v.y0 = t.y0;
-  v.invSpacing = 1.0 / t.spacing;
-  v.friction = t.friction;
-  return v;
-}
+TerrainView<double> viewOf(const TerrainSpec& t) { return terrainViewOf(t, t.heights.data()); }
 
 std::string writeFile(const std::string& name, const std::string& text) {
   const std::string path = (std::filesystem::temp_directory_path() / name).string();
