@@ -262,6 +262,7 @@ def main(argv):
                "blocks": len(blocks), "blocks_reached": sum(1 for b in blocks if b["first_contact"] == b["first_contact"]),
                "blocks_buried": sum(1 for b in blocks if b["buried"]),
                "blocks_below_ground": sum(1 for b in blocks if b["z"] < float(ground.height(b["x"], b["y"]))),
+               "blocks_outside_grid": sum(1 for b in blocks if b["outside_grid"]),
                "largest_block_travel": max((b["travel"] for b in blocks), default=0.0),
                "largest_block_force": max((b["peak_force"] for b in blocks), default=0.0),
                "wall_seconds": wall, "maps": written}
@@ -277,8 +278,9 @@ def main(argv):
                                                "conserved" if summary["mass"] == mass0 else "CHANGED",
                                                summary["below_ground"], wall, out))
     if blocks:
-        print("blocks: %d reached by the flow, %d buried, %d below the ground; the most displaced (blocks.csv):"
-              % (summary["blocks_reached"], summary["blocks_buried"], summary["blocks_below_ground"]))
+        print("blocks: %d reached by the flow, %d buried, %d below the ground, %d outside the grid; the most displaced "
+              "(blocks.csv):" % (summary["blocks_reached"], summary["blocks_buried"], summary["blocks_below_ground"],
+                                 summary["blocks_outside_grid"]))
         for b in sorted(blocks, key=lambda b: -b["travel"])[:5]:
             print("  block %3d: from (%.1f, %.1f) to (%.1f, %.1f) m, %.1f m, turned %.0f deg, peak force %.3g N at "
                   "%.2f s, cover %.2f m" % (b["id"], b["x0"], b["y0"], b["x"], b["y"], b["travel"], b["rotation_deg"],

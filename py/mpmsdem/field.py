@@ -12,6 +12,7 @@
   block's top at the end) as CSV and HDF5.
 """
 import csv
+import json
 import math
 import os
 
@@ -140,6 +141,9 @@ class BlockTracker:
         self.peakTime = np.full(n, np.nan)
         self.firstContact = np.full(n, np.nan)
         self.runner = PyRunner(command=_bindStep("field", id(self), self._step), iterPeriod=1, label=label)
+        g = json.loads(coupled.mpm.solver.sceneJson)["grid"]
+        self.gridLo = np.array(g["origin"], dtype=float)
+        self.gridHi = self.gridLo + g["dx"] * np.array(g["cells"], dtype=float)
 
     def _step(self):
         t = O.time
@@ -155,8 +159,9 @@ class BlockTracker:
         rotation [deg], peak flow force [N] and its time [s], first contact [s] (NaN: never
         touched), top [m] (the highest point of its rounded shape), cover [m] (the thickness of
         the flow's material above its top within its plan's circle: the volume at the
-        material's initial density of the points above the top, over the circle's area) and
-        buried (cover > 0)."""
+        material's initial density of the points above the top, over the circle's area), buried
+        (cover > 0) and outside_grid (its centre left the flow's grid box: the flow can no
+        longer reach it; reported, not dropped)."""
         x = np.asarray(particles["x"])
         vol = np.asarray(particles["volume0"])
         rows = []
@@ -176,13 +181,15 @@ class BlockTracker:
                          "rotation_deg": math.degrees(min(turn, 2 * math.pi - turn)),
                          "peak_force": float(self.peak[k]), "peak_force_time": float(self.peakTime[k]),
                          "first_contact": float(self.firstContact[k]), "top": top, "cover": cover,
-                         "buried": bool(cover > 0)})
+                         "buried": bool(cover > 0),
+                         "outside_grid": bool(np.any(np.array(list(p)) < self.gridLo) or
+                                              np.any(np.array(list(p)) > self.gridHi))})
         return rows
 
 
 REPORT_UNITS = {"id": "", "x0": "m", "y0": "m", "z0": "m", "x": "m", "y": "m", "z": "m", "travel": "m",
                 "travel_3d": "m", "rotation_deg": "deg", "peak_force": "N", "peak_force_time": "s",
-                "first_contact": "s", "top": "m", "cover": "m", "buried": ""}
+                "first_contact": "s", "top": "m", "cover": "m", "buried": "", "outside_grid": ""}
 
 
 def writeReport(folder, rows):

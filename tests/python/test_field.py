@@ -92,6 +92,9 @@ def test_the_report_gives_each_block_its_travel_force_contact_and_cover():
     O.bodies[b].state.pos = O.bodies[b].state.pos + mpmsdem.sdem.Vector3(0.03, 0.04, 0.0)
     rows = tracker.report(mpm.particles())
     ra, rb = rows
+    assert not ra["outside_grid"] and not rb["outside_grid"]
+    O.bodies[b].state.pos = O.bodies[b].state.pos + mpmsdem.sdem.Vector3(1.0, 0, 0)  # beyond the grid's 0.42 m
+    assert tracker.report(mpm.particles())[1]["outside_grid"]
     # a: the material above its top (z 0.061) within its plan circle (radius 0.02 sqrt 2): the
     # column's part over the circle, 3.0 cm thick (z 0.07 to 0.10)
     x = mpm.particles()["x"]
