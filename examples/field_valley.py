@@ -70,9 +70,15 @@ def parse(argv):
     ap.add_argument("--terrain", default=None, help="a raster of your own (.asc, GeoTIFF) instead of the valley")
     ap.add_argument("--origin", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "Z"),
                     help="with --terrain: the file's point that becomes the grid's zero [m]")
-    ap.add_argument("--source", type=float, nargs=4, default=(2.0, 4.0, 8.0, 12.0), metavar=("X0", "Y0", "X1", "Y1"),
-                    help="the source volume's plan [m] in the grid frame (default: the valley's, near its top)")
-    ap.add_argument("--source-depth", type=float, default=4.0, help="the source's depth above the ground [m]")
+    ap.add_argument("--source", type=float, nargs=4, default=None, metavar=("X0", "Y0", "X1", "Y1"),
+                    help="the source volume's plan [m] in the grid frame (default: the valley's, near its top: "
+                         "2 4 8 12 times --scale)")
+    ap.add_argument("--source-depth", type=float, default=None,
+                    help="the source's depth above the ground [m] (default 4 times --scale)")
+    ap.add_argument("--scale", type=float, default=1.0,
+                    help="the synthetic valley, its source and its village this many times larger (default 1; the "
+                         "blocks stay 1 m): 2 with --dx 0.1 is the GPU version, about 2e7 points and room for 900 "
+                         "blocks")
     ap.add_argument("--flip-viscosity", type=float, default=FIELD_VISCOSITY,
                     help="PIC viscosity of the FLIP/PIC blend [m²/s] > 0 (default %g: 20 /s of PIC damping at dx "
                          "0.5 m; docs/field.md)" % FIELD_VISCOSITY)
@@ -89,6 +95,12 @@ def parse(argv):
         raise ValueError("--dx = %r m: must be > 0 and finite" % (a.dx,))
     if not (a.duration > 0 and math.isfinite(a.duration)):
         raise ValueError("--duration = %r s: must be > 0 and finite" % (a.duration,))
+    if not (a.scale > 0 and math.isfinite(a.scale)):
+        raise ValueError("--scale = %r: must be > 0 and finite" % (a.scale,))
+    if a.terrain and a.scale != 1.0:
+        raise ValueError("--scale = %r: the synthetic valley's; a --terrain keeps its own size" % (a.scale,))
+    a.source = tuple(a.source) if a.source else tuple(a.scale * v for v in (2.0, 4.0, 8.0, 12.0))
+    a.source_depth = a.source_depth if a.source_depth is not None else 4.0 * a.scale
     if not (a.source[2] > a.source[0] and a.source[3] > a.source[1]):
         raise ValueError("--source = %r: must be X0 Y0 X1 Y1 with X1 > X0 and Y1 > Y0" % (a.source,))
     if not (a.flip_viscosity > 0 and math.isfinite(a.flip_viscosity)):
@@ -110,15 +122,15 @@ def snap(v, dx, up):
     return (math.ceil if up else math.floor)(v / dx - 1e-9) * dx
 
 
-def scene(a):
-    """The terrain, the grid around it and the source box."""
+def scene(a, dx):
+    """The terrain, the grid of spacing dx around it and the source box."""
+    k = a.scale
     if a.terrain:
         ground = Terrain.read(a.terrain, origin=a.origin, friction=BASAL_FRICTION)
     else:
-        ground = Terrain.valley(60.0, 16.0, 0.5, slope_deg=28.0, side_slope_deg=30.0, floor_width=4.0, runout=34.0,
-                                friction=BASAL_FRICTION)
+        ground = Terrain.valley(60.0 * k, 16.0 * k, 0.5, slope_deg=28.0, side_slope_deg=30.0, floor_width=4.0 * k,
+                                runout=34.0 * k, friction=BASAL_FRICTION)
     x0, x1, y0, y1 = ground.extent
-    dx = a.dx
     # the grid covers the raster, with the two wall layers outside it, and the relief plus room
     # for the source above its highest point
     lo = [snap(x0, dx, False) - 2 * dx, snap(y0, dx, False) - 2 * dx, snap(ground.heights.min(), dx, False) - 2 * dx]
@@ -128,7 +140,6 @@ def scene(a):
     sx0, sy0, sx1, sy1 = (snap(a.source[0], dx, False), snap(a.source[1], dx, False), snap(a.source[2], dx, True),
                           snap(a.source[3], dx, True))
     # the source: a box from the ground up to source_depth above the ground's highest point under it
-    import numpy as np
     xs, ys = np.meshgrid(np.linspace(sx0, sx1, 9), np.linspace(sy0, sy1, 9))
     floor = float(ground.height(xs, ys).min())
     ceiling = float(ground.height(xs, ys).max()) + a.source_depth
@@ -137,13 +148,13 @@ def scene(a):
     return ground, {"dx": dx, "cells": cells, "origin": lo}, box
 
 
-def village(n, ground, seed):
+def village(n, seed, scale=1.0):
     """n blocks of 1 m and 2 t on a regular grid over the plain and its flanks (x 28-59 m, y
-    0.5-15.5 m), turned by up to 10 deg either way, at least 1.45 m apart: their corners stay
-    clear of each other, also where one stands on the floor and its neighbour on a 30 deg flank."""
-    import numpy as np
+    0.5-15.5 m, times the valley's scale), turned by up to 10 deg either way, at least 1.45 m
+    apart: their corners stay clear of each other, also where one stands on the floor and its
+    neighbour on a 30 deg flank."""
     rng = np.random.default_rng(seed)
-    x0, x1, y0, y1 = 28.0, 59.0, 0.5, 15.5
+    x0, x1, y0, y1 = 28.0 * scale, 59.0 * scale, 0.5 * scale, 15.5 * scale
     nx = max(1, int(math.ceil(math.sqrt(n * (x1 - x0) / (y1 - y0)))))
     ny = int(math.ceil(n / nx))
     xs = np.linspace(x0, x1, nx) if nx > 1 else np.array([0.5 * (x0 + x1)])
@@ -162,11 +173,15 @@ def main(argv):
     a = parse(argv)
     from yade import O
     from yade.wrapper import ForceResetter, NewtonIntegrator
-    ground, grid, box = scene(a)
+    # A driver scene for a fine grid is written from engines built on a coarse one (the flow is
+    # seeded by the driver from the scene's box, and nothing else depends on dx): the host need not
+    # hold the fine grid.
+    buildDx = max(a.dx, 0.5) if a.driver_scene else a.dx
+    ground, grid, box = scene(a, buildDx)
     out = os.path.abspath(a.out)
     os.makedirs(out, exist_ok=True)
     O.reset()
-    rows = field.readBlockTable(a.block_table) if a.block_table else village(a.blocks, ground, a.seed)
+    rows = field.readBlockTable(a.block_table) if a.block_table else village(a.blocks, a.seed, a.scale)
     coupled = tracker = None
     mpm = mpmsdem.MpmEngine(grid=grid, material=DEBRIS, particles=[box], gravity=(0, 0, -9.81), terrain=ground,
                             flipViscosity=a.flip_viscosity, backend=a.backend, precision=a.precision,
@@ -197,15 +212,19 @@ def main(argv):
         O.engines = [mpm.runner]
     if a.driver_scene:
         if coupled:
-            mpmsdem.driver.writeScene(a.driver_scene, coupled, duration=a.duration, dt="auto", outputEvery=1.0,
-                                      outputDir=out)
+            s = mpmsdem.driver.sceneDict(coupled, duration=a.duration, dt="auto", outputEvery=1.0, outputDir=out)
         else:
             s = json.loads(mpm.solver.sceneJson)
             s["run"] = {"duration": a.duration, "dt": "auto", "output_every": 1.0, "output_dir": out}
-            with open(a.driver_scene, "w") as f:
-                json.dump(s, f, allow_nan=False)
-        print("driver scene of the field valley (%d blocks, dx %g m) written to %s: mpmsdem-run %s"
-              % (len(rows), a.dx, a.driver_scene, a.driver_scene))
+        _, s["grid"], fine = scene(a, a.dx)
+        s["particles"] = [fine]
+        with open(a.driver_scene, "w") as f:
+            json.dump(s, f, allow_nan=False)
+        cells = s["grid"]["cells"]
+        print("driver scene of the field valley (%d blocks, dx %g m, grid %s cells, at most %.3g points) written to %s: "
+              "mpmsdem-run %s" % (len(rows), a.dx, "x".join(map(str, cells)),
+                                  8 * np.prod([(fine["hi"][d] - fine["lo"][d]) / a.dx for d in range(3)]),
+                                  a.driver_scene, a.driver_scene))
         return None
     ground.writeVtk(os.path.join(out, "terrain.vtk"))
     maps = FlowMaps(ground)
@@ -292,7 +311,6 @@ def plotSeries(series, path, dx):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
     s = np.array(series)
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
     ax[0].plot(s[:, 0], s[:, 1])

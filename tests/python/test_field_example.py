@@ -89,3 +89,25 @@ def test_field_example_writes_a_driver_scene_that_runs_without_yade(tmp_path):
     assert bench["blocks"] == 12 and bench["block_contacts"] == 48 and bench["time"] >= 1.0
     for b in bench["moving_blocks"]:
         assert np.linalg.norm(np.array(b["end"]) - np.array(b["start"])) < 0.05  # settled where placed
+
+
+def test_a_driver_scene_for_a_finer_grid_seeds_what_the_example_seeds(tmp_path):
+    # --driver-scene builds its engines on a grid of at least 0.5 m and writes the scene for the
+    # --dx asked: the driver then seeds the same debris the example seeds at that dx.
+    example = os.path.join(REPO, "examples", "field_valley.py")
+    scene = str(tmp_path / "fine.json")
+    proc = subprocess.run([sys.executable, example, "--dx", "0.4", "--blocks", "0", "--duration", "0.05",
+                           "--driver-scene", scene, "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, env=children.env())
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    s = json.load(open(scene))
+    assert s["grid"]["dx"] == 0.4
+    r = subprocess.run([mpmsdem.driver.executable(), scene, "--bench", "--steps", "5"], capture_output=True, text=True,
+                       env=children.env(OMP_NUM_THREADS=1))
+    assert r.returncode == 0, r.stderr[-3000:]
+    bench = json.loads(r.stdout.strip().splitlines()[-1])
+    out = str(tmp_path / "run")
+    proc = subprocess.run([sys.executable, example, "--dx", "0.4", "--blocks", "0", "--duration", "0.05", "--no-plots",
+                           "--out", out], capture_output=True, text=True, env=children.env(OMP_NUM_THREADS=1))
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert bench["particles"] == json.load(open(os.path.join(out, "summary.json")))["points"] > 40000
