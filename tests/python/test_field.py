@@ -105,3 +105,32 @@ def test_the_report_gives_each_block_its_travel_force_contact_and_cover():
     assert rb["cover"] == 0 and not rb["buried"]
     assert rb["travel"] == pytest.approx(0.05, rel=1e-9) and ra["travel"] == 0
     assert math.isnan(ra["first_contact"]) and ra["peak_force"] == 0  # no step taken yet
+
+
+def test_a_mesh_block_from_the_table_rests_on_its_base(tmp_path):
+    # A block from a mesh file in millimetres (a 2 x 1 x 0.8 m box as OBJ, '*0.001'): placed by the
+    # table with the table's mass, it settles onto the ground on its four base corners.
+    O.reset()
+    obj = tmp_path / "van.obj"
+    v = [(x, y, z) for x in (0, 2000) for y in (0, 1000) for z in (0, 800)]
+    faces = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+    obj.write_text("".join("v %g %g %g\n" % p for p in v) + "".join("f %d %d %d %d\n" % q for q in faces))
+    table = tmp_path / "blocks.csv"
+    field.writeBlockTable(str(table), [{"id": 0, "shape": "van.obj*0.001", "x": 0.0, "y": 0.0, "heading_deg": 30.0,
+                                        "mass": 1500.0}])
+    ground = Terrain.plane((-3.0, -3.0), (3.0, 3.0), 0.5, z0=0.0)
+    sdem = mpmsdem.SdemEngine(dtCheck="raise", verbose=False)
+    sdem.terrain(ground, mpmsdem.material(density=2500, friction=0.7, barrierStiffness=3e6))
+    ids = field.placeBlocks(sdem, ground, field.readBlockTable(str(table)),
+                            lambda rho: mpmsdem.material(density=rho, friction=0.7, barrierStiffness=3e6,
+                                                         normalDamping=0.3, tangentialDamping=0.5),
+                            folder=str(tmp_path))
+    b = O.bodies[ids[0]]
+    assert b.state.mass == pytest.approx(1500.0, rel=1e-9)
+    O.engines = [ForceResetter(), sdem.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
+    O.dt = 2e-4
+    mpmsdem.run(2500, sdem)
+    c = sdem.contacts()
+    assert len(c["normalForce"]) == 4 and set(c["id2"]) == {-1}
+    assert c["normalForce"].sum() == pytest.approx(1500.0 * 9.81, rel=5e-3)
+    assert abs(b.state.pos[2] - 0.4) < 0.01  # its centre half its height above the ground
