@@ -88,8 +88,9 @@ def _shapeSpec(shape, where):
 def placeBlocks(sdem, terrain, rows, material, sweepFraction=0.05, folder="."):
     """Add the blocks of ``rows`` (:func:`readBlockTable`) to ``sdem`` resting on ``terrain``:
     each turned by its heading about the vertical, then tilted so that its base lies along the
-    ground's slope under its centre, its core a twentieth of its smallest side (sweepFraction)
-    above the surface's barrier (it settles in its first steps). ``material``: a function
+    ground's slope under its centre; its sweep radius ``sweepFraction`` of its smallest side (a
+    twentieth, the paper's R/h_b), its rounded base a tenth of that radius above the ground (it
+    settles within its first tenths of a second). ``material``: a function
     ``mass_density -> SdemMat`` (each block's density is its mass over its rounded volume).
     Mesh paths are relative to ``folder``. Returns the YADE ids, in the table's order."""
     ids = []
