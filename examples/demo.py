@@ -133,7 +133,8 @@ def flume_block():
     e = s["events"]
     print("beside the paper (§3.2, Figs 7-9; here dx %g m, %d material points, %s; %s):"
           % (s["dx"], s["particles"], s["flip_blend"],
-             ", ".join("%s %s" % (k.replace("_", " "), v) for k, v in s["settings"].items() if k != "name")))
+             ", ".join("%s %s" % (k.replace("_", " ").replace("mu 2", "mu_2"), v) for k, v in s["settings"].items()
+                       if k not in ("name", "flip_viscosity"))))
     print("  flow first touches the cube:  paper ~0.25 s (experiment 0.3 s);  here %.3f s" % e["first_touch"])
     print("  flow force on the cube at 0.4 s:  paper 0.32 N;  here %.2f N" % e["force_04"])
     print("  the cube turns through 45 deg:  paper at 0.72 s;  here at %s, %.0f deg by %.1f s, still moving at %.2f m/s "
