@@ -12,6 +12,58 @@
 namespace mpmsdem {
 namespace sdem {
 
+// ------------------------------------------------------------------ contact histories
+
+std::size_t ContactHistoryTable::slotOf(const ContactKey& k) const {
+  const std::size_t mask = gen_.size() - 1;
+  std::size_t i = ContactKeyHash()(k) & mask;
+  while (gen_[i] == current_ && !(keys_[i] == k)) i = (i + 1) & mask;
+  return i;
+}
+
+const ContactHistory* ContactHistoryTable::find(const ContactKey& k) const {
+  if (size_ == 0) return nullptr;
+  const std::size_t i = slotOf(k);
+  return gen_[i] == current_ ? &values_[i] : nullptr;
+}
+
+void ContactHistoryTable::put(const ContactKey& k, const ContactHistory& h) {
+  if (2 * (size_ + 1) > gen_.size()) grow();  // at most half full: short probes
+  const std::size_t i = slotOf(k);
+  if (gen_[i] != current_) {
+    gen_[i] = current_;
+    keys_[i] = k;
+    ++size_;
+  }
+  values_[i] = h;
+}
+
+void ContactHistoryTable::clear() {
+  size_ = 0;
+  if (++current_ == 0) {  // the generations wrapped: no slot may look current
+    std::fill(gen_.begin(), gen_.end(), 0u);
+    current_ = 1;
+  }
+}
+
+void ContactHistoryTable::swap(ContactHistoryTable& o) noexcept {
+  keys_.swap(o.keys_);
+  values_.swap(o.values_);
+  gen_.swap(o.gen_);
+  std::swap(current_, o.current_);
+  std::swap(size_, o.size_);
+}
+
+void ContactHistoryTable::grow() {
+  ContactHistoryTable bigger;
+  const std::size_t n = std::max<std::size_t>(64, 2 * gen_.size());
+  bigger.keys_.resize(n);
+  bigger.values_.resize(n);
+  bigger.gen_.assign(n, 0u);
+  forEach([&bigger](const ContactKey& k, const ContactHistory& h) { bigger.put(k, h); });
+  swap(bigger);
+}
+
 // ------------------------------------------------------------------ set-up
 
 int SdemEngine::addMaterial(const SdemMaterial& m) {
@@ -225,15 +277,14 @@ void SdemEngine::addContact(int a, int b, const SdemGeom& g, const BarrierPhys& 
   const bool terrain = b == kTerrainBody;
   ContactKey key{a, b, g.kindA, g.kindB, g.indexA, g.indexB};
   ContactHistory h;
-  auto it = history_.find(key);
-  if (it != history_.end()) h = it->second;
+  if (const ContactHistory* old = history_.find(key)) h = *old;
   const Vec3 ra = g.contactPoint - pos_[a];
   const Vec3 rb = terrain ? Vec3::Zero() : Vec3(g.contactPoint - pos_[b]);
   const Vec3 velB = terrain ? Vec3::Zero() : Vec3(vel_[b] + angVel_[b].cross(rb));
   const Vec3 relVel = velB - (vel_[a] + angVel_[a].cross(ra));
   const int externalB = terrain ? -1 : external_[b];
   const LawResult r = Law2_SdemGeom_BarrierPhys_Coulomb::go(g, R, phys, relVel, meff, dt, h, external_[a], externalB);
-  nextHistory_.emplace(key, h);
+  nextHistory_.put(key, h);
   const Vec3 f = r.normalForce * g.normal + r.tangentialForce;  // on B
   force_[a] -= f;
   torque_[a] -= ra.cross(f);
@@ -341,12 +392,12 @@ void SdemEngine::setDissipation(Real friction, Real damping) {
 std::vector<ContactHistoryEntry> SdemEngine::contactHistories() const {
   std::vector<ContactHistoryEntry> out;
   out.reserve(history_.size());
-  for (const auto& [k, h] : history_) out.push_back({k, h.xi});
+  history_.forEach([&out](const ContactKey& k, const ContactHistory& h) { out.push_back({k, h.xi}); });
   return out;
 }
 
 void SdemEngine::setContactHistories(const std::vector<ContactHistoryEntry>& entries) {
-  std::unordered_map<ContactKey, ContactHistory, ContactKeyHash> h;
+  ContactHistoryTable h;
   for (const ContactHistoryEntry& e : entries) {
     checkBody(e.key.bodyA, "contact history bodyA");
     if (e.key.bodyB == kTerrainBody && !hasTerrain())
@@ -355,7 +406,9 @@ void SdemEngine::setContactHistories(const std::vector<ContactHistoryEntry>& ent
     if (e.key.bodyB != kTerrainBody && !(e.key.bodyA < e.key.bodyB))
       throwParameter("contact history bodyB", e.key.bodyB, "", "> bodyA = " + std::to_string(e.key.bodyA));
     if (!e.xi.allFinite()) throw ParameterError("contact history xi: must be finite");
-    h[e.key].xi = e.xi;
+    ContactHistory v;
+    v.xi = e.xi;
+    h.put(e.key, v);
   }
   history_.swap(h);
 }

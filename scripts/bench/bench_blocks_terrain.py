@@ -14,7 +14,10 @@ size's (1.0: linear scaling), the block pairs the narrow phase computed per step
 broad phase that lets none through) and the terrain contacts (4 per block at rest).
 
     python3 scripts/bench/bench_blocks_terrain.py [--exe build/mpmsdem-run] [--sizes 100,300,1000,3000]
-                                                  [--steps 500] [--repeats 2]
+                                                  [--steps 500] [--repeats 2] [--baseline-exe OLD]
+
+With ``--baseline-exe`` an older mpmsdem-run runs each scene too, in turn with the new one, and
+the table adds the new/old speed.
 """
 import argparse
 import json
@@ -74,6 +77,7 @@ def main(argv):
     ap.add_argument("--sizes", default="100,300,1000,3000")
     ap.add_argument("--steps", type=int, default=500)
     ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--baseline-exe", default=None, help="an older mpmsdem-run to compare with")
     a = ap.parse_args(argv)
     sizes = [int(v) for v in a.sizes.split(",")]
     rows = []
@@ -82,27 +86,32 @@ def main(argv):
             path = os.path.join(tmp, "blocks_%d.json" % n)
             with open(path, "w") as f:
                 json.dump(scene(n, a.steps), f)
-            best = None
+            best = {}
             for _ in range(a.repeats):
-                r = subprocess.run([a.exe, path, "--bench"], capture_output=True, text=True)
-                if r.returncode != 0:
-                    sys.exit("mpmsdem-run failed for %d blocks:\n%s" % (n, r.stderr[-3000:]))
-                res = json.loads(r.stdout.strip().splitlines()[-1])
-                if best is None or res["seconds"] < best["seconds"]:
-                    best = res
-            rows.append((n, best))
+                for exe in [a.exe] + ([a.baseline_exe] if a.baseline_exe else []):
+                    r = subprocess.run([exe, path, "--bench"], capture_output=True, text=True)
+                    if r.returncode != 0:
+                        sys.exit("%s failed for %d blocks:\n%s" % (exe, n, r.stderr[-3000:]))
+                    res = json.loads(r.stdout.strip().splitlines()[-1])
+                    if exe not in best or res["seconds"] < best[exe]["seconds"]:
+                        best[exe] = res
+            rows.append((n, best[a.exe], best.get(a.baseline_exe)))
     base = None
     print("| blocks | steps | step loop [s] | blocks' share | µs per block-step | / %d blocks' | narrow-phase pairs per step | "
-          "terrain contacts |" % sizes[0])
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
-    for n, r in rows:
+          "terrain contacts |%s" % (sizes[0], " baseline µs per block-step | new / baseline speed |" if a.baseline_exe else ""))
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|%s" % ("---:|---:|" if a.baseline_exe else ""))
+    for n, r, old in rows:
         per = r["seconds"] / (r["steps"] * n) * 1e6
         base = base or per
         stages = r.get("stage_seconds", {})
         share = stages.get("blocks", float("nan")) / r["seconds"] if stages else float("nan")
-        print("| %d | %d | %.3f | %.2f | %.2f | %.2f | %s | %s |" % (
+        extra = ""
+        if old:
+            perOld = old["seconds"] / (old["steps"] * n) * 1e6
+            extra = " %.2f | %.2f |" % (perOld, perOld / per)
+        print("| %d | %d | %.3f | %.2f | %.2f | %.2f | %s | %s |%s" % (
             n, r["steps"], r["seconds"], share, per, per / base, "%.1f" % (r["narrow_phase_pairs"] / r["steps"]),
-            r["block_contacts"]))
+            r["block_contacts"], extra))
     print("commit %s, %s, %s" % (subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"],
                                                 capture_output=True, text=True).stdout.strip(),
                                  os.uname().machine, "load average %.1f" % os.getloadavg()[0]))

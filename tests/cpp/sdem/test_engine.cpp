@@ -7,6 +7,9 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
+#include <random>
+#include <tuple>
 #include <string>
 #include <utility>
 #include <vector>
@@ -329,4 +332,44 @@ TEST(Engine, ContactHistoryCheckpoint) {
   f.computeForces(1e-4);
   EXPECT_TRUE(f.contactHistories().empty());
   EXPECT_EQ(f.force(copy.block).norm(), 0.0);
+}
+
+// The contacts' history table: what is put is found (and replaced), a cleared table holds
+// nothing, growth keeps every entry, iteration visits each once; against a std::map.
+TEST(ContactHistoryTable, BehavesAsAMap) {
+  ContactHistoryTable t;
+  std::map<std::tuple<int, int, int, int>, Real> ref;
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> body(0, 300), feature(0, 11);
+  for (int round = 0; round < 3; ++round) {
+    t.clear();
+    ref.clear();
+    for (int k = 0; k < 5000; ++k) {
+      ContactKey key{body(rng), body(rng) + 301, FeatureKind::Vertex, FeatureKind::Face, feature(rng), feature(rng)};
+      ContactHistory h;
+      h.xi = Vec3(k + round, 0, 0);
+      t.put(key, h);
+      ref[{key.bodyA, key.bodyB, key.indexA, key.indexB}] = k + round;
+    }
+    ASSERT_EQ(t.size(), ref.size());
+    std::size_t visited = 0;
+    t.forEach([&](const ContactKey& key, const ContactHistory& h) {
+      ++visited;
+      EXPECT_EQ(h.xi.x(), ref.at({key.bodyA, key.bodyB, key.indexA, key.indexB}));
+    });
+    EXPECT_EQ(visited, ref.size());
+    for (const auto& [k, x] : ref) {
+      const ContactKey key{std::get<0>(k), std::get<1>(k), FeatureKind::Vertex, FeatureKind::Face, std::get<2>(k),
+                           std::get<3>(k)};
+      const ContactHistory* h = t.find(key);
+      ASSERT_NE(h, nullptr);
+      EXPECT_EQ(h->xi.x(), x);
+      ContactKey other = key;
+      other.kindB = FeatureKind::Edge;  // same bodies and indices, another feature: absent
+      EXPECT_EQ(t.find(other), nullptr);
+    }
+  }
+  t.clear();
+  EXPECT_EQ(t.size(), 0u);
+  EXPECT_EQ(t.find(ContactKey{1, 302, FeatureKind::Vertex, FeatureKind::Face, 0, 0}), nullptr);
 }
