@@ -284,6 +284,7 @@ def main(argv):
                "blocks_outside_grid": sum(1 for b in blocks if b["outside_grid"]),
                "largest_block_travel": max((b["travel"] for b in blocks), default=0.0),
                "largest_block_force": max((b["peak_force"] for b in blocks), default=0.0),
+               "largest_block_force_10ms": max((b["peak_force_mean"] for b in blocks), default=0.0),
                "wall_seconds": wall, "maps": written}
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
@@ -301,9 +302,10 @@ def main(argv):
               "(blocks.csv):" % (summary["blocks_reached"], summary["blocks_buried"], summary["blocks_below_ground"],
                                  summary["blocks_outside_grid"]))
         for b in sorted(blocks, key=lambda b: -b["travel"])[:5]:
-            print("  block %3d: from (%.1f, %.1f) to (%.1f, %.1f) m, %.1f m, turned %.0f deg, peak force %.3g N at "
-                  "%.2f s, cover %.2f m" % (b["id"], b["x0"], b["y0"], b["x"], b["y"], b["travel"], b["rotation_deg"],
-                                           b["peak_force"], b["peak_force_time"], b["cover"]))
+            print("  block %3d: from (%.1f, %.1f) to (%.1f, %.1f) m, %.1f m, turned %.0f deg, peak force %.3g N (10 ms "
+                  "mean) at %.2f s, cover %.2f m" % (b["id"], b["x0"], b["y0"], b["x"], b["y"], b["travel"],
+                                                    b["rotation_deg"], b["peak_force_mean"], b["peak_force_mean_time"],
+                                                    b["cover"]))
     return summary
 
 

@@ -134,3 +134,30 @@ def test_a_mesh_block_from_the_table_rests_on_its_base(tmp_path):
     assert len(c["normalForce"]) == 4 and set(c["id2"]) == {-1}
     assert c["normalForce"].sum() == pytest.approx(1500.0 * 9.81, rel=5e-3)
     assert abs(b.state.pos[2] - 0.4) < 0.01  # its centre half its height above the ground
+
+
+def test_the_tracker_takes_the_peak_and_its_window_mean_of_a_known_force():
+    # A flow force made by hand on one block, step by step: 1 N everywhere but 101 N during one
+    # step of 1 ms. The largest step value is 101 N at that step; its 10 ms window holds 10 steps,
+    # so the window mean is (9 x 1 + 101) / 10 = 11 N, reported at the window's end; the first
+    # contact is the first step.
+    O.reset()
+    ground = Terrain.plane((0.0, 0.0), (0.4, 0.2), 0.01, z0=0.02)
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=700, friction=0.5)
+    a = sdem.box((0.02, 0.02, 0.02), 0.002, mat, pos=(0.1, 0.1, 0.0405))
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [44, 24, 20], "origin": [-0.02, -0.02, 0.0]},
+                            material=MATERIAL, particles=[], verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: {"friction": 0.3}}, verbose=False)
+    tracker = field.BlockTracker(coupled, [a], window=0.01)
+    O.engines = []
+    O.dt = 1e-3
+    for step in range(1, 41):
+        O.step()  # the clock: O.time = step ms
+        coupled.force = (lambda f: (lambda i: mpmsdem.sdem.Vector3(0, f, 0)))(101.0 if step == 25 else 1.0)
+        tracker._step()
+    assert tracker.peak[0] == 101.0 and tracker.peakTime[0] == pytest.approx(0.025)
+    assert tracker.peakMean[0] == pytest.approx(11.0, rel=1e-12) and tracker.peakMeanTime[0] == pytest.approx(0.03)
+    assert tracker.firstContact[0] == pytest.approx(0.001)
+    with pytest.raises(ValueError, match="window = 0"):
+        field.BlockTracker(coupled, [a], window=0)
