@@ -19,24 +19,6 @@ void requirePositive(const std::string& name, double v, const std::string& unit)
   if (!(v > 0) || !std::isfinite(v)) throwParameter(name, v, unit, "finite and > 0");
 }
 
-void validateTerrain(const TerrainSpec& t) {
-  if (!t.enabled()) return;
-  if (t.nx < 2) throwParameter("terrain.nx", t.nx, "", ">= 2 raster nodes along x");
-  if (t.ny < 2) throwParameter("terrain.ny", t.ny, "", ">= 2 raster nodes along y");
-  if (double(t.nx) * t.ny > 2147483647.0 || t.heights.size() != std::size_t(t.nx) * std::size_t(t.ny))
-    throwParameter("terrain.heights", std::to_string(t.heights.size()) + " values", "",
-                   "nx * ny = " + std::to_string(t.nx) + " x " + std::to_string(t.ny) + " values (< 2^31)");
-  requirePositive("terrain.spacing", t.spacing, "m");
-  if (!std::isfinite(t.x0)) throwParameter("terrain.x0", t.x0, "m", "finite");
-  if (!std::isfinite(t.y0)) throwParameter("terrain.y0", t.y0, "m", "finite");
-  if (!std::isfinite(t.friction)) throwParameter("terrain.friction", t.friction, "", "finite (< 0 no-slip, 0 free slip, > 0 Coulomb)");
-  for (std::size_t k = 0; k < t.heights.size(); ++k)
-    if (!std::isfinite(t.heights[k]))
-      throwParameter("terrain.heights[" + std::to_string(k) + "] (node i " + std::to_string(k / t.ny) + ", j " +
-                         std::to_string(k % t.ny) + ")",
-                     t.heights[k], "m", "finite (fill the raster's no-data nodes first)");
-}
-
 void validate(const MpmParams& p) {
   requirePositive("dx", p.dx, "m");
   const char* axis[3] = {"x", "y", "z"};
@@ -87,7 +69,7 @@ void validate(const MpmParams& p) {
   if (!(m.criticalDensity >= 0) || !std::isfinite(m.criticalDensity))
     throwParameter("material.criticalDensity", m.criticalDensity, "kg/m^3", ">= 0 (0 means = density)");
   validateGate(p);
-  validateTerrain(p.terrain);
+  p.terrain.validate();
 }
 
 std::unique_ptr<MpmSolver> withGate(std::unique_ptr<MpmSolver> solver, const GateSpec& gate) {

@@ -192,6 +192,7 @@ void parseTerrain(const json& root, MpmParams& p, const std::string& baseDir) {
     for (std::size_t k = 0; k < h.size(); ++k) t.heights.push_back(number(h[k], "terrain.heights[" + std::to_string(k) + "]"));
   }
   t.friction = j.contains("friction") ? parseFriction(j.at("friction"), "terrain.friction") : 0;
+  t.validate();  // before the seeding reads it
 }
 
 void parseMaterial(const json& root, MpmParams& p) {

@@ -54,7 +54,7 @@ struct GateSpec {
 // linear on the two triangles of each raster cell and continued flat outside. The flow cannot enter it (grid nodes at or
 // below the surface lose their velocity into it, Coulomb friction on the rest) and points are kept
 // on or above it. Use it with gravity along -z (a real slope, not a rotated one). Range checks:
-// makeSolver (ParameterError naming "terrain.<field>").
+// validate(), which the scene reader, makeSolver and the SDEM engine call.
 struct TerrainSpec {
   std::vector<double> heights;  // [m], nx * ny finite values; empty: no terrain (the default)
   int nx = 0, ny = 0;           // raster nodes along x and y, >= 2 each
@@ -62,6 +62,26 @@ struct TerrainSpec {
   double spacing = 0;           // raster spacing [m], > 0 and finite
   double friction = 0;          // flow–terrain friction [-], finite: < 0 no-slip, 0 free slip, > 0 Coulomb
   bool enabled() const { return !heights.empty(); }
+  // ParameterError naming "terrain.<field>" for a field out of its range (nothing to check
+  // without a terrain).
+  void validate() const {
+    if (!enabled()) return;
+    if (nx < 2) throwParameter("terrain.nx", nx, "", ">= 2 raster nodes along x");
+    if (ny < 2) throwParameter("terrain.ny", ny, "", ">= 2 raster nodes along y");
+    if (double(nx) * ny > 2147483647.0 || heights.size() != std::size_t(nx) * std::size_t(ny))
+      throwParameter("terrain.heights", std::to_string(heights.size()) + " values", "",
+                     "nx * ny = " + std::to_string(nx) + " x " + std::to_string(ny) + " values (< 2^31)");
+    if (!(spacing > 0) || !std::isfinite(spacing)) throwParameter("terrain.spacing", spacing, "m", "finite and > 0");
+    if (!std::isfinite(x0)) throwParameter("terrain.x0", x0, "m", "finite");
+    if (!std::isfinite(y0)) throwParameter("terrain.y0", y0, "m", "finite");
+    if (!std::isfinite(friction))
+      throwParameter("terrain.friction", friction, "", "finite (< 0 no-slip, 0 free slip, > 0 Coulomb)");
+    for (std::size_t k = 0; k < heights.size(); ++k)
+      if (!std::isfinite(heights[k]))
+        throwParameter("terrain.heights[" + std::to_string(k) + "] (node i " + std::to_string(k / ny) + ", j " +
+                           std::to_string(k % ny) + ")",
+                       heights[k], "m", "finite (fill the raster's no-data nodes first)");
+  }
 };
 
 struct MpmParams {

@@ -319,14 +319,8 @@ void SdemEngine::setTerrain(const mpm::TerrainSpec& terrain, int material) {
   if (material < 0 || material >= numMaterials())
     throwParameter("terrain material", material, "",
                    "a registered material index in [0, " + std::to_string(numMaterials()) + ")");
-  if (terrain.nx < 2 || terrain.ny < 2 || terrain.heights.size() != std::size_t(terrain.nx) * std::size_t(terrain.ny))
-    throwParameter("terrain.heights", std::to_string(terrain.heights.size()) + " values", "",
-                   "nx * ny with nx, ny >= 2 (nx " + std::to_string(terrain.nx) + ", ny " + std::to_string(terrain.ny) + ")");
-  if (!(terrain.spacing > 0) || !std::isfinite(terrain.spacing)) throwParameter("terrain.spacing", terrain.spacing, "m", "> 0");
-  if (!std::isfinite(terrain.x0) || !std::isfinite(terrain.y0))
-    throwParameter("terrain.x0, y0", std::to_string(terrain.x0) + ", " + std::to_string(terrain.y0), "m", "finite");
-  for (std::size_t k = 0; k < terrain.heights.size(); ++k)
-    if (!std::isfinite(terrain.heights[k])) throwParameter("terrain.heights[" + std::to_string(k) + "]", terrain.heights[k], "m", "finite");
+  if (!terrain.enabled()) throw ParameterError("terrain.heights: empty: a terrain has nx * ny >= 4 heights");
+  terrain.validate();
   terrain_ = terrain;
   terrainView_ = mpm::terrainViewOf(terrain_, terrain_.heights.data());
   terrainMaterial_ = material;
