@@ -63,15 +63,28 @@ def series(path):
         return {k: np.array(s[k]) for k in s}, json.loads(f.attrs["ids"])
 
 
+def run_both(coupled, path, steps, tmp_path):
+    """YADE runs ``steps`` steps of ``coupled``, then the driver the scene it wrote to ``path``;
+    both record every step into tmp_path/yade and tmp_path/driver: their series and ids (the
+    records hold the initial state and every step's), and the driver's completed process."""
+    mpmsdem.run(steps, coupled)
+    r = subprocess.run([driver_exe(), path, "--steps", str(steps)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    y, yid = series(tmp_path / "yade" / "coupled.h5")
+    d, did = series(tmp_path / "driver" / "coupled.h5")
+    assert len(y["time"]) == len(d["time"]) == steps + 1
+    return (y, yid), (d, did), r
+
+
 def test_driver_matches_yade_for_the_same_coupled_scene(tmp_path):
     exe = driver_exe()
     coupled, (bed, hull, box) = scene(tmp_path / "yade")
     steps = 1200
     path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=O.dt, seriesEvery=O.dt,
                              outputEvery=0.02, outputDir=str(tmp_path / "driver"), vtk="none")
-    mpmsdem.run(steps, coupled)
-    r = subprocess.run([exe, path, "--steps", str(steps)], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
+    # Both record every step the state at t (blocks and particles), with the flow forces of the
+    # step that led there: record 0 is the initial state, the last one the state after the run.
+    (y, yid), (d, did), r = run_both(coupled, path, steps, tmp_path)
     # where the step loop went, in shares that add up: the records (every step here) and the
     # snapshots (every 0.02 s) are timed apart from the time-step control
     split = re.search(r"step loop: MPM step ([-\d.]+) %, MP-block coupling ([-\d.]+) %, blocks ([-\d.]+) %, "
@@ -80,12 +93,7 @@ def test_driver_matches_yade_for_the_same_coupled_scene(tmp_path):
     shares = [float(v) for v in split.groups()]
     assert sum(shares) == pytest.approx(100, abs=0.5) and min(shares) >= -0.1
     assert shares[3] > 1 and shares[4] > 0.1  # records every step, a snapshot every 0.02 s
-    y, yid = series(tmp_path / "yade" / "coupled.h5")
-    d, did = series(tmp_path / "driver" / "coupled.h5")
     assert yid == did == [bed, hull, box]
-    # Both record every step the state at t (blocks and particles), with the flow forces of the
-    # step that led there: record 0 is the initial state, the last one the state after the run.
-    assert len(y["time"]) == len(d["time"]) == steps + 1
     assert np.abs(y["time"] - d["time"]).max() <= 1e-12
     # the flow did act: the blocks moved and were pushed
     assert np.abs(d["pos"][-1, 3:6] - d["pos"][0, 3:6]).max() > 2e-3
@@ -120,20 +128,14 @@ def test_driver_matches_yade_for_the_same_coupled_scene(tmp_path):
 def test_driver_runs_a_coupled_scene_without_particles_as_yade_does(tmp_path):
     """"particles": [] (MpmEngine(particles=[])): the blocks move under gravity and their own
     contacts alone, the same in the driver and in YADE, with no flow force and no flow front."""
-    exe = driver_exe()
     coupled, (bed, hull, box) = scene(tmp_path / "yade", blob=False)
     steps = 1200
     path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=O.dt, seriesEvery=O.dt,
                              outputEvery=0.02, outputDir=str(tmp_path / "driver"), vtk="none")
     with open(path) as f:
         assert json.load(f)["particles"] == []
-    mpmsdem.run(steps, coupled)
-    r = subprocess.run([exe, path, "--steps", str(steps)], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
+    (y, _), (d, _), r = run_both(coupled, path, steps, tmp_path)
     assert "0 particles" in r.stdout
-    y, _ = series(tmp_path / "yade" / "coupled.h5")
-    d, _ = series(tmp_path / "driver" / "coupled.h5")
-    assert len(y["time"]) == len(d["time"]) == steps + 1
     assert np.abs(y["flow_force"]).max() == np.abs(d["flow_force"]).max() == 0
     # the hull starts 0.5 mm above the bed's barrier and lands: it moved, the same in both
     assert np.abs(d["pos"][-1, 3:6] - d["pos"][0, 3:6]).max() > 1e-4
@@ -171,12 +173,7 @@ def test_driver_matches_yade_on_a_terrain(tmp_path):
     path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=O.dt, seriesEvery=O.dt,
                              outputEvery=0.02, outputDir=str(tmp_path / "driver"), vtk="none")
     assert json.load(open(path))["terrain_material"]["friction"] == 0.4
-    mpmsdem.run(steps, coupled)
-    r = subprocess.run([exe, path, "--steps", str(steps)], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    y, _ = series(tmp_path / "yade" / "coupled.h5")
-    d, _ = series(tmp_path / "driver" / "coupled.h5")
-    assert len(y["time"]) == len(d["time"]) == steps + 1
+    (y, _), (d, _), _ = run_both(coupled, path, steps, tmp_path)
     assert np.linalg.norm(d["pos"][-1] - d["pos"][0]) > 1e-3  # landed, pushed down the slope
     assert np.abs(d["flow_force"]).max() > 0.01
     for k in ("pos", "vel", "rotation", "flow_force"):
@@ -202,19 +199,13 @@ def test_driver_auto_step_follows_yade_dtAuto(tmp_path, stiffness, steps):
     down onto the bed make the MP–bed and MP–block contacts, not the MPM CFL step, set the
     step; at k_c 1e7 N/m the particles' approach step does at each first touch (without it that
     run stopped at step 185, its step above twice the contact step)."""
-    exe = driver_exe()
     coupled, (bed, hull, box) = scene(tmp_path / "yade", stiffness=stiffness, velocity=(1.0, 0, -1.0))
     coupled.dtAuto = 0.5
     coupled.outputEvery = 1e-9  # a record every step, as the driver's seriesEvery below
     O.dt = 1.0  # above any step dtAuto sets: the first step is dtAuto's own, as in the driver
     path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt="auto", dtFactor=0.5,
                              seriesEvery=1e-9, outputEvery=0.02, outputDir=str(tmp_path / "driver"), vtk="none")
-    mpmsdem.run(steps, coupled)
-    r = subprocess.run([exe, path, "--steps", str(steps)], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    y, _ = series(tmp_path / "yade" / "coupled.h5")
-    d, _ = series(tmp_path / "driver" / "coupled.h5")
-    assert len(y["time"]) == len(d["time"]) == steps + 1
+    (y, _), (d, _), _ = run_both(coupled, path, steps, tmp_path)
     dt = np.diff(d["time"])
     # the steps did change (contacts of the landing blob set them: 2.9e-5 to 5.0e-5 s at k_c
     # 1e5, 6.5e-6 to 4.9e-5 s at 1e7), and both took the same ones
