@@ -125,10 +125,8 @@ class MpmEngine:
             scene["gate"] = dict(gate)
             if scene["gate"].get("speed") == math.inf:  # JSON has no infinity; 0 means the same
                 scene["gate"]["speed"] = 0
-        self.terrain = None  # the Terrain object, when given as one
         if terrain is not None:
             if hasattr(terrain, "scene"):
-                self.terrain = terrain
                 scene["terrain"] = terrain.scene()
             elif isinstance(terrain, dict):
                 scene["terrain"] = dict(terrain)
