@@ -180,12 +180,15 @@ def main(argv):
     ground, grid, box = scene(a, buildDx)
     out = os.path.abspath(a.out)
     os.makedirs(out, exist_ok=True)
+    # a driver scene's outputs are the driver's (at a.out as the user wrote it, for the machine that
+    # runs it); the engines built here to write it write none
+    outputs = {} if a.driver_scene else {"output": out, "outputEvery": 1.0}
     O.reset()
     rows = field.readBlockTable(a.block_table) if a.block_table else village(a.blocks, a.seed, a.scale)
     coupled = tracker = None
     mpm = mpmsdem.MpmEngine(grid=grid, material=DEBRIS, particles=[box], gravity=(0, 0, -9.81), terrain=ground,
                             flipViscosity=a.flip_viscosity, backend=a.backend, precision=a.precision,
-                            output=out, outputEvery=1.0, verbose=False)
+                            verbose=False, **outputs)
     if rows:
         field.writeBlockTable(os.path.join(out, "blocks_input.csv"), rows)
         sdem = mpmsdem.SdemEngine(verbose=False)
@@ -203,8 +206,8 @@ def main(argv):
         ids = field.placeBlocks(sdem, ground, rows, blockMaterial,
                                 folder=os.path.dirname(os.path.abspath(a.block_table)) if a.block_table else ".")
         pairs = {m: {"friction": BASAL_FRICTION, "barrierStiffness": FIELD_STIFFNESS} for m in materials.values()}
-        coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs=pairs, dtAuto=0.5, output=out, outputEvery=1.0,
-                                        vtkEvery=1.0, verbose=False)
+        coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs=pairs, dtAuto=0.5, verbose=False,
+                                        **dict(outputs, vtkEvery=1.0) if outputs else {})
         tracker = field.BlockTracker(coupled, ids)
         O.engines = [ForceResetter(), coupled.runner, tracker.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
         O.dt = 0.5 * mpm.stableTimeStep()
@@ -212,10 +215,10 @@ def main(argv):
         O.engines = [mpm.runner]
     if a.driver_scene:
         if coupled:
-            s = mpmsdem.driver.sceneDict(coupled, duration=a.duration, dt="auto", outputEvery=1.0, outputDir=out)
+            s = mpmsdem.driver.sceneDict(coupled, duration=a.duration, dt="auto", outputEvery=1.0, outputDir=a.out)
         else:
             s = json.loads(mpm.solver.sceneJson)
-            s["run"] = {"duration": a.duration, "dt": "auto", "output_every": 1.0, "output_dir": out}
+            s["run"] = {"duration": a.duration, "dt": "auto", "output_every": 1.0, "output_dir": a.out}
         _, s["grid"], fine = scene(a, a.dx)
         s["particles"] = [fine]
         with open(a.driver_scene, "w") as f:

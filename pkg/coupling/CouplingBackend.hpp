@@ -62,6 +62,10 @@ class CouplingDeviceBackend {
                                  std::vector<unsigned>& written) = 0;
   virtual void uploadHistories(const std::vector<long long>& keys, const std::vector<double>& xi,
                                const std::vector<unsigned>& written) = 0;
+  // The contacts the device's list holds before it first grows (default 65,536). A step with
+  // more adds its block sums atomically, in an order that changes from run to run, and the list
+  // grows to twice its contacts for the next step. Tests set a small one to reach that step.
+  virtual void setFirstListCapacity(unsigned int capacity) = 0;
   // Largest initial particle volume of the view [m^3].
   virtual double maxVolume0(const mpm::ParticleView& v) = 0;
   // Keep each step's contacts on the device from the next step on (kContactValues doubles,

@@ -222,6 +222,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     devicePrecision_ = view.precision;
     if (!device_) throw RuntimeFailure("MpSdemCoupling: the solver runs on CUDA but this build has no CUDA coupling");
     device_->recordContacts(recordContacts_);
+    if (deviceListCapacity_ > 0) device_->setFirstListCapacity(deviceListCapacity_);
   }
   const bool hostFloat = !view.device && view.precision == mpm::Precision::Float;
   if (maxParticleRadius_ < 0) {
@@ -456,6 +457,12 @@ void MpSdemCoupling::appendContacts(const HostSide<T>& side, int block, std::vec
 void MpSdemCoupling::setRecordContacts(bool on) {
   recordContacts_ = on;
   if (device_) device_->recordContacts(on);
+}
+
+void MpSdemCoupling::setDeviceListCapacity(unsigned int capacity) {
+  if (capacity == 0) throw ParameterError("MpSdemCoupling: deviceListCapacity must be >= 1 (got 0)");
+  if (device_) throw ParameterError("MpSdemCoupling: deviceListCapacity is set before the first step");
+  deviceListCapacity_ = capacity;
 }
 
 std::vector<MpContactRecord> MpSdemCoupling::contacts(int block) const {

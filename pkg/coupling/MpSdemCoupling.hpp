@@ -94,6 +94,10 @@ class MpSdemCoupling {
   // backends always have them (the loop's own list).
   void setRecordContacts(bool on);
   bool recordContacts() const { return recordContacts_; }
+  // CUDA: the contacts the device's list holds before it first grows (default 65,536; >= 1). A
+  // step with more sums its block forces with atomics, in an order that changes from run to run,
+  // and grows the list to twice its contacts. Set before the first step.
+  void setDeviceListCapacity(unsigned int capacity);
   // contacts() can answer for the last step (false on CUDA without recording).
   bool contactsAvailable() const { return contactsIn_ != ContactsIn::Device || recordContacts_; }
   // Smallest sqrt(m_p / max(k_n, K_t)) over the MP contacts [s]; +inf without contacts.
@@ -182,6 +186,7 @@ class MpSdemCoupling {
   // failed), one of the host sides, or the device.
   enum class ContactsIn { None, HostDouble, HostFloat, Device } contactsIn_ = ContactsIn::None;
   bool recordContacts_ = false;
+  unsigned int deviceListCapacity_ = 0;  // 0: the backend's default
   template <typename T>
   static void appendContacts(const HostSide<T>& side, int block, std::vector<MpContactRecord>& out);
   bool historiesToDevice_ = false;  // setHistories() since the last step: the device takes them

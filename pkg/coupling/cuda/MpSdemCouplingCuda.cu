@@ -102,6 +102,11 @@ class CouplingCuda : public CouplingDeviceBackend {
     return m;
   }
 
+  void setFirstListCapacity(unsigned int capacity) override {
+    if (capacity == 0) throw ParameterError("MP-block coupling on CUDA: the contact list's first capacity must be >= 1");
+    firstListCapacity_ = capacity;
+  }
+
   void recordContacts(bool on) override {
     recording_ = on;
     if (on && listCapacity_ > 0) record_.reserve(static_cast<std::size_t>(kContactValues) * listCapacity_);
@@ -183,7 +188,7 @@ class CouplingCuda : public CouplingDeviceBackend {
       throw ParameterError("MP-block coupling on CUDA: " + std::to_string(numBlocks) + " blocks and " +
                            std::to_string(v.n) + " particles need a contact sort key of " + std::to_string(keyBits) +
                            " bits, at most 64 are supported");
-    if (listCapacity_ == 0) growList(kFirstListCapacity);
+    if (listCapacity_ == 0) growList(firstListCapacity_);
     sums_.reserve(out.sums.size());
     CUDA_CHECK(cudaMemsetAsync(sums_.ptr, 0, std::max<std::size_t>(out.sums.size(), 1) * sizeof(double)));
     const cudak::ContactList list{share_.ptr, keys_[0].ptr, entries_[0].ptr, recording_ ? record_.ptr : nullptr,
@@ -209,9 +214,13 @@ class CouplingCuda : public CouplingDeviceBackend {
     cudak::CouplingFlags res;
     CUDA_CHECK(cudaMemcpy(&res, flagsD, sizeof(res), cudaMemcpyDeviceToHost));
     recorded_ = recording_ && res.contacts <= listCapacity_ ? static_cast<long>(res.contacts) : -1;
-    if (res.contacts > listCapacity_)
-      growList(2ull * res.contacts);  // this step keeps the atomic sums
-    else if (res.contacts > 0)
+    if (res.contacts > listCapacity_) {  // this step's sums are atomic; the list grows for the next
+      const unsigned int listed = listCapacity_;
+      cudak::listedSharesKernel<<<(listed + kThreads - 1) / kThreads, kThreads>>>(listed, share_.ptr, keys_[0].ptr,
+                                                                                 numberBits + 8, sums_.ptr);
+      CUDA_CHECK(cudaGetLastError());
+      growList(2ull * res.contacts);
+    } else if (res.contacts > 0)
       orderedSums(static_cast<int>(res.contacts), numBlocks, numberBits, keyBits);
     if (!out.sums.empty())
       CUDA_CHECK(cudaMemcpy(out.sums.data(), sums_.ptr, out.sums.size() * sizeof(double), cudaMemcpyDeviceToHost));
@@ -228,7 +237,7 @@ class CouplingCuda : public CouplingDeviceBackend {
   }
 
  private:
-  static constexpr unsigned int kFirstListCapacity = 1u << 16;
+  unsigned int firstListCapacity_ = 1u << 16;
 
   void growList(unsigned long long capacity) {
     listCapacity_ = static_cast<unsigned int>(std::min<unsigned long long>(capacity, 1ull << 31));

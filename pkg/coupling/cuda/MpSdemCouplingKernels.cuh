@@ -53,12 +53,14 @@ struct DeviceSink {
   CouplingFlags* flags;
   ContactList list;
   unsigned int j = 0;  // contacts of this particle so far
-  // The atomic sums are those of a step whose contacts overflowed the list; otherwise the
-  // list's ordered sums replace them (blockSumsKernel).
+  // A contact past the list's end adds its share atomically (a step that overflows the list
+  // then adds the listed shares too: listedSharesKernel); the listed ones are summed in order
+  // (blockSumsKernel). Atomics for every contact would queue a step's thousands of contacts
+  // with the bed on the same 16 sums.
   __device__ void operator()(const MpContact<T>& c) {
     const BlockState<T>& b = blocks[c.block];
-    addBlockShare(c, b, sums, AtomicAdd{});
     const unsigned int i = listPlace(&flags->contacts);
+    if (i >= list.capacity) addBlockShare(c, b, sums, AtomicAdd{});
     if (i < list.capacity) {
       blockShare(c, b, list.share + static_cast<std::size_t>(kBlockSums) * i);
       list.key[i] = (static_cast<unsigned long long>(c.block) << (list.numberBits + 8)) |
@@ -97,6 +99,18 @@ static __global__ void __launch_bounds__(kSumThreads)
     __syncthreads();
   }
   if (t < kBlockSums) sums[static_cast<std::size_t>(kBlockSums) * b + t] = part[t][0];
+}
+
+// The shares of the listed contacts added atomically to the block sums, in a step whose
+// contacts overflowed the list (the others were added so in coupleKernel).
+static __global__ void listedSharesKernel(unsigned int count, const double* share, const unsigned long long* key,
+                                          int blockShift, double* sums) {
+  const unsigned int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= count) return;
+  const double* s = share + static_cast<std::size_t>(kBlockSums) * i;
+  double* dst = sums + static_cast<std::size_t>(kBlockSums) * (key[i] >> blockShift);
+  for (int k = 0; k < kBlockSums; ++k)
+    if (s[k] != 0.0) atomicAdd(dst + k, s[k]);
 }
 
 template <typename T>

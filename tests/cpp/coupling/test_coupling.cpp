@@ -137,11 +137,12 @@ struct BlobHit {
   double minApproach = std::numeric_limits<double>::infinity();
   std::vector<MpContactRecord> contacts;  // of the last step
 };
-BlobHit blobHitsCube(mpm::Backend backend, mpm::Precision precision) {
+BlobHit blobHitsCube(mpm::Backend backend, mpm::Precision precision, unsigned int deviceListCapacity = 0) {
   int cube;
   auto world = blobAtCube(1.0, false, 1e4, &cube, backend, precision);
   CoupledWorld& w = *world;
   w.coupling.setRecordContacts(true);
+  if (deviceListCapacity > 0) w.coupling.setDeviceListCapacity(deviceListCapacity);
   BlobHit r;
   r.impulse = Vec3::Zero();
   for (int s = 0; s < 1500; ++s) {
@@ -747,6 +748,7 @@ TEST(MpSdemCoupling, BadInputIsRefusedClearly) {
         << e.what();
   }
   EXPECT_THROW(w.coupling.setHistorySlots(0), ParameterError);
+  EXPECT_THROW(w.coupling.setDeviceListCapacity(0), ParameterError);
   sdem::BarrierPhys bad = pair();
   bad.friction = -1;
   EXPECT_THROW(w.coupling.setPair(0, bad), ParameterError);
@@ -925,6 +927,20 @@ TEST(MpSdemCoupling, CpuAndCudaAgree) {
     EXPECT_EQ(again.position, gpu.position) << "precision " << ::testing::PrintToString(prec);
     EXPECT_EQ(again.impulse, gpu.impulse) << "precision " << ::testing::PrintToString(prec);
   }
+}
+
+// Steps whose contacts overflow the device's contact list (a list of 4 at first, grown to
+// twice a step's contacts each time it overflows): their block sums (the overflowing contacts
+// added atomically, the listed ones after them) are the CPU's within the ordered sums' bound.
+TEST(MpSdemCoupling, CudaStepsBeyondTheContactListAgreeWithTheCpu) {
+  if (!mpm::cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
+  const BlobHit cpu = blobHitsCube(mpm::Backend::Cpu, mpm::Precision::Double);
+  const BlobHit gpu = blobHitsCube(mpm::Backend::Cuda, mpm::Precision::Double, 4);
+  ASSERT_GT(cpu.contacts.size(), 8u) << "too few contacts to overflow a list of 4 twice";
+  std::printf("cuda-double, contact list of 4 at first: cube position %.3e m, impulse %.3e of %.4g N s\n",
+              (gpu.position - cpu.position).norm(), (gpu.impulse - cpu.impulse).norm(), cpu.impulse.norm());
+  EXPECT_NEAR((gpu.position - cpu.position).norm(), 0.0, 1e-10);
+  EXPECT_NEAR((gpu.impulse - cpu.impulse).norm(), 0.0, 1e-8 * cpu.impulse.norm());
 }
 
 // The records contacts() hands out are the contacts the block sums were made of.
