@@ -24,6 +24,7 @@
 #                                                      # (2000) with --bench --device-stages, and
 #                                                      # with its outputs and probes
 #   GPU_TEST_FILTER='*uda*' bash ...                   # the tests' gtest filter (default all)
+#   GPU_PROFILE_BASELINE=0 bash ...                    # --profile-scene without the baseline's run
 #   ... --workers N                                    # prepared cases N at a time (small scenes
 #                                                      # leave most of a GPU idle; default 1)
 #   ... --baseline DIR                                 # an older mpmsdem-run in DIR: the MPM
@@ -250,7 +251,7 @@ scene_profile() {
   name=$(basename "$(dirname "$scene")")_$(basename "$scene" .json)
   "$bin/mpmsdem-run" "$scene" --backend cuda --bench --device-stages --steps "$steps" 2> /dev/null | tail -1 \
     > "$out/profile_$name.json" || return 1
-  if [ -n "$baseline" ]; then
+  if [ -n "$baseline" ] && [ "${GPU_PROFILE_BASELINE:-1}" = 1 ]; then
     "$baseline/mpmsdem-run" "$scene" --backend cuda --bench --device-stages --steps "$steps" 2> /dev/null | tail -1 \
       > "$out/profile_${name}_baseline.json" || return 1
     python3 - "$out/profile_$name.json" "$out/profile_${name}_baseline.json" <<'PY'
