@@ -634,7 +634,7 @@ class OutputRun {
   }
 
  private:
-  mpm::Diagnostics diagnose() { return mpm::diagnose(slices_, solver_.params().gravity, scene_.probes); }
+  mpm::Diagnostics diagnose() { return mpm::diagnose(solver_, slices_, solver_.params().gravity, scene_.probes); }
 
   // The flow probes' records and the run's stop rules, at a series record of time t.
   void recordProbes(const mpm::Diagnostics& d, double t) {

@@ -94,9 +94,10 @@ class PyMpm {
     return d;
   }
 
-  // The series' diagnostics of the current state (mpm::diagnose), read slice by slice.
+  // The series' diagnostics of the current state (mpm::diagnose): on CUDA reduced on the
+  // device, elsewhere read slice by slice.
   bp::dict diagnostics() {
-    const mpm::Diagnostics d = mpm::diagnose(outputParticles(), scene_.params.gravity);
+    const mpm::Diagnostics d = mpm::diagnose(*solver_, outputParticles(), scene_.params.gravity);
     bp::dict out;
     out["kinetic_energy"] = d.kineticEnergy;
     out["potential_energy"] = d.potential;

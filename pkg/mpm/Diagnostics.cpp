@@ -8,58 +8,45 @@ namespace mpm {
 
 Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& g,
                      const std::vector<FlowProbeSpec>& probes) {
+  DiagnosticSums sums = emptyDiagnosticSums();
+  std::vector<ProbeSums> probeSums(probes.size(), emptyProbeSums());
+  const double gravity[3] = {g[0], g[1], g[2]};
+  forEachSlice(particles, [&](std::size_t, const ParticleSet& p) {
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double* x = &p.x[3 * i];
+      addParticleDiagnostics(sums, x, &p.v[3 * i], p.mass[i], p.phase[i], gravity);
+      for (std::size_t k = 0; k < probes.size(); ++k)
+        addProbeSample(probeSums[k], {probes[k].x, probes[k].halfWidth}, x, p.v[3 * i], p.mass[i]);
+    }
+  });
+  return finishDiagnostics(sums, probeSums, particles.size(), probes);
+}
+
+Diagnostics finishDiagnostics(const DiagnosticSums& sums, const std::vector<ProbeSums>& probeSums, std::size_t n,
+                              const std::vector<FlowProbeSpec>& probes) {
   Diagnostics d;
   d.probes.assign(probes.size(), ProbeSample{});
-  const std::size_t n = particles.size();
   if (n == 0) {
     // no flow has no front, height or centre of mass; its energies and fractions are zero
     d.frontX = d.heightZ = d.com[0] = d.com[1] = d.com[2] = std::nan("");
     return d;
   }
-  d.frontX = -INFINITY;
-  d.heightZ = -INFINITY;
-  double mass = 0, maxV2 = 0;
-  std::size_t flowing = 0, gasified = 0;
-  std::vector<double> top(probes.size(), -INFINITY), probeMass(probes.size(), 0.0);
-  forEachSlice(particles, [&](std::size_t, const ParticleSet& p) {
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      const double* v = &p.v[3 * i];
-      const double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-      d.kineticEnergy += 0.5 * p.mass[i] * v2;
-      maxV2 = std::max(maxV2, v2);
-      d.frontX = std::max(d.frontX, p.x[3 * i]);
-      d.heightZ = std::max(d.heightZ, p.x[3 * i + 2]);
-      for (int a = 0; a < 3; ++a) d.com[a] += p.mass[i] * p.x[3 * i + a];
-      mass += p.mass[i];
-      flowing += p.phase[i] == 1;
-      gasified += p.phase[i] == 2;
-    }
-    for (std::size_t i = 0; i < p.size(); ++i)
-      d.potential -= p.mass[i] * (g[0] * p.x[3 * i] + g[1] * p.x[3 * i + 1] + g[2] * p.x[3 * i + 2]);
-    for (std::size_t k = 0; k < probes.size(); ++k) {
-      ProbeSample& s = d.probes[k];
-      for (std::size_t i = 0; i < p.size(); ++i) {
-        if (std::abs(p.x[3 * i] - probes[k].x) > probes[k].halfWidth) continue;
-        ++s.points;
-        top[k] = std::max(top[k], p.x[3 * i + 2]);
-        probeMass[k] += p.mass[i];
-        s.velocity += p.mass[i] * p.v[3 * i];
-      }
-    }
-  });
+  d.kineticEnergy = sums.kinetic;
+  d.potential = sums.potential;
+  d.frontX = sums.front;
+  d.heightZ = sums.height;
+  for (int a = 0; a < 3; ++a) d.com[a] = sums.moment[a] / sums.mass;
+  d.maxSpeed = std::sqrt(sums.maxV2);
+  d.flowing = double(sums.flowing) / n;
+  d.gasified = double(sums.gasified) / n;
   for (std::size_t k = 0; k < probes.size(); ++k) {
+    const ProbeSums& q = probeSums[k];
     ProbeSample& s = d.probes[k];
-    if (s.points < probes[k].minPoints) {
-      s.depth = s.velocity = 0;
-      continue;
-    }
-    s.depth = top[k] - probes[k].bedZ;
-    s.velocity /= probeMass[k];
+    s.points = q.points;
+    if (q.points < probes[k].minPoints) continue;  // the front has not arrived: depth and velocity 0
+    s.depth = q.top - probes[k].bedZ;
+    s.velocity = q.momentumX / q.mass;
   }
-  for (double& c : d.com) c /= mass;
-  d.maxSpeed = std::sqrt(maxV2);
-  d.flowing = double(flowing) / n;
-  d.gasified = double(gasified) / n;
   return d;
 }
 

@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "mpm/DiagnosticsKernels.hpp"
 #include "mpm/MpmTypes.hpp"
 
 namespace mpmsdem {
@@ -45,6 +46,11 @@ struct Diagnostics {
 
 Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& gravity,
                      const std::vector<FlowProbeSpec>& probes = {});
+
+// The diagnostics of `n` particles from their sums (DiagnosticsKernels.hpp), one ProbeSums
+// per probe: what diagnose() and a solver's own reduction (MpmSolver::diagnose) report.
+Diagnostics finishDiagnostics(const DiagnosticSums& sums, const std::vector<ProbeSums>& probeSums, std::size_t n,
+                              const std::vector<FlowProbeSpec>& probes);
 
 // A probe's records over a run: the front's arrival (the first record with the flow at the
 // station) and the means of depth and velocity over the records up to `window` after it, as

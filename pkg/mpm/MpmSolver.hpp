@@ -9,6 +9,7 @@
 
 #include "common/Error.hpp"
 
+#include "mpm/Diagnostics.hpp"
 #include "mpm/MpmTypes.hpp"
 
 namespace mpmsdem {
@@ -144,6 +145,16 @@ class MpmSolver {
     }
   }
 
+  // The sums behind the whole-system diagnostics of the current particles (mpm::diagnose's
+  // per-particle formulas, DiagnosticsKernels.hpp; one ProbeSums per station into
+  // `probeSums`) reduced where the particles are, so that a few hundred bytes cross instead of
+  // the whole state: true where this backend does that (CUDA, with at most kMaxDeviceProbes
+  // stations; sums in a fixed order), false where the caller reads slices.
+  virtual bool diagnosticSums(const std::array<double, 3>& /*gravity*/, const std::vector<ProbeStation>& /*stations*/,
+                              DiagnosticSums& /*sums*/, std::vector<ProbeSums>& /*probeSums*/) {
+    return false;
+  }
+
   // Bytes of device (CUDA) or host (CPU) memory held for particles and grid.
   virtual std::size_t memoryBytes() const = 0;
 
@@ -223,6 +234,19 @@ class SolverParticleSlices : public ParticleSlices {
   std::size_t sliceSize_;
   ParticleSet buffer_;
 };
+
+// The diagnostics of a solver's current particles: its own reduction where it has one
+// (MpmSolver::diagnose), else a pass over `slices` of them (mpm::diagnose).
+inline Diagnostics diagnose(MpmSolver& solver, ParticleSlices& slices, const std::array<double, 3>& gravity,
+                            const std::vector<FlowProbeSpec>& probes = {}) {
+  std::vector<ProbeStation> stations;
+  for (const FlowProbeSpec& p : probes) stations.push_back({p.x, p.halfWidth});
+  DiagnosticSums sums;
+  std::vector<ProbeSums> probeSums;
+  if (solver.diagnosticSums(gravity, stations, sums, probeSums))
+    return finishDiagnostics(sums, probeSums, solver.numParticles(), probes);
+  return diagnose(slices, gravity, probes);
+}
 
 // Build a solver, with a Gate hook when params.gate is enabled (findGridHook<Gate>() reads
 // it). Throws ParameterError on invalid parameters (each names the parameter and its range),

@@ -88,6 +88,7 @@ MpmCuda<T>::~MpmCuda() {
   deviceFree(activeTiles_);
   deviceFree(listCounts_);
   deviceFree(tileMark_);
+  deviceFree(diagnostics_);
 }
 
 template <typename T>
@@ -482,6 +483,36 @@ void MpmCuda<T>::step(double dt) {
   hasFext_ = false;
   time_ += dt;
   ++steps_;
+}
+
+template <typename T>
+bool MpmCuda<T>::diagnosticSums(const std::array<double, 3>& gravity, const std::vector<ProbeStation>& stations,
+                                DiagnosticSums& sums, std::vector<ProbeSums>& probeSums) {
+  if (stations.size() > static_cast<std::size_t>(kMaxDeviceProbes)) return false;
+  cudak::DiagnosticPartial total;
+  total.sums = emptyDiagnosticSums();
+  for (auto& q : total.probes) q = emptyProbeSums();
+  if (n_ > 0) {
+    cudak::DiagnosticInput in{};
+    for (int d = 0; d < 3; ++d) in.gravity[d] = gravity[d];
+    for (std::size_t k = 0; k < stations.size(); ++k) in.probes[k] = stations[k];
+    in.numProbes = static_cast<int>(stations.size());
+    if (!diagnostics_) {
+      cudak::DiagnosticPartial* p = nullptr;
+      deviceAlloc(&p, cudak::kDiagBlocks + 1, bytes_);
+      diagnostics_ = p;
+    }
+    auto* partial = static_cast<cudak::DiagnosticPartial*>(diagnostics_);
+    cudak::diagnosticsKernel<T><<<cudak::kDiagBlocks, cudak::kDiagThreads>>>(static_cast<int>(n_), input(),
+                                                                           state_[cur_].phase, in, partial);
+    CUDA_CHECK(cudaGetLastError());
+    cudak::diagnosticsTotalKernel<<<1, cudak::kDiagThreads>>>(partial, in.numProbes, partial + cudak::kDiagBlocks);
+    CUDA_CHECK(cudaGetLastError());
+    CUDA_CHECK(cudaMemcpy(&total, partial + cudak::kDiagBlocks, sizeof(total), cudaMemcpyDeviceToHost));
+  }
+  sums = total.sums;
+  probeSums.assign(total.probes, total.probes + stations.size());
+  return true;
 }
 
 template class MpmCuda<float>;

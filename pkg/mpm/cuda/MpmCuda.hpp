@@ -58,6 +58,8 @@ class MpmCuda : public MpmSolver {
   std::size_t memoryBytes() const override;
   void setStageTiming(bool on) override;
   std::vector<std::pair<std::string, double>> stageSeconds() const override;
+  bool diagnosticSums(const std::array<double, 3>& gravity, const std::vector<ProbeStation>& stations,
+                      DiagnosticSums& sums, std::vector<ProbeSums>& probeSums) override;
 
  private:
   struct DeviceState {
@@ -127,6 +129,7 @@ class MpmCuda : public MpmSolver {
   void* events_[kStages + 1] = {};
   double stageTotals_[kStages] = {};
   double maxSpeed_ = 0;
+  void* diagnostics_ = nullptr;  // the diagnostics' per-block results and total (allocated at first use)
   std::size_t bytes_ = 0;
 };
 

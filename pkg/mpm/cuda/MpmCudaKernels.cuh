@@ -1,5 +1,6 @@
 // CUDA kernels of one MPM step: thin wrappers that call the shared stage functions.
 #pragma once
+#include "mpm/DiagnosticsKernels.hpp"
 #include "mpm/MpmKernelsCommon.hpp"
 
 namespace mpmsdem {
@@ -247,6 +248,74 @@ __global__ void gatherByNumberKernel(int count, int first, const int* __restrict
                                      U* __restrict__ dst) {
   const int k = blockIdx.x * blockDim.x + threadIdx.x;
   if (k < count) dst[k] = src[slotOf[first + k]];
+}
+
+// Whole-system diagnostics (DiagnosticsKernels.hpp) in a fixed order: thread t of the
+// kDiagBlocks x kDiagThreads takes slots t, t + stride, ... in turn, a fixed tree adds each
+// block's threads, and diagnosticsTotalKernel adds the blocks' results the same way, so that the
+// sums depend on the slots' order alone (the step's sort gives it), not on thread timing.
+constexpr int kDiagThreads = 64;
+constexpr int kDiagBlocks = 256;
+
+struct DiagnosticPartial {
+  DiagnosticSums sums;
+  ProbeSums probes[kMaxDeviceProbes];
+};
+
+struct DiagnosticInput {
+  double gravity[3];
+  ProbeStation probes[kMaxDeviceProbes];
+  int numProbes;
+};
+
+__device__ __forceinline__ void emptyPartial(DiagnosticPartial& a) {
+  a.sums = emptyDiagnosticSums();
+  for (int k = 0; k < kMaxDeviceProbes; ++k) a.probes[k] = emptyProbeSums();
+}
+
+__device__ __forceinline__ void combinePartial(DiagnosticPartial& a, const DiagnosticPartial& b, int numProbes) {
+  combineDiagnostics(a.sums, b.sums);
+  for (int k = 0; k < numProbes; ++k) combineProbe(a.probes[k], b.probes[k]);
+}
+
+// Adds part[0..kDiagThreads) into part[0] by halves (a fixed tree).
+__device__ __forceinline__ void treeSum(DiagnosticPartial* part, int numProbes) {
+  const int t = threadIdx.x;
+  for (int half = kDiagThreads / 2; half > 0; half >>= 1) {
+    __syncthreads();
+    if (t < half) combinePartial(part[t], part[t + half], numProbes);
+  }
+}
+
+template <typename T>
+__global__ void __launch_bounds__(kDiagThreads)
+    diagnosticsKernel(int n, ParticleIn<T> in, const std::uint8_t* phase, DiagnosticInput d, DiagnosticPartial* partial) {
+  __shared__ DiagnosticPartial part[kDiagThreads];
+  const int t = threadIdx.x;
+  DiagnosticPartial& acc = part[t];
+  emptyPartial(acc);
+  for (int p = blockIdx.x * kDiagThreads + t; p < n; p += kDiagBlocks * kDiagThreads) {
+    const double x[3] = {static_cast<double>(in.x[0][p]), static_cast<double>(in.x[1][p]),
+                         static_cast<double>(in.x[2][p])};
+    const double v[3] = {static_cast<double>(in.v[0][p]), static_cast<double>(in.v[1][p]),
+                         static_cast<double>(in.v[2][p])};
+    const double m = static_cast<double>(in.mass[p]);
+    addParticleDiagnostics(acc.sums, x, v, m, phase[p], d.gravity);
+    for (int k = 0; k < d.numProbes; ++k) addProbeSample(acc.probes[k], d.probes[k], x, v[0], m);
+  }
+  treeSum(part, d.numProbes);
+  if (t == 0) partial[blockIdx.x] = part[0];
+}
+
+// One block of kDiagThreads: the kDiagBlocks partial results into *total.
+static __global__ void __launch_bounds__(kDiagThreads)
+    diagnosticsTotalKernel(const DiagnosticPartial* partial, int numProbes, DiagnosticPartial* total) {
+  __shared__ DiagnosticPartial part[kDiagThreads];
+  const int t = threadIdx.x;
+  emptyPartial(part[t]);
+  for (int q = t; q < kDiagBlocks; q += kDiagThreads) combinePartial(part[t], partial[q], numProbes);
+  treeSum(part, numProbes);
+  if (t == 0) *total = part[0];
 }
 
 }  // namespace cudak

@@ -6,7 +6,12 @@
 #include <cmath>
 
 #include "mpm/Diagnostics.hpp"
+#include "mpm/MpmScene.hpp"
+#include "mpm/MpmSolver.hpp"
 #include "mpm/MpmTypes.hpp"
+#include "mpm/Seeding.hpp"
+
+#include "GranularColumn.hpp"
 
 using namespace mpmsdem::mpm;
 
@@ -81,4 +86,57 @@ TEST(FlowProbe, ARecordThatNeverSeesTheFlowHasNoResult) {
   EXPECT_FALSE(r.complete());
   EXPECT_EQ(r.depth(), 0.0);
   EXPECT_EQ(r.velocity(), 0.0);
+}
+
+// The CUDA backend's reduction of the diagnostics on the device (MpmSolver::diagnosticSums)
+// against the host's pass over the same particles read back in slices: maxima and counts
+// equal, sums within the round-off of another order of the same double terms (1e-12
+// relative), on a column 100 steps into its collapse with two probes across the flow; two
+// reductions give the same bits; more stations than the device carries fall back to slices.
+TEST(Diagnostics, CudaReductionIsTheHostPassOverTheSameParticles) {
+  if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine: device diagnostics check skipped";
+  MpmParams prm = testing_scenes::granularColumnParams(0.01, {30, 12, 24}, 2e5);
+  MpmScene scene;
+  scene.params = prm;
+  ParticleBox box;
+  box.lo = {0.02, 0.02, 0.02};
+  box.hi = {0.10, 0.10, 0.20};
+  box.ppc = {2, 2, 2};
+  scene.boxes.push_back(box);
+  const ParticleSet ps = seedParticles(scene);
+  const std::array<double, 3> g = prm.gravity;
+  const std::vector<FlowProbeSpec> probes = {{0.09, 0.01, 0.02, 1, 0.05}, {0.05, 0.005, 0.02, 1, 0.05}};
+  for (auto prec : {Precision::Double, Precision::Float}) {
+    auto s = makeSolver(prm, Backend::Cuda, prec);
+    s->setParticles(ps);
+    const double dt = 0.8 * s->stableTimeStep();
+    for (int i = 0; i < 100; ++i) s->step(dt);
+    SolverParticleSlices slices(*s, 1000);
+    const Diagnostics host = diagnose(slices, g, probes);
+    const Diagnostics dev = diagnose(*s, slices, g, probes);
+    const Diagnostics again = diagnose(*s, slices, g, probes);
+    std::printf("%s: kinetic %.6e J (host %.6e), front %.6f m, probes %ld and %ld points\n", s->name().c_str(),
+                dev.kineticEnergy, host.kineticEnergy, dev.frontX, dev.probes[0].points, dev.probes[1].points);
+    ASSERT_GT(host.kineticEnergy, 0.0);
+    ASSERT_GT(host.probes[0].points, 0) << "no point at the first probe";
+    auto near = [](double a, double b) { return std::abs(a - b) <= 1e-12 * std::abs(b); };
+    EXPECT_TRUE(near(dev.kineticEnergy, host.kineticEnergy)) << dev.kineticEnergy << " vs " << host.kineticEnergy;
+    EXPECT_TRUE(near(dev.potential, host.potential)) << dev.potential << " vs " << host.potential;
+    for (int a = 0; a < 3; ++a) EXPECT_TRUE(near(dev.com[a], host.com[a])) << a;
+    EXPECT_EQ(dev.frontX, host.frontX);
+    EXPECT_EQ(dev.heightZ, host.heightZ);
+    EXPECT_EQ(dev.maxSpeed, host.maxSpeed);
+    EXPECT_EQ(dev.flowing, host.flowing);
+    EXPECT_EQ(dev.gasified, host.gasified);
+    for (std::size_t k = 0; k < probes.size(); ++k) {
+      EXPECT_EQ(dev.probes[k].points, host.probes[k].points) << k;
+      EXPECT_EQ(dev.probes[k].depth, host.probes[k].depth) << k;
+      EXPECT_TRUE(near(dev.probes[k].velocity, host.probes[k].velocity)) << k;
+    }
+    EXPECT_EQ(again.kineticEnergy, dev.kineticEnergy);
+    EXPECT_EQ(again.potential, dev.potential);
+    DiagnosticSums sums;
+    std::vector<ProbeSums> probeSums;
+    EXPECT_FALSE(s->diagnosticSums(g, std::vector<ProbeStation>(kMaxDeviceProbes + 1, {0.1, 0.01}), sums, probeSums));
+  }
 }
