@@ -35,6 +35,8 @@
 #   GPU_RUN_STAGES='test_|coarse' bash ...             # only the stages whose names match this
 #                                                      # extended regular expression
 #
+# The outputs end up in one archive, $OUT/gpu-run.tgz (also when the command is stopped).
+#
 # Stages, most telling first: the whole of test_mpm and test_coupling side by side (stage
 # "tests"; the CPU-vs-CUDA agreement tests are the ones a machine without a GPU skips); the
 # prepared §3.2 design (--design); bench_mpm.py --cuda (MPM
@@ -74,6 +76,17 @@ while [ $# -gt 0 ]; do
   esac
 done
 mkdir -p "$out"
+# Everything the stages write goes, at the end (also when the command is stopped), into one
+# archive $out/gpu-run.tgz, the files themselves removed: one file to copy back, however many
+# stages ran.
+pack() {
+  trap - EXIT TERM INT
+  (cd "$out" && find . -maxdepth 1 -type f ! -name gpu-run.tgz | sed 's|^\./||' | sort > .packed &&
+    [ -s .packed ] && tar czf gpu-run.tgz -T .packed && xargs rm -f < .packed; rm -f .packed)
+  echo "gpu_run.sh: outputs in $out/gpu-run.tgz"
+}
+trap pack EXIT
+trap 'pack; exit 143' TERM INT
 start=$SECONDS
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv | tee "$out/gpu.txt"
 grep -m1 'model name' /proc/cpuinfo | tee -a "$out/gpu.txt"
