@@ -33,7 +33,8 @@
 //                            blocks' contacts with blocks and terrain after the last step)
 //   --device-stages          with --bench on CUDA: time the MPM step's stages on the device
 //                            (events; sort, p2g, grid, g2p) and add device_stage_seconds to
-//                            the JSON line
+//                            the JSON line; in a coupled run also the coupling's parts
+//                            (coupling_stage_seconds: MpSdemCoupling::setStageTiming)
 // Outputs (not with --bench), in the output folder:
 //   mpm.h5          HDF5 (pkg/io/Hdf5Writer.hpp): /series/{time, step, dt, kinetic_energy,
 //                   front_x, height_z, centre_of_mass (3), max_speed, flowing_fraction,
@@ -392,6 +393,11 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
   if (st.coupled) {
     const auto& s = st.coupled->stageSeconds();
     out["stage_seconds"] = {{"mpm", s.mpm}, {"coupling", s.coupling}, {"blocks", s.blocks}};
+    const auto couplingStages = st.coupled->coupling.stageSeconds();
+    if (!couplingStages.empty()) {
+      out["coupling_stage_seconds"] = nlohmann::json::object();
+      for (const auto& [name, sec] : couplingStages) out["coupling_stage_seconds"][name] = sec;
+    }
     const auto& low = st.coupled->contactStepLow();
     out["contact_step_min"] = std::isfinite(low.step) ? nlohmann::json(low.step) : nlohmann::json();
     out["contact_step_min_time"] = std::isfinite(low.step) ? nlohmann::json(low.time) : nlohmann::json();
@@ -846,7 +852,10 @@ int main(int argc, char** argv) {
                     mpm.stableTimeStep());
       throwParameter("run.dt", scene.run.dt, "s", range);
     }
-    if (opt.deviceStages) mpm.setStageTiming(true);
+    if (opt.deviceStages) {
+      mpm.setStageTiming(true);
+      if (coupled) coupled->coupling.setStageTiming(true);
+    }
 #ifdef MPMSDEM_WITH_HDF5
     if (opt.bench) return runBench(stepper, scene, maxSteps);
     OutputRun out(stepper, scene, opt.restart, checkpoint ? &*checkpoint : nullptr);

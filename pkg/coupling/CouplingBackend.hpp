@@ -2,6 +2,8 @@
 // the CUDA backend. Kept free of Eigen so that the CUDA sources include only plain headers.
 #pragma once
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "coupling/CouplingKernelsCommon.hpp"
@@ -66,6 +68,11 @@ class CouplingDeviceBackend {
   // more adds its block sums atomically, in an order that changes from run to run, and the list
   // grows to twice its contacts for the next step. Tests set a small one to reach that step.
   virtual void setFirstListCapacity(unsigned int capacity) = 0;
+  // Time the step's parts from now on (on: device events around the uploads, the contact
+  // kernel and the ordered sums, a few microseconds a step; host clocks around the waits for
+  // the device) and add them up: stageSeconds() by name, in seconds.
+  virtual void setStageTiming(bool on) = 0;
+  virtual std::vector<std::pair<std::string, double>> stageSeconds() const = 0;
   // Largest initial particle volume of the view [m^3].
   virtual double maxVolume0(const mpm::ParticleView& v) = 0;
   // Keep each step's contacts on the device from the next step on (kContactValues doubles,

@@ -1,6 +1,7 @@
 #include "coupling/MpSdemCoupling.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -216,13 +217,23 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     barrierEnergy_ = springEnergy_ = 0;
     return;
   }
+  auto clockStart = std::chrono::steady_clock::now();
+  // host seconds since clockStart into hostStage_[k], when timing, and restart the clock
+  auto lap = [&](int k) {
+    if (!stageTiming_) return;
+    const auto now = std::chrono::steady_clock::now();
+    hostStage_[k] += std::chrono::duration<double>(now - clockStart).count();
+    clockStart = now;
+  };
   mpm::ParticleView view = solver.openForceBuffer();
+  lap(kStageForceBuffer);
   if (view.device && !device_) {
     device_ = makeCouplingDeviceBackend(view.precision);
     devicePrecision_ = view.precision;
     if (!device_) throw RuntimeFailure("MpSdemCoupling: the solver runs on CUDA but this build has no CUDA coupling");
     device_->recordContacts(recordContacts_);
     if (deviceListCapacity_ > 0) device_->setFirstListCapacity(deviceListCapacity_);
+    device_->setStageTiming(stageTiming_);
   }
   const bool hostFloat = !view.device && view.precision == mpm::Precision::Float;
   if (maxParticleRadius_ < 0) {
@@ -256,7 +267,9 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   if (view.device && historiesToDevice_) device_->uploadHistories(key_, hostDouble_.xi, written_);
   historiesToDevice_ = false;
   if (!view.device) hostFloatRun_ = hostFloat;
+  lap(kStageSetup);
   buildBins(g);
+  lap(kStageBins);
   CouplingStepInput in;
   in.shapes = shapes_.view();
   in.numVertices = static_cast<int>(shapes_.vertex.size() / 3);
@@ -299,6 +312,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   } else {
     runCpu(in, shapes_.view(), blocks_.data(), phys_.data(), hostDouble_, out);
   }
+  lap(kStageContacts);
   shapesChanged_ = false;
   if (out.badParticle >= 0) {
     std::ostringstream os;
@@ -452,6 +466,22 @@ void MpSdemCoupling::appendContacts(const HostSide<T>& side, int block, std::vec
     contactRecord(*ct, r);
     out.push_back(recordOf(r));
   }
+}
+
+void MpSdemCoupling::setStageTiming(bool on) {
+  stageTiming_ = on;
+  if (device_) device_->setStageTiming(on);
+}
+
+std::vector<std::pair<std::string, double>> MpSdemCoupling::stageSeconds() const {
+  if (!stageTiming_) return {};
+  std::vector<std::pair<std::string, double>> out = {{"force_buffer", hostStage_[kStageForceBuffer]},
+                                                     {"setup", hostStage_[kStageSetup]},
+                                                     {"bins", hostStage_[kStageBins]},
+                                                     {"contacts", hostStage_[kStageContacts]}};
+  if (device_)
+    for (const auto& [name, sec] : device_->stageSeconds()) out.emplace_back("device_" + name, sec);
+  return out;
 }
 
 void MpSdemCoupling::setRecordContacts(bool on) {

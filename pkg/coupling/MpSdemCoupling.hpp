@@ -24,6 +24,8 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "coupling/CouplingBackend.hpp"
@@ -94,6 +96,13 @@ class MpSdemCoupling {
   // backends always have them (the loop's own list).
   void setRecordContacts(bool on);
   bool recordContacts() const { return recordContacts_; }
+  // Time the parts of each step from now on and add them up (host clocks; on CUDA also device
+  // events): stageSeconds() gives, in seconds, force_buffer (opening the solver's force
+  // buffer), setup (blocks, tables and histories), bins, contacts (the contact loop, on CUDA
+  // the whole device call) and on CUDA device_upload, device_kernel, device_sums (device time)
+  // and device_host_wait (host time blocked on the device); empty while timing is off.
+  void setStageTiming(bool on);
+  std::vector<std::pair<std::string, double>> stageSeconds() const;
   // CUDA: the contacts the device's list holds before it first grows (default 65,536; >= 1). A
   // step with more sums its block forces with atomics, in an order that changes from run to run,
   // and grows the list to twice its contacts. Set before the first step.
@@ -187,6 +196,9 @@ class MpSdemCoupling {
   enum class ContactsIn { None, HostDouble, HostFloat, Device } contactsIn_ = ContactsIn::None;
   bool recordContacts_ = false;
   unsigned int deviceListCapacity_ = 0;  // 0: the backend's default
+  enum { kStageForceBuffer, kStageSetup, kStageBins, kStageContacts, kHostStages };
+  bool stageTiming_ = false;
+  double hostStage_[kHostStages] = {};
   template <typename T>
   static void appendContacts(const HostSide<T>& side, int block, std::vector<MpContactRecord>& out);
   bool historiesToDevice_ = false;  // setHistories() since the last step: the device takes them

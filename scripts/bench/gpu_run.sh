@@ -220,6 +220,8 @@ for f in sys.argv[1:]:
     r = json.load(open(f))
     d = r.get("device_stage_seconds", {})
     extra = " mpm stage %.3f s coupling %.3f s" % (r["stage_seconds"]["mpm"], r["stage_seconds"]["coupling"]) if "stage_seconds" in r else ""
+    if "coupling_stage_seconds" in r:
+        extra += " (coupling: %s)" % ", ".join("%s %.3f" % kv for kv in r["coupling_stage_seconds"].items())
     print("%s: %d points x %d steps, loop %.3f s%s; device: %s (sum %.3f s)" % (f.split("/")[-1], r["particles"], r["steps"],
           r["seconds"], extra, ", ".join("%s %.3f" % kv for kv in d.items()), sum(d.values())))
 PY
@@ -283,10 +285,12 @@ PY
 import json, sys
 r = json.load(open(sys.argv[1]))
 d = r.get("device_stage_seconds", {})
-print("%s: %d points x %d steps --bench: loop %.2f s (%.3g upd/s; %s); device %s (sum %.2f s); with outputs: %s s wall, %s" % (
+print("%s: %d points x %d steps --bench: loop %.2f s (%.3g upd/s; %s); device %s (sum %.2f s); coupling parts %s; "
+      "with outputs: %s s wall, %s" % (
     sys.argv[1].split("/")[-1], r["particles"], r["steps"], r["seconds"], r["particle_updates_per_s"],
     ", ".join("%s %.2f" % kv for kv in r.get("stage_seconds", {}).items()),
-    ", ".join("%s %.2f" % kv for kv in d.items()), sum(d.values()), sys.argv[2], sys.argv[3]))
+    ", ".join("%s %.2f" % kv for kv in d.items()), sum(d.values()),
+    ", ".join("%s %.3f" % kv for kv in r.get("coupling_stage_seconds", {}).items()) or "-", sys.argv[2], sys.argv[3]))
 PY
 }
 export -f scene_profile

@@ -12,6 +12,7 @@
 #include <cub/device/device_radix_sort.cuh>
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -107,6 +108,23 @@ class CouplingCuda : public CouplingDeviceBackend {
     firstListCapacity_ = capacity;
   }
 
+  void setStageTiming(bool on) override {
+    if (on && !events_[0])
+      for (auto& e : events_) CUDA_CHECK(cudaEventCreate(&e));
+    timing_ = on;
+  }
+
+  std::vector<std::pair<std::string, double>> stageSeconds() const override {
+    if (!events_[0]) return {};
+    return {{"upload", stageTotals_[0]}, {"kernel", stageTotals_[1]}, {"sums", stageTotals_[2]},
+            {"host_wait", hostWait_}};
+  }
+
+  ~CouplingCuda() override {
+    for (auto& e : events_)
+      if (e) CUDA_CHECK_NOTHROW(cudaEventDestroy(e));
+  }
+
   void recordContacts(bool on) override {
     recording_ = on;
     if (on && listCapacity_ > 0) record_.reserve(static_cast<std::size_t>(kContactValues) * listCapacity_);
@@ -139,6 +157,7 @@ class CouplingCuda : public CouplingDeviceBackend {
       convex_.upload(s.convex, ns);
       numShapes_ = ns;
     }
+    mark(0);
     const std::vector<BlockState<double>>& hb = *in.blocks;
     // What changes every step (blocks, pair physics, the flags' start values) goes in one copy
     // from pinned memory, queued before the kernel without waiting for it; the bin table only
@@ -205,14 +224,16 @@ class CouplingCuda : public CouplingDeviceBackend {
     bins.blocks = binBlocks_.ptr;
     const HistoryView<T> H{histKey_.ptr, histXi_.ptr, histWritten_.ptr, in.historyStep, in.historySlots};
     const int n = static_cast<int>(v.n);
+    mark(1);
     if (n > 0) {
       cudak::coupleKernel<T><<<(n + kThreads - 1) / kThreads, kThreads>>>(
           n, P, blocksD, S, physD, bins, H, static_cast<T>(in.dt), static_cast<T>(in.stepSafety), sums_.ptr, flagsD,
           list);
       CUDA_CHECK(cudaGetLastError());
     }
+    mark(2);
     cudak::CouplingFlags res;
-    CUDA_CHECK(cudaMemcpy(&res, flagsD, sizeof(res), cudaMemcpyDeviceToHost));
+    waited([&] { CUDA_CHECK(cudaMemcpy(&res, flagsD, sizeof(res), cudaMemcpyDeviceToHost)); });
     recorded_ = recording_ && res.contacts <= listCapacity_ ? static_cast<long>(res.contacts) : -1;
     if (res.contacts > listCapacity_) {  // this step's sums are atomic; the list grows for the next
       const unsigned int listed = listCapacity_;
@@ -222,8 +243,17 @@ class CouplingCuda : public CouplingDeviceBackend {
       growList(2ull * res.contacts);
     } else if (res.contacts > 0)
       orderedSums(static_cast<int>(res.contacts), numBlocks, numberBits, keyBits);
+    mark(3);
     if (!out.sums.empty())
-      CUDA_CHECK(cudaMemcpy(out.sums.data(), sums_.ptr, out.sums.size() * sizeof(double), cudaMemcpyDeviceToHost));
+      waited([&] {
+        CUDA_CHECK(cudaMemcpy(out.sums.data(), sums_.ptr, out.sums.size() * sizeof(double), cudaMemcpyDeviceToHost));
+      });
+    if (timing_)
+      for (int k = 0; k < kStages; ++k) {
+        float ms = 0;
+        CUDA_CHECK(cudaEventElapsedTime(&ms, events_[k], events_[k + 1]));
+        stageTotals_[k] += 1e-3 * ms;
+      }
     float minStep;
     std::memcpy(&minStep, &res.minStepBits, sizeof(float));
     out.minParticleStep = minStep;
@@ -272,6 +302,22 @@ class CouplingCuda : public CouplingDeviceBackend {
     CUDA_CHECK(cudaGetLastError());
   }
 
+  void mark(int k) {
+    if (timing_) CUDA_CHECK(cudaEventRecord(events_[k]));
+  }
+  template <typename F>
+  void waited(F&& copy) {
+    const auto start = std::chrono::steady_clock::now();
+    copy();
+    if (timing_) hostWait_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  // Stage timing: events before the uploads, the kernel, the ordered sums and after them.
+  static constexpr int kStages = 3;  // upload, kernel, sums
+  bool timing_ = false;
+  cudaEvent_t events_[kStages + 1] = {};
+  double stageTotals_[kStages] = {};
+  double hostWait_ = 0;  // host time blocked in the step's two copies back [s]
   int numShapes_ = 0;
   DeviceArray<T> vertex_, faceNormal_, faceOffset_, sweepRadius_, boundingRadius_;
   DeviceArray<int> faceLoopStart_, loopVertex_, loopEdge_, shapeFaceStart_, shapeVertexStart_, shapeEdgeStart_;

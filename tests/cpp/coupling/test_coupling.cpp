@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <random>
 #include <tuple>
 
@@ -941,6 +942,41 @@ TEST(MpSdemCoupling, CudaStepsBeyondTheContactListAgreeWithTheCpu) {
               (gpu.position - cpu.position).norm(), (gpu.impulse - cpu.impulse).norm(), cpu.impulse.norm());
   EXPECT_NEAR((gpu.position - cpu.position).norm(), 0.0, 1e-10);
   EXPECT_NEAR((gpu.impulse - cpu.impulse).norm(), 0.0, 1e-8 * cpu.impulse.norm());
+}
+
+// The coupling's stage timing (mpmsdem-run --device-stages): its parts add up to at most the
+// coupled step's coupling stage, which they lie inside, and the contact loop, where the blob
+// presses the cube, is part of them; on CUDA the device parts fit in the device call.
+TEST(MpSdemCoupling, StageTimesFitInTheCouplingStage) {
+  for (auto backend : {mpm::Backend::Cpu, mpm::Backend::Cuda}) {
+    if (backend == mpm::Backend::Cuda && !mpm::cudaAvailable()) continue;
+    int cube;
+    auto world = blobAtCube(1.0, false, 1e4, &cube, backend, mpm::Precision::Double);
+    CoupledWorld& w = *world;
+    EXPECT_TRUE(w.coupling.stageSeconds().empty());  // timing off
+    w.coupling.setStageTiming(true);
+    for (int s = 0; s < 1500; ++s) w.step(1e-5);
+    ASSERT_GT(w.coupling.totalContacts(), 0) << "the blob is not touching the cube";
+    std::map<std::string, double> t;
+    double host = 0;
+    for (const auto& [name, sec] : w.coupling.stageSeconds()) {
+      EXPECT_GE(sec, 0.0) << name;
+      t[name] = sec;
+      if (name.rfind("device_", 0) != 0) host += sec;
+    }
+    for (const char* name : {"force_buffer", "setup", "bins", "contacts"}) EXPECT_EQ(t.count(name), 1u) << name;
+    const double stage = w.stageSeconds().coupling;
+    std::printf("%s: coupling stage %.4f s; parts %.4f s: contacts %.4f s\n", w.mpm().name().c_str(), stage, host,
+                t["contacts"]);
+    EXPECT_LE(host, stage);
+    EXPECT_GT(t["contacts"], 0.0);
+    if (backend == mpm::Backend::Cuda) {
+      for (const char* name : {"device_upload", "device_kernel", "device_sums", "device_host_wait"})
+        EXPECT_EQ(t.count(name), 1u) << name;
+      EXPECT_LE(t["device_host_wait"], t["contacts"]);
+      EXPECT_GT(t["device_kernel"], 0.0);
+    }
+  }
 }
 
 // The records contacts() hands out are the contacts the block sums were made of.
