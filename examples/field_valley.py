@@ -273,6 +273,7 @@ def main(argv):
     if blocks:
         written += list(field.writeReport(out, blocks))
     deposited = maps.deposit_thickness > 0.05
+    wallPoints, wallMass = field.pointsAtGridWalls(p, json.loads(mpm.solver.sceneJson)["grid"])
     summary = {"dx": a.dx, "duration": O.time, "steps": steps, "points": int(len(p["mass"])),
                "mass": float(p["mass"].sum()), "mass_seeded": mass0, "flip_blend": mpm.solver.flipBlend,
                "flip_damping_rate": mpm.solver.flipDampingRate(O.dt), "basal_friction": BASAL_FRICTION,
@@ -285,6 +286,7 @@ def main(argv):
                "blocks_buried": sum(1 for b in blocks if b["buried"]),
                "blocks_below_ground": sum(1 for b in blocks if b["z"] < float(ground.height(b["x"], b["y"]))),
                "blocks_outside_grid": sum(1 for b in blocks if b["outside_grid"]),
+               "points_at_grid_walls": wallPoints, "mass_at_grid_walls": wallMass,
                "largest_block_travel": max((b["travel"] for b in blocks), default=0.0),
                "largest_block_force": max((b["peak_force"] for b in blocks), default=0.0),
                "largest_block_force_10ms": max((b["peak_force_mean"] for b in blocks), default=0.0),
@@ -300,6 +302,10 @@ def main(argv):
                                                summary["max_speed"],
                                                "conserved" if summary["mass"] == mass0 else "CHANGED",
                                                summary["below_ground"], wall, out))
+    if wallPoints:
+        print("WARNING: %d material points (%.3g t) reached the grid's side walls or top and are held there: the domain "
+              "is too small for this flow, which would have gone on (a larger terrain or grid)"
+              % (wallPoints, wallMass / 1000.0))
     if blocks:
         print("blocks: %d reached by the flow, %d buried, %d below the ground, %d outside the grid; the most displaced "
               "(blocks.csv):" % (summary["blocks_reached"], summary["blocks_buried"], summary["blocks_below_ground"],

@@ -24,6 +24,8 @@ from yade.wrapper import PyRunner
 from . import _mpmsdem
 from .sdem import _bindStep
 
+WALL_LAYER = 2  # cells inside each face of the grid box where its walls act (pkg/mpm/GridBoundary.hpp)
+
 COLUMNS = ("id", "shape", "x", "y", "heading_deg", "mass")
 
 
@@ -206,6 +208,25 @@ class BlockTracker:
                          "outside_grid": bool(np.any(np.array(list(p)) < self.gridLo) or
                                               np.any(np.array(list(p)) > self.gridHi))})
         return rows
+
+
+def pointsAtGridWalls(particles, grid, layers=WALL_LAYER + 1):
+    """The material points held by the flow grid's side walls or its top: the points within
+    ``layers`` cells of the faces x lo/hi, y lo/hi and z hi of the grid box (its walls act
+    ``WALL_LAYER`` cells inside each face, and points are kept inside them). ``grid``: the
+    scene's grid (``origin`` [m], ``dx`` [m], ``cells``). A field scene whose points reach them
+    was too small for its flow: the flow would have gone on. Returns (count, mass [kg]); the
+    floor is left out (the terrain holds the flow there)."""
+    if not (layers > 0):
+        raise ValueError("layers = %r cells: must be > 0" % (layers,))
+    x = np.asarray(particles["x"], dtype=float)
+    mass = np.asarray(particles["mass"], dtype=float)
+    lo = np.asarray(grid["origin"], dtype=float)
+    hi = lo + float(grid["dx"]) * np.asarray(grid["cells"], dtype=float)
+    reach = layers * float(grid["dx"])
+    held = ((x[:, 0] < lo[0] + reach) | (x[:, 0] > hi[0] - reach) | (x[:, 1] < lo[1] + reach) |
+            (x[:, 1] > hi[1] - reach) | (x[:, 2] > hi[2] - reach))
+    return int(held.sum()), float(mass[held].sum())
 
 
 REPORT_UNITS = {"id": "", "x0": "m", "y0": "m", "z0": "m", "x": "m", "y": "m", "z": "m", "travel": "m",

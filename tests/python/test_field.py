@@ -142,7 +142,6 @@ def test_the_tracker_takes_the_peak_and_its_window_mean_of_a_known_force():
     # so the window mean is (9 x 1 + 101) / 10 = 11 N, reported at the window's end; the first
     # contact is the first step.
     O.reset()
-    ground = Terrain.plane((0.0, 0.0), (0.4, 0.2), 0.01, z0=0.02)
     sdem = mpmsdem.SdemEngine(verbose=False)
     mat = mpmsdem.material(density=700, friction=0.5)
     a = sdem.box((0.02, 0.02, 0.02), 0.002, mat, pos=(0.1, 0.1, 0.0405))
@@ -161,3 +160,21 @@ def test_the_tracker_takes_the_peak_and_its_window_mean_of_a_known_force():
     assert tracker.firstContact[0] == pytest.approx(0.001)
     with pytest.raises(ValueError, match="window = 0"):
         field.BlockTracker(coupled, [a], window=0)
+
+
+def test_points_held_by_the_grid_walls_are_counted_on_the_sides_and_top_not_the_floor():
+    # Grid box [0, 1] x [0, 0.5] x [0, 0.4] m of 0.01 m cells: the walls act 2 cells inside each
+    # face, the count takes 3. One point by each side face and the top, one near the floor and
+    # one in the middle; masses 1..7 kg.
+    grid = {"origin": [0.0, 0.0, 0.0], "dx": 0.01, "cells": [100, 50, 40]}
+    x = np.array([[0.025, 0.2, 0.1], [0.975, 0.2, 0.1], [0.5, 0.029, 0.1], [0.5, 0.475, 0.1], [0.5, 0.2, 0.375],
+                  [0.5, 0.2, 0.005], [0.5, 0.2, 0.2]])
+    mass = np.arange(1.0, 8.0)
+    count, held = field.pointsAtGridWalls({"x": x, "mass": mass}, grid)
+    assert count == 5 and held == pytest.approx(1 + 2 + 3 + 4 + 5, rel=1e-15)
+    # just beyond the 3 cells: not held
+    count, _ = field.pointsAtGridWalls({"x": np.array([[0.0301, 0.2, 0.1], [0.9699, 0.2, 0.1]]), "mass": [1, 1]}, grid)
+    assert count == 0
+    assert field.pointsAtGridWalls({"x": x, "mass": mass}, grid, layers=1)[0] == 0
+    with pytest.raises(ValueError, match="layers"):
+        field.pointsAtGridWalls({"x": x, "mass": mass}, grid, layers=0)
