@@ -90,13 +90,14 @@ MpmCpu<T>::MpmCpu(const MpmParams& params)
       grid_(makeGridConst<T>(params, 0.0)),
       mat_(makeConstitutiveConst<T>(params.material)),
       maxSpeedAllowed_(blowUpSpeed(params)) {
-  nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
-  nodes_.assign(static_cast<std::size_t>(kNodeValues) * nNodes_, T(0));
+  column_.assign(static_cast<std::size_t>(grid_.nodes[0]) * grid_.nodes[1], -1);
+  grid_.column = column_.data();
   for (int d = 0; d < 3; ++d) {
     blocks_[d] = blocksAlong(params.cells[d]);
     tiles_[d] = (grid_.nodes[d] + 2) / 3;
   }
-  blockStart_.assign(static_cast<std::size_t>(blocks_[0]) * blocks_[1] * blocks_[2] + 1, 0);
+  blockFirst_.assign(static_cast<std::size_t>(blocks_[0]) * blocks_[1] * blocks_[2], 0);
+  blockCount_.assign(blockFirst_.size(), 0);
   tileMark_.assign(static_cast<std::size_t>(tiles_[0]) * tiles_[1] * tiles_[2], 0);
   if (params.terrain.enabled()) {
     terrainZ_.assign(params.terrain.heights.begin(), params.terrain.heights.end());
@@ -281,8 +282,11 @@ std::size_t MpmCpu<T>::memoryBytes() const {
   add(scratch_);
   for (const auto& a : fext_) add(a);
   add(nodes_);
+  add(column_);
   add(terrainZ_);
-  add(blockStart_);
+  add(blockFirst_);
+  add(blockCount_);
+  add(occupied_);
   add(order_);
   add(cellOf_);
   for (const auto& c : colourBlocks_) add(c);
@@ -354,7 +358,6 @@ void MpmCpu<T>::reorder() {
 template <typename T>
 void MpmCpu<T>::bin(const ParticleIn<T>& in) {
   const long n = static_cast<long>(n_);
-  const int nBlocks = static_cast<int>(blockStart_.size()) - 1;
   // Bin the particles by their stencil base node (computed in T exactly as Stencil::compute
   // does): cellOf_[p] = 27 b + c for the c-th base of the 3x3x3 block b.
 #pragma omp parallel for schedule(static)
@@ -363,35 +366,69 @@ void MpmCpu<T>::bin(const ParticleIn<T>& in) {
     gridCoordinate(in, static_cast<int>(p), grid_, g);
     cellOf_[p] = blockCellOf(g, blocks_);
   }
-  std::fill(blockStart_.begin(), blockStart_.end(), 0);
-  for (long p = 0; p < n; ++p) ++blockStart_[cellOf_[p] / kBlockCells + 1];
-  for (int b = 0; b < nBlocks; ++b) blockStart_[b + 1] += blockStart_[b];
-  {
-    std::vector<int> fill(blockStart_.begin(), blockStart_.end() - 1);
-    for (long p = 0; p < n; ++p) order_[fill[cellOf_[p] / kBlockCells]++] = static_cast<int>(p);
+  // Counting sort over the occupied blocks alone: a domain far larger than its flow has millions
+  // of empty blocks, which no pass visits. The counts left by the last binning are cleared
+  // first, then each block is listed when its first particle arrives; the offsets go in
+  // ascending block order, as a prefix sum over every block would give them.
+  for (int b : occupied_) blockCount_[b] = 0;
+  occupied_.clear();
+  for (long p = 0; p < n; ++p) {
+    const int b = cellOf_[p] / kBlockCells;
+    if (blockCount_[b]++ == 0) occupied_.push_back(b);
   }
+  std::sort(occupied_.begin(), occupied_.end());
+  int offset = 0;
+  for (int b : occupied_) {
+    blockFirst_[b] = offset;  // the fill's cursor first, its first place again below
+    offset += blockCount_[b];
+  }
+  for (long p = 0; p < n; ++p) order_[blockFirst_[cellOf_[p] / kBlockCells]++] = static_cast<int>(p);
+  for (int b : occupied_) blockFirst_[b] -= blockCount_[b];
   // Within a block the particles go by stencil base, so that the particles of one base are
   // neighbours for G2P's groups, and then by number, so that the P2G sums and hence the
   // results do not depend on the storage order (a restart from a snapshot, which holds the
   // particles by number, continues bit for bit).
+  const long nOccupied = static_cast<long>(occupied_.size());
 #pragma omp parallel for schedule(dynamic, 64)
-  for (int b = 0; b < nBlocks; ++b)
-    sortByCellAndNumber(order_.data() + blockStart_[b], blockStart_[b + 1] - blockStart_[b], cellOf_.data(), in.id);
+  for (long i = 0; i < nOccupied; ++i) {
+    const int b = occupied_[i];
+    sortByCellAndNumber(order_.data() + blockFirst_[b], blockCount_[b], cellOf_.data(), in.id);
+  }
   for (auto& c : colourBlocks_) c.clear();
-  for (int b = 0; b < nBlocks; ++b) {
-    if (blockStart_[b + 1] == blockStart_[b]) continue;
+  activeTiles_.clear();
+  for (int b : occupied_) {
     int bc[3];
     blockCoordsOf(b, blocks_, bc);
     colourBlocks_[blockColourOf(bc)].push_back(b);
-    forTilesOfBlock(bc, tiles_, [this](int t) { tileMark_[t] = 1; });
+    forTilesOfBlock(bc, tiles_, [this](int t) {
+      if (tileMark_[t]) return;
+      tileMark_[t] = 1;
+      activeTiles_.push_back(t);
+    });
   }
-  activeTiles_.clear();
-  const int nTiles = static_cast<int>(tileMark_.size());
-  for (int t = 0; t < nTiles; ++t) {
-    if (!tileMark_[t]) continue;
-    activeTiles_.push_back(t);
-    tileMark_[t] = 0;
+  std::sort(activeTiles_.begin(), activeTiles_.end());
+  for (int t : activeTiles_) tileMark_[t] = 0;
+  allocateColumns();
+}
+
+template <typename T>
+void MpmCpu<T>::allocateColumns() {
+  const int* nodes = grid_.nodes;
+  const int before = columns_;
+  int last = -1;  // the (t0, t1) of the previous tile: the tiles go in index order, t2 fastest
+  for (int t : activeTiles_) {
+    int tc[3];
+    blockCoordsOf(t, tiles_, tc);
+    const int pair = tc[0] * tiles_[1] + tc[1];
+    if (pair == last) continue;
+    last = pair;
+    for (int a = 3 * tc[0]; a < std::min(3 * tc[0] + 3, nodes[0]); ++a)
+      for (int b = 3 * tc[1]; b < std::min(3 * tc[1] + 3, nodes[1]); ++b) {
+        int& c = column_[static_cast<std::size_t>(a) * nodes[1] + b];
+        if (c < 0) c = columns_++;
+      }
   }
+  if (columns_ > before) nodes_.resize(static_cast<std::size_t>(kNodeValues) * columns_ * nodes[2], T(0));
 }
 
 template <typename T>
@@ -428,7 +465,7 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
       // The next particle is prepared before this one is added: its coefficients, written
       // value by value, are then in the cache when they are read as whole vectors (read right
       // after being written, the reads waited for the writes).
-      const int q0 = blockStart_[b], q1 = blockStart_[b + 1];
+      const int q0 = blockFirst_[b], q1 = q0 + blockCount_[b];
       P2GParticle<T> prepared[2];
       if (q0 < q1) p2gPrepare(order_[q0], in, g, dt, prepared[0]);
       for (int q = q0; q < q1; ++q) {
@@ -446,7 +483,7 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
                 e2 = std::min(kBlockNodes, g.nodes[2] - b0[2]);
       for (int a = 0; a < e0; ++a)
         for (int bb = 0; bb < e1; ++bb) {
-          T* r = gridData + kNodeValues * (((b0[0] + a) * g.nodes[1] + (b0[1] + bb)) * g.nodes[2] + b0[2]);
+          T* r = gridData + kNodeValues * nodeRecordAt(g, b0[0] + a, b0[1] + bb, b0[2]);
           const T* l = loc[a][bb][0];
           MPM_SIMD
           for (int v = 0; v < kNodeValues * e2; ++v) r[v] += l[v];
@@ -464,13 +501,17 @@ void MpmCpu<T>::step(double dt) {
   const T dtT = static_cast<T>(dt);
   const ParticleIn<T> in = input();
   const ParticleOut<T> out = output();
+  {
+    // Only the previous step's active tiles hold non-zero values.
+    T* gridData = nodes_.data();
+    const GridConst<T>& g = grid_;
+    forActiveNodes([gridData, &g](int node) {
+      T* r = gridData + kNodeValues * nodeRecord(g, node);
+      for (int c = 0; c < kNodeValues; ++c) r[c] = T(0);
+    });
+  }
+  bin(in);  // stores the columns the particles newly reach
   T* gridData = nodes_.data();
-  // Only the previous step's active tiles hold non-zero values.
-  forActiveNodes([gridData](int node) {
-    T* r = gridData + kNodeValues * node;
-    for (int c = 0; c < kNodeValues; ++c) r[c] = T(0);
-  });
-  bin(in);
   scatter(dtT, in);
   const GridConst<T> g = grid_;
   if (hooks_.empty()) {
@@ -483,6 +524,8 @@ void MpmCpu<T>::step(double dt) {
     view.stride = kNodeValues;
     view.mass = gridData + kNodeMass;
     for (int d = 0; d < 3; ++d) view.v[d] = gridData + kNodeVNew + d;
+    view.column = column_.data();
+    view.storedNodes = static_cast<long>(columns_) * grid_.nodes[2];
     applyGridHooks(view);
     forActiveNodes([gridData, &g](int node) { gridNodeWalls(node, gridData, g); });
   }

@@ -42,7 +42,9 @@
 // the binning arrays (block id and sorted order, 8 B); external forces, 3 T, once set or
 // opened by a coupling; and the grid, 8 T per node (7 values and a pad that makes a node two
 // whole SIMD registers in double; plus a byte and at most an int per tile of 27 nodes for the
-// active tiles).
+// active tiles). Grid memory follows the flow: only the node columns (i, j) the particles
+// have reached are stored (GridConst::column; an int per column for the map), so a flow in a
+// large domain costs its footprint's columns, not the box.
 #pragma once
 #include <cstdint>
 #include <type_traits>
@@ -102,7 +104,6 @@ class MpmCpu : public MpmSolver {
   ConstitutiveConst<T> mat_{};
   double maxSpeedAllowed_;
   std::size_t n_ = 0;
-  int nNodes_;
   // The state a step reads and, unless params_.keepLastGoodState is off (then state_[1] stays
   // empty and G2P updates state_[0] in place), the one it writes.
   State state_[2];
@@ -111,14 +112,22 @@ class MpmCpu : public MpmSolver {
   int stepsSinceReorder_ = 0;
   std::vector<T> fext_[3];
   bool hasFext_ = false;
-  std::vector<T> nodes_;  // kNodeValues * nNodes_
+  // The grid's node records, column by column (GridConst::column): a column of nodes[2] records
+  // is added when the particles first reach it (an active tile covers it), and kept.
+  std::vector<T> nodes_;
+  std::vector<int> column_;  // stored column of each (i, j), -1 until reached
+  int columns_ = 0;          // columns stored
+  void allocateColumns();    // a column for each (i, j) of this step's active tiles
   std::vector<T> terrainZ_;  // the terrain's heights (grid_.terrain.z), empty without one
   double maxSpeed_ = 0;   // largest particle speed of the current state [m/s]
   // P2G colouring and the active grid
   int blocks_[3];
   int tiles_[3];
   std::vector<int> colourBlocks_[8];   // occupied block ids of each colour, this step
-  std::vector<int> blockStart_;        // counting-sort offsets, size nBlocks + 1
+  // The binning: each occupied block's first place in order_ and its particle count (entries
+  // of other blocks are stale or zero: only occupied_ is read), the occupied blocks ascending.
+  std::vector<int> blockFirst_, blockCount_;
+  std::vector<int> occupied_;
   std::vector<int> order_;             // slots sorted by block, within a block by stencil base, then number
   std::vector<int> cellOf_;           // stencil base of each particle (27 x block + base in the block)
   std::vector<int> slotOf_;            // slot of each particle number, for output slices; emptied by step()

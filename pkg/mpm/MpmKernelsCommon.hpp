@@ -2,8 +2,10 @@
 // __host__ __device__ functions: the CPU loops (MpmCpu.cpp) and the CUDA kernels
 // (cuda/MpmCudaKernels.cuh) call exactly these, in double or float.
 //
-// Grid layout: one record of kNodeValues values per node, node (i, j, k) at
-// n = (i * nodes[1] + j) * nodes[2] + k, its value c at grid[kNodeValues * n + c]. A node's
+// Grid layout: one record of kNodeValues values per node. Node (i, j, k) has the index
+// n = (i * nodes[1] + j) * nodes[2] + k; its record is n itself in the dense layout, or, where
+// a backend stores only the node columns its particles reach (GridConst::column), the k-th of
+// its column's nodes[2] consecutive records; its value c at grid[kNodeValues * record + c]. A node's
 // values share a cache line and two SIMD registers (double; one in float), so P2G adds and G2P
 // reads a node with whole-register operations.
 // After P2G: c = 0..2 momentum of the particle velocities (sum w m v), 3 mass, 4..6 that
@@ -44,7 +46,25 @@ struct GridConst {
   T massEps;        // nodes with mass <= massEps are treated as empty [kg]
   T lo[3], hi[3];   // admissible particle box (kWallLayer cells inside the faces) [m]
   TerrainView<T> terrain;  // its heights in the backend's memory, set by the backend; null z: none
+  // Where each column of nodes (i, j) is stored: its nodes k = 0 .. nodes[2] - 1 are the records
+  // column[i * nodes[1] + j] * nodes[2] + k. Null: the dense layout (column i * nodes[1] + j). A
+  // backend that allocates the columns as its particles reach them sets it, so that the grid's
+  // memory follows the flow and not the box.
+  const int* column;
 };
+
+// The record of node (i, j, k), and of the node with index `node` (see the layout above).
+template <typename T>
+MPM_HD_INLINE int nodeRecordAt(const GridConst<T>& g, int i, int j, int k) {
+  const int c = i * g.nodes[1] + j;
+  return (g.column ? g.column[c] : c) * g.nodes[2] + k;
+}
+template <typename T>
+MPM_HD_INLINE int nodeRecord(const GridConst<T>& g, int node) {
+  if (!g.column) return node;
+  const int c = node / g.nodes[2];
+  return g.column[c] * g.nodes[2] + (node - c * g.nodes[2]);
+}
 
 // Per-step constants.
 template <typename T>
@@ -147,7 +167,8 @@ MPM_HD_INLINE void p2gStencil(const P2GParticle<T>& a, Scatter& add) {
     }
 }
 
-// P2G of particle p into the flat grid: calls add(node, r) for its 27 nodes (see p2gStencil).
+// P2G of particle p into the flat grid: calls add(node, r) for its 27 nodes by index (see
+// p2gStencil).
 template <typename T, typename Scatter>
 MPM_HD_INLINE void p2gParticle(int p, const ParticleIn<T>& P, const GridConst<T>& g, T dt, Scatter& add) {
   P2GParticle<T> a;
@@ -285,7 +306,7 @@ MPM_HD_INLINE void p2gBaseTileSum(int row, int n0, int n1, int n2, const Part& p
 // is zeroed (mass included, so grid hooks see it at rest).
 template <typename T>
 MPM_HD_INLINE void gridNodeVelocity(int node, T* grid, const GridConst<T>& g, T dt) {
-  T* r = grid + kNodeValues * node;
+  T* r = grid + kNodeValues * nodeRecord(g, node);
   const T m = r[kNodeMass];
   if (!(m > g.massEps)) {
     for (int c = 0; c < kNodeValues; ++c) r[c] = T(0);
@@ -306,7 +327,7 @@ MPM_HD_INLINE void gridNodeWalls(int node, T* grid, const GridConst<T>& g) {
   const int q = node / g.nodes[2];
   idx[1] = q % g.nodes[1];
   idx[0] = q / g.nodes[1];
-  T* r = grid + kNodeValues * node + kNodeVNew;
+  T* r = grid + kNodeValues * nodeRecord(g, node) + kNodeVNew;
   Vec3T<T> vn{r[0], r[1], r[2]};
   if (g.terrain.z) {
     const Vec3T<T> p{g.origin[0] + T(idx[0]) * g.dx, g.origin[1] + T(idx[1]) * g.dx, g.origin[2] + T(idx[2]) * g.dx};
@@ -395,7 +416,7 @@ MPM_HD_INLINE void g2pGatherGroup(const int* ps, int count, const ParticleIn<T>&
   }
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
-      const T* row = grid + kNodeValues * (((base[0] + i) * g.nodes[1] + (base[1] + j)) * g.nodes[2] + base[2]);
+      const T* row = grid + kNodeValues * nodeRecordAt(g, base[0] + i, base[1] + j, base[2]);
       T ad[3][G], an[3][G], bn[3][G];
       for (int d = 0; d < 3; ++d) {
         MPM_SIMD
@@ -554,6 +575,7 @@ inline ConstitutiveConst<T> makeConstitutiveConst(const GranularMaterial& m) {
 template <typename T>
 inline GridConst<T> makeGridConst(const MpmParams& prm, double massEps) {
   GridConst<T> g;
+  g.column = nullptr;
   g.dx = static_cast<T>(prm.dx);
   g.invDx = static_cast<T>(1.0 / prm.dx);
   for (int d = 0; d < 3; ++d) {

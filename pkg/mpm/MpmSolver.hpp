@@ -55,9 +55,22 @@ struct GridView {
   int nodes[3] = {};        // nodes per axis (cells + 1)
   double origin[3] = {};    // position of node (0, 0, 0) [m]
   double dx = 0;            // node spacing [m]
-  int stride = 1;           // elements from one node to the next in mass and v
+  int stride = 1;           // elements from one node record to the next in mass and v
   const void* mass = nullptr;  // node mass [kg]
   void* v[3] = {};          // node velocity at the end of the step [m/s]
+  // Where the nodes are (GridConst::column): node (i, j, k) has the index
+  // n = (i * nodes[1] + j) * nodes[2] + k and its values are at element record(n) * stride. Null
+  // column: the dense layout, record(n) = n. Otherwise column[i * nodes[1] + j] is the stored
+  // column of (i, j), or -1 where no material point has reached it (its nodes are empty and not
+  // stored). storedNodes: the records behind the arrays.
+  const int* column = nullptr;
+  long storedNodes = 0;
+  // The record of the node with index n, or -1 where it is not stored.
+  long record(long n) const {
+    if (!column) return n;
+    const long c = n / nodes[2];
+    return column[c] < 0 ? -1 : static_cast<long>(column[c]) * nodes[2] + (n - c * nodes[2]);
+  }
   double time = 0;          // time at the start of the step [s] (the velocities are those of time + dt)
   double dt = 0;            // step [s]
 };

@@ -437,6 +437,7 @@ void MpmCuda<T>::step(double dt) {
     view.precision = sizeof(T) == sizeof(float) ? Precision::Float : Precision::Double;
     view.device = true;
     view.stride = kNodeValues;
+    view.storedNodes = nNodes_;
     view.mass = nodes_ + kNodeMass;
     for (int d = 0; d < 3; ++d) view.v[d] = nodes_ + kNodeVNew + d;
     applyGridHooks(view);

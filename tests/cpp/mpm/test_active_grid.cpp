@@ -47,12 +47,13 @@ std::vector<double> readStrided(const void* src, std::size_t nodes, int stride, 
   return out;
 }
 
-// Sums the node mass over the whole grid and counts nodes that are empty but moving.
+// Sums the node mass over the whole grid (every stored node record) and counts nodes that are
+// empty but moving.
 struct WholeGridProbe : GridHook {
   double mass = 0;
   long movingEmpty = 0;
   void apply(const GridView& g) override {
-    const std::size_t nodes = static_cast<std::size_t>(g.nodes[0]) * g.nodes[1] * g.nodes[2];
+    const std::size_t nodes = static_cast<std::size_t>(g.storedNodes);
     auto read = [&](const void* a) {
       return g.precision == Precision::Float ? readStrided<float>(a, nodes, g.stride, g.device)
                                              : readStrided<double>(a, nodes, g.stride, g.device);
@@ -139,6 +140,39 @@ TEST_P(ActiveGridEveryBackend, EmptySpaceAroundAFlowChangesNothing) {
   EXPECT_TRUE(snug.x == wide.x);
   EXPECT_TRUE(snug.v == wide.v);
   EXPECT_TRUE(snug.stress == wide.stress);
+}
+
+TEST(CpuGrid, StoresTheNodeColumnsTheFlowReachedNotTheBox) {
+  // The collapsing column of EmptySpaceAroundAFlowChangesNothing in its own box (30 cells long)
+  // and in one 100 times as long (3000 cells: a dense grid of 3001 x 6 x 21 nodes would be
+  // 24 MB in double). The runs agree bit for bit, and the long box's solver holds exactly its
+  // larger index arrays more (an int per node column for the column map, two ints per block of
+  // 3 x 3 x 3 cells for the binning, a byte per tile), not its grid: both store the node
+  // columns the flow reached, in the same order.
+  auto run = [](std::array<int, 3> cells, std::size_t& bytes) {
+    MpmParams prm = testing_scenes::granularColumnParams(0.01, cells, 2e5);
+    ParticleSet ps;
+    seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
+    auto s = makeSolver(prm, Backend::Cpu, Precision::Double);
+    s->setParticles(ps);
+    for (int n = 0; n < 1000; ++n) s->step(2e-4);
+    bytes = s->memoryBytes();
+    ParticleSet out;
+    s->getParticles(out);
+    return out;
+  };
+  std::size_t snugBytes = 0, longBytes = 0;
+  const ParticleSet snug = run({30, 5, 20}, snugBytes);
+  const ParticleSet far = run({3000, 5, 20}, longBytes);
+  EXPECT_TRUE(snug.x == far.x);
+  EXPECT_TRUE(snug.stress == far.stress);
+  auto indexBytes = [](int cellsX) {
+    const std::size_t blocks = static_cast<std::size_t>(blocksAlong(cellsX)) * blocksAlong(5) * blocksAlong(20);
+    const std::size_t tiles = blocks;  // as many tiles per axis as blocks
+    return 4 * static_cast<std::size_t>(cellsX + 1) * 6 + 8 * blocks + tiles;
+  };
+  EXPECT_EQ(longBytes - snugBytes, indexBytes(3000) - indexBytes(30));
+  EXPECT_LT(longBytes, 2 * snugBytes);
 }
 
 TEST(ActiveTiles, TilesPartitionTheGridNodes) {

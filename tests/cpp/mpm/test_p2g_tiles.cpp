@@ -160,8 +160,9 @@ class MassRecorder : public GridHook {
   std::vector<double> mass;
   void apply(const GridView& v) override {
     const int nodes = v.nodes[0] * v.nodes[1] * v.nodes[2];
-    mass.resize(nodes);
-    for (int i = 0; i < nodes; ++i) mass[i] = static_cast<const double*>(v.mass)[v.stride * i];
+    mass.assign(nodes, 0.0);  // a node that is not stored is empty
+    for (int i = 0; i < nodes; ++i)
+      if (const long r = v.record(i); r >= 0) mass[i] = static_cast<const double*>(v.mass)[v.stride * r];
   }
 };
 

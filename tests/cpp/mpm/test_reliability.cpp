@@ -164,14 +164,16 @@ std::unique_ptr<MpmSolver> seededSolver(int cells, double lo, double hi) {
 }
 
 // In a child process: forces for 64,000 points (three 512 kB arrays on the CPU) set under an
-// address-space limit that leaves room for less than two of them, then again without it.
+// address-space limit at the process's size, then again without it. The allocator can still
+// reuse blocks freed inside that space (the CPU grid's earlier buffer, ~1 MB, freed when its
+// columns grew), so the limit gives no room beyond them: less than the three arrays need.
 // Exits 0 when the allocation failed, the next step refused to run naming setExternalForces,
 // and forces set again let it run; 2-6 otherwise.
 [[noreturn]] void setForcesOutOfMemoryThenStep() {
   auto solver = seededSolver(24, 0.02, 0.22);
   solver->step(1e-4);  // the thread pool and every step buffer exist before the limit
   const std::vector<double> forces(3 * solver->numParticles(), 1e-3);
-  rlimit limit{virtualMemory() + 768 * 1024, RLIM_INFINITY};
+  rlimit limit{virtualMemory(), RLIM_INFINITY};
   if (setrlimit(RLIMIT_AS, &limit) != 0) std::_Exit(2);
   try {
     solver->setExternalForces(forces);
