@@ -525,11 +525,11 @@ std::string sceneSizeDescription(const MpmScene& scene) {
     particles += n;
   }
   std::ostringstream os;
-  // 7 values per node (mass, old and new velocity) and ~20 per particle in double, twice
+  // 8 values per node (mass, old and new velocity, a pad) and ~20 per particle in double, twice
   // (the solver keeps the state at the start of a step)
   os << "grid.cells = [" << c[0] << ", " << c[1] << ", " << c[2] << "] (" << nodes << " nodes, about "
-     << nodes * 7 * 8 / 1e9 << " GB) and about " << particles << " particles (about "
-     << particles * 2 * 20 * 8 / 1e9 << " GB)";
+     << nodes * 8 * 8 / 1e9 << " GB as the dense grid CUDA holds; the CPU backend holds the node columns the flow "
+     << "reaches) and about " << particles << " particles (about " << particles * 2 * 20 * 8 / 1e9 << " GB)";
   return os.str();
 }
 
