@@ -34,6 +34,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -111,6 +112,39 @@ def gpu_name():
         return ""
 
 
+def copy_bandwidth_cpu(megabytes=512, repeats=5):
+    """This machine's memory bandwidth as one thread's copy of a large buffer (a memcpy) moves it:
+    bytes read plus written per second, the best of `repeats`."""
+    src = bytearray(b"\x01") * (megabytes * 1024 * 1024)
+    dst = bytearray(len(src))
+    best = float("inf")
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        dst[:] = src
+        best = min(best, time.perf_counter() - t0)
+    return 2 * len(src) / best
+
+
+def copy_bandwidth_gpu(megabytes=2048, repeats=10):
+    """The GPU's memory bandwidth as a device-to-device copy moves it (bytes read plus written per
+    second, CuPy with CUDA events), or None where CuPy is missing."""
+    try:
+        import cupy as cp
+    except ImportError:
+        return None
+    n = megabytes * 1024 * 1024 // 8
+    src, dst = cp.ones(n), cp.empty(n)
+    start, end = cp.cuda.Event(), cp.cuda.Event()
+    cp.copyto(dst, src)
+    start.record()
+    for _ in range(repeats):
+        cp.copyto(dst, src)
+    end.record()
+    end.synchronize()
+    seconds = cp.cuda.get_elapsed_time(start, end) / 1e3 / repeats
+    return 2 * src.nbytes / seconds
+
+
 def parse_copies(text):
     """'2,1' -> [2, 1]"""
     try:
@@ -152,7 +186,8 @@ def steps_for(particles, target_updates, min_steps, max_steps):
 
 def format_table(rows):
     head = ["size", "build", "backend", "precision", "copies", "particles", "steps", "seconds",
-            "updates/s", "bytes/particle", "float/double", "1/2 copies", "GPU/CPU", "new/old"]
+            "updates/s", "bytes/particle", "state GB/s", "of copy", "float/double", "1/2 copies", "GPU/CPU",
+            "new/old"]
     body = []
     for r in rows:
         body.append([
@@ -160,6 +195,8 @@ def format_table(rows):
             str(r["steps"]),
             "%.3g" % r["seconds"], "%.3e" % r["particle_updates_per_s"],
             "%.0f" % r["bytes_per_particle"],
+            "%.1f" % (r["state_bytes_per_s"] / 1e9),
+            ("%.0f %%" % (100 * r["of_copy"])) if r.get("of_copy") is not None else "",
             ("%.2f" % r["float_ratio"]) if r.get("float_ratio") is not None else "",
             ("%.2f" % r["copies_ratio"]) if r.get("copies_ratio") is not None else "",
             ("%.1f" % r["ratio"]) if r.get("ratio") is not None else "n/a",
@@ -314,12 +351,25 @@ def main():
         cpu = rate.get((r["size"], "cpu", "double", 2))
         r["ratio"] = r["particle_updates_per_s"] / cpu if r["backend"] == "cuda" and cpu else None
     rows += rows_old
+    # What a step moves at least: the solver's bytes per particle, its state read from one copy
+    # and written to the other once a step (the grid and the stencils' re-reads not counted),
+    # against the copy bandwidth of the memory that holds it.
+    bandwidth = {"cpu": copy_bandwidth_cpu() if any(r["backend"] == "cpu" for r in rows) else None,
+                 "cuda": copy_bandwidth_gpu() if any(r["backend"] == "cuda" for r in rows) else None}
+    for r in rows:
+        r["state_bytes_per_s"] = r["particle_updates_per_s"] * r["bytes_per_particle"]
+        bw = bandwidth[r["backend"]]
+        r["of_copy"] = r["state_bytes_per_s"] / bw if bw else None
     text, md = format_table(rows)
     print()
     print(text, end="")
     print("(CPU runs: OMP_NUM_THREADS=%d; float/double: against the same backend and copies in double; "
           "1/2 copies: one copy of the particles against two; GPU/CPU: against cpu-double at the same size; "
-          "new/old: against the baseline build's run of the same case)" % args.threads)
+          "new/old: against the baseline build's run of the same case; state GB/s: updates/s times the "
+          "solver's bytes per particle, a lower bound of a step's memory traffic; of copy: that against the "
+          "memory's copy bandwidth, read plus written: %s)" % (args.threads, ", ".join(
+              "%s %.1f GB/s (%s)" % (k, v / 1e9, "a one-thread memcpy" if k == "cpu" else "device-to-device copy")
+              for k, v in bandwidth.items() if v) or "not measured"))
 
     if args.json:
         with open(args.json, "w") as f:

@@ -248,12 +248,14 @@ class CouplingCuda : public CouplingDeviceBackend {
       waited([&] {
         CUDA_CHECK(cudaMemcpy(out.sums.data(), sums_.ptr, out.sums.size() * sizeof(double), cudaMemcpyDeviceToHost));
       });
-    if (timing_)
+    if (timing_) {
+      CUDA_CHECK(cudaEventSynchronize(events_[kStages]));
       for (int k = 0; k < kStages; ++k) {
         float ms = 0;
         CUDA_CHECK(cudaEventElapsedTime(&ms, events_[k], events_[k + 1]));
         stageTotals_[k] += 1e-3 * ms;
       }
+    }
     float minStep;
     std::memcpy(&minStep, &res.minStepBits, sizeof(float));
     out.minParticleStep = minStep;
