@@ -5,10 +5,10 @@
         [--out results/tradeoff_stacked_blocks] [--duration 0.35] [--quick] [--json FILE]
         [--markdown FILE] [--plot PNG] [--package-data] [--report-only]
 
-docs/tradeoffs.md measures grid spacing, points per cell, FLIP/PIC alpha and precision on the
+docs/tradeoffs.md measures grid spacing, points per cell, FLIP/PIC damping and precision on the
 column collapse, whose output is a runout. A user of the coupling reads forces and block motions
 instead; this script measures the same knobs on them. Each setting runs
-``examples/liu2018_blocks.py --dx --ppc --flip-alpha --flip-reference-dt step --precision --duration --no-plots`` in its
+``examples/liu2018_blocks.py --dx --ppc --flip-viscosity --precision --duration --no-plots`` in its
 own process on one thread (free flow first, then the coupled run with ``dtAuto``) and reads its
 ``summary.json``:
 
@@ -20,8 +20,8 @@ own process on one thread (free flow first, then the coupled run with ``dtAuto``
 - its cost: points x steps of the coupled run (the work), the coupled run's wall seconds (one
   thread, so its CPU time) and the whole process's CPU seconds.
 
-One knob at a time from the default (dx 0.01 m, 8 points per cell, alpha 0.99, double: the
-example's ``--full``); the reference is the finest grid (dx 0.005 m, 8 per cell; 256,000 points,
+One knob at a time from the default (dx 0.01 m, 8 points per cell, the paper's blend as a PIC
+viscosity of 0.0503 m^2/s, double: the example's ``--full``); the reference is the finest grid (dx 0.005 m, 8 per cell; 256,000 points,
 ``--quick``: dx 1/150 m). Errors are relative to the reference (for event times: of the time
 from the release), costs relative to the default, all measured in this one command. Every
 finished run is kept under ``--out`` (its summary and CPU seconds), and a second call with the
@@ -41,10 +41,10 @@ import sys
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 EXAMPLE = os.path.join(REPO, "examples", "liu2018_blocks.py")
-DEFAULT = {"dx": 0.01, "ppc": 8, "alpha": 0.99, "precision": "double"}
+DEFAULT = {"dx": 0.01, "ppc": 8, "viscosity": 0.0503, "precision": "double"}
 # Spacings with whole cells along the flume (0.6 m), its width (0.2 m) and the column (0.1 m).
 SPACINGS = (0.02, 0.0125, 0.01, 1.0 / 150.0, 0.005)
-KEYS = {"dx": "dx", "ppc": "ppc", "alpha": "flip_alpha", "precision": "precision"}
+KEYS = {"dx": "dx", "ppc": "ppc", "viscosity": "flip_viscosity", "precision": "precision"}
 # relative errors stored for mpmsdem.tradeoffs: output name -> row key. Not the peak force: the
 # 10 ms peak of the impact transient does not converge with the grid (docs/tradeoffs.md), so no
 # setting can be proposed for an error in it.
@@ -56,17 +56,18 @@ def plan(quick):
     finest = SPACINGS[-2] if quick else SPACINGS[-1]
     runs = [dict(DEFAULT, dx=dx) for dx in SPACINGS if dx > finest]
     runs += [dict(DEFAULT, ppc=1)]
-    runs += [dict(DEFAULT, alpha=a) for a in (0.9, 0.95, 1.0)]
+    # the damping: the scenes' default (a tenth of the paper's), 0.02 m^2/s, twice the paper's
+    runs += [dict(DEFAULT, viscosity=nu) for nu in (0.005, 0.02, 0.1)]
     runs += [dict(DEFAULT, precision="float"), dict(DEFAULT, ppc=27), dict(DEFAULT, dx=finest)]
     return runs
 
 
 def name(s):
-    return "dx%.5g_ppc%d_a%g_%s" % (s["dx"], s["ppc"], s["alpha"], s["precision"])
+    return "dx%.5g_ppc%d_nu%g_%s" % (s["dx"], s["ppc"], s["viscosity"], s["precision"])
 
 
 def label(s):
-    return "dx %.3g, %d/cell, alpha %g, %s" % (s["dx"], s["ppc"], s["alpha"], s["precision"])
+    return "dx %.3g, %d/cell, PIC viscosity %g m^2/s, %s" % (s["dx"], s["ppc"], s["viscosity"], s["precision"])
 
 
 def runOne(s, folder, duration, timeout):
@@ -78,8 +79,7 @@ def runOne(s, folder, duration, timeout):
         if row["duration"] == duration and all(row[k] == v for k, v in s.items()):
             return row, True
     os.makedirs(folder, exist_ok=True)
-    cmd = [sys.executable, EXAMPLE, "--dx", repr(s["dx"]), "--ppc", str(s["ppc"]), "--flip-alpha", repr(s["alpha"]),
-           "--flip-reference-dt", "step",
+    cmd = [sys.executable, EXAMPLE, "--dx", repr(s["dx"]), "--ppc", str(s["ppc"]), "--flip-viscosity", repr(s["viscosity"]),
            "--precision", s["precision"], "--duration", repr(duration), "--no-plots", "--out", folder]
     env = dict(os.environ, OMP_NUM_THREADS="1")
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -134,10 +134,10 @@ def num(v, f):
 
 
 def table(rows):
-    head = ["dx [m]", "points/cell", "alpha", "precision", "points", "steps", "peak F [N]", "vs ref",
+    head = ["dx [m]", "points/cell", "PIC viscosity [m²/s]", "precision", "points", "steps", "peak F [N]", "vs ref",
             "sustained F [N]", "vs ref", "middle falls [s]", "top touched [s]", "top falls [s]",
             "middle / top travel [m]", "coupled s", "work / default", "time / default"]
-    body = [["%.4g" % r["dx"], "%d" % r["ppc"], "%g" % r["alpha"], r["precision"], "%d" % r["particles"],
+    body = [["%.4g" % r["dx"], "%d" % r["ppc"], "%g" % r["viscosity"], r["precision"], "%d" % r["particles"],
              "%d" % r["steps"], "%.1f" % r["peak"], pct(r["peak_error"]), num(r["sustained"], "%.2f"),
              pct(r["sustained_error"]), num(r["middle_fall"], "%.3f"), num(r["top_touch"], "%.3f"),
              num(r["top_fall"], "%.3f"), "%.3f / %.3f" % (r["middle_travel"], r["top_travel"]),
@@ -169,8 +169,8 @@ def packageData(rows, command):
                   "errors": {out: r[key + "_error"] for out, key in OUTPUTS.items()
                              if r[key + "_error"] is not None},
                   "cost": r["work"], "cpu_cost": r["coupled_cost"], "reference": r is ref,
-                  # alpha changes the flow's damping (a model choice), not its resolution
-                  "sensitivity": r["alpha"] != ref["alpha"]} for r in rows],
+                  # the damping is a model choice, not a resolution
+                  "sensitivity": r["viscosity"] != ref["viscosity"]} for r in rows],
     }
     data["studies"] = [s for s in data["studies"] if s["name"] != study["name"]] + [study]
     with open(path, "w") as f:
@@ -189,14 +189,14 @@ def plot(rows, path):
         for r in rows[:-1]:
             if r[key] is None:
                 continue
-            colour = "C1" if r["precision"] == "float" else ("C2" if r["alpha"] != DEFAULT["alpha"] else "C0")
+            colour = "C1" if r["precision"] == "float" else ("C2" if r["viscosity"] != DEFAULT["viscosity"] else "C0")
             ax.scatter(r["work"], 100 * r[key], color=colour)
             ax.annotate(label(r).replace(", ", "\n", 1), (r["work"], 100 * r[key]), fontsize=6)
         ax.axhline(0.0, color="grey", lw=0.8)
         ax.set_xscale("log")
         ax.set_xlabel("work (points x steps) / default (dx 0.01 m, 8/cell)")
         ax.set_ylabel("%s: (value - reference) / reference [%%]" % what, fontsize=8)
-    grid = sorted((r for r in rows if r["ppc"] == 8 and r["alpha"] == DEFAULT["alpha"] and r["precision"] == "double"),
+    grid = sorted((r for r in rows if r["ppc"] == 8 and r["viscosity"] == DEFAULT["viscosity"] and r["precision"] == "double"),
                   key=lambda r: r["dx"])
     ax = axes[2]
     ax.plot([1e3 * r["dx"] for r in grid], [r["peak"] for r in grid], "o-", label="peak (10 ms mean)")
@@ -204,7 +204,7 @@ def plot(rows, path):
     ax.set_xlabel("grid spacing dx [mm] (8 points per cell)")
     ax.set_ylabel("downstream flow force on the bottom block [N]")
     ax.legend(fontsize=8)
-    fig.suptitle("Paper §3.3 stacked blocks: error against cost (reference: %s); green: alpha, orange: float"
+    fig.suptitle("Paper §3.3 stacked blocks: error against cost (reference: %s); green: damping, orange: float"
                  % label(rows[-1]), fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -224,10 +224,18 @@ def main(argv=None):
     ap.add_argument("--package-data", action="store_true",
                     help="store the study in py/mpmsdem/tradeoffs.json for mpmsdem.tradeoffs.propose()")
     ap.add_argument("--report-only", action="store_true", help="report the finished runs in --out, run nothing")
+    ap.add_argument("--workers", type=int, default=1, help="runs side by side, one thread each (default 1)")
     a = ap.parse_args(argv)
     if not a.duration > 0:
         ap.error("--duration = %r s: must be > 0" % a.duration)
     runs = plan(a.quick)
+    if a.workers > 1 and not a.report_only:
+        # the runs side by side, the largest (the reference, last) first; each on one thread, its
+        # cost read as its work (points x steps), which sharing the machine does not change
+        from concurrent.futures import ThreadPoolExecutor
+        with ThreadPoolExecutor(a.workers) as pool:
+            list(pool.map(lambda s: runOne(s, os.path.join(os.path.abspath(a.out), name(s)), a.duration, a.timeout),
+                          reversed(runs)))
     rows = []
     for i, s in enumerate(runs):
         folder = os.path.join(os.path.abspath(a.out), name(s))
@@ -249,7 +257,7 @@ def main(argv=None):
     print()
     printTable(head, body)
     print("(reference: the last row; work: points x steps of the coupled run, time: its wall seconds, one thread, "
-          "each against dx 0.01 m, 8/cell, alpha 0.99, double)")
+          "each against dx 0.01 m, 8/cell, PIC viscosity 0.0503 m^2/s, double)")
     command = "OMP_NUM_THREADS=1 python3 scripts/bench/tradeoff_stacked_blocks.py" + (" --quick" if a.quick else "")
     if a.json:
         with open(a.json, "w") as f:
