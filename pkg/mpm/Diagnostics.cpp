@@ -10,16 +10,23 @@ Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& g,
                      const std::vector<FlowProbeSpec>& probes) {
   DiagnosticSums sums = emptyDiagnosticSums();
   std::vector<ProbeSums> probeSums(probes.size(), emptyProbeSums());
+  const std::vector<ProbeStation> stations = probeStations(probes);
   const double gravity[3] = {g[0], g[1], g[2]};
   forEachSlice(particles, [&](std::size_t, const ParticleSet& p) {
     for (std::size_t i = 0; i < p.size(); ++i) {
       const double* x = &p.x[3 * i];
       addParticleDiagnostics(sums, x, &p.v[3 * i], p.mass[i], p.phase[i], gravity);
       for (std::size_t k = 0; k < probes.size(); ++k)
-        addProbeSample(probeSums[k], {probes[k].x, probes[k].halfWidth}, x, p.v[3 * i], p.mass[i]);
+        addProbeSample(probeSums[k], stations[k], x, p.v[3 * i], p.mass[i]);
     }
   });
   return finishDiagnostics(sums, probeSums, particles.size(), probes);
+}
+
+std::vector<ProbeStation> probeStations(const std::vector<FlowProbeSpec>& probes) {
+  std::vector<ProbeStation> stations;
+  for (const FlowProbeSpec& p : probes) stations.push_back({p.x, p.halfWidth});
+  return stations;
 }
 
 Diagnostics finishDiagnostics(const DiagnosticSums& sums, const std::vector<ProbeSums>& probeSums, std::size_t n,

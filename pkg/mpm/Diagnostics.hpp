@@ -47,6 +47,9 @@ struct Diagnostics {
 Diagnostics diagnose(ParticleSlices& particles, const std::array<double, 3>& gravity,
                      const std::vector<FlowProbeSpec>& probes = {});
 
+// The stations (x and half-width) of the probes, as the per-particle formulas read them.
+std::vector<ProbeStation> probeStations(const std::vector<FlowProbeSpec>& probes);
+
 // The diagnostics of `n` particles from their sums (DiagnosticsKernels.hpp), one ProbeSums
 // per probe: what diagnose() and a solver's own reduction (MpmSolver::diagnose) report.
 Diagnostics finishDiagnostics(const DiagnosticSums& sums, const std::vector<ProbeSums>& probeSums, std::size_t n,

@@ -249,14 +249,12 @@ class SolverParticleSlices : public ParticleSlices {
 };
 
 // The diagnostics of a solver's current particles: its own reduction where it has one
-// (MpmSolver::diagnose), else a pass over `slices` of them (mpm::diagnose).
+// (MpmSolver::diagnosticSums), else a pass over `slices` of them (mpm::diagnose).
 inline Diagnostics diagnose(MpmSolver& solver, ParticleSlices& slices, const std::array<double, 3>& gravity,
                             const std::vector<FlowProbeSpec>& probes = {}) {
-  std::vector<ProbeStation> stations;
-  for (const FlowProbeSpec& p : probes) stations.push_back({p.x, p.halfWidth});
   DiagnosticSums sums;
   std::vector<ProbeSums> probeSums;
-  if (solver.diagnosticSums(gravity, stations, sums, probeSums))
+  if (solver.diagnosticSums(gravity, probeStations(probes), sums, probeSums))
     return finishDiagnostics(sums, probeSums, solver.numParticles(), probes);
   return diagnose(slices, gravity, probes);
 }
