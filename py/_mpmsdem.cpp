@@ -6,6 +6,7 @@
 #include <numpy/arrayobject.h>
 
 #include "PyConvert.hpp"
+#include "mpm/GridBoundary.hpp"
 
 namespace {
 
@@ -27,4 +28,6 @@ BOOST_PYTHON_MODULE(_mpmsdem) {
   mpmsdem::py::exportSdem();
   mpmsdem::py::exportMpm();
   mpmsdem::py::exportCoupling();
+  // cells inside each face of the grid box where its walls act (mpm/GridBoundary.hpp)
+  boost::python::scope().attr("wallLayer") = mpmsdem::mpm::kWallLayer;
 }

@@ -24,7 +24,7 @@ from yade.wrapper import PyRunner
 from . import _mpmsdem
 from .sdem import _bindStep
 
-WALL_LAYER = 2  # cells inside each face of the grid box where its walls act (pkg/mpm/GridBoundary.hpp)
+WALL_LAYER = _mpmsdem.wallLayer  # cells inside each face of the grid box where its walls act
 
 COLUMNS = ("id", "shape", "x", "y", "heading_deg", "mass")
 
