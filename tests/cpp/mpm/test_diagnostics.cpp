@@ -6,7 +6,6 @@
 #include <cmath>
 
 #include "mpm/Diagnostics.hpp"
-#include "mpm/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "mpm/MpmTypes.hpp"
 #include "mpm/Seeding.hpp"
@@ -96,15 +95,9 @@ TEST(FlowProbe, ARecordThatNeverSeesTheFlowHasNoResult) {
 // reductions give the same bits; more stations than the device carries fall back to slices.
 TEST(Diagnostics, CudaReductionIsTheHostPassOverTheSameParticles) {
   if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine: device diagnostics check skipped";
-  MpmParams prm = testing_scenes::granularColumnParams(0.01, {30, 12, 24}, 2e5);
-  MpmScene scene;
-  scene.params = prm;
-  ParticleBox box;
-  box.lo = {0.02, 0.02, 0.02};
-  box.hi = {0.10, 0.10, 0.20};
-  box.ppc = {2, 2, 2};
-  scene.boxes.push_back(box);
-  const ParticleSet ps = seedParticles(scene);
+  const MpmParams prm = testing_scenes::granularColumnParams(0.01, {30, 12, 24}, 2e5);
+  ParticleSet ps;
+  seedBox(prm, {0.02, 0.02, 0.02}, {0.10, 0.10, 0.20}, {2, 2, 2}, ps);
   const std::array<double, 3> g = prm.gravity;
   const std::vector<FlowProbeSpec> probes = {{0.09, 0.01, 0.02, 1, 0.05}, {0.05, 0.005, 0.02, 1, 0.05}};
   for (auto prec : {Precision::Double, Precision::Float}) {
