@@ -53,6 +53,7 @@ PROBE_EVERY = 0.005   # free flow: the station is read every this much simulated
 PROBE_WINDOW = 0.05   # h_f, v_f: means over this long after the front's arrival [s]
 FRONT_STILL = 0.3     # free flow: a front that has not advanced dx/2 for this long has stopped [s]
 SAMPLE_EVERY = 0.002  # coupled run: the cube's record interval [s]
+ENERGY_EVERY = 0.01   # coupled run: the energies kept in the results (Fig 17) every this long [s]
 STATIC_FLOOR = 0.01   # a static force below this fraction of the peak: nothing rests against the cube (no ratio)
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -189,6 +190,30 @@ def _coupledResults(out, ff, s, duration, potential0, frontEnd):
         i = int(s[key].argmax())
         out.update({key + "_max": float(s[key][i]), key + "_max_time": float(s["t"][i])})
     out["block_kinetic_ratio"] = out["block_kinetic_max"] / potential0
+    out["energy"] = energySeries(s, potential0)
+    out["flow_dissipated_end"] = out["energy"]["dissipated"][-1]
+
+
+def energySeries(s, potential0):
+    """Fig 17's energies over the flow's initial potential energy E_p,0^f, every ENERGY_EVERY
+    and at the run's end, from the coupled run's records ``s`` (t, flow_potential, flow_kinetic,
+    block_kinetic): E_p^f, E_k^f, E_k^b and the energy dissipated, E_d = E_p,0^f - E_p^f - E_k^f
+    - E_k^b, the mechanical energy the flow and the cube have lost (the cube's own potential
+    energy, about 1 J against the flow's hundreds, is left out). E_p^f is zero at the bed under
+    the column's upstream end, so a flow that runs far down the 10° flume dissipates more than
+    E_p,0^f."""
+    t = [float(x) for x in s["t"]]
+    every = max(1, int(round(ENERGY_EVERY / (t[1] - t[0])))) if len(t) > 1 else 1
+    keep = list(range(0, len(t), every))
+    if keep[-1] != len(t) - 1:
+        keep.append(len(t) - 1)
+    out = {"t": [t[i] for i in keep]}
+    for key, name in (("flow_potential", "flow_potential"), ("flow_kinetic", "flow_kinetic"),
+                      ("block_kinetic", "block_kinetic")):
+        out[name] = [float(s[key][i]) / potential0 for i in keep]
+    out["dissipated"] = [1.0 - p - k - b for p, k, b in zip(out["flow_potential"], out["flow_kinetic"],
+                                                                out["block_kinetic"])]
+    return out
 
 
 # ---------------------------------------------------------------- through the C++ driver

@@ -16,11 +16,22 @@ Figs 14, 16b and 19:
   is zero at the bed under the column's upstream end), and beside it the time of the flow's
   kinetic-energy peak in the coupled run (Fig 17: about 0.38 s for AR 3.0 at L0/h_b 4 and 24).
   Runs recorded before these energies were kept are left out of both.
+- Fig 17: the energies of each case over time, over the flow's initial potential energy E_p,0^f:
+  E_p^f, E_k^f, the energy dissipated E_d^f (the balance E_p,0^f - E_p^f - E_k^f - E_k^b) and the
+  cube's E_k^b (paper, AR 3.0 at 4.5 s: E_d^f 77 % at L0/h_b 4, 73 % at 24; E_p^f is zero at the
+  bed under the column's upstream end, a datum the paper does not give) ->
+  parametric_study_energy.png.
+- Fig 15 (``--views CASE_FOLDER``, a case the driver ran, `examples/parametric_study.py
+  --run-prepared`): top and side views of the coupled run's particle snapshots around the cube,
+  coloured by speed, the cube's outline drawn from its position and rotation, and the flow's
+  height over the cube against h_b (paper, Fig 15a: 2.31 for AR 1.3, L0/h_b 4 at 0.5 s; Fig 15c:
+  0.31 for AR 1.3, L0/h_b 54) -> views_CASE.png beside the folder.
 
     python3 examples/parametric_study_summary.py [--results results/parametric_study]
+    python3 examples/parametric_study_summary.py --views DIR/AR=3_L0hb=4_full [--times 0.5,1,4.5]
 
 Reads the sweep's store (runs.jsonl) and the per-case JSON files of yade-batch jobs in the
-folder; writes parametric_study.png and fits.json there.
+folder; writes parametric_study.png, parametric_study_energy.png and fits.json there.
 """
 import argparse
 import glob
@@ -87,10 +98,27 @@ def fitGroups(runs, x):
     return fits
 
 
+# Fig 17's dissipated energy at 4.5 s, by (AR, L0/h_b) (§5.3)
+PAPER_DISSIPATED = {(3.0, 4): 0.77, (3.0, 24): 0.73}
+# Fig 15's flow height over the cube against h_b, by (AR, L0/h_b): (value, time [s] or None: the largest)
+PAPER_HEIGHT = {(1.3, 4): (2.31, 0.5), (1.3, 54): (0.31, None)}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--results", default="results/parametric_study", help="folder of the study's results")
+    ap.add_argument("--views", metavar="CASE_FOLDER", default=None,
+                    help="Fig 15: top and side views of one case the driver ran (its coupled/mpm.h5 snapshots)")
+    ap.add_argument("--times", default="0.5,1,2,4.5",
+                    help="--views: the snapshot times to show [s], comma-separated (the nearest snapshot each; "
+                         "default 0.5,1,2,4.5)")
     a = ap.parse_args()
+    if a.views:
+        path, heights = views(a.views, [float(t) for t in a.times.split(",")])
+        for t, h in heights:
+            print("t = %.3f s: the flow's height over the cube %.2f h_b" % (t, h))
+        print("views: %s" % path)
+        return
     allRuns = load(a.results)
     if not allRuns:
         raise SystemExit("no results in %s: run the study first (see examples/parametric_study.py)" % a.results)
@@ -132,8 +160,16 @@ def main():
                          for g, f in fits[xname].items())
         print("S_b/L0 against %s: %s (paper, complete / partial: r = %s)" % (xname, text, paper))
 
+    withEnergy = sorted((r for r in runs if "energy" in r), key=lambda r: (r["AR"], r["L0_hb"]))
+    for r in withEnergy:
+        paper = PAPER_DISSIPATED.get((round(r["AR"], 2), r["L0_hb"]))
+        print("%5.2f %6g   E_d^f/E_p,0^f %.1f %% at %.2f s%s" % (
+            r["AR"], r["L0_hb"], 100 * r["flow_dissipated_end"], r["energy"]["t"][-1],
+            " (paper: %.0f %% at 4.5 s)" % (100 * paper) if paper else ""))
     png, js = os.path.join(a.results, "parametric_study.png"), os.path.join(a.results, "fits.json")
     plot(runs, fits, png)
+    if withEnergy:
+        energyPlot(withEnergy, os.path.join(a.results, "parametric_study_energy.png"))
     with open(js, "w") as f:
         json.dump(fits, f, indent=1)
     print("plot: %s; fits: %s" % (png, js))
@@ -211,6 +247,119 @@ def plot(runs, fits, path):
     fig.suptitle("Parametric study (paper §5): %d runs" % len(runs))
     fig.tight_layout()
     fig.savefig(path, dpi=90)
+
+
+def energyPlot(runs, path):
+    """Fig 17 for every case with its energy series: one panel a case."""
+    cols = min(4, len(runs))
+    rows = (len(runs) + cols - 1) // cols
+    fig, ax = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+    for a, r in zip(ax.flat, runs):
+        e = r["energy"]
+        for key, label, color in (("flow_potential", "E_p^f", "C0"), ("flow_kinetic", "E_k^f", "C1"),
+                                  ("dissipated", "E_d^f", "C3")):
+            a.plot(e["t"], e[key], color=color, label=label)
+        a.plot(e["t"], [100 * b for b in e["block_kinetic"]], color="C2", label="E_k^b × 100")
+        paper = PAPER_DISSIPATED.get((round(r["AR"], 2), r["L0_hb"]))
+        if paper:
+            a.plot([4.5], [paper], "k*", ms=10, label="paper's E_d^f at 4.5 s")
+        a.axvline(0.38, color="k", ls=":", lw=0.8)
+        a.set_title("AR %.2f, L0/h_b %g (%s)" % (r["AR"], r["L0_hb"], r["submersion"]), fontsize=9)
+        a.set_xlabel("t [s]")
+        a.set_ylabel("E / E_p,0^f")
+    for a in ax.flat[len(runs):]:
+        a.axis("off")
+    ax.flat[0].legend(fontsize=7)
+    fig.suptitle("Energies over the flow's initial potential energy (Fig 17; dotted: the paper's kinetic peak, "
+                 "0.38 s)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+
+
+def flowHeightOver(x, cube, hb):
+    """The flow's height over the cube: the highest point z [m] within h_b/2 of the cube's
+    centre in x and y (the flume frame, z up from the bed), or 0 when none is there."""
+    near = (np.abs(x[:, 0] - cube[0]) < hb / 2) & (np.abs(x[:, 1] - cube[1]) < hb / 2)
+    return float(x[near, 2].max()) if near.any() else 0.0
+
+
+def cubeOutline(centre, rotation, hb, axes):
+    """The outline of the cube (side hb, turned by the rotation vector) projected on two axes:
+    the convex hull of its corners' projections, closed."""
+    from scipy.spatial import ConvexHull
+    corners = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float) * hb / 2
+    angle = np.linalg.norm(rotation)
+    if angle > 0:
+        u = np.asarray(rotation) / angle
+        K = np.array([[0, -u[2], u[1]], [u[2], 0, -u[0]], [-u[1], u[0], 0]])
+        corners = corners @ (np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K).T
+    p = (corners + centre)[:, axes]
+    hull = ConvexHull(p).vertices
+    return np.vstack([p[hull], p[hull[:1]]])
+
+
+def views(case, times):
+    """Fig 15 for one case folder the driver ran: top (x, y) and side (x, z) views of the
+    coupled run's snapshots nearest ``times`` [s], the points coloured by speed; writes
+    views_CASE.png beside the folder. Returns its path and, per snapshot shown, (time [s], the
+    flow's height over the cube / h_b)."""
+    import h5py
+    case = os.path.normpath(case)
+    folder = os.path.join(case, "coupled")
+    with open(os.path.join(case, "case.json")) as f:
+        meta = json.load(f)["result"]
+    hb = meta["h_b"]
+    with h5py.File(os.path.join(folder, "coupled.h5"), "r", locking=False) as f:
+        t = f["series/time"][:]
+        pos, rot = f["series/pos"][:], f["series/rotation"][:]
+    block = next(k for k in range(pos.shape[1] // 3) if np.ptp(pos[:, 3 * k:3 * k + 3], axis=0).max() > 0)
+    pos, rot = pos[:, 3 * block:3 * block + 3], rot[:, 3 * block:3 * block + 3]
+    snaps = []
+    with h5py.File(os.path.join(folder, "mpm.h5"), "r", locking=False) as f:
+        stored = [(float(f["snapshots"][k].attrs["time"]), k) for k in f["snapshots"]]
+        if not stored:
+            raise SystemExit("%s: no particle snapshots in coupled/mpm.h5" % case)
+        for want in times:
+            tt, key = min(stored, key=lambda s: abs(s[0] - want))
+            if any(key == k for k, *_ in snaps):
+                continue
+            g = f["snapshots"][key]
+            snaps.append((key, tt, g["x"][:], np.linalg.norm(g["v"][:], axis=1)))
+    x0 = pos[0, 0]
+    lo, hi = x0 - 0.5, x0 + max(0.5, float(np.ptp(pos[:, 0]))) + 0.5
+    # Each panel drawn to scale: its height follows the flume's width and the flow's height.
+    width = max(float(np.ptp(x[:, 1])) for _, _, x, _ in snaps) + hb
+    top = 1.05 * max(float(x[(x[:, 0] > lo) & (x[:, 0] < hi), 2].max(initial=hb)) for _, _, x, _ in snaps)
+    inch = 4.8 / (hi - lo)
+    fig, ax = plt.subplots(2, len(snaps), figsize=(4.8 * len(snaps) + 1.5, inch * (width + top) + 2.0),
+                           squeeze=False, gridspec_kw={"height_ratios": [width, top]}, constrained_layout=True)
+    vmax = max(float(np.percentile(v, 99)) for *_, v in snaps) or 1.0
+    heights = []
+    for c, (key, tt, x, v) in enumerate(snaps):
+        i = int(np.abs(t - tt).argmin())
+        sel = (x[:, 0] > lo) & (x[:, 0] < hi)
+        height = flowHeightOver(x, pos[i], hb) / hb
+        heights.append((tt, height))
+        for r, (axes, ylabel) in enumerate((((0, 1), "y [m]"), ((0, 2), "z [m]"))):
+            a = ax[r, c]
+            im = a.scatter(x[sel, axes[0]], x[sel, axes[1]], c=v[sel], s=0.2, cmap="viridis", vmin=0, vmax=vmax,
+                           rasterized=True)
+            a.plot(*cubeOutline(pos[i], rot[i], hb, list(axes)).T, color="#e6b800", lw=1.5, ls="--")
+            a.set_xlim(lo, hi)
+            if axes[1] == 2:
+                a.set_ylim(0, top)
+            a.set_aspect("equal")
+            a.set_xlabel("x [m]")
+            a.set_ylabel(ylabel)
+        ax[0, c].set_title("t = %.2f s: height over the cube %.2f h_b" % (tt, height), fontsize=9)
+    fig.colorbar(im, ax=ax, label="speed [m/s]", shrink=0.8)
+    paper = PAPER_HEIGHT.get((round(meta["AR"], 2), meta["L0_hb"]))
+    fig.suptitle("AR %.2f, L0/h_b %g: top and side views (Fig 15%s)" % (
+        meta["AR"], meta["L0_hb"], "; paper: %.2f h_b%s" % (paper[0], " at %.1f s" % paper[1] if paper[1] else
+                                                           ", largest") if paper else ""), fontsize=10)
+    path = os.path.join(os.path.dirname(case), "views_%s.png" % os.path.basename(case))
+    fig.savefig(path, dpi=100)
+    return path, heights
 
 
 if __name__ == "__main__":

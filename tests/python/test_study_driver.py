@@ -21,6 +21,14 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 pytest.importorskip("h5py")
 
 
+def summary():
+    spec = importlib.util.spec_from_file_location("parametric_study_summary",
+                                                  os.path.join(ROOT, "examples", "parametric_study_summary.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def study():
     spec = importlib.util.spec_from_file_location("parametric_study", os.path.join(ROOT, "examples",
                                                                                     "parametric_study.py"))
@@ -43,6 +51,13 @@ def test_a_case_through_the_driver_gives_the_yade_case(tmp_path):
     got = ps.collectCase(folder)
     assert ref["reached"] and got["reached"]
     assertSameCase(got, ref)
+    # Fig 15's views of the run's first and last snapshots: nothing over the cube before the flow
+    # comes; at the end at most the cube's height and the free flow's depth (at this grid the
+    # flow passes the one-cell cube by its sides)
+    path, heights = summary().views(folder, [0.0, 10.0])
+    assert os.path.getsize(path) > 10000
+    assert [t for t, _ in heights] == [0.0, pytest.approx(ref["duration"], abs=1e-9)]
+    assert heights[0][1] == 0.0 and 0 <= heights[1][1] < 1.0 + ref["free_flow"]["h_f"] / 0.05
     # E_p,0 is the column's weight times its centroid's height against gravity, zero at the bed
     # under its upstream end (10° flume; the lowest points R_p0 - dx/4 above the bed, Eq 13)
     dx, th = CASE["dx"], math.radians(10)
@@ -54,6 +69,15 @@ def test_a_case_through_the_driver_gives_the_yade_case(tmp_path):
     assert 0 < ref["flow_kinetic_max_time"] < ref["duration"]
     assert ref["free_flow"]["arrival"] < ref["block_kinetic_max_time"] <= ref["duration"] + 1e-9
     assert 0.001 < ref["block_kinetic_ratio"] < 0.2
+    # Fig 17's balance: no energy is made, so the flow and cube lose mechanical energy from the
+    # release on, and by the end have lost a good part of it (two-sided: the flow has not stopped)
+    e = ref["energy"]
+    assert e["t"][0] == pytest.approx(0.002, abs=1e-3) and e["t"][-1] == pytest.approx(ref["duration"], abs=1e-3)
+    assert e["t"][1] - e["t"][0] == pytest.approx(ps.ENERGY_EVERY, rel=0.3)
+    assert e["dissipated"][0] == pytest.approx(0.0, abs=1e-3)
+    assert min(e["dissipated"]) > -1e-3
+    assert min(b - a for a, b in zip(e["dissipated"], e["dissipated"][1:])) > -1e-3  # nothing given back
+    assert 0.1 < ref["flow_dissipated_end"] < 1.0
     # the front arrives at the station (x 0.5 m) in 0.2 s and the cube is pushed downstream
     assert 0.1 < ref["free_flow"]["arrival"] < 0.3
     assert 0.05 < ref["travel"] < 1.0
@@ -78,8 +102,11 @@ def assertSameCase(got, ref):
     for k in ("arrival", "h_f", "v_f", "Fr", "Fr1"):
         assert got["free_flow"][k] == pytest.approx(ref["free_flow"][k], rel=1e-12, abs=1e-15), k
     for k in ("travel", "peak_force", "static_force", "rotation_deg", "speed_end", "eq20_force", "static_force_model",
-              "flow_potential_0", "flow_kinetic_max", "block_kinetic_max", "block_kinetic_ratio"):
+              "flow_potential_0", "flow_kinetic_max", "block_kinetic_max", "block_kinetic_ratio", "flow_dissipated_end"):
         assert got[k] == pytest.approx(ref[k], rel=1e-9, abs=1e-12), k
+    assert got["energy"]["t"] == ref["energy"]["t"]
+    for k in ("flow_potential", "flow_kinetic", "block_kinetic", "dissipated"):
+        assert got["energy"][k] == pytest.approx(ref["energy"][k], rel=1e-9, abs=1e-12), k
     for k in ("peak_time", "flow_kinetic_max_time", "block_kinetic_max_time", "duration", "particles", "cube_at_end", "submersion", "flume_length", "flip_blend"):
         assert got[k] == ref[k], k
 
@@ -198,7 +225,8 @@ def test_a_cube_at_the_end_wall_is_told_from_one_held_back_by_the_flow():
 
     def case(travel, force, frontEnd):
         s = {"t": t, "Ft": np.where(t > 1.9, force, 5.0), "travel": travel * t / 2, "vx": np.full_like(t, 1.0),
-             "rotation": np.zeros_like(t), "flow_kinetic": np.ones_like(t), "block_kinetic": np.ones_like(t)}
+             "rotation": np.zeros_like(t), "flow_kinetic": np.ones_like(t), "block_kinetic": np.ones_like(t),
+             "flow_potential": np.full_like(t, 150.0)}
         out = {"L_i": 0.3, "L0": 2.7, "flume_length": 9.05, "dx": 0.01}
         ps._coupledResults(out, ff, s, 2.0, 150.0, frontEnd)
         return out["cube_at_end"]
@@ -207,6 +235,47 @@ def test_a_cube_at_the_end_wall_is_told_from_one_held_back_by_the_flow():
     assert case(1.9, -1.3, 9.0)       # pushed back by the flow the wall turned
     assert case(5.95, 2.0, 9.0)       # at the wall itself
     assert not case(1.9, 2.0, 9.0)    # pushed downstream, away from the wall
+
+
+def test_the_energies_of_fig_17_are_a_balance_over_the_initial_potential_energy():
+    # A flow that turns 150 J of potential energy into 20 J of kinetic energy, hands 0.6 J to the
+    # cube and dissipates the rest, recorded every 2 ms for 1.001 s: kept every 10 ms and at the end.
+    import numpy as np
+    ps = study()
+    t = np.arange(501) * 0.002 + 0.002
+    s = {"t": t, "flow_potential": 150.0 - 120.0 * t / t[-1], "flow_kinetic": 20.0 * np.sin(np.pi * t / t[-1]),
+         "block_kinetic": np.full_like(t, 0.6)}
+    e = ps.energySeries(s, 150.0)
+    assert len(e["t"]) == 101 and e["t"][:2] == [0.002, 0.012] and e["t"][-1] == t[-1]
+    assert e["flow_potential"][-1] == pytest.approx(30.0 / 150.0, rel=1e-12)
+    assert e["block_kinetic"][0] == pytest.approx(0.004, rel=1e-12)
+    assert e["dissipated"][-1] == pytest.approx(1 - 0.2 - 0.004, abs=1e-12)  # E_k^f back to 0 at the end
+    mid = e["t"].index(t[250])
+    assert e["dissipated"][mid] == pytest.approx(1 - (150 - 120 * t[250] / t[-1] + 20 * np.sin(np.pi * t[250] / t[-1])
+                                                     + 0.6) / 150, rel=1e-12)
+
+
+def test_fig_15_views_measure_the_flow_over_the_cube_and_draw_it_turned():
+    import numpy as np
+    sm = summary()
+    hb = 0.05
+
+    def area(p):  # shoelace, of a closed outline
+        return 0.5 * abs(np.dot(p[:-1, 0], p[1:, 1]) - np.dot(p[1:, 0], p[:-1, 1]))
+
+    centre = np.array([1.0, 0.1, 0.025])
+    flat = sm.cubeOutline(centre, [0, 0, 0], hb, [0, 1])
+    assert area(flat) == pytest.approx(hb * hb, rel=1e-12) and np.ptp(flat[:, 0]) == pytest.approx(hb, rel=1e-12)
+    yawed = sm.cubeOutline(centre, [0, 0, math.pi / 4], hb, [0, 1])  # from above: the same square, corner first
+    assert area(yawed) == pytest.approx(hb * hb, rel=1e-12)
+    assert np.ptp(yawed[:, 0]) == pytest.approx(hb * math.sqrt(2), rel=1e-12)
+    side = sm.cubeOutline(centre, [0, 0, math.pi / 4], hb, [0, 2])  # from the side: its diagonal by its height
+    assert area(side) == pytest.approx(hb * hb * math.sqrt(2), rel=1e-12)
+    assert side[:, 1].min() == pytest.approx(0.0, abs=1e-15) and side[:, 1].max() == pytest.approx(hb, rel=1e-12)
+    # the highest point within h_b/2 of the cube's centre in x and y; one just outside does not count
+    x = np.array([[1.0, 0.1, 0.07], [1.02, 0.08, 0.09], [1.03, 0.1, 0.5], [0.9, 0.1, 0.3]])
+    assert sm.flowHeightOver(x, centre, hb) == 0.09
+    assert sm.flowHeightOver(x[2:], centre, hb) == 0.0
 
 
 def test_prepared_cases_run_workers_at_a_time_in_order_and_stop_at_a_failure():

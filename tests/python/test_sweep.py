@@ -228,6 +228,12 @@ def test_parametric_study_summary_on_known_data(tmp_path):
                      "travel_L0": travel / L0, "peak_force": ratio * 0.5, "static_force": 0.5,
                      "force_ratio": ratio, "cube_at_end": i == 7,
                      "speed_end": {3: 0.4, 7: 0.9, 9: 0.05}.get(i, 0.0)})  # 3 still carried; 7 at the end; 9 at the bound
+    for r in (runs[10], runs[16]):  # AR 3.0 and 4.0 at L0/h_b 4 and 14 with their energy series (Fig 17)
+        t = np.linspace(0, 4.5, 451)
+        e = {"t": list(t), "flow_potential": list(1 - 0.7 * t / 4.5), "flow_kinetic": list(0.1 * np.sin(t / 1.5)),
+             "block_kinetic": list(np.full_like(t, 1e-4))}
+        e["dissipated"] = [1 - p - q - b for p, q, b in zip(e["flow_potential"], e["flow_kinetic"], e["block_kinetic"])]
+        r.update(energy=e, flow_dissipated_end=e["dissipated"][-1])
     out = tmp_path / "results"
     os.makedirs(out)
     with sweep.Store(str(out / "runs.jsonl")) as st:  # 15 from a sweep, 5 as yade-batch job files
@@ -245,6 +251,12 @@ def test_parametric_study_summary_on_known_data(tmp_path):
     energyLines = [line for line in proc.stdout.splitlines() if "E_k,max^b/E_p,0^f" in line]
     assert [line.split()[:2] for line in energyLines] == [["4.00", str(r["L0_hb"])] for r in runs[15:]]
     assert "1.00 %" in energyLines[-1] and "at 0.380 s" in energyLines[-1]
+    dissipated = [line.split() for line in proc.stdout.splitlines() if "E_d^f/E_p,0^f" in line]
+    end = 100 * runs[10]["flow_dissipated_end"]
+    assert [d[:2] for d in dissipated] == [["3.00", "4"], ["4.00", "14"]]
+    assert " ".join(dissipated[0][2:]) == "E_d^f/E_p,0^f %.1f %% at 4.50 s (paper: 77 %% at 4.5 s)" % end
+    assert "paper" not in " ".join(dissipated[1])
+    assert os.path.getsize(out / "parametric_study_energy.png") > 10000
     fits = json.load(open(out / "fits.json"))
     assert fits["runs"] == 20 and fits["cube_at_end"] == 1 and os.path.getsize(out / "parametric_study.png") > 10000
     # a cube still carried at its run's end is flagged (its travel a lower bound) and stays in the fits
