@@ -25,16 +25,18 @@ void validate(const MpmParams& p) {
   for (int d = 0; d < 3; ++d) {
     if (p.cells[d] < 2 * kWallLayer) {
       std::ostringstream os;
-      os << ">= " << 2 * kWallLayer << " (two wall layers of " << kWallLayer << " cells) and <= 2^31 nodes in all";
+      os << ">= " << 2 * kWallLayer << " (two wall layers of " << kWallLayer << " cells)";
       throwParameter(std::string("cells[") + axis[d] + "]", p.cells[d], "", os.str());
     }
     if (!std::isfinite(p.origin[d])) throwParameter(std::string("origin[") + axis[d] + "]", p.origin[d], "m", "finite");
     if (!std::isfinite(p.gravity[d])) throwParameter(std::string("gravity[") + axis[d] + "]", p.gravity[d], "m/s^2", "finite");
   }
-  const double nodes = double(p.cells[0] + 1) * (p.cells[1] + 1) * (p.cells[2] + 1);
-  if (nodes * kNodeValues > 2147483647.0)
+  // Node and stencil-base indices are ints; 27 stencil bases a block of 3 x 3 x 3 cells number
+  // at least the nodes, so they bound both. The stored node records are addressed in 64 bits.
+  const double bases = double(kBlockCells) * blocksAlong(p.cells[0]) * blocksAlong(p.cells[1]) * blocksAlong(p.cells[2]);
+  if (bases > 2147483647.0)
     throwParameter("cells", std::to_string(p.cells[0]) + "x" + std::to_string(p.cells[1]) + "x" + std::to_string(p.cells[2]),
-                   "", "small enough that " + std::to_string(kNodeValues) + " x number of nodes < 2^31");
+                   "", "small enough that 27 x (cells[x]/3 + 1)(cells[y]/3 + 1)(cells[z]/3 + 1) < 2^31 (about 2^31 nodes)");
   if (!(p.flipAlpha >= 0 && p.flipAlpha <= 1)) throwParameter("flipAlpha", p.flipAlpha, "", "in [0, 1]");
   if (!(p.flipViscosity >= 0 && std::isfinite(p.flipViscosity)))
     throwParameter("flipViscosity", p.flipViscosity, "m^2/s", ">= 0 and finite (0: flipAlpha per flipReferenceDt)");

@@ -53,17 +53,20 @@ struct GridConst {
   const int* column;
 };
 
-// The record of node (i, j, k), and of the node with index `node` (see the layout above).
+// The record of node (i, j, k), and of the node with index `node` (see the layout above). Node
+// indices are ints (a grid has fewer than 2^31 nodes); records, and the value offsets
+// kNodeValues * record, are 64-bit, so that the grid's size is bounded by the memory of the
+// nodes it stores and not by 2^31 values.
 template <typename T>
-MPM_HD_INLINE int nodeRecordAt(const GridConst<T>& g, int i, int j, int k) {
+MPM_HD_INLINE long nodeRecordAt(const GridConst<T>& g, int i, int j, int k) {
   const int c = i * g.nodes[1] + j;
-  return (g.column ? g.column[c] : c) * g.nodes[2] + k;
+  return static_cast<long>(g.column ? g.column[c] : c) * g.nodes[2] + k;
 }
 template <typename T>
-MPM_HD_INLINE int nodeRecord(const GridConst<T>& g, int node) {
+MPM_HD_INLINE long nodeRecord(const GridConst<T>& g, int node) {
   if (!g.column) return node;
   const int c = node / g.nodes[2];
-  return g.column[c] * g.nodes[2] + (node - c * g.nodes[2]);
+  return static_cast<long>(g.column[c]) * g.nodes[2] + (node - c * g.nodes[2]);
 }
 
 // Per-step constants.

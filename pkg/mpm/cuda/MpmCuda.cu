@@ -50,6 +50,25 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
   nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
   for (int d = 0; d < 3; ++d) blocks_[d] = blocksAlong(params.cells[d]);
   nBlocks_ = blocks_[0] * blocks_[1] * blocks_[2];
+  // What a grid too large for the device allocated is given back (a YADE session that tries a
+  // smaller grid next has the whole device), and the error says what the grid needs.
+  try {
+    allocateGrid();
+  } catch (const RuntimeFailure& e) {
+    freeDevice();
+    const std::size_t grid = static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T);
+    const std::size_t ranges = 2 * static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int);
+    std::ostringstream os;
+    os << "the CUDA backend holds the grid of " << params.cells[0] << " x " << params.cells[1] << " x "
+       << params.cells[2] << " cells densely: " << nNodes_ << " nodes, " << grid / 1e9 << " GB of node records and "
+       << ranges / 1e9 << " GB of sorted cell ranges; it did not fit on the device (a smaller grid.cells, float, "
+       << "or the CPU backend, which holds only the node columns the flow reaches): " << e.what();
+    throw RuntimeFailure(os.str());
+  }
+}
+
+template <typename T>
+void MpmCuda<T>::allocateGrid() {
   deviceAlloc(&nodes_, static_cast<std::size_t>(kNodeValues) * nNodes_, bytes_);
   deviceAlloc(&flags_, 1, bytes_);
   deviceAlloc(&cellStart_, static_cast<std::size_t>(kBlockCells) * nBlocks_, bytes_);
@@ -62,8 +81,8 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
   CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
   CUDA_CHECK(cudaMemset(listCounts_, 0, kTileLists * sizeof(int)));
   CUDA_CHECK(cudaMemset(tileMark_, 0, nBlocks_));
-  if (params.terrain.enabled()) {
-    const std::vector<T> z(params.terrain.heights.begin(), params.terrain.heights.end());
+  if (params_.terrain.enabled()) {
+    const std::vector<T> z(params_.terrain.heights.begin(), params_.terrain.heights.end());
     deviceAlloc(&terrain_, z.size(), bytes_);
     CUDA_CHECK(cudaMemcpy(terrain_, z.data(), z.size() * sizeof(T), cudaMemcpyHostToDevice));
     grid_.terrain.z = terrain_;
@@ -77,6 +96,11 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
 
 template <typename T>
 MpmCuda<T>::~MpmCuda() {
+  freeDevice();
+}
+
+template <typename T>
+void MpmCuda<T>::freeDevice() {
   setStageTiming(false);
   freeParticles();
   deviceFree(nodes_);

@@ -78,6 +78,8 @@ class MpmCuda : public MpmSolver {
     unsigned int maxSpeedBits;    // float bits of the largest particle speed (>= 0, so ordered as uint)
   };
   void freeParticles();
+  void allocateGrid();  // the grid's arrays, the terrain's heights and the kernels' launch size
+  void freeDevice();    // every device array and event (the destructor; a constructor that failed part-way)
   void loadParticles(const ParticleSet& ps);  // allocates and fills the particle arrays for ps
   ParticleIn<T> input() const;
   ParticleOut<T> output() const;

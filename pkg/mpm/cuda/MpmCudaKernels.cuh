@@ -146,7 +146,7 @@ __global__ void __launch_bounds__(kBaseThreads)
   }
   const int g0 = 3 * b[0] + n0, g1 = 3 * b[1] + n1, g2 = 3 * b[2] + n2;
   if (t < kTile && g0 < g.nodes[0] && g1 < g.nodes[1] && g2 < g.nodes[2]) {
-    T* r = grid + kNodeValues * ((g0 * g.nodes[1] + g1) * g.nodes[2] + g2);
+    T* r = grid + kNodeValues * nodeRecordAt(g, g0, g1, g2);
     for (int c = 0; c < kNodeVNew + 3; ++c) r[c] += acc[c];
   }
 }
@@ -172,7 +172,8 @@ __global__ void gridWallsKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<
 template <typename T>
 __global__ void clearTilesKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<T> g) {
   forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) {
-    for (int c = 0; c < kNodeValues; ++c) grid[kNodeValues * node + c] = T(0);
+    T* r = grid + kNodeValues * nodeRecord(g, node);
+    for (int c = 0; c < kNodeValues; ++c) r[c] = T(0);
   });
 }
 

@@ -175,6 +175,76 @@ TEST(CpuGrid, StoresTheNodeColumnsTheFlowReachedNotTheBox) {
   EXPECT_LT(longBytes, 2 * snugBytes);
 }
 
+TEST(CpuGrid, RunsAGridWhoseDenseValuesPassTwoToThe31) {
+  // The collapsing column above in a box 22 km long (2.2e6 cells at 1 cm, 2.8e8 nodes): its
+  // dense grid would hold 2.2e9 values, beyond an int offset (and 18 GB in double), and was
+  // refused. It runs, holding what the flow reached plus the box's index arrays, and moves the
+  // column as its own box does, to the bit.
+  auto run = [](std::array<int, 3> cells, std::size_t& bytes) {
+    MpmParams prm = testing_scenes::granularColumnParams(0.01, cells, 2e5);
+    ParticleSet ps;
+    seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
+    auto s = makeSolver(prm, Backend::Cpu, Precision::Double);
+    s->setParticles(ps);
+    for (int n = 0; n < 300; ++n) s->step(2e-4);
+    bytes = s->memoryBytes();
+    ParticleSet out;
+    s->getParticles(out);
+    return out;
+  };
+  const std::array<int, 3> huge = {2200000, 5, 20};
+  EXPECT_GT(double(kNodeValues) * (huge[0] + 1) * (huge[1] + 1) * (huge[2] + 1), 2147483647.0);
+  std::size_t snugBytes = 0, hugeBytes = 0;
+  const ParticleSet snug = run({30, 5, 20}, snugBytes);
+  const ParticleSet far = run(huge, hugeBytes);
+  EXPECT_TRUE(snug.x == far.x);
+  EXPECT_TRUE(snug.v == far.v);
+  EXPECT_TRUE(snug.stress == far.stress);
+  EXPECT_LT(hugeBytes, std::size_t(250) << 20);  // index arrays of 1.5e8 B, no dense grid
+}
+
+TEST(CpuGrid, NodeRecordsPastTwoToThe28AreAddressedIn64Bits) {
+  // A stored column far down the column pool: its records' value offsets (8 a record) pass 2^31.
+  GridConst<double> g{};
+  g.nodes[0] = 2, g.nodes[1] = 2, g.nodes[2] = 401;
+  const int column[4] = {0, -1, 1000000, 3};
+  g.column = column;
+  EXPECT_EQ(nodeRecordAt(g, 1, 0, 7), 401000007L);
+  EXPECT_EQ(kNodeValues * nodeRecordAt(g, 1, 0, 400), 8L * 401000400L);
+  EXPECT_EQ(kNodeValues * nodeRecord(g, 2 * 401 + 5), 8L * 401000005L);
+  EXPECT_EQ(nodeRecordAt(g, 1, 1, 2), 3 * 401 + 2);
+  g.column = nullptr;  // the dense layout: the node's own index
+  EXPECT_EQ(nodeRecordAt(g, 1, 1, 2), (1 * 2 + 1) * 401 + 2);
+}
+
+TEST(CudaGrid, AGridTooLargeForTheDeviceIsRefusedAndItsMemoryGivenBack) {
+  // 2001 x 2001 x 501 nodes, a dense grid of 128 GB in double and 16 GB of cell ranges: more than
+  // an H100's or H200's memory. The error names the grid's needs, whatever was allocated before
+  // the failing allocation is freed, and a grid that fits runs next in the same process.
+  if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
+#ifdef MPMSDEM_WITH_CUDA
+  std::size_t freeBefore = 0, total = 0, freeAfter = 0;
+  ASSERT_EQ(cudaMemGetInfo(&freeBefore, &total), cudaSuccess);
+  MpmParams big = testing_scenes::granularColumnParams(0.01, {2000, 2000, 500}, 2e5);
+  try {
+    makeSolver(big, Backend::Cuda, Precision::Double);
+    FAIL() << "a 144 GB grid was allocated";
+  } catch (const RuntimeFailure& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("2000 x 2000 x 500 cells densely"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("did not fit on the device"), std::string::npos) << msg;
+  }
+  ASSERT_EQ(cudaMemGetInfo(&freeAfter, &total), cudaSuccess);
+  EXPECT_GT(freeAfter + (std::size_t(64) << 20), freeBefore);  // nothing held beyond the runtime's own
+  MpmParams prm = testing_scenes::granularColumnParams(0.01, {30, 5, 20}, 2e5);
+  ParticleSet ps;
+  seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
+  auto s = makeSolver(prm, Backend::Cuda, Precision::Double);
+  s->setParticles(ps);
+  EXPECT_NO_THROW(s->step(2e-4));
+#endif
+}
+
 TEST(ActiveTiles, TilesPartitionTheGridNodes) {
   // Grids whose node counts are and are not multiples of 3: over all tiles, tileNodeOf names
   // every node exactly once, and as many tiles per axis as blocks of stencil bases.

@@ -82,8 +82,10 @@ struct PushingHook : GridHook {
     const double* m = static_cast<const double*>(g.mass);
     double* vx = static_cast<double*>(g.v[0]);
     massSum = 0;
-    for (int i = 0; i < g.nodes[0] * g.nodes[1] * g.nodes[2]; ++i) {
-      const int e = i * g.stride;
+    for (long n = 0; n < long(g.nodes[0]) * g.nodes[1] * g.nodes[2]; ++n) {
+      const long r = g.record(n);  // the CPU stores the node columns the particles reached
+      if (r < 0) continue;
+      const long e = r * g.stride;
       massSum += m[e];
       if (m[e] > 0) vx[e] = 1.0;
     }
