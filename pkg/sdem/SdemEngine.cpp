@@ -321,46 +321,24 @@ void SdemEngine::setTerrain(const mpm::TerrainSpec& terrain, int material) {
                    "a registered material index in [0, " + std::to_string(numMaterials()) + ")");
   if (!terrain.enabled()) throw ParameterError("terrain.heights: empty: a terrain has nx * ny >= 4 heights");
   terrain.validate();
-  terrain_ = terrain;
-  terrainView_ = mpm::terrainViewOf(terrain_, terrain_.heights.data());
+  terrainGeom_.setTerrain(terrain);
   terrainMaterial_ = material;
 }
 
-// Each core vertex of a moving body against the plane of the terrain triangle under it.
+// Every moving body against the terrain (Ig2_SpheroPolyhedron_Terrain).
 void SdemEngine::terrainContacts(Real dt) {
   const int nm = numMaterials();
+  std::string what;
   for (int i = 0; i < numBodies(); ++i) {
     if (fixed_[i]) continue;
-    const PosedSpheroPolyhedron& P = posed_[i];
-    const Real R = shapes_[i]->sweepRadius;
-    const BarrierPhys& phys = pairPhys_[material_[i] * nm + terrainMaterial_];
-    for (std::size_t v = 0; v < P.vertices.size(); ++v) {
-      const Vec3& p = P.vertices[v];
-      Real gx, gy;
-      const Real h = mpm::terrainHeight(terrainView_, p.x(), p.y(), gx, gy);
-      const Real s = std::sqrt(1 + gx * gx + gy * gy);
-      const Real d = (p.z() - h) / s;
-      if (d >= R) continue;
-      if (!(d > 0)) {
-        std::ostringstream os;
-        os << "SDEM body " << external_[i] << ": core vertex " << v << " at (" << p.x() << ", " << p.y() << ", " << p.z()
-           << ") m is at or below the terrain (height " << h << " m there); " << coreContactRemedy();
-        throw RuntimeFailure(os.str());
-      }
-      const Vec3 n(-gx / s, -gy / s, 1 / s);  // the terrain's upward normal
-      SdemGeom g;
-      g.kindA = FeatureKind::Vertex;
-      g.indexA = static_cast<int>(v);
-      g.kindB = FeatureKind::Face;
-      g.indexB = -1;  // the terrain as one face: the history follows the vertex across triangles
-      g.pointA = p;
-      g.pointB = p - d * n;
-      g.normal = -n;
-      g.distance = d;
-      g.overlap = R - d;
-      g.contactPoint = 0.5 * ((p - R * n) + g.pointB);
-      addContact(i, kTerrainBody, g, phys, R, mass_[i], dt);
+    geoms_.clear();
+    if (!terrainGeom_.go(posed_[i], geoms_, what)) {
+      std::ostringstream os;
+      os << "SDEM body " << external_[i] << ": " << what << "; " << coreContactRemedy();
+      throw RuntimeFailure(os.str());
     }
+    const BarrierPhys& phys = pairPhys_[material_[i] * nm + terrainMaterial_];
+    for (const SdemGeom& g : geoms_) addContact(i, kTerrainBody, g, phys, shapes_[i]->sweepRadius, mass_[i], dt);
   }
 }
 

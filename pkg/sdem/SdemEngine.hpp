@@ -18,6 +18,7 @@
 #include "mpm/MpmTypes.hpp"
 #include "mpm/Terrain.hpp"
 #include "sdem/Ig2_SpheroPolyhedron_SpheroPolyhedron.hpp"
+#include "sdem/Ig2_SpheroPolyhedron_Terrain.hpp"
 #include "sdem/Ip2_SdemMat_SdemMat_BarrierPhys.hpp"
 #include "sdem/Law2_SdemGeom_BarrierPhys_Coulomb.hpp"
 #include "sdem/SdemMaterial.hpp"
@@ -124,14 +125,14 @@ class SdemEngine {
   bool isFixed(int i) const;
 
   // A terrain under the blocks (the flow's, mpm/Terrain.hpp: a height field, linear on the two
-  // triangles of each raster cell) with its SDEM material (a registered index): each core vertex
-  // of a moving body closer to the plane of the terrain triangle under it than the body's sweep
-  // radius R is a vertex–face contact with it (the terrain's own radius 0: overlap R − d, the
-  // barrier and Coulomb laws of the block pairs, history kept while the vertex slides from
-  // triangle to triangle). A cube face-down carries its weight on its 4 corners, edge-down on 2.
-  // The cost is each moving body's core vertices, whatever the raster's size; relief finer than
-  // a block's core edges (a crest between two corners) is not felt between its corners. A core
-  // vertex at or below the terrain stops the run (RuntimeFailure), as interpenetrating cores do.
+  // triangles of each raster cell) with its SDEM material (a registered index): every moving
+  // body meets it through Ig2_SpheroPolyhedron_Terrain's contacts (its core vertices against the
+  // triangles under them; the crest nodes and convex edges of ridges and peaks against its core,
+  // so that relief finer than the core is felt), with the barrier and Coulomb laws of the block
+  // pairs (the terrain's own radius 0: overlap R − d). A cube face-down on a plane carries its
+  // weight on its 4 corners, edge-down on 2. The cost is each moving body's features against the
+  // raster under it, whatever the raster's size. Terrain reaching a core (a vertex at or below
+  // the surface, a crest in it) stops the run (RuntimeFailure), as interpenetrating cores do.
   // ParameterError for an invalid terrain (the checks of the flow's) or material.
   void setTerrain(const mpm::TerrainSpec& terrain, int material);
   bool hasTerrain() const { return terrainMaterial_ >= 0; }
@@ -253,8 +254,7 @@ class SdemEngine {
   std::vector<SdemGeom> geoms_;
   std::vector<ContactRecord> records_;
   ContactHistoryTable history_, nextHistory_;
-  mpm::TerrainSpec terrain_;
-  mpm::TerrainView<Real> terrainView_;
+  Ig2_SpheroPolyhedron_Terrain terrainGeom_;
   int terrainMaterial_ = -1;
 
   Real safety_ = 1.0;

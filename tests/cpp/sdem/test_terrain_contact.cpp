@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/Error.hpp"
+#include "sdem/Ig2_SpheroPolyhedron_Terrain.hpp"
 #include "sdem/SdemEngine.hpp"
 
 using namespace mpmsdem;
@@ -169,4 +170,197 @@ TEST(TerrainContact, HistoriesCheckpointAndACoreBelowTheGroundIsRefused) {
   mpm::TerrainSpec bad = slope(0.0, 0.1);
   bad.heights.pop_back();
   EXPECT_THROW(deep.world.engine.setTerrain(bad, 0), ParameterError);
+}
+
+// ---------------------------------------------------------------- relief finer than the core
+namespace {
+
+// Flat ground z = 0 on [-1, 1]^2, raster `spacing`, with the heights `raise` adds.
+template <typename F>
+mpm::TerrainSpec relief(Real spacing, F raise) {
+  mpm::TerrainSpec t;
+  t.nx = t.ny = static_cast<int>(std::round(2.0 / spacing)) + 1;
+  t.x0 = t.y0 = -1.0;
+  t.spacing = spacing;
+  for (int i = 0; i < t.nx; ++i)
+    for (int j = 0; j < t.ny; ++j) t.heights.push_back(raise(i, j));
+  return t;
+}
+
+// Eq 10 (the barrier's force) at overlap delta for a contact reach Rc and k_c 1e4 N/m.
+Real eq10(Real delta, Real Rc) {
+  return -1e4 * delta * (2 * std::log((Rc - delta) / Rc) - Rc / (Rc - delta) + 1);
+}
+
+// The cube of these tests at rest, face-down and unturned, centred over (x, y), its bottom core
+// face at height zb; gravity off, so that one step shows the contacts of that pose.
+void cubeAt(OnTerrain& s, const mpm::TerrainSpec& t, Real x, Real y, Real zb, const SdemMaterial& m) {
+  const int mat = s.world.engine.addMaterial(m);
+  s.world.engine.setTerrain(t, mat);
+  auto cube = SpheroPolyhedron::box(Vec3::Constant(0.05), R);
+  s.block = s.world.engine.addBody(cube, mat, rho * cube->volume, rho * cube->inertiaPerDensity, 7);
+  s.mass = s.world.engine.mass(s.block);
+  s.world.engine.setState(s.block, Vec3(x, y, zb + a), Quat::Identity(), Vec3::Zero(), Vec3::Zero());
+}
+
+}  // namespace
+
+// Which raster edges are convex: none on a plane or in a valley; on a ridge along y only the
+// ridge's own edges (the diagonals beside it join coplanar triangles); a peak's four axis edges
+// and the two diagonals that run to it; crest nodes are their ends.
+TEST(TerrainCrest, ConvexEdgesAreTheRidgesAndPeaks) {
+  const Real s = 0.1;
+  const int mid = 10;  // node of x = 0 (and y = 0)
+  auto flags = [](const mpm::TerrainSpec& t) {
+    Ig2_SpheroPolyhedron_Terrain g;
+    g.setTerrain(t);
+    return g;
+  };
+  for (const mpm::TerrainSpec& t : {relief(s, [](int i, int j) { return 0.3 * i - 0.1 * j; }),
+                                    relief(s, [&](int i, int) { return 0.05 * std::abs(i - mid); })}) {
+    const Ig2_SpheroPolyhedron_Terrain g = flags(t);
+    for (int i = 0; i < t.nx; ++i)
+      for (int j = 0; j < t.ny; ++j) {
+        EXPECT_FALSE(g.crestNode(i, j));
+        for (int d = 0; d < 3; ++d) EXPECT_FALSE(g.convexEdge(i, j, d));
+      }
+  }
+  const Ig2_SpheroPolyhedron_Terrain ridge = flags(relief(s, [&](int i, int) { return -0.05 * std::abs(i - mid); }));
+  int convex = 0;
+  for (int i = 0; i < 21; ++i)
+    for (int j = 0; j < 21; ++j) {
+      EXPECT_EQ(ridge.crestNode(i, j), i == mid) << i << " " << j;
+      for (int d = 0; d < 3; ++d) {
+        const bool expect = d == 1 && i == mid && j < 20;
+        EXPECT_EQ(ridge.convexEdge(i, j, d), expect) << i << " " << j << " " << d;
+        convex += ridge.convexEdge(i, j, d);
+      }
+    }
+  EXPECT_EQ(convex, 20);
+  const Ig2_SpheroPolyhedron_Terrain peak = flags(relief(s, [&](int i, int j) { return i == mid && j == mid ? 0.05 : 0.0; }));
+  EXPECT_TRUE(peak.convexEdge(mid, mid, 0) && peak.convexEdge(mid - 1, mid, 0));
+  EXPECT_TRUE(peak.convexEdge(mid, mid, 1) && peak.convexEdge(mid, mid - 1, 1));
+  EXPECT_TRUE(peak.convexEdge(mid - 1, mid, 2) && peak.convexEdge(mid, mid - 1, 2));  // (mid, mid) to (mid-1, mid+1), (mid+1, mid-1)
+  EXPECT_FALSE(peak.convexEdge(mid - 1, mid - 1, 2) || peak.convexEdge(mid, mid, 2));
+  int crests = 0;
+  for (int i = 0; i < 21; ++i)
+    for (int j = 0; j < 21; ++j) crests += peak.crestNode(i, j);
+  EXPECT_EQ(crests, 7);  // the peak and the six ends of its convex edges
+}
+
+// A spike on flat ground under the middle of the cube's bottom face, 2.5 mm (R/2) below it: its
+// node is the one contact (the corners are 5 cm above the ground), along -z with Eq 10's force
+// at overlap R/2. Before the crest pairs the cube felt nothing.
+TEST(TerrainCrest, APeakUnderAFaceIsACrestNodeContact) {
+  const Real H = 0.05;
+  OnTerrain s;
+  SdemMaterial m;
+  m.density = rho;
+  cubeAt(s, relief(0.02, [&](int i, int j) { return i == 50 && j == 50 ? H : 0.0; }), 0.003, -0.004, H + 0.5 * R, m);
+  s.world.gravity = Vec3::Zero();
+  s.world.step(1e-6);
+  const std::vector<ContactRecord>& c = s.world.engine.contacts();
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0].key.kindB, FeatureKind::Vertex);
+  EXPECT_EQ(c[0].key.indexB, 50 * 101 + 50);
+  EXPECT_NEAR(c[0].overlap, 0.5 * R, 1e-12);
+  EXPECT_NEAR(c[0].normal.z(), -1.0, 1e-12);
+  EXPECT_NEAR(c[0].normalForce / eq10(0.5 * R, R), 1.0, 1e-9);
+  EXPECT_NEAR(s.world.engine.force(s.block).z() / eq10(0.5 * R, R), 1.0, 1e-9);
+}
+
+// A ridge along y on a raster coarser than the cube (0.2 m: its nodes 5.5 cm beyond the core's
+// sides), under the bottom face, R/2 below it: the face rests on the ridge where its two edges
+// across the ridge cross it (the corners of their contact patch), two contacts of Eq 10's force
+// at overlap R/2, and none at the corners (1.1 cm above the slopes) or the ridge's nodes.
+TEST(TerrainCrest, ARidgeBetweenItsNodesIsMetByTheCoreEdgesAcrossIt) {
+  const Real H = 0.04;
+  OnTerrain s;
+  SdemMaterial m;
+  m.density = rho;
+  cubeAt(s, relief(0.2, [&](int i, int) { return i == 5 ? H : 0.0; }), 0.0, 0.1, H + 0.5 * R, m);
+  s.world.gravity = Vec3::Zero();
+  s.world.step(1e-6);
+  const std::vector<ContactRecord>& c = s.world.engine.contacts();
+  ASSERT_EQ(c.size(), 2u);
+  Real ySum = 0;
+  for (const ContactRecord& r : c) {
+    EXPECT_EQ(r.key.kindA, FeatureKind::Edge);
+    EXPECT_EQ(r.key.kindB, FeatureKind::Edge);
+    EXPECT_EQ(r.key.indexB, 3 * (5 * 11 + 5) + 1);  // the y edge from node (5, 5), (0, 0) to (0, 0.2)
+    EXPECT_NEAR(r.overlap, 0.5 * R, 1e-12);
+    EXPECT_NEAR(r.normal.z(), -1.0, 1e-12);
+    EXPECT_NEAR(r.point.x(), 0.0, 1e-12);
+    EXPECT_NEAR(std::abs(r.point.y() - 0.1), a, 1e-12);
+    ySum += r.point.y();
+    EXPECT_NEAR(r.normalForce / eq10(0.5 * R, R), 1.0, 1e-9);
+  }
+  EXPECT_NEAR(ySum, 0.2, 1e-12);  // one at each side: no torque about x
+  EXPECT_NEAR(s.world.engine.torque(s.block).norm(), 0.0, 1e-12);
+  // their histories go into checkpoints as the vertex contacts' do
+  EXPECT_NO_THROW(s.world.engine.setContactHistories(s.world.engine.contactHistories()));
+  EXPECT_EQ(s.world.engine.contactHistories().size(), 2u);
+  // the face 2 mm below the ridge: the ridge runs through the core, between its features
+  OnTerrain deep;
+  cubeAt(deep, relief(0.2, [&](int i, int) { return i == 5 ? H : 0.0; }), 0.0, 0.1, H - 0.002, m);
+  try {
+    deep.world.step(1e-6);
+    ADD_FAILURE() << "a ridge through the core was accepted";
+  } catch (const RuntimeFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("SDEM body 7: terrain ridge edge 181"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("passes through the core"), std::string::npos) << e.what();
+  }
+}
+
+// Dropped on the spike, the cube is held off the ground by it, tips off it onto the flat ground
+// and comes to rest there beside it: the spike never enters its core (the run would stop), and
+// at rest the ground and the spike carry its weight. Without the crest node the cube fell flat
+// onto the ground around the spike, which ended inside its core.
+TEST(TerrainCrest, ACubeDroppedOnASpikeNeverTakesItInside) {
+  const Real H = 0.03;
+  OnTerrain s;
+  SdemMaterial m;
+  m.density = rho;
+  m.friction = 0.5;
+  m.normalDamping = 0.5;
+  m.tangentialDamping = 0.5;
+  const mpm::TerrainSpec t = relief(0.02, [&](int i, int j) { return i == 50 && j == 50 ? H : 0.0; });
+  cubeAt(s, t, 0.02, 0.01, H + 0.9 * R, m);
+  for (int k = 0; k < 12000; ++k) s.world.step(1e-4);
+  const SdemEngine& e = s.world.engine;
+  const Vec3 spike(0, 0, H);
+  const SpheroPolyhedron::PointQuery q =
+      SpheroPolyhedron::box(Vec3::Constant(0.05), R)->closestPoint(e.orientation(s.block).conjugate() * (spike - e.position(s.block)));
+  EXPECT_GT(q.distance, 0.5 * R);  // outside the core, beyond the barrier's stiff half
+  EXPECT_LT(e.velocity(s.block).norm(), 1e-3);
+  EXPECT_NEAR(e.force(s.block).z() / (s.mass * g0), 1.0, 0.02);
+  EXPECT_GT(Eigen::AngleAxis<Real>(e.orientation(s.block)).angle(), 0.1);  // it leans on the spike
+}
+
+// The cube edge-down (turned 45 deg about y) across a ridge along x, between the ridge's nodes
+// (0.2 m raster): no face lies near either slope (45 deg against 11 deg), so the lowest core
+// edge and the ridge meet by the edge pair's general rule, in one contact at their crossing.
+TEST(TerrainCrest, ACoreEdgeAcrossARidgeIsOneEdgePairContact) {
+  const Real H = 0.04;
+  OnTerrain s;
+  SdemMaterial m;
+  m.density = rho;
+  const int mat = s.world.engine.addMaterial(m);
+  s.world.engine.setTerrain(relief(0.2, [&](int, int j) { return j == 5 ? H : 0.0; }), mat);
+  auto cube = SpheroPolyhedron::box(Vec3::Constant(0.05), R);
+  s.block = s.world.engine.addBody(cube, mat, rho * cube->volume, rho * cube->inertiaPerDensity, 7);
+  const Quat q(Eigen::AngleAxis<Real>(M_PI / 4, Vec3::UnitY()));
+  s.world.engine.setState(s.block, Vec3(0.1, 0.0, H + 0.5 * R + a * std::sqrt(2.0)), q, Vec3::Zero(), Vec3::Zero());
+  s.world.gravity = Vec3::Zero();
+  s.world.step(1e-6);
+  const std::vector<ContactRecord>& c = s.world.engine.contacts();
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c[0].key.kindA, FeatureKind::Edge);
+  EXPECT_EQ(c[0].key.kindB, FeatureKind::Edge);
+  EXPECT_EQ(c[0].key.indexB, 3 * (5 * 11 + 5) + 0);  // the x edge from node (5, 5), (0, 0) to (0.2, 0)
+  EXPECT_NEAR(c[0].overlap, 0.5 * R, 1e-12);
+  EXPECT_NEAR(c[0].normal.z(), -1.0, 1e-12);
+  EXPECT_NEAR(c[0].point.x(), 0.1, 1e-12);
+  EXPECT_NEAR(c[0].point.y(), 0.0, 1e-12);
+  EXPECT_NEAR(c[0].normalForce / eq10(0.5 * R, R), 1.0, 1e-9);
 }
