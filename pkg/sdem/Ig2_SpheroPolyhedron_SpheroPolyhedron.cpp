@@ -122,20 +122,8 @@ void emit(PairContext& c, FeatureKind ka, int ia, FeatureKind kb, int ib, const 
   const Real mergeTol = 4 * c.tol;
   for (size_t k = c.first; k < c.out.size(); ++k)
     if ((c.out[k].pointA - pa).norm() <= mergeTol && (c.out[k].pointB - pb).norm() <= mergeTol) return;
-  SdemGeom g;
-  g.kindA = ka;
-  g.indexA = ia;
-  g.kindB = kb;
-  g.indexB = ib;
-  g.pointA = pa;
-  g.pointB = pb;
-  g.normal = (pb - pa) / d;
-  g.distance = d;
-  g.overlap = c.cutoff - d;
-  const Real RA = c.A.shape->sweepRadius, RB = c.B.shape->sweepRadius;
-  // sphere surfaces: pa + RA n (A's) and pb - RB n (B's); midway between them
-  g.contactPoint = 0.5 * (pa + RA * g.normal + pb - RB * g.normal);
-  c.out.push_back(g);
+  c.out.push_back(SdemGeom::of(ka, ia, kb, ib, pa, pb, (pb - pa) / d, d, c.A.shape->sweepRadius,
+                               c.B.shape->sweepRadius));
 }
 
 // Vertex v of P against face f of Q. pIsA: P is body A.

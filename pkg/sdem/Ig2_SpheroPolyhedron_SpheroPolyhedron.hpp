@@ -44,6 +44,24 @@ struct SdemGeom {
   Real distance = 0;                        // core distance d [m], 0 < d < R_A + R_B
   Real overlap = 0;                         // delta = R_A + R_B - d [m] (Eq 7)
   Vec3 contactPoint = Vec3::Zero();         // midway between the two sphere surfaces [m]
+
+  // The contact of feature (ka, ia) of A with (kb, ib) of B at core points pa and pb, d apart
+  // along the unit normal n (from A to B), for sweep radii RA and RB.
+  static SdemGeom of(FeatureKind ka, int ia, FeatureKind kb, int ib, const Vec3& pa, const Vec3& pb, const Vec3& n,
+                     Real d, Real RA, Real RB) {
+    SdemGeom g;
+    g.kindA = ka;
+    g.indexA = ia;
+    g.kindB = kb;
+    g.indexB = ib;
+    g.pointA = pa;
+    g.pointB = pb;
+    g.normal = n;
+    g.distance = d;
+    g.overlap = RA + RB - d;
+    g.contactPoint = 0.5 * (pa + RA * n + pb - RB * n);  // sphere surfaces pa + RA n (A's), pb - RB n (B's)
+    return g;
+  }
 };
 
 // A shape placed in the world: the world-frame copies of its core data the narrow phase

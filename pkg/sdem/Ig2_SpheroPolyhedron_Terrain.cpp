@@ -93,18 +93,7 @@ bool Ig2_SpheroPolyhedron_Terrain::go(const PosedSpheroPolyhedron& P, std::vecto
                   Real d) {
     for (std::size_t k = first; k < out.size(); ++k)
       if ((out[k].pointA - pa).norm() <= 4 * tol && (out[k].pointB - pb).norm() <= 4 * tol) return;
-    SdemGeom g;
-    g.kindA = ka;
-    g.indexA = ia;
-    g.kindB = kb;
-    g.indexB = ib;
-    g.pointA = pa;
-    g.pointB = pb;
-    g.normal = normal;
-    g.distance = d;
-    g.overlap = R - d;
-    g.contactPoint = 0.5 * ((pa + R * normal) + pb);  // midway between the sphere's surface and the terrain
-    out.push_back(g);
+    out.push_back(SdemGeom::of(ka, ia, kb, ib, pa, pb, normal, d, R, 0));
   };
   auto where = [](const Vec3& p) {
     std::ostringstream os;

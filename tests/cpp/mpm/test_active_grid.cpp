@@ -142,6 +142,25 @@ TEST_P(ActiveGridEveryBackend, EmptySpaceAroundAFlowChangesNothing) {
   EXPECT_TRUE(snug.stress == wide.stress);
 }
 
+namespace {
+
+// The collapsing column of EmptySpaceAroundAFlowChangesNothing in a grid of `cells`, `steps`
+// steps on the CPU in double: its particles at the end and the solver's memory then.
+ParticleSet collapseOnTheCpu(std::array<int, 3> cells, int steps, std::size_t& bytes) {
+  MpmParams prm = testing_scenes::granularColumnParams(0.01, cells, 2e5);
+  ParticleSet ps;
+  seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
+  auto s = makeSolver(prm, Backend::Cpu, Precision::Double);
+  s->setParticles(ps);
+  for (int n = 0; n < steps; ++n) s->step(2e-4);
+  bytes = s->memoryBytes();
+  ParticleSet out;
+  s->getParticles(out);
+  return out;
+}
+
+}  // namespace
+
 TEST(CpuGrid, StoresTheNodeColumnsTheFlowReachedNotTheBox) {
   // The collapsing column of EmptySpaceAroundAFlowChangesNothing in its own box (30 cells long)
   // and in one 100 times as long (3000 cells: a dense grid of 3001 x 6 x 21 nodes would be
@@ -149,21 +168,9 @@ TEST(CpuGrid, StoresTheNodeColumnsTheFlowReachedNotTheBox) {
   // larger index arrays more (an int per node column for the column map, two ints per block of
   // 3 x 3 x 3 cells for the binning, a byte per tile), not its grid: both store the node
   // columns the flow reached, in the same order.
-  auto run = [](std::array<int, 3> cells, std::size_t& bytes) {
-    MpmParams prm = testing_scenes::granularColumnParams(0.01, cells, 2e5);
-    ParticleSet ps;
-    seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
-    auto s = makeSolver(prm, Backend::Cpu, Precision::Double);
-    s->setParticles(ps);
-    for (int n = 0; n < 1000; ++n) s->step(2e-4);
-    bytes = s->memoryBytes();
-    ParticleSet out;
-    s->getParticles(out);
-    return out;
-  };
   std::size_t snugBytes = 0, longBytes = 0;
-  const ParticleSet snug = run({30, 5, 20}, snugBytes);
-  const ParticleSet far = run({3000, 5, 20}, longBytes);
+  const ParticleSet snug = collapseOnTheCpu({30, 5, 20}, 1000, snugBytes);
+  const ParticleSet far = collapseOnTheCpu({3000, 5, 20}, 1000, longBytes);
   EXPECT_TRUE(snug.x == far.x);
   EXPECT_TRUE(snug.stress == far.stress);
   auto indexBytes = [](int cellsX) {
@@ -180,23 +187,11 @@ TEST(CpuGrid, RunsAGridWhoseDenseValuesPassTwoToThe31) {
   // dense grid would hold 2.2e9 values, beyond an int offset (and 18 GB in double), and was
   // refused. It runs, holding what the flow reached plus the box's index arrays, and moves the
   // column as its own box does, to the bit.
-  auto run = [](std::array<int, 3> cells, std::size_t& bytes) {
-    MpmParams prm = testing_scenes::granularColumnParams(0.01, cells, 2e5);
-    ParticleSet ps;
-    seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
-    auto s = makeSolver(prm, Backend::Cpu, Precision::Double);
-    s->setParticles(ps);
-    for (int n = 0; n < 300; ++n) s->step(2e-4);
-    bytes = s->memoryBytes();
-    ParticleSet out;
-    s->getParticles(out);
-    return out;
-  };
   const std::array<int, 3> huge = {2200000, 5, 20};
   EXPECT_GT(double(kNodeValues) * (huge[0] + 1) * (huge[1] + 1) * (huge[2] + 1), 2147483647.0);
   std::size_t snugBytes = 0, hugeBytes = 0;
-  const ParticleSet snug = run({30, 5, 20}, snugBytes);
-  const ParticleSet far = run(huge, hugeBytes);
+  const ParticleSet snug = collapseOnTheCpu({30, 5, 20}, 300, snugBytes);
+  const ParticleSet far = collapseOnTheCpu(huge, 300, hugeBytes);
   EXPECT_TRUE(snug.x == far.x);
   EXPECT_TRUE(snug.v == far.v);
   EXPECT_TRUE(snug.stress == far.stress);

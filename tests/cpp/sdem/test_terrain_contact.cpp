@@ -56,6 +56,17 @@ void cubeOnSlope(OnTerrain& s, const SdemMaterial& m, Real thetaDeg, Real spacin
 
 Real rotationAngle(const Quat& q0, const Quat& q1) { return Eigen::AngleAxis<Real>(q0.conjugate() * q1).angle(); }
 
+// One step of a scene whose terrain reaches into the core: refused, the message naming both.
+void expectRefused(OnTerrain& s, const std::string& who, const std::string& why) {
+  try {
+    s.world.step(1e-6);
+    ADD_FAILURE() << "terrain in a core was accepted";
+  } catch (const RuntimeFailure& e) {
+    EXPECT_NE(std::string(e.what()).find(who), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 
 // Face-down on a flat terrain, dropped from first touch and settled under normal damping: the
@@ -159,13 +170,7 @@ TEST(TerrainContact, HistoriesCheckpointAndACoreBelowTheGroundIsRefused) {
 
   OnTerrain deep;
   cubeOnSlope(deep, m, 10.0, 0.05, -0.001, 0.0, 0.0);  // its bottom core face 1 mm into the ground
-  try {
-    deep.world.step(1e-4);
-    ADD_FAILURE() << "a core below the terrain was accepted";
-  } catch (const RuntimeFailure& e) {
-    EXPECT_NE(std::string(e.what()).find("SDEM body 7: core vertex"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("below the terrain"), std::string::npos) << e.what();
-  }
+  expectRefused(deep, "SDEM body 7: core vertex", "below the terrain");
   EXPECT_THROW(deep.world.engine.setTerrain(slope(0.0, 0.1), 5), ParameterError);
   mpm::TerrainSpec bad = slope(0.0, 0.1);
   bad.heights.pop_back();
@@ -303,13 +308,7 @@ TEST(TerrainCrest, ARidgeBetweenItsNodesIsMetByTheCoreEdgesAcrossIt) {
   // the face 2 mm below the ridge: the ridge runs through the core, between its features
   OnTerrain deep;
   cubeAt(deep, relief(0.2, [&](int i, int) { return i == 5 ? H : 0.0; }), 0.0, 0.1, H - 0.002, m);
-  try {
-    deep.world.step(1e-6);
-    ADD_FAILURE() << "a ridge through the core was accepted";
-  } catch (const RuntimeFailure& e) {
-    EXPECT_NE(std::string(e.what()).find("SDEM body 7: terrain ridge edge 181"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("passes through the core"), std::string::npos) << e.what();
-  }
+  expectRefused(deep, "SDEM body 7: terrain ridge edge 181", "passes through the core");
 }
 
 // Dropped on the spike, the cube is held off the ground by it, tips off it onto the flat ground
