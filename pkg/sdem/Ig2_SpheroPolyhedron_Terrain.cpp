@@ -39,7 +39,6 @@ void Ig2_SpheroPolyhedron_Terrain::setTerrain(const mpm::TerrainSpec& t) {
     throwParameter("terrain.heights", std::to_string(t.nx) + " x " + std::to_string(t.ny) + " nodes", "",
                    "fewer than 2^31 / 3 nodes under blocks (their terrain edges are named in 32 bits)");
   spec_ = t;
-  view_ = mpm::terrainViewOf(spec_, spec_.heights.data());
   const int nx = t.nx, ny = t.ny;
   Real zmax = 0;
   for (double h : t.heights) zmax = std::max(zmax, std::abs(h));
@@ -101,11 +100,12 @@ bool Ig2_SpheroPolyhedron_Terrain::go(const PosedSpheroPolyhedron& P, std::vecto
     return os.str();
   };
 
+  const mpm::TerrainView<Real> view = mpm::terrainViewOf(spec_, spec_.heights.data());  // (a copy's own heights)
   std::vector<char> touching(P.vertices.size(), 0);
   for (std::size_t v = 0; v < P.vertices.size(); ++v) {
     const Vec3& p = P.vertices[v];
     Real gx, gy;
-    const Real h = mpm::terrainHeight(view_, p.x(), p.y(), gx, gy);
+    const Real h = mpm::terrainHeight(view, p.x(), p.y(), gx, gy);
     const Real s = std::sqrt(1 + gx * gx + gy * gy);
     const Real d = (p.z() - h) / s;
     if (d >= R) continue;

@@ -59,7 +59,6 @@ class Ig2_SpheroPolyhedron_Terrain {
   void edgePoints(int i, int j, int dir, Vec3& a, Vec3& b, Vec3& c1, Vec3& c2) const;
 
   mpm::TerrainSpec spec_;
-  mpm::TerrainView<Real> view_;
   std::vector<std::uint8_t> convex_;  // per node, bit d: its edge d is convex
   std::vector<std::uint8_t> crest_;   // per node: an end of a convex edge
 };
