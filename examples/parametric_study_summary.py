@@ -100,6 +100,7 @@ def fitGroups(runs, x):
 
 # Fig 17's dissipated energy at 4.5 s, by (AR, L0/h_b) (§5.3)
 PAPER_DISSIPATED = {(3.0, 4): 0.77, (3.0, 24): 0.73}
+HALF_WINDOW = 8  # Fig 15's views reach this many h_b up- and downstream of the cube
 # Fig 15's flow height over the cube against h_b, by (AR, L0/h_b): (value, time [s] or None: the largest)
 PAPER_HEIGHT = {(1.3, 4): (2.31, 0.5), (1.3, 54): (0.31, None)}
 
@@ -325,18 +326,23 @@ def views(case, times):
                 continue
             g = f["snapshots"][key]
             snaps.append((key, tt, g["x"][:], np.linalg.norm(g["v"][:], axis=1)))
-    x0 = pos[0, 0]
-    lo, hi = x0 - 0.5, x0 + max(0.5, float(np.ptp(pos[:, 0]))) + 0.5
-    # Each panel drawn to scale: its height follows the flume's width and the flow's height.
+    # Each panel follows the cube, HALF_WINDOW h_b up- and downstream of it, drawn to scale: its
+    # height follows the flume's width and the flow's height there.
+    window = []
+    for key, tt, x, v in snaps:
+        c = pos[int(np.abs(t - tt).argmin()), 0]
+        window.append((c - HALF_WINDOW * hb, c + HALF_WINDOW * hb))
     width = max(float(np.ptp(x[:, 1])) for _, _, x, _ in snaps) + hb
-    top = 1.05 * max(float(x[(x[:, 0] > lo) & (x[:, 0] < hi), 2].max(initial=hb)) for _, _, x, _ in snaps)
-    inch = 4.8 / (hi - lo)
+    top = 1.05 * max(float(x[(x[:, 0] > lo) & (x[:, 0] < hi), 2].max(initial=hb))
+                     for (_, _, x, _), (lo, hi) in zip(snaps, window))
+    inch = 4.8 / (2 * HALF_WINDOW * hb)
     fig, ax = plt.subplots(2, len(snaps), figsize=(4.8 * len(snaps) + 1.5, inch * (width + top) + 2.0),
                            squeeze=False, gridspec_kw={"height_ratios": [width, top]}, constrained_layout=True)
     vmax = max(float(np.percentile(v, 99)) for *_, v in snaps) or 1.0
     heights = []
     for c, (key, tt, x, v) in enumerate(snaps):
         i = int(np.abs(t - tt).argmin())
+        lo, hi = window[c]
         sel = (x[:, 0] > lo) & (x[:, 0] < hi)
         height = flowHeightOver(x, pos[i], hb) / hb
         heights.append((tt, height))
