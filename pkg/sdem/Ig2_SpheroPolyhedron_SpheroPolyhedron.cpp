@@ -72,6 +72,11 @@ struct PairContext {
   size_t first;  // index of this pair's first contact in out
 };
 
+// Edge e of P as a segment.
+EdgeSegment segmentOf(const PosedSpheroPolyhedron& P, int e) {
+  return {P.vertices[P.shape->edges[e].v0], P.edgeDir[e], P.edgeLength[e]};
+}
+
 // Unit direction of edge `e` leaving vertex `v`.
 Vec3 edgeFrom(const PosedSpheroPolyhedron& P, int e, int v) {
   return P.shape->edges[e].v0 == v ? P.edgeDir[e] : Vec3(-P.edgeDir[e]);
@@ -157,18 +162,9 @@ void vertexFace(PairContext& c, const PosedSpheroPolyhedron& P, int v, const Pos
 // closest points of the two edge lines would drift away from the corner instead).
 bool patchCrossing(PairContext& c, int ea, int eb, const Vec3& na) {
   const PosedSpheroPolyhedron &A = c.A, &B = c.B;
-  const Vec3& p0 = A.vertices[A.shape->edges[ea].v0];
-  const Vec3& q0 = B.vertices[B.shape->edges[eb].v0];
-  const Vec3 &ta = A.edgeDir[ea], &tb = B.edgeDir[eb];
-  const Real La = A.edgeLength[ea], Lb = B.edgeLength[eb];
-  const Real den = ta.cross(tb).dot(na);
   // parallel in the patch plane: the ends' vertex–face corners carry the contact
-  if (std::abs(den) * c.cutoff <= c.tol) return true;
-  const Vec3 r = q0 - p0;
-  const Real s = r.cross(tb).dot(na) / den;
-  const Real t = r.cross(ta).dot(na) / den;
-  if (s < -c.tol || s > La + c.tol || t < -c.tol || t > Lb + c.tol) return true;
-  const Vec3 pa = p0 + std::clamp(s, Real(0), La) * ta, pb = q0 + std::clamp(t, Real(0), Lb) * tb;
+  Vec3 pa, pb;
+  if (!crossingAlong(segmentOf(A, ea), segmentOf(B, eb), na, c.cutoff, c.tol, pa, pb)) return true;
   const Vec3 sep = pb - pa;
   if (sep.dot(na) <= 0) return false;  // B behind A's face: not this patch, try the general rule
   const Real d = sep.norm();
@@ -191,16 +187,8 @@ void edgeEdge(PairContext& c, int ea, int eb) {
   if (patchNormal(A, ea, B, eb, na) && patchCrossing(c, ea, eb, na)) return;
   // Parallel within tolerance: the contact is carried by the endpoints' vertex pairs, whose
   // cone tests then pass within tol. sin(angle) * cutoff <= tol keeps both rules consistent.
-  const Real sin2 = ta.cross(tb).squaredNorm();
-  if (sin2 * c.cutoff * c.cutoff <= c.tol * c.tol) return;
-  const Vec3 r = q0 - p0;
-  const Real cosab = ta.dot(tb), da = ta.dot(r), db = tb.dot(r);
-  Real s = (da - cosab * db) / sin2;
-  Real t = (cosab * da - db) / sin2;
-  if (s < -c.tol || s > La + c.tol || t < -c.tol || t > Lb + c.tol) return;
-  s = std::clamp(s, Real(0), La);
-  t = std::clamp(t, Real(0), Lb);
-  const Vec3 pa = p0 + s * ta, pb = q0 + t * tb;
+  Vec3 pa, pb;
+  if (!closestOfSegments(segmentOf(A, ea), segmentOf(B, eb), c.cutoff, c.tol, pa, pb)) return;
   const Vec3 sep = pb - pa;
   const Real d = sep.norm();
   if (d <= 0 || d >= c.cutoff) return;

@@ -21,6 +21,8 @@
 // vertex–vertex). Two aligned equal cubes face to face give 4 contacts, a cube face-down on
 // a slab 4 at any yaw, edge-down 2, corner-down 1.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -63,6 +65,46 @@ struct SdemGeom {
     return g;
   }
 };
+
+// A core edge as a segment: from p0 along the unit direction t for length L [m].
+struct EdgeSegment {
+  Vec3 p0;
+  Vec3 t;
+  Real L;
+};
+
+// The points of segments a and b that coincide when seen along the unit direction na (a contact
+// patch's normal), clamped to the segments. False when the two are parallel in the plane
+// normal to na (|(ta x tb) . na| cutoff <= tol) or the crossing lies beyond either segment by
+// more than tol.
+inline bool crossingAlong(const EdgeSegment& a, const EdgeSegment& b, const Vec3& na, Real cutoff, Real tol, Vec3& pa,
+                          Vec3& pb) {
+  const Real den = a.t.cross(b.t).dot(na);
+  if (std::abs(den) * cutoff <= tol) return false;
+  const Vec3 r = b.p0 - a.p0;
+  const Real s = r.cross(b.t).dot(na) / den;
+  const Real t = r.cross(a.t).dot(na) / den;
+  if (s < -tol || s > a.L + tol || t < -tol || t > b.L + tol) return false;
+  pa = a.p0 + std::clamp(s, Real(0), a.L) * a.t;
+  pb = b.p0 + std::clamp(t, Real(0), b.L) * b.t;
+  return true;
+}
+
+// The closest points of the lines of segments a and b, clamped to the segments. False when the
+// two are parallel (sin(angle) cutoff <= tol) or the closest points lie beyond either segment by
+// more than tol.
+inline bool closestOfSegments(const EdgeSegment& a, const EdgeSegment& b, Real cutoff, Real tol, Vec3& pa, Vec3& pb) {
+  const Real sin2 = a.t.cross(b.t).squaredNorm();
+  if (sin2 * cutoff * cutoff <= tol * tol) return false;
+  const Vec3 r = b.p0 - a.p0;
+  const Real cosab = a.t.dot(b.t), da = a.t.dot(r), db = b.t.dot(r);
+  const Real s = (da - cosab * db) / sin2;
+  const Real t = (cosab * da - db) / sin2;
+  if (s < -tol || s > a.L + tol || t < -tol || t > b.L + tol) return false;
+  pa = a.p0 + std::clamp(s, Real(0), a.L) * a.t;
+  pb = b.p0 + std::clamp(t, Real(0), b.L) * b.t;
+  return true;
+}
 
 // A shape placed in the world: the world-frame copies of its core data the narrow phase
 // needs, recomputed by update() when the pose changes.

@@ -182,7 +182,8 @@ bool Ig2_SpheroPolyhedron_Terrain::go(const PosedSpheroPolyhedron& P, std::vecto
           const Vec3 mid = (p0 + 0.5 * La * ta) - 0.5 * (a + b);
           const Real reach = 0.5 * (La + L) + R;
           if (mid.squaredNorm() >= reach * reach) continue;
-          const Vec3 r = a - p0;
+          const EdgeSegment core{p0, ta, La}, ridge{a, u, L};
+          Vec3 pa, pb;
           // A face at the core edge nearly flat on a triangle at the terrain edge: their crossing
           // seen along the face's normal na (a corner of the contact patch).
           bool patch = false;
@@ -194,11 +195,8 @@ bool Ig2_SpheroPolyhedron_Terrain::go(const PosedSpheroPolyhedron& P, std::vecto
                 na = P.faceNormals[fa];
               }
           if (patch) {
-            const Real den = ta.cross(u).dot(na);
-            if (std::abs(den) * R <= tol) continue;  // parallel in the patch plane: its ends carry it
-            const Real s = r.cross(u).dot(na) / den, t = r.cross(ta).dot(na) / den;
-            if (s < -tol || s > La + tol || t < -tol || t > L + tol) continue;
-            const Vec3 pa = p0 + std::clamp(s, Real(0), La) * ta, pb = a + std::clamp(t, Real(0), L) * u;
+            // parallel in the patch plane, or no crossing: the ends' pairs carry it
+            if (!crossingAlong(core, ridge, na, R, tol, pa, pb)) continue;
             const Vec3 sep = pb - pa;
             if (sep.dot(na) > 0) {
               const Real d = sep.norm();
@@ -206,14 +204,7 @@ bool Ig2_SpheroPolyhedron_Terrain::go(const PosedSpheroPolyhedron& P, std::vecto
               continue;
             }
           }
-          const Real sin2 = ta.cross(u).squaredNorm();
-          if (sin2 * R * R <= tol * tol) continue;  // parallel: the ends' pairs carry it
-          const Real cosab = ta.dot(u), da = ta.dot(r), db = u.dot(r);
-          Real s = (da - cosab * db) / sin2, t = (cosab * da - db) / sin2;
-          if (s < -tol || s > La + tol || t < -tol || t > L + tol) continue;
-          s = std::clamp(s, Real(0), La);
-          t = std::clamp(t, Real(0), L);
-          const Vec3 pa = p0 + s * ta, pb = a + t * u;
+          if (!closestOfSegments(core, ridge, R, tol, pa, pb)) continue;  // parallel: the ends' pairs carry it
           const Vec3 sep = pb - pa;
           const Real d = sep.norm();
           if (d >= R) continue;
