@@ -82,6 +82,48 @@ void Ig2_SpheroPolyhedron_Terrain::edgePoints(int i, int j, int dir, Vec3& a, Ve
   }
 }
 
+template <typename Emit>
+void Ig2_SpheroPolyhedron_Terrain::wallContacts(int v, const Vec3& p, const Vec3& under, Real R, Emit& emit) const {
+  struct Wall {
+    Real d;
+    int key;
+    Vec3 n;
+  };
+  std::vector<Wall> found;  // empty, and unallocated, away from walls
+  const Real s = spec_.spacing, edge = 1e-9;
+  int i0, i1, j0, j1;
+  nodeRange(p.x(), p.x(), R, spec_.x0, s, spec_.nx - 1, i0, i1);  // cells: their lower-left nodes
+  nodeRange(p.y(), p.y(), R, spec_.y0, s, spec_.ny - 1, j0, j1);
+  for (int i = i0; i <= i1; ++i)
+    for (int j = j0; j <= j1; ++j)
+      for (int t = 0; t < 2; ++t) {
+        const Vec3 a = t == 0 ? nodePoint(i, j) : nodePoint(i + 1, j + 1);
+        const Vec3 n = upwardNormal(a, nodePoint(i + 1, j), nodePoint(i, j + 1));
+        if (n.dot(under) >= wallCosine) continue;  // the surface under the vertex, continued
+        const Real d = n.dot(p - a);
+        if (!(d > 0) || d >= R) continue;  // behind the triangle's plane: another slope's side
+        const Vec3 q = p - d * n;
+        const Real fx = (q.x() - spec_.x0) / s - i, fy = (q.y() - spec_.y0) / s - j;
+        const bool inside = t == 0 ? fx >= -edge && fy >= -edge && fx + fy <= 1 + edge
+                                   : fx <= 1 + edge && fy <= 1 + edge && fx + fy >= 1 - edge;
+        if (!inside) continue;
+        found.push_back(Wall{d, 2 * node(i, j) + t, n});
+      }
+  // Nearest first; a wall nearly parallel to one kept is the same slope's next triangle.
+  std::sort(found.begin(), found.end(),
+            [](const Wall& x, const Wall& y) { return x.d < y.d || (x.d == y.d && x.key < y.key); });
+  for (std::size_t k = 0; k < found.size(); ++k) {
+    bool same = false;
+    for (std::size_t m = 0; m < k && !same; ++m) same = found[m].key >= 0 && found[m].n.dot(found[k].n) >= wallCosine;
+    if (same) {
+      found[k].key = -1;
+      continue;
+    }
+    emit(FeatureKind::Vertex, v, FeatureKind::Face, found[k].key, p, p - found[k].d * found[k].n, -found[k].n,
+         found[k].d);
+  }
+}
+
 bool Ig2_SpheroPolyhedron_Terrain::go(const PosedSpheroPolyhedron& P, std::vector<SdemGeom>& out,
                                       std::string& what) const {
   const SpheroPolyhedron& S = *P.shape;
@@ -108,7 +150,6 @@ bool Ig2_SpheroPolyhedron_Terrain::go(const PosedSpheroPolyhedron& P, std::vecto
     const Real h = mpm::terrainHeight(view, p.x(), p.y(), gx, gy);
     const Real s = std::sqrt(1 + gx * gx + gy * gy);
     const Real d = (p.z() - h) / s;
-    if (d >= R) continue;
     if (!(d > 0)) {
       std::ostringstream os;
       os << "core vertex " << v << " at " << where(p) << " is at or below the terrain (height " << h << " m there)";
@@ -116,8 +157,11 @@ bool Ig2_SpheroPolyhedron_Terrain::go(const PosedSpheroPolyhedron& P, std::vecto
       return false;
     }
     const Vec3 n(-gx / s, -gy / s, 1 / s);  // the terrain's upward normal
-    emit(FeatureKind::Vertex, static_cast<int>(v), FeatureKind::Face, -1, p, p - d * n, -n, d);
-    touching[v] = 1;
+    if (d < R) {
+      emit(FeatureKind::Vertex, static_cast<int>(v), FeatureKind::Face, -1, p, p - d * n, -n, d);
+      touching[v] = 1;
+    }
+    wallContacts(static_cast<int>(v), p, n, R, emit);
   }
 
   int i0, i1, j0, j1;

@@ -363,3 +363,83 @@ TEST(TerrainCrest, ACoreEdgeAcrossARidgeIsOneEdgePairContact) {
   EXPECT_NEAR(c[0].point.y(), 0.0, 1e-12);
   EXPECT_NEAR(c[0].normalForce / eq10(0.5 * R, R), 1.0, 1e-9);
 }
+
+namespace {
+
+// Flat ground z = 0 up to x = 0.1 m (node 55 of the 0.02 m raster), then a wall rising at 80 deg.
+const Real wallX = 0.1, wallAngle = 80 * M_PI / 180;
+mpm::TerrainSpec wall() {
+  return relief(0.02, [](int i, int) { return i > 55 ? std::tan(wallAngle) * (-1.0 + 0.02 * i - wallX) : 0.0; });
+}
+
+}  // namespace
+
+// The cube's bottom face 6 mm above the ground (beyond R), its front core corners 1.5 mm short of
+// the wall's foot and R/2 from the wall's plane: both corners touch the wall, each with Eq 10's
+// force at overlap R/2 along the wall's normal, and nothing touches the ground. Before the wall
+// pair the cube felt nothing until a corner was over the wall, with the overlap R - z cos 80 deg.
+TEST(TerrainWall, AVertexBesideASteepWallIsAFaceContactWithIt) {
+  const Real zb = 0.006, sinW = std::sin(wallAngle), cosW = std::cos(wallAngle);
+  const Real dx = (0.5 * R - cosW * zb) / sinW;  // the corners' distance to the wall's foot
+  ASSERT_GT(dx, 0.0);
+  OnTerrain s;
+  SdemMaterial m;
+  m.density = rho;
+  cubeAt(s, wall(), wallX - dx - a, 0.01, zb, m);
+  s.world.gravity = Vec3::Zero();
+  s.world.step(1e-6);
+  const std::vector<ContactRecord>& c = s.world.engine.contacts();
+  ASSERT_EQ(c.size(), 2u);
+  for (const ContactRecord& r : c) {
+    EXPECT_EQ(r.key.kindA, FeatureKind::Vertex);
+    EXPECT_EQ(r.key.kindB, FeatureKind::Face);
+    EXPECT_GE(r.key.indexB, 2 * (55 * 101));  // a triangle of the wall's first cells
+    EXPECT_LT(r.key.indexB, 2 * (56 * 101));
+    EXPECT_NEAR(r.overlap, 0.5 * R, 1e-12);
+    EXPECT_NEAR(r.normal.x(), sinW, 1e-12);
+    EXPECT_NEAR(r.normal.z(), -cosW, 1e-12);
+    EXPECT_NEAR(r.normalForce / eq10(0.5 * R, R), 1.0, 1e-9);
+  }
+  const Vec3 f = s.world.engine.force(s.block) / (2 * eq10(0.5 * R, R));
+  EXPECT_NEAR(f.x(), -sinW, 1e-9);
+  EXPECT_NEAR(f.z(), cosW, 1e-9);
+}
+
+// Gravity tilted 20 deg towards the wall, no friction: the cube slides 1 cm into the corner and
+// rests there, its front corners held short of the wall's foot by the wall (each on the ground and
+// on the wall: 6 contacts), the walls' push along x balancing m g sin 20 deg. Before the wall
+// pair the corners ran over the foot (2.3 mm) and met the wall there with most of the barrier.
+TEST(TerrainWall, ACubeSlidingIntoAWallRestsAgainstIt) {
+  const Real tilt = 20 * M_PI / 180;
+  OnTerrain s;
+  SdemMaterial m;
+  m.density = rho;
+  m.friction = 0;
+  m.normalDamping = 0.5;
+  m.tangentialDamping = 0.5;
+  cubeAt(s, wall(), wallX - 0.01 - a, 0.01, 0.9 * R, m);
+  s.world.gravity = g0 * Vec3(std::sin(tilt), 0, -std::cos(tilt));
+  const SdemEngine& e = s.world.engine;
+  Real front = -1;
+  for (int k = 0; k < 10000; ++k) {
+    s.world.step(1e-4);
+    front = std::max(front, e.position(s.block).x() + a);  // the unturned cube's front core face
+  }
+  EXPECT_LT(front, wallX);
+  EXPECT_GT(front, wallX - R);  // it reached the wall
+  EXPECT_LT(e.velocity(s.block).norm(), 1e-3);
+  // a lean of the ground's overlaps (about 1 mm under each corner), the front corners carrying less
+  EXPECT_LT(Eigen::AngleAxis<Real>(e.orientation(s.block)).angle(), 0.01);
+  const Vec3 weight = s.mass * s.world.gravity;
+  EXPECT_NEAR((e.force(s.block) + weight).norm() / weight.norm(), 0.0, 0.01);
+  Real wallPush = 0;
+  int walls = 0;
+  for (const ContactRecord& r : e.contacts())
+    if (r.key.indexB >= 0) {
+      ++walls;
+      wallPush -= r.normalForce * r.normal.x();
+    }
+  EXPECT_EQ(e.contacts().size(), 6u);
+  EXPECT_EQ(walls, 2);
+  EXPECT_NEAR(wallPush / weight.x(), -1.0, 0.01);
+}
