@@ -54,7 +54,7 @@
 //                   besides the particles (block states, contact histories).
 //   With "flow_probes": /series/probe_depth, probe_velocity, probe_points (one value per
 //                   probe and record) in mpm.h5, and flow_probes.json at the end: why the run
-//                   stopped ("duration", "steps", "probes", "front_still", "failure"), the
+//                   stopped ("duration", "steps", "probes", "front_still", "failure", "signal"), the
 //                   time, and per probe its spec, arrival (null: the front never came), h_f,
 //                   v_f, Fr = v_f / sqrt(|g| h_f) and the number of records. run.stop_when_probed
 //                   and run.stop_when_front_still end the run early (MpmScene.hpp). Such a run
@@ -70,11 +70,17 @@
 // with the split of the step loop's wall time (MPM step, MP-block coupling, blocks, the rest)
 // and the smallest contact step of the run and when it occurred, also in --bench's JSON as
 // "stage_seconds" and "contact_step_min" / "contact_step_min_time" (null while nothing touched).
+// SIGINT or SIGTERM (Ctrl-C, `timeout`, a batch system's end of allocation) ends the run after the
+// step in progress: the state is saved as a snapshot with its coupled checkpoint, so that
+// --restart continues the same run, and the exit status is 4. A second SIGINT (Ctrl-C twice) ends
+// the process at once (the outputs are then those of the last snapshot, as after a kill); more
+// SIGTERMs change nothing, so that a runner may pass one on to a driver that had its own. With
+// --bench, or before the step loop has begun, either signal ends the process at once.
 // Exit status: 0 done; 2 bad parameters or command line (a scene too large for the memory
 // included); 3 run failure (NaN, blow-up, step
 // above the stable one), after writing the last good state as a final snapshot (with
-// "keep_last_good_state": false, naming the last snapshot written as the last good state); 1
-// other errors (e.g. I/O).
+// "keep_last_good_state": false, naming the last snapshot written as the last good state); 4
+// stopped by a signal, the state saved; 1 other errors (e.g. I/O).
 #include <omp.h>
 
 #include <nlohmann/json.hpp>
@@ -82,6 +88,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -110,6 +117,19 @@ using namespace mpmsdem;
 using namespace mpmsdem::mpm;
 
 namespace {
+
+constexpr int kExitStopped = 4;
+
+// The number of the SIGINT or SIGTERM that asked the step loop to stop (0: none). SIGINT gets its
+// default action back, so that a second Ctrl-C ends a run whose saving hangs.
+volatile std::sig_atomic_t gStopSignal = 0;
+
+extern "C" void onStopSignal(int sig) {
+  if (!gStopSignal) gStopSignal = sig;
+  if (sig == SIGINT) std::signal(sig, SIG_DFL);
+}
+
+const char* signalName(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal"; }
 
 const char* const kUsage =
     "usage: mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR] [--steps N] "
@@ -544,8 +564,10 @@ class OutputRun {
       writeSnapshot();
       snapshotSeconds += since(start);
     };
+    std::signal(SIGINT, onStopSignal);
+    std::signal(SIGTERM, onStopSignal);
     try {
-      while (!finished(solver_, run, maxSteps) && stopReason_.empty()) {
+      while (!finished(solver_, run, maxSteps) && stopReason_.empty() && !gStopSignal) {
         dt = nextStep(stepper_, run, byTime);
         stepper_.step(dt);
         const double t = solver_.time();
@@ -605,6 +627,15 @@ class OutputRun {
     }
     if (solver_.time() > state_time_) timedSnapshot();
     const double loop = since(t0);
+    if (gStopSignal) {
+      std::printf("mpmsdem-run: stopped by %s at t = %.6g s, step %ld, %.3g s wall: the state is saved as the last "
+                  "snapshot of %s%s; --restart continues the run\n",
+                  signalName(gStopSignal), solver_.time(), solver_.steps(), loop, h5_.path().c_str(),
+                  coupled_ ? " with coupled.checkpoint.json" : "");
+      writeProbeResults("signal");
+      std::fflush(stdout);
+      return kExitStopped;
+    }
     if (!stopReason_.empty())
       std::printf("mpmsdem-run: stopped before run.duration: %s\n",
                   stopReason_ == "probes" ? "every flow probe has its result (run.stop_when_probed)"

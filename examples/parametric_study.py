@@ -57,7 +57,8 @@ ENERGY_EVERY = 0.01   # coupled run: the energies kept in the results (Fig 17) e
 STATIC_FLOOR = 0.01   # a static force below this fraction of the peak: nothing rests against the cube (no ratio)
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from driver_runs import eachCase, recordSteps, runDriver, stepsOf  # noqa: E402  (standard library only)
+from driver_runs import (STOPPED_EXIT, DriverStopped, eachCase, recordSteps, runDriver,  # noqa: E402
+                         stepsOf, stopDriversOnSignals)  # (standard library only)
 
 
 def resolution(full, dx=None, ppc=None):
@@ -264,8 +265,9 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
     ``rerun``, or unless its coupled run ended before ``until``: that run then goes on from
     its last snapshot (mpmsdem-run --restart, the same run as one to ``until``). A case
     stopped part-way (killed, or the machine went away) resumes: its finished free flow is
-    kept (run.partial.json) and its coupled run goes on from its last snapshot (every 0.5 s).
-    Returns the case folders run, in name order."""
+    kept (run.partial.json) and its coupled run goes on from its last snapshot (every 0.5 s, and
+    where a signal stopped it: the command line passes SIGINT and SIGTERM on to the drivers, which
+    save their state; DriverStopped is then raised). Returns the case folders run, in name order."""
     cases = [os.path.join(folder, name) for name in sorted(os.listdir(folder))
              if os.path.isfile(os.path.join(folder, name, "case.json"))]
 
@@ -525,7 +527,15 @@ def main(argv):
     if a.prepare:
         return prepareMain(a)
     if a.run_prepared:
-        if not runPrepared(a.run_prepared, a.exe, a.backend, a.precision, a.threads, a.rerun, a.until, a.workers):
+        try:
+            with stopDriversOnSignals():
+                ran = runPrepared(a.run_prepared, a.exe, a.backend, a.precision, a.threads, a.rerun, a.until,
+                                  a.workers)
+        except DriverStopped as e:
+            print("--run-prepared %s: stopped by a signal (%s); the same command goes on from where each case "
+                  "stopped" % (a.run_prepared, e))
+            return STOPPED_EXIT
+        if not ran:
             print("--run-prepared %s: nothing to run (no case folder without run.json; --rerun runs them again)"
                   % a.run_prepared)
         return
@@ -547,4 +557,6 @@ def main(argv):
 
 
 if __name__ == "__main__":  # also under `yade -x` and yade-batch, which run scripts as __main__
-    main(sys.argv[1:])
+    status = main(sys.argv[1:])
+    if status:  # --run-prepared stopped by a signal
+        sys.exit(status)

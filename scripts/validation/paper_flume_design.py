@@ -206,7 +206,7 @@ def runPrepared(a):
     """The prepared cases without YADE or numpy, ``--workers`` at a time (a case with its
     done.json is skipped)."""
     sys.path.insert(0, os.path.join(ROOT, "examples"))
-    from driver_runs import eachCase, runDriver
+    from driver_runs import STOPPED_EXIT, DriverStopped, eachCase, runDriver, stopDriversOnSignals
     cases = [os.path.join(a.run_prepared, name) for name in sorted(os.listdir(a.run_prepared))]
     cases = [c for c in cases if os.path.isfile(os.path.join(c, "case.json"))
              and not os.path.exists(os.path.join(c, "done.json"))]
@@ -220,7 +220,13 @@ def runPrepared(a):
             json.dump({"seconds": seconds, "backend": a.backend or "scene's", "exe": a.exe}, f)
         print("%s: %d steps in %.0f s" % (os.path.basename(case), steps, seconds))
 
-    eachCase(runOne, cases, a.workers)
+    try:
+        with stopDriversOnSignals():
+            eachCase(runOne, cases, a.workers)
+    except DriverStopped as e:
+        print("--run-prepared %s: stopped by a signal (%s); the same command runs the cases without done.json "
+              "again" % (a.run_prepared, e))
+        return STOPPED_EXIT
 
 
 def collect(a):

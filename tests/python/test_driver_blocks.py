@@ -289,6 +289,56 @@ def test_coupled_driver_restart_continues_the_same_run_bit_for_bit(tmp_path, dt,
         assert np.ptp(np.diff(d["time"])) > 0  # the contacts did set the steps
 
 
+def test_a_signal_stops_the_coupled_driver_with_its_state_saved_and_restart_goes_on_bit_for_bit(tmp_path):
+    """SIGTERM (as `timeout` or a batch system sends it) stops a coupled run after the step in
+    progress with exit status 4, its state saved as a snapshot with the coupled checkpoint of
+    that step; --restart for the remaining steps then gives every record of the unbroken run to
+    the last bit. A second SIGTERM while it saves changes nothing."""
+    exe = driver_exe()
+    coupled, _ = scene(tmp_path / "yade", velocity=(1.0, 0, -1.0))
+    steps = 6000
+    path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=4e-5, seriesEvery=1e-9,
+                             outputEvery=0.05, outputDir=str(tmp_path / "whole"), vtk="none")
+    r = subprocess.run([exe, path, "--steps", str(steps)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    split = tmp_path / "split"
+    proc = subprocess.Popen([exe, path, "--out", str(split), "--steps", str(steps)], stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+    lines = []
+    for line in proc.stdout:  # the progress line at 5 % of the steps: well inside the step loop
+        lines.append(line)
+        if line.startswith("[  5.0%]"):
+            proc.send_signal(subprocess.signal.SIGTERM)
+            proc.send_signal(subprocess.signal.SIGTERM)
+            break
+    lines += proc.stdout.readlines()
+    assert proc.wait() == 4, "".join(lines)
+    stopped = [ln for ln in lines if "stopped by SIGTERM" in ln]
+    assert len(stopped) == 1 and "--restart continues the run" in stopped[0], "".join(lines)
+    checkpoint = json.loads((split / "coupled.checkpoint.json").read_text())
+    first = checkpoint["step"]
+    assert steps // 20 <= first < steps  # stopped between the 5 % line and the end, off the output times
+    _, snaps = h5tree(split / "mpm.h5")
+    assert abs(max(snaps) - checkpoint["time"]) <= 1e-12 * checkpoint["time"]
+    r = subprocess.run([exe, path, "--out", str(split), "--steps", str(steps - first), "--restart"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    for name in ("coupled.h5", "mpm.h5"):
+        a, sa = h5tree(tmp_path / "whole" / name)
+        b, sb = h5tree(split / name)
+        assert sorted(a) == sorted(b), name
+        for k in a:
+            np.testing.assert_array_equal(a[k], b[k], err_msg="%s:%s" % (name, k))
+    _, sa = h5tree(tmp_path / "whole" / "mpm.h5")
+    _, sb = h5tree(split / "mpm.h5")
+    assert set(sa) <= set(sb) and len(sb) - len(sa) == 1  # and the stop's own snapshot
+    for t in sa:
+        for k in sa[t]:
+            np.testing.assert_array_equal(sa[t][k], sb[t][k], err_msg="snapshot at %g s, %s" % (t, k))
+    d, _ = series(split / "coupled.h5")
+    assert len(d["time"]) == steps + 1 and np.abs(d["flow_force"][:, 3:]).max() > 0.05
+
+
 def test_coupled_driver_restart_refuses_outputs_it_cannot_continue(tmp_path):
     exe = driver_exe()
     coupled, _ = scene(tmp_path / "yade")

@@ -338,3 +338,47 @@ def test_the_design_table_scores_the_cases_and_shows_an_unreached_45_degrees_as_
     assert "Lowest loss" in text and ": exact (" in text  # the tumbled case is not ranked however it scores
     m, loss = design.misfits(dict(base, t45=0.72))
     assert loss == 0 and set(m) == {k for k, _ in design.LOSS_TARGETS}
+
+
+def test_a_signal_to_the_runner_stops_its_drivers_which_save_and_no_other_case_starts(tmp_path):
+    """SIGTERM to a --run-prepared runner (stopDriversOnSignals) is passed on to the drivers it is
+    running, as SIGTERM; each saves and exits 4 (here a stand-in for mpmsdem-run that does only
+    that), the runner raises DriverStopped and exits 4, and the third case never starts."""
+    import signal
+    import time
+    fake = tmp_path / "fake-mpmsdem-run"
+    fake.write_text("#!%s\n" % sys.executable + "\n".join([
+        "import signal, sys, time",
+        "out = sys.argv[sys.argv.index('--out') + 1]",
+        "def stop(sig, frame):",
+        "    open(out + '.stopped', 'w').write(str(sig))",
+        "    sys.exit(4)",
+        "signal.signal(signal.SIGTERM, stop)",
+        "open(out + '.started', 'w').close()",
+        "time.sleep(60)",
+        "sys.exit(9)"]) + "\n")
+    fake.chmod(0o755)
+    runner = "\n".join([
+        "import os, sys",
+        "sys.path.insert(0, %r)" % os.path.join(ROOT, "examples"),
+        "from driver_runs import STOPPED_EXIT, DriverStopped, eachCase, runDriver, stopDriversOnSignals",
+        "work = %r" % str(tmp_path),
+        "def one(c):",
+        "    runDriver(%r, c + '.json', os.path.join(work, c), os.path.join(work, c + '.log'))" % str(fake),
+        "try:",
+        "    with stopDriversOnSignals():",
+        "        eachCase(one, ['a', 'b', 'c'], workers=2)",
+        "except DriverStopped as e:",
+        "    print('stopped:', e)",
+        "    sys.exit(STOPPED_EXIT)"])
+    proc = subprocess.Popen([sys.executable, "-c", runner], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    deadline = time.time() + 30
+    while not all((tmp_path / (c + ".started")).exists() for c in "ab") and time.time() < deadline:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    out, _ = proc.communicate(timeout=30)
+    assert proc.returncode == 4, out
+    assert "was stopped by a signal, its state saved" in out
+    for c in "ab":
+        assert (tmp_path / (c + ".stopped")).read_text() == str(int(signal.SIGTERM))
+    assert not (tmp_path / "c.started").exists()
