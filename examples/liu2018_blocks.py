@@ -82,6 +82,8 @@ def parse(argv):
     ap.add_argument("--ppc", type=int, default=None, help="material points per cell (default 1, --full 8)")
     ap.add_argument("--duration", type=float, default=1.0, help="coupled run [s] (default 1.0)")
     ap.add_argument("--flow-friction", type=float, default=0.13, help="flow-block friction (default 0.13)")
+    ap.add_argument("--young", type=float, default=GRANULAR["young_modulus"],
+                    help="the flow's Young's modulus [Pa] (default Table 2's 5e4; > 0)")
     ap.add_argument("--flip-viscosity", type=float, default=None,
                     help="PIC viscosity of the flow's FLIP/PIC blend [m^2/s] > 0 (default: the scene default, 0.005; "
                          "with --full the paper's blend, 0.0503)")
@@ -133,8 +135,10 @@ def flipViscosity(a):
 
 
 def scene(dx, ppc, a, blocks=(), output=None, verbose=True):
+    if not a.young > 0:
+        raise ValueError("--young %r Pa: must be > 0" % (a.young,))
     s = Flume(inclineDeg=0.0, length=LENGTH, width=WIDTH, columnLength=COLUMN_L, columnHeight=COLUMN_H, dx=dx,
-              ppc=ppc, granular=GRANULAR, basalFriction=0.13, blocks=blocks, backend=a.backend, flipAlpha=a.flip_alpha,
+              ppc=ppc, granular=dict(GRANULAR, young_modulus=a.young), basalFriction=0.13, blocks=blocks, backend=a.backend, flipAlpha=a.flip_alpha,
               flipReferenceDt=a.flip_reference_dt, flipViscosity=flipViscosity(a),
               precision=a.precision, output=output, outputEvery=0.01, vtkEvery=0.05 if output else None,
               verbose=verbose)
@@ -258,7 +262,7 @@ def main(argv):
     summary = {"dx": dx, "ppc": ppc, "flip_blend": s.flipBlend(), "precision": a.precision,
                "particles": s.mpm.numParticles, "duration": duration,
                "dt_min": s.extra["dtMin"], "steps": O.iter,
-               "flow_friction": a.flow_friction, "free_flow": ff, "eq20_bottom": eq20, "blocks": ev,
+               "flow_friction": a.flow_friction, "young_modulus": a.young, "free_flow": ff, "eq20_bottom": eq20, "blocks": ev,
                "paper": {"peak_force_bottom": 9.7, "eq20_bottom": 10.6, "middle_falls": 0.4, "top_hit": 0.5},
                "wall_seconds": {"free_flow": tFree, "coupled": tCoupled}, "timings": s.coupled.timings()}
     with open(os.path.join(out, "summary.json"), "w") as f:
