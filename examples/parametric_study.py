@@ -169,6 +169,8 @@ def _coupledResults(out, ff, s, duration, potential0, frontEnd):
     ratio to E_p,0^f)."""
     from mpmsdem import analysis
     peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
+    # the same over 50 ms: past the first 10-20 ms of a blow, whose size the flow's E sets
+    peakLong, _ = analysis.smoothedPeak(s["t"], s["Ft"], 0.05)
     late = s["t"] >= s["t"][-1] - 0.1
     static = float(s["Ft"][late].mean())
     A = min(ff["h_f"], HB) * HB  # impact area: the flow's depth on the cube's face, at most its height
@@ -182,6 +184,7 @@ def _coupledResults(out, ff, s, duration, potential0, frontEnd):
     atEnd = out["L_i"] + out["L0"] + travel + HB > out["flume_length"] - 0.1 or (static < 0 and wallReached)
     out.update(reached=True, free_flow=ff, submersion=analysis.submersion(ff["h_f"], HB), travel=travel,
                travel_L0=travel / out["L0"], cube_at_end=atEnd, duration=duration, peak_force=peak, peak_time=tPeak,
+               peak_force_50ms=peakLong,
                static_force=static, force_ratio=peak / static if static > STATIC_FLOOR * peak else None,
                static_force_model=analysis.staticImpactForce(RHO, ff["h_f"], A, k=K_STATIC),
                eq20_force=analysis.hydrodynamicForce(RHO, ff["v_f"], ff["h_f"], A),
