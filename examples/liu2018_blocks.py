@@ -3,7 +3,8 @@
 Table 2), MPM–SDEM coupled.
 
     yade -n -x examples/liu2018_blocks.py [--full] [--out DIR] [--duration T] [--dx DX] [--ppc N]
-                                          [--flip-alpha A] [--backend cpu|cuda] [--precision double|float]
+                                          [--flip-alpha A] [--young E] [--backend cpu|cuda]
+                                          [--precision double|float]
     /usr/bin/python3 examples/liu2018_blocks.py ...       (same, without YADE's GUI shell)
 
 Scene (Table 2): horizontal flume 600 mm long, 200 mm wide; granular column 100 mm long ×
