@@ -112,15 +112,11 @@ void Ig2_SpheroPolyhedron_Terrain::wallContacts(int v, const Vec3& p, const Vec3
   // Nearest first; a wall nearly parallel to one kept is the same slope's next triangle.
   std::sort(found.begin(), found.end(),
             [](const Wall& x, const Wall& y) { return x.d < y.d || (x.d == y.d && x.key < y.key); });
-  for (std::size_t k = 0; k < found.size(); ++k) {
-    bool same = false;
-    for (std::size_t m = 0; m < k && !same; ++m) same = found[m].key >= 0 && found[m].n.dot(found[k].n) >= wallCosine;
-    if (same) {
-      found[k].key = -1;
-      continue;
-    }
-    emit(FeatureKind::Vertex, v, FeatureKind::Face, found[k].key, p, p - found[k].d * found[k].n, -found[k].n,
-         found[k].d);
+  std::vector<Vec3> kept;
+  for (const Wall& w : found) {
+    if (std::any_of(kept.begin(), kept.end(), [&](const Vec3& n) { return n.dot(w.n) >= wallCosine; })) continue;
+    kept.push_back(w.n);
+    emit(FeatureKind::Vertex, v, FeatureKind::Face, w.key, p, p - w.d * w.n, -w.n, w.d);
   }
 }
 
