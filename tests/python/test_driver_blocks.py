@@ -230,6 +230,17 @@ def h5tree(path):
     return series, snaps
 
 
+def assertSameSeries(whole, split):
+    """Every series dataset of the HDF5 file ``split`` equals that of ``whole`` to the bit;
+    returns their snapshots (h5tree's) for the caller's checks."""
+    a, sa = h5tree(whole)
+    b, sb = h5tree(split)
+    assert sorted(a) == sorted(b), split
+    for k in a:
+        np.testing.assert_array_equal(a[k], b[k], err_msg="%s:%s" % (split, k))
+    return sa, sb
+
+
 @pytest.mark.parametrize("dt, stiffness", [(4e-5, 1e5), ("auto", 1e7)])
 def test_coupled_driver_restart_continues_the_same_run_bit_for_bit(tmp_path, dt, stiffness):
     """A coupled run stopped and restarted (--restart) is the run that was not stopped: every
@@ -270,11 +281,7 @@ def test_coupled_driver_restart_continues_the_same_run_bit_for_bit(tmp_path, dt,
     (split / "coupled.checkpoint.json").write_text(old)
     drive(split, steps - first, restart=True)
     for name in ("coupled.h5", "mpm.h5"):
-        a, sa = h5tree(tmp_path / "whole" / name)
-        b, sb = h5tree(split / name)
-        assert sorted(a) == sorted(b), name
-        for k in a:
-            np.testing.assert_array_equal(a[k], b[k], err_msg="%s:%s" % (name, k))
+        sa, sb = assertSameSeries(tmp_path / "whole" / name, split / name)
         # the split run also saved its state where it stopped (and, dropped with its checkpoint,
         # a quarter run later), off the output times of an automatic step: the rest are the same
         assert set(sa) <= set(sb) and len(sb) - len(sa) <= 1, name
@@ -323,14 +330,8 @@ def test_a_signal_stops_the_coupled_driver_with_its_state_saved_and_restart_goes
     r = subprocess.run([exe, path, "--out", str(split), "--steps", str(steps - first), "--restart"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    for name in ("coupled.h5", "mpm.h5"):
-        a, sa = h5tree(tmp_path / "whole" / name)
-        b, sb = h5tree(split / name)
-        assert sorted(a) == sorted(b), name
-        for k in a:
-            np.testing.assert_array_equal(a[k], b[k], err_msg="%s:%s" % (name, k))
-    _, sa = h5tree(tmp_path / "whole" / "mpm.h5")
-    _, sb = h5tree(split / "mpm.h5")
+    assertSameSeries(tmp_path / "whole" / "coupled.h5", split / "coupled.h5")
+    sa, sb = assertSameSeries(tmp_path / "whole" / "mpm.h5", split / "mpm.h5")
     assert set(sa) <= set(sb) and len(sb) - len(sa) == 1  # and the stop's own snapshot
     for t in sa:
         for k in sa[t]:
