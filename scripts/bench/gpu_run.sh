@@ -25,6 +25,8 @@
 #                                                      # with its outputs and probes
 #   GPU_TEST_FILTER='*uda*' bash ...                   # the tests' gtest filter (default all)
 #   GPU_PROFILE_BASELINE=0 bash ...                    # --profile-scene without the baseline's run
+#   GPU_BENCH_ARGS='--no-cpu --sizes 1e6,1e7' bash ... # bench_mpm.py's arguments after the stage's
+#                                                      # own (a later one wins: a shorter stage)
 #   ... --workers N                                    # prepared cases N at a time (small scenes
 #                                                      # leave most of a GPU idle; default 1)
 #   ... --baseline DIR                                 # an older mpmsdem-run in DIR: the MPM
@@ -179,7 +181,7 @@ full=examples/scenes/flume_block_full.json
 base_args=()
 [ -n "$baseline" ] && base_args=(--baseline-exe "$baseline/mpmsdem-run")
 stage bench_mpm 240 python3 scripts/bench/bench_mpm.py --exe "$bin/mpmsdem-run" --cuda --threads "$(nproc)" \
-  --cpu-precisions double --gpu-updates 1e9 --markdown "$out/bench.md" --json "$out/bench.json" "${base_args[@]}"
+  --cpu-precisions double --gpu-updates 1e9 --markdown "$out/bench.md" --json "$out/bench.json" "${base_args[@]}" ${GPU_BENCH_ARGS:-}
 flume full_cpu_4000 120 "$full" cpu double --steps 4000
 flume full_cuda_4000 60 "$full" cuda double --steps 4000
 [ -n "$baseline" ] && FLUME_EXE=$baseline/mpmsdem-run flume full_cuda_4000_baseline 60 "$full" cuda double --steps 4000
