@@ -54,6 +54,7 @@ PROBE_WINDOW = 0.05   # h_f, v_f: means over this long after the front's arrival
 FRONT_STILL = 0.3     # free flow: a front that has not advanced dx/2 for this long has stopped [s]
 SAMPLE_EVERY = 0.002  # coupled run: the cube's record interval [s]
 ENERGY_EVERY = 0.01   # coupled run: the energies kept in the results (Fig 17) every this long [s]
+MOVING = 0.01         # a cube faster than this [m/s] is still carried
 STATIC_FLOOR = 0.01   # a static force below this fraction of the peak: nothing rests against the cube (no ratio)
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -121,7 +122,7 @@ def runCase(AR, L0_hb, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, max
     potential0 = scene.mpm.diagnostics()["potential_energy"]
     steps, every = coupledSteps(ff["arrival"], settle, until, O.dt)
     scene.run(steps * O.dt, sampleEvery=every * O.dt)
-    _coupledResults(out, ff, scene.series(0), steps * O.dt, potential0, scene.mpm.diagnostics()["front_x"])
+    _coupledResults(out, ff, scene.series(0), steps * O.dt, potential0)
     out["wall_seconds"] = {"free_flow": tFree, "coupled": time.time() - t1}
     return out
 
@@ -160,13 +161,12 @@ def _cube(station):
     return Block(half=(HB / 2,) * 3, x=station, density=8900, friction=0.67, flowFriction=0.21)
 
 
-def _coupledResults(out, ff, s, duration, potential0, frontEnd):
+def _coupledResults(out, ff, s, duration, potential0):
     """The coupled run's results into ``out`` from the cube's series ``s`` (the keys of
-    Flume.series), the free flow ``ff`` (FlowProbe.result), the flow's potential energy at
-    the start, ``potential0`` [J] (zero at the bed under the column's upstream end), and its
-    front's position at the end, ``frontEnd`` [m]: the energies of the paper's Figs 17 and 18
-    (the flow's kinetic peak and its time; the cube's largest kinetic energy E_k,max^b and its
-    ratio to E_p,0^f)."""
+    Flume.series, the flow's front among them), the free flow ``ff`` (FlowProbe.result) and the
+    flow's potential energy at the start, ``potential0`` [J] (zero at the bed under the column's
+    upstream end): the energies of the paper's Figs 17 and 18 (the flow's kinetic peak and its
+    time; the cube's largest kinetic energy E_k,max^b and its ratio to E_p,0^f)."""
     from mpmsdem import analysis
     peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
     # the same over 50 ms: past the first 10-20 ms of a blow, whose size the flow's E sets
@@ -175,15 +175,20 @@ def _coupledResults(out, ff, s, duration, potential0, frontEnd):
     static = float(s["Ft"][late].mean())
     A = min(ff["h_f"], HB) * HB  # impact area: the flow's depth on the cube's face, at most its height
     travel = float(s["travel"][-1])
-    # A cube carried to the flume's end, or pushed back by the flow the end wall turned (a
-    # negative force at the end once the front has reached the wall), has a travel cut short
-    # by the end wall: flagged, and left out of the travel fits by the summary (give such a case
-    # a larger margin). A negative force while the front is still short of the wall is the
-    # flow holding back a cube that runs ahead of it: its travel stands.
-    wallReached = frontEnd > out["flume_length"] - 0.1
-    atEnd = out["L_i"] + out["L0"] + travel + HB > out["flume_length"] - 0.1 or (static < 0 and wallReached)
+    # A cube carried to the flume's end, pushed back by the flow the end wall turned (a
+    # negative force at the end once the front has reached the wall), or still carried when the
+    # front reached the wall (the flow piles against it instead of running on), has a travel
+    # cut short by the end wall: flagged, and left out of the travel fits by the summary (give
+    # such a case a larger margin). A negative force while the front is still short of the
+    # wall is the flow holding back a cube that runs ahead of it: its travel stands.
+    atWall = s["flow_front"] > out["flume_length"] - 0.1
+    wallTime = float(s["t"][atWall.argmax()]) if atWall.any() else None
+    carriedPastWall = wallTime is not None and bool((abs(s["vx"][s["t"] >= wallTime]) > MOVING).any())
+    atEnd = (out["L_i"] + out["L0"] + travel + HB > out["flume_length"] - 0.1 or (static < 0 and wallTime is not None)
+             or carriedPastWall)
     out.update(reached=True, free_flow=ff, submersion=analysis.submersion(ff["h_f"], HB), travel=travel,
-               travel_L0=travel / out["L0"], cube_at_end=atEnd, duration=duration, peak_force=peak, peak_time=tPeak,
+               travel_L0=travel / out["L0"], cube_at_end=atEnd, front_at_wall_time=wallTime,
+               carried_past_wall=carriedPastWall, duration=duration, peak_force=peak, peak_time=tPeak,
                peak_force_50ms=peakLong,
                static_force=static, force_ratio=peak / static if static > STATIC_FLOOR * peak else None,
                static_force_model=analysis.staticImpactForce(RHO, ff["h_f"], A, k=K_STATIC),
@@ -395,12 +400,10 @@ def collectCase(case):
     ff = {"arrival": probe["arrival"], "h_f": h, "v_f": v, "Fr": analysis.froude(v, h),
           "Fr1": analysis.froudeDistance(v, out["L0"])}
     s, _ = analysis.driverBlockSeries(os.path.join(case, "coupled"))
+    if "flow_front" not in s:
+        raise ValueError("%s: no mpm.h5 beside coupled.h5 (the flow's front series)" % os.path.join(case, "coupled"))
     potential0 = float(s["flow_potential"][0])  # the driver's record at the start
-    import h5py
-    with h5py.File(os.path.join(case, "coupled", "mpm.h5"), "r", locking=False) as f:
-        frontEnd = float(f["series/front_x"][-1])
-    _coupledResults(out, ff, {k: v[1:] for k, v in s.items()}, record["coupled_steps"] * meta["dt"], potential0,
-                    frontEnd)
+    _coupledResults(out, ff, {k: v[1:] for k, v in s.items()}, record["coupled_steps"] * meta["dt"], potential0)
     out["wall_seconds"]["coupled"] = record["coupled_seconds"]
     return out
 

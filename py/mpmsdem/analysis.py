@@ -298,7 +298,8 @@ def driverBlockSeries(folder, block=None, initial=True):
     keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, Ft, Ff, Fe
     (downstream flow force: total, on faces, on edges) [N], rotation (the whole angle turned
     since the start), tilt and yaw [deg], and the scene's flow_kinetic, flow_potential and
-    block_kinetic [J]. ``block``: its index in the file (default: the first
+    block_kinetic [J], and flow_front [m] (the flow's most downstream point, from the mpm.h5
+    beside it where there is one). ``block``: its index in the file (default: the first
     block that moves; a flume's bed is fixed). ``initial``: keep the driver's record at the
     start; False leaves it out, as :meth:`Flume.series` has no record before the first step
     (travel still counts from the start). Returns (series, scene dict). Needs h5py only, not
@@ -331,6 +332,10 @@ def driverBlockSeries(folder, block=None, initial=True):
             if k in g:  # the driver and CoupledEngine write them; other writers may not
                 s[k] = g[k][:]
         scene = json.loads(f.attrs["parameters"])
+    flow = os.path.join(folder, "mpm.h5")
+    if os.path.exists(flow):
+        with h5py.File(flow, "r") as f:
+            s["flow_front"] = np.interp(t, f["series/time"][:], f["series/front_x"][:])
     if not initial:
         s = {k: v[1:] for k, v in s.items()}
     return s, scene

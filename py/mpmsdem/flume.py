@@ -176,7 +176,7 @@ class Flume:
         O.dt = dtFactor * self.mpm.stableTimeStep()
         self.x0 = [O.bodies[i].state.pos[0] for i in self.blockIds]
         # per sample: (t, [x], [vx], [Fx], [Ffx], [Fex], [rotation], [tilt], [yaw] deg, (flow
-        # kinetic, flow potential, blocks' kinetic energy) [J])
+        # kinetic, flow potential, blocks' kinetic energy [J], the flow's front [m]))
         self.history = []
 
     def sample(self):
@@ -194,7 +194,7 @@ class Flume:
         row.append([tilt for tilt, _ in split])
         row.append([yaw for _, yaw in split])
         d = self.mpm.diagnostics()
-        row.append((d["kinetic_energy"], d["potential_energy"], self.coupled.blockKineticEnergy()))
+        row.append((d["kinetic_energy"], d["potential_energy"], self.coupled.blockKineticEnergy(), d["front_x"]))
         # the CUDA backend keeps its contacts on the device: no split by face there
         row.append([analysis.boxFaceLoads(self.coupled.contacts(i), b.state.ori.toRotationMatrix())
                     for i, b in zip(self.blockIds, bodies)] if self.mpm.solver.name.startswith("cpu") else None)
@@ -236,17 +236,18 @@ class Flume:
         """numpy arrays of block k: t, travel S_b, v_x, F_t, F_f, F_e (downstream, N), rotation
         (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`); and
         of the scene: flow_kinetic, flow_potential (zero at the origin: the bed under the
-        column's upstream end) and block_kinetic (all blocks, translation and rotation) [J].
+        column's upstream end) and block_kinetic (all blocks, translation and rotation) [J], and
+        flow_front, the flow's most downstream point [m].
         On the CPU backend also ``faces``: the flow's normal load on each face of the block in
         its own frame, a dict of arrays [N] keyed as :func:`analysis.boxFaceLoads` ("-x" the
         upstream face of a block placed square, "+z" its top, "edges")."""
         import numpy as np
         t = np.array([r[0] for r in self.history])
         cols = [np.array([r[j][k] for r in self.history]) for j in range(1, 9)]
-        energies = np.array([r[9] for r in self.history]).reshape(-1, 3)
+        scene = np.array([r[9] for r in self.history]).reshape(-1, 4)
         out = {"t": t, "travel": cols[0] - self.x0[k], "vx": cols[1], "Ft": cols[2], "Ff": cols[3], "Fe": cols[4],
-               "rotation": cols[5], "tilt": cols[6], "yaw": cols[7], "flow_kinetic": energies[:, 0],
-               "flow_potential": energies[:, 1], "block_kinetic": energies[:, 2]}
+               "rotation": cols[5], "tilt": cols[6], "yaw": cols[7], "flow_kinetic": scene[:, 0],
+               "flow_potential": scene[:, 1], "block_kinetic": scene[:, 2], "flow_front": scene[:, 3]}
         if self.history and self.history[0][10] is not None:
             out["faces"] = {f: np.array([r[10][k][f] for r in self.history]) for f in self.history[0][10][k]}
         return out

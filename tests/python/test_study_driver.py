@@ -217,26 +217,31 @@ def test_a_flume_candidate_through_the_driver_gives_flumerun(tmp_path):
 
 
 def test_a_cube_at_the_end_wall_is_told_from_one_held_back_by_the_flow():
-    # Travel is cut short (left out of the fits) when the cube reached the flume's end, or when
-    # the flow turned back by the end wall pushes it upstream; a negative force while the front is
-    # still short of the wall is the flow holding back a cube that runs ahead of it.
+    # Travel is cut short (left out of the fits) when the cube reached the flume's end, when the
+    # flow turned back by the end wall pushes it upstream, or when it was still carried as the
+    # front reached the wall (the flow piles there instead of running on); a negative force while
+    # the front is still short of the wall is the flow holding back a cube that runs ahead of it.
     import numpy as np
     ps = study()
     t = np.linspace(0, 2, 201)
     ff = {"arrival": 0.5, "h_f": 0.02, "v_f": 2.0, "Fr": 4.5, "Fr1": 0.6}
 
-    def case(travel, force, frontEnd):
-        s = {"t": t, "Ft": np.where(t > 1.9, force, 5.0), "travel": travel * t / 2, "vx": np.full_like(t, 1.0),
+    def case(travel, force, frontEnd, stops=1.0):
+        # the front runs at frontEnd / 1.5 m/s to frontEnd; the cube moves at 1 m/s until `stops` [s]
+        s = {"t": t, "Ft": np.where(t > 1.9, force, 5.0), "travel": travel * t / 2, "vx": np.where(t < stops, 1.0, 0.0),
              "rotation": np.zeros_like(t), "flow_kinetic": np.ones_like(t), "block_kinetic": np.ones_like(t),
-             "flow_potential": np.full_like(t, 150.0)}
+             "flow_potential": np.full_like(t, 150.0), "flow_front": np.minimum(frontEnd, frontEnd * t / 1.5)}
         out = {"L_i": 0.3, "L0": 2.7, "flume_length": 9.05, "dx": 0.01}
-        ps._coupledResults(out, ff, s, 2.0, 150.0, frontEnd)
-        return out["cube_at_end"]
+        ps._coupledResults(out, ff, s, 2.0, 150.0)
+        return out["cube_at_end"], out["front_at_wall_time"]
 
-    assert not case(1.9, -1.3, 5.4)   # held back, the front 3.6 m short of the wall
-    assert case(1.9, -1.3, 9.0)       # pushed back by the flow the wall turned
-    assert case(5.95, 2.0, 9.0)       # at the wall itself
-    assert not case(1.9, 2.0, 9.0)    # pushed downstream, away from the wall
+    assert case(1.9, -1.3, 5.4) == (False, None)   # held back, the front 3.6 m short of the wall
+    assert case(1.9, -1.3, 9.0) == (True, 1.5)     # pushed back by the flow the wall turned (8.95 m at 1.4917 s)
+    assert case(5.95, 2.0, 9.0)[0]                 # at the wall itself
+    assert not case(1.9, 2.0, 9.0)[0]              # at rest from 1 s, pushed downstream, away from the wall
+    assert not case(1.9, 2.0, 9.0, stops=1.49)[0]  # at rest just before the front reached the wall
+    assert case(1.9, 2.0, 9.0, stops=1.51)[0]      # still carried when it did
+    assert not case(1.9, 2.0, 8.9, stops=3.0)[0]   # carried to the end, the front 0.15 m short of the wall
 
 
 def test_the_energies_of_fig_17_are_a_balance_over_the_initial_potential_energy():
