@@ -10,7 +10,8 @@ Figs 14, 16b and 19:
 - Fig 19a, 19b: S_b/L0 against Fr and against Fr1 = v_f/√(g L0), with a line and Pearson's
   r for each submersion group (paper: r = 0.02 and −0.11 against Fr; 0.91 and 0.83 against Fr1).
   A cube still carried at the end of its run (faster than 0.05 m/s) has a lower bound for its
-  travel: an arrow up from its point, and a note in the table (fits.json: still_moving).
+  travel: an arrow up from its point, and a note in the table (fits.json: still_moving). A
+  travel the flume's end wall cut short (cube_at_end) is a grey triangle with an arrow, in no fit.
 - Fig 18: the cube's largest kinetic energy over the flow's initial potential energy,
   E_k,max^b / E_p,0^f, against L0/h_b for each AR (paper: below 0.4 % in every case; our E_p,0^f
   is zero at the bed under the column's upstream end), and beside it the time of the flow's
@@ -237,6 +238,14 @@ def plot(runs, fits, path):
                 xs = np.linspace(min(x), max(x), 2)
                 a.plot(xs, f["slope"] * xs + f["intercept"], "-", color=color,
                        label="%s: r = %.2f" % (label.split(" (")[0], f["r"]))
+        # travels the end wall cut short: shown as lower bounds, in no fit
+        cut = [r for r in runs if r.get("reached", True) and not travelled(r)]
+        for r in cut:
+            a.annotate("", xy=(r["free_flow"][xname], r["travel_L0"] * 1.12), xytext=(r["free_flow"][xname], r["travel_L0"]),
+                       arrowprops=dict(arrowstyle="->", color="0.6"))
+        if cut:
+            a.plot([r["free_flow"][xname] for r in cut], [r["travel_L0"] for r in cut], "^", color="0.6", mfc="none",
+                   ls="none", label="cut short by the end wall (not fitted)")
         a.set_xlabel("Fr = v_f / √(g h_f)" if xname == "Fr" else "Fr1 = v_f / √(g L0)")
         a.set_ylabel("S_b / L0")
         a.set_title("Travel distance (%s)" % title)
