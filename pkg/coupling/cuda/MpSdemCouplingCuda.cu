@@ -3,13 +3,14 @@
 // (resident; copied to and from the host for checkpoints), the per-block sums (downloaded once
 // per step). Particle data never leaves the device.
 //
-// Block sums in a fixed order: the contacts' shares go to a list, sorted by block, particle
-// number and contact order, and each block's are added by a fixed tree, so two runs give the
-// same bits. A step with more contacts than the list holds uses sums added atomically in the
-// same pass (the order of those changes from run to run), and the list grows for the next.
+// Block sums in a fixed order: the contacts' shares go to a list, are placed in particle-number
+// and contact order by a scan of the particles' contact counts, and each block's are added in
+// that order by a fixed tree, so two runs give the same bits. A step with more contacts than the
+// list holds uses sums added atomically (the order of those changes from run to run), and the
+// list grows for the next. The step's flags and sums come back in one copy at its end.
 #include <cuda_runtime.h>
 
-#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_scan.cuh>
 
 #include <algorithm>
 #include <chrono>
@@ -202,15 +203,23 @@ class CouplingCuda : public CouplingDeviceBackend {
     }
     const int numBlocks = static_cast<int>(hb.size());
     const int numberBits = sortedkeys::bitsFor(v.n);
-    const int keyBits = sortedkeys::bitsFor(static_cast<unsigned long long>(numBlocks)) + numberBits + 8;
+    const int keyBits = sortedkeys::bitsFor(static_cast<unsigned long long>(numBlocks)) + numberBits;
     if (keyBits > 64)
       throw ParameterError("MP-block coupling on CUDA: " + std::to_string(numBlocks) + " blocks and " +
-                           std::to_string(v.n) + " particles need a contact sort key of " + std::to_string(keyBits) +
+                           std::to_string(v.n) + " particles need a contact key of " + std::to_string(keyBits) +
                            " bits, at most 64 are supported");
     if (listCapacity_ == 0) growList(firstListCapacity_);
     sums_.reserve(out.sums.size());
     CUDA_CHECK(cudaMemsetAsync(sums_.ptr, 0, std::max<std::size_t>(out.sums.size(), 1) * sizeof(double)));
-    const cudak::ContactList list{share_.ptr, keys_[0].ptr, entries_[0].ptr, recording_ ? record_.ptr : nullptr,
+    if (counted_ != v.n) {  // every particle writes its count each step: no clearing
+      count_.reserve(v.n);
+      first_.reserve(v.n);
+      std::size_t scanBytes = 0;
+      CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, scanBytes, count_.ptr, first_.ptr, static_cast<int>(v.n)));
+      scanScratch_.reserve(scanBytes);
+      counted_ = v.n;
+    }
+    const cudak::ContactList list{share_.ptr,  key_.ptr, entry_.ptr, count_.ptr, recording_ ? record_.ptr : nullptr,
                                   listCapacity_, numberBits};
 
     const CouplingParticles<T> P = couplingParticles<T>(v);
@@ -232,22 +241,32 @@ class CouplingCuda : public CouplingDeviceBackend {
       CUDA_CHECK(cudaGetLastError());
     }
     mark(2);
-    cudak::CouplingFlags res;
-    waited([&] { CUDA_CHECK(cudaMemcpy(&res, flagsD, sizeof(res), cudaMemcpyDeviceToHost)); });
-    recorded_ = recording_ && res.contacts <= listCapacity_ ? static_cast<long>(res.contacts) : -1;
-    if (res.contacts > listCapacity_) {  // this step's sums are atomic; the list grows for the next
-      const unsigned int listed = listCapacity_;
-      cudak::listedSharesKernel<<<(listed + kThreads - 1) / kThreads, kThreads>>>(listed, share_.ptr, keys_[0].ptr,
-                                                                                 numberBits + 8, sums_.ptr);
+    // The contact count stays on the device: the placing and the sums read it there (a step
+    // that overflowed the list takes the atomic way in blockSumsKernel), and the host learns
+    // it with the sums.
+    if (n > 0 && numBlocks > 0) {
+      std::size_t scanBytes = scanScratch_.capacity;
+      CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scanScratch_.ptr, scanBytes, count_.ptr, first_.ptr, n));
+      cudak::placeKernel<<<kPlaceBlocks, kThreads>>>(flagsD, listCapacity_, key_.ptr, entry_.ptr, first_.ptr,
+                                                     numberBits, order_.ptr);
       CUDA_CHECK(cudaGetLastError());
-      growList(2ull * res.contacts);
-    } else if (res.contacts > 0)
-      orderedSums(static_cast<int>(res.contacts), numBlocks, numberBits, keyBits);
+      cudak::blockSumsKernel<<<numBlocks, cudak::kSumThreads>>>(flagsD, listCapacity_, share_.ptr, key_.ptr,
+                                                                order_.ptr, numberBits, sums_.ptr);
+      CUDA_CHECK(cudaGetLastError());
+    }
     mark(3);
-    if (!out.sums.empty())
-      waited([&] {
-        CUDA_CHECK(cudaMemcpy(out.sums.data(), sums_.ptr, out.sums.size() * sizeof(double), cudaMemcpyDeviceToHost));
-      });
+    const std::size_t sumBytes = out.sums.size() * sizeof(double);
+    resultHost_.reserve(alignUp(sizeof(cudak::CouplingFlags)) + sumBytes);
+    CUDA_CHECK(cudaMemcpyAsync(resultHost_.ptr, flagsD, sizeof(cudak::CouplingFlags), cudaMemcpyDeviceToHost));
+    if (sumBytes)
+      CUDA_CHECK(cudaMemcpyAsync(resultHost_.ptr + alignUp(sizeof(cudak::CouplingFlags)), sums_.ptr, sumBytes,
+                                 cudaMemcpyDeviceToHost));
+    waited([&] { CUDA_CHECK(cudaStreamSynchronize(0)); });
+    cudak::CouplingFlags res;
+    std::memcpy(&res, resultHost_.ptr, sizeof(res));
+    if (sumBytes) std::memcpy(out.sums.data(), resultHost_.ptr + alignUp(sizeof(cudak::CouplingFlags)), sumBytes);
+    recorded_ = recording_ && res.contacts <= listCapacity_ ? static_cast<long>(res.contacts) : -1;
+    if (res.contacts > listCapacity_) growList(2ull * res.contacts);  // this step's sums were atomic
     if (timing_) {
       CUDA_CHECK(cudaEventSynchronize(events_[kStages]));
       for (int k = 0; k < kStages; ++k) {
@@ -271,37 +290,16 @@ class CouplingCuda : public CouplingDeviceBackend {
  private:
   unsigned int firstListCapacity_ = 1u << 16;
 
+  // The placing kernel's grid: it loops over the step's contacts, whose number the device holds.
+  static constexpr int kPlaceBlocks = 264;
+
   void growList(unsigned long long capacity) {
     listCapacity_ = static_cast<unsigned int>(std::min<unsigned long long>(capacity, 1ull << 31));
     share_.reserve(static_cast<std::size_t>(kBlockSums) * listCapacity_);
-    for (int b = 0; b < 2; ++b) {
-      keys_[b].reserve(listCapacity_);
-      entries_[b].reserve(listCapacity_);
-    }
+    key_.reserve(listCapacity_);
+    entry_.reserve(listCapacity_);
+    order_.reserve(listCapacity_);
     if (recording_) record_.reserve(static_cast<std::size_t>(kContactValues) * listCapacity_);
-    std::size_t bytes = 0;
-    cub::DoubleBuffer<unsigned long long> k(keys_[0].ptr, keys_[1].ptr);
-    cub::DoubleBuffer<int> e(entries_[0].ptr, entries_[1].ptr);
-    CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, k, e, static_cast<int>(listCapacity_)));
-    sortScratch_.reserve(bytes);
-  }
-
-  // The block sums of this step's `count` listed contacts, in their fixed order, into sums_.
-  void orderedSums(int count, int numBlocks, int numberBits, int keyBits) {
-    cub::DoubleBuffer<unsigned long long> k(keys_[0].ptr, keys_[1].ptr);
-    cub::DoubleBuffer<int> e(entries_[0].ptr, entries_[1].ptr);
-    std::size_t bytes = sortScratch_.capacity;
-    CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_.ptr, bytes, k, e, count, 0, keyBits));
-    blockStart_.reserve(numBlocks);
-    blockEnd_.reserve(numBlocks);
-    CUDA_CHECK(cudaMemsetAsync(blockStart_.ptr, 0, std::max(numBlocks, 1) * sizeof(int)));
-    CUDA_CHECK(cudaMemsetAsync(blockEnd_.ptr, 0, std::max(numBlocks, 1) * sizeof(int)));
-    sortedkeys::rangesKernel<<<(count + kThreads - 1) / kThreads, kThreads>>>(count, k.Current(), numberBits + 8,
-                                                                                blockStart_.ptr, blockEnd_.ptr);
-    CUDA_CHECK(cudaGetLastError());
-    cudak::blockSumsKernel<<<numBlocks, cudak::kSumThreads>>>(share_.ptr, e.Current(), blockStart_.ptr, blockEnd_.ptr,
-                                                              sums_.ptr);
-    CUDA_CHECK(cudaGetLastError());
   }
 
   void mark(int k) {
@@ -319,7 +317,7 @@ class CouplingCuda : public CouplingDeviceBackend {
   bool timing_ = false;
   cudaEvent_t events_[kStages + 1] = {};
   double stageTotals_[kStages] = {};
-  double hostWait_ = 0;  // host time blocked in the step's two copies back [s]
+  double hostWait_ = 0;  // host time blocked in the step's copy back [s]
   int numShapes_ = 0;
   DeviceArray<T> vertex_, faceNormal_, faceOffset_, sweepRadius_, boundingRadius_;
   DeviceArray<int> faceLoopStart_, loopVertex_, loopEdge_, shapeFaceStart_, shapeVertexStart_, shapeEdgeStart_;
@@ -327,6 +325,7 @@ class CouplingCuda : public CouplingDeviceBackend {
   DeviceArray<unsigned char> staged_;  // this step's blocks, pair physics and flags
   DeviceArray<int> binStart_, binBlocks_;  // the bin table, uploaded when it changes
   PinnedArray stagedHost_;
+  PinnedArray resultHost_;  // the step's flags and block sums, copied back together
   DeviceArray<long long> histKey_;
   DeviceArray<T> histXi_;
   DeviceArray<unsigned> histWritten_;
@@ -338,10 +337,11 @@ class CouplingCuda : public CouplingDeviceBackend {
   bool recording_ = false;
   long recorded_ = -1;         // contacts the last step recorded, -1: none
   DeviceArray<double> record_;  // kContactValues per list entry while recording
-  DeviceArray<unsigned long long> keys_[2];
-  DeviceArray<int> entries_[2];
-  DeviceArray<unsigned char> sortScratch_;
-  DeviceArray<int> blockStart_, blockEnd_;
+  DeviceArray<unsigned long long> key_;
+  DeviceArray<int> entry_, order_;
+  std::size_t counted_ = ~std::size_t(0);  // the particles count_ and first_ are sized for
+  DeviceArray<int> count_, first_;          // per particle number: contacts, and the scan of them
+  DeviceArray<unsigned char> scanScratch_;
 };
 
 }  // namespace

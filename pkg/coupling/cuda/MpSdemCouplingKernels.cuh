@@ -1,5 +1,7 @@
 // CUDA kernel of the MP–SDEM coupling: a thin wrapper over the shared coupleParticle().
 #pragma once
+#include <cub/block/block_scan.cuh>
+
 #include "coupling/CouplingKernelsCommon.hpp"
 
 namespace mpmsdem {
@@ -21,14 +23,18 @@ struct AtomicAdd {
   __device__ __forceinline__ void operator()(double* slot, double value) const { atomicAdd(slot, value); }
 };
 
-// The step's contacts for the block sums in a fixed order: each contact's share (blockShare)
-// at the place an atomic counter gives it, with a sort key that orders the contacts by block,
-// particle number and the particle's own contact order (the order the CPU backend adds them in,
-// block by block).
+// The step's contacts for the block sums in a fixed order: each contact's share at the place an
+// atomic counter gives it, with its block and particle number (key) and its place among the
+// particle's own contacts (entry, the order the CPU backend adds them in), and each particle's
+// count of contacts by number. A scan of the counts then gives every contact a place that
+// depends on the contacts alone (placeKernel), in particle-number order, and each block adds its
+// contacts in that order (blockSumsKernel): the sums of a sort by block, number and contact order
+// without the sort.
 struct ContactList {
   double* share;            // kBlockSums per entry
-  unsigned long long* key;  // block << (numberBits + 8) | number << 8 | j
-  int* entry;               // the entry's own place (the sort's values)
+  unsigned long long* key;  // block << numberBits | number
+  int* entry;               // the contact's place among its particle's contacts
+  int* count;               // per particle number: its contacts this step
   double* record;           // kContactValues per entry (contactRecord), or null: not recorded
   unsigned int capacity;
   int numberBits;
@@ -54,18 +60,18 @@ struct DeviceSink {
   ContactList list;
   unsigned int j = 0;  // contacts of this particle so far
   // A contact past the list's end adds its share atomically (a step that overflows the list
-  // then adds the listed shares too: listedSharesKernel); the listed ones are summed in order
-  // (blockSumsKernel). Atomics for every contact would queue a step's thousands of contacts
-  // with the bed on the same 16 sums.
+  // then adds the listed shares too: blockSumsKernel); the listed ones are summed in order.
+  // Atomics for every contact would queue a step's thousands of contacts with the bed on the
+  // same 16 sums.
   __device__ void operator()(const MpContact<T>& c) {
     const BlockState<T>& b = blocks[c.block];
     const unsigned int i = listPlace(&flags->contacts);
     if (i >= list.capacity) addBlockShare(c, b, sums, AtomicAdd{});
     if (i < list.capacity) {
       blockShare(c, b, list.share + static_cast<std::size_t>(kBlockSums) * i);
-      list.key[i] = (static_cast<unsigned long long>(c.block) << (list.numberBits + 8)) |
-                    (static_cast<unsigned long long>(c.particle) << 8) | (j < 255u ? j : 255u);
-      list.entry[i] = static_cast<int>(i);
+      list.key[i] = (static_cast<unsigned long long>(c.block) << list.numberBits) |
+                    static_cast<unsigned long long>(c.particle);
+      list.entry[i] = static_cast<int>(j);
       if (list.record) {
         double* r = list.record + static_cast<std::size_t>(kContactValues) * i;
         contactRecord(c, r);
@@ -78,18 +84,63 @@ struct DeviceSink {
   }
 };
 
-// Block b's sums from its sorted contacts: thread t adds contacts t, t + kSumThreads, ... in
-// turn, then a fixed tree adds the threads' sums. The order depends on the contacts alone, not
-// on thread timing.
+// The listed contacts in particle-number order: contact i of particle `number`, its entry-th,
+// goes to order[first[number] + entry], where first is the exclusive scan of the particles'
+// counts. Nothing in a step that overflowed the list (its sums are atomic).
+static __global__ void placeKernel(const CouplingFlags* flags, unsigned int capacity, const unsigned long long* key,
+                                   const int* entry, const int* first, int numberBits, int* order) {
+  const unsigned int count = flags->contacts;
+  if (count > capacity) return;
+  const unsigned long long numberMask = (1ull << numberBits) - 1ull;
+  for (unsigned int i = blockIdx.x * blockDim.x + threadIdx.x; i < count; i += gridDim.x * blockDim.x)
+    order[first[key[i] & numberMask] + entry[i]] = static_cast<int>(i);
+}
+
+// Block b's sums from its contacts in particle-number order: its r-th contact goes to thread
+// r mod kSumThreads, which adds its contacts in turn, then a fixed tree adds the threads' sums.
+// The order depends on the contacts alone, not on thread timing. The list is read a chunk at a
+// time: a block scan ranks the chunk's contacts of block b, and shared memory hands each to its
+// thread (a chunk's ranks are consecutive: one contact a thread at most). In a step that
+// overflowed the list the listed shares of block b are added atomically instead (its other
+// contacts were added so in coupleKernel).
 constexpr int kSumThreads = 128;
 static __global__ void __launch_bounds__(kSumThreads)
-    blockSumsKernel(const double* share, const int* sortedEntry, const int* start, const int* end, double* sums) {
+    blockSumsKernel(const CouplingFlags* flags, unsigned int capacity, const double* share,
+                    const unsigned long long* key, const int* order, int blockShift, double* sums) {
+  const unsigned long long b = blockIdx.x;
+  const int t = threadIdx.x;
+  const unsigned int count = flags->contacts;
+  double* dst = sums + static_cast<std::size_t>(kBlockSums) * b;
+  if (count > capacity) {
+    for (unsigned int i = t; i < capacity; i += kSumThreads)
+      if (key[i] >> blockShift == b) {
+        const double* s = share + static_cast<std::size_t>(kBlockSums) * i;
+        for (int k = 0; k < kBlockSums; ++k)
+          if (s[k] != 0.0) atomicAdd(dst + k, s[k]);
+      }
+    return;
+  }
+  using Scan = cub::BlockScan<int, kSumThreads>;
+  __shared__ typename Scan::TempStorage scanStorage;
+  __shared__ int handed[kSumThreads];
   __shared__ double part[kBlockSums][kSumThreads];
-  const int b = blockIdx.x, t = threadIdx.x;
+  handed[t] = -1;
   double acc[kBlockSums] = {};
-  for (int q = start[b] + t; q < end[b]; q += kSumThreads) {
-    const double* s = share + static_cast<std::size_t>(kBlockSums) * sortedEntry[q];
-    for (int k = 0; k < kBlockSums; ++k) acc[k] += s[k];
+  int ranked = 0;  // contacts of block b in the chunks before this one
+  for (unsigned int chunk = 0; chunk < count; chunk += kSumThreads) {
+    int e = chunk + t < count ? order[chunk + t] : -1;
+    if (e >= 0 && key[e] >> blockShift != b) e = -1;
+    int rank, inChunk;
+    Scan(scanStorage).ExclusiveSum(e >= 0 ? 1 : 0, rank, inChunk);
+    if (e >= 0) handed[(ranked + rank) % kSumThreads] = e;
+    __syncthreads();
+    if (handed[t] >= 0) {
+      const double* s = share + static_cast<std::size_t>(kBlockSums) * handed[t];
+      for (int k = 0; k < kBlockSums; ++k) acc[k] += s[k];
+      handed[t] = -1;
+    }
+    ranked += inChunk;
+    __syncthreads();
   }
   for (int k = 0; k < kBlockSums; ++k) part[k][t] = acc[k];
   __syncthreads();
@@ -98,19 +149,7 @@ static __global__ void __launch_bounds__(kSumThreads)
       for (int k = 0; k < kBlockSums; ++k) part[k][t] += part[k][t + half];
     __syncthreads();
   }
-  if (t < kBlockSums) sums[static_cast<std::size_t>(kBlockSums) * b + t] = part[t][0];
-}
-
-// The shares of the listed contacts added atomically to the block sums, in a step whose
-// contacts overflowed the list (the others were added so in coupleKernel).
-static __global__ void listedSharesKernel(unsigned int count, const double* share, const unsigned long long* key,
-                                          int blockShift, double* sums) {
-  const unsigned int i = blockIdx.x * blockDim.x + threadIdx.x;
-  if (i >= count) return;
-  const double* s = share + static_cast<std::size_t>(kBlockSums) * i;
-  double* dst = sums + static_cast<std::size_t>(kBlockSums) * (key[i] >> blockShift);
-  for (int k = 0; k < kBlockSums; ++k)
-    if (s[k] != 0.0) atomicAdd(dst + k, s[k]);
+  if (t < kBlockSums) dst[t] = part[t][0];
 }
 
 template <typename T>
@@ -124,8 +163,10 @@ __global__ void coupleKernel(int n, CouplingParticles<T> P, const BlockState<T>*
   int badBlock = -1, overflow = 0;
   T approach = T(INFINITY);
   CouplingLoopMemo<T> memo;
-  if (coupleParticle(p, P, blocks, shapes, phys, bins, hist, dt, safety, sink, &badBlock, &overflow, &approach,
-                     memo) != kCoupleOk)
+  const int status =
+      coupleParticle(p, P, blocks, shapes, phys, bins, hist, dt, safety, sink, &badBlock, &overflow, &approach, memo);
+  list.count[particleNumber(P, p)] = static_cast<int>(sink.j);
+  if (status != kCoupleOk)
     atomicMin(&flags->bad,
               (static_cast<unsigned long long>(particleNumber(P, p)) << 32) | static_cast<unsigned int>(badBlock));
   if (overflow) atomicAdd(&flags->overflow, static_cast<unsigned long long>(overflow));
