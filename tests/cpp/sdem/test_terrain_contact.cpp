@@ -443,3 +443,40 @@ TEST(TerrainWall, ACubeSlidingIntoAWallRestsAgainstIt) {
   EXPECT_EQ(walls, 2);
   EXPECT_NEAR(wallPush / weight.x(), -1.0, 0.01);
 }
+
+// A fold of the wall itself (0.002 m raster): flat ground to x = 0.1 m, one cell rising at 60 deg,
+// then the wall at 80 deg. Each front core corner lies over the ground, 0.49 R from the 60 deg
+// triangle's plane and 0.51 R from the 80 deg one's, the foot of its normal inside each: both are
+// walls to it (steeper than 26 deg from the ground under it), but they lean only 20 deg from each
+// other, the same slope: one contact a corner, with the nearer one, at Eq 10's force for its
+// overlap. Counting both would push the corner out of the fold twice.
+TEST(TerrainWall, AVertexInAFoldOfOneSlopeTouchesItOnce) {
+  const Real s = 0.002, t60 = std::tan(M_PI / 3), t80 = std::tan(80 * M_PI / 180);
+  const mpm::TerrainSpec fold = relief(s, [&](int i, int) {
+    return i <= 550 ? 0.0 : i == 551 ? s * t60 : s * t60 + (i - 551) * s * t80;  // node 550 at x = 0.1
+  });
+  const Real dA = 0.49 * R, dB = 0.51 * R, c = std::cos(M_PI / 9);  // the two walls' normals, 20 deg apart
+  const Vec3 nA(-std::sin(M_PI / 3), 0, std::cos(M_PI / 3)), nB(-std::sin(80 * M_PI / 180), 0, std::cos(80 * M_PI / 180));
+  const Vec3 kink(0.102, 0, s * t60);
+  const Vec3 p = kink + (dA - c * dB) / (1 - c * c) * nA + (dB - c * dA) / (1 - c * c) * nB;
+  ASSERT_LT(p.x(), 0.1);  // over the ground
+  OnTerrain w;
+  SdemMaterial m;
+  m.density = rho;
+  cubeAt(w, fold, p.x() - a, 0.01, p.z(), m);
+  w.world.gravity = Vec3::Zero();
+  w.world.step(1e-6);
+  int walls = 0;
+  for (const ContactRecord& r : w.world.engine.contacts()) {
+    if (r.key.indexB < 0) continue;  // the ground under the bottom corners
+    ++walls;
+    EXPECT_EQ(r.key.kindA, FeatureKind::Vertex);
+    EXPECT_GE(r.key.indexB, 2 * (550 * 1001));  // a triangle of the 60 deg cells
+    EXPECT_LT(r.key.indexB, 2 * (551 * 1001));
+    EXPECT_NEAR(r.overlap, R - dA, 1e-12);
+    EXPECT_NEAR(r.normal.x(), -nA.x(), 1e-12);
+    EXPECT_NEAR(r.normal.z(), -nA.z(), 1e-12);
+    EXPECT_NEAR(r.normalForce / eq10(R - dA, R), 1.0, 1e-9);
+  }
+  EXPECT_EQ(walls, 2);
+}
