@@ -16,6 +16,10 @@
 #                                                      # results in $OUT/study.tgz, for --collect
 #   ... --study DIR --until 4.5                        # its coupled runs to 4.5 s (the paper's end)
 #                                                      # (runs last, with what is left of the budget)
+#   ... --sweep DIR                                    # a trade-off sweep prepared in DIR
+#                                                      # (tradeoff_sweep_radius.py --prepare: its
+#                                                      # run_driver.sh), one run at a time on CUDA:
+#                                                      # $OUT/sweep.tgz, for --collect
 #   ... --design DIR                                   # the §3.2 cases prepared in DIR
 #                                                      # (scripts/validation/paper_flume_design.py
 #                                                      # --prepare), likewise: $OUT/design.tgz
@@ -62,6 +66,7 @@ prebuilt=""
 baseline=""
 study=""
 design=""
+sweep=""
 until=""
 workers=1
 profile=()
@@ -71,6 +76,7 @@ while [ $# -gt 0 ]; do
     --baseline) baseline=${2:?"--baseline needs a folder"}; shift 2 ;;
     --study) study=${2:?"--study needs a folder of prepared cases"}; shift 2 ;;
     --design) design=${2:?"--design needs a folder of prepared cases"}; shift 2 ;;
+    --sweep) sweep=${2:?"--sweep needs a folder of prepared runs"}; shift 2 ;;
     --until) until=${2:?"--until needs a time [s]"}; shift 2 ;;
     --profile-scene) profile+=("${2:?"--profile-scene needs a driver scene"}"); shift 2 ;;
     --workers) workers=${2:?"--workers needs a number of cases"}; shift 2 ;;
@@ -83,7 +89,7 @@ mkdir -p "$out"
 # stages ran.
 pack() {
   trap - EXIT TERM INT
-  (cd "$out" && find . -maxdepth 1 -type f ! -name gpu-run.tgz | sed 's|^\./||' | sort > .packed &&
+  (cd "$out" && find . -maxdepth 1 -type f ! -name gpu-run.tgz ! -name .packed | sed 's|^\./||' | sort > .packed &&
     [ -s .packed ] && tar czf gpu-run.tgz -T .packed && xargs rm -f < .packed; rm -f .packed)
   echo "gpu_run.sh: outputs in $out/gpu-run.tgz"
 }
@@ -157,6 +163,18 @@ prepared_run() {
 }
 export -f prepared_run
 [ -n "$design" ] && stage design 420 prepared_run design 400 "$design" scripts/validation/paper_flume_design.py
+# sweep_run DIR LIMIT: a prepared trade-off sweep's runs one after another on CUDA (side by side
+# they only take turns on the GPU), their logs and coupled.h5 in $out/sweep.tgz also when stopped
+sweep_run() {
+  local dir=$1 rc
+  MPMSDEM_RUN="$bin/mpmsdem-run" JOBS=1 OMP_NUM_THREADS=$(nproc) timeout -k 5 "$2" bash "$dir/run_driver.sh" 2>&1 |
+    tee "$out/sweep.log"
+  rc=${PIPESTATUS[0]}
+  tar czf "$out/sweep.tgz" --exclude='*.snapshots' --exclude='*.restart' -C "$(dirname "$dir")" "$(basename "$dir")"
+  return "$rc"
+}
+export -f sweep_run
+[ -n "$sweep" ] && stage sweep 420 sweep_run "$sweep" 400
 
 # flume_run NAME SCENE BACKEND PRECISION [ARGS...]: one --bench run, its JSON line in $out/NAME.json
 # (FLUME_EXE: another mpmsdem-run)
