@@ -274,3 +274,30 @@ def test_parametric_study_summary_on_known_data(tmp_path):
         assert fits["Fr1"][group]["r"] == pytest.approx(expect["r"], rel=1e-9)
         assert fits["Fr1"][group]["r"] > 0.9  # the made-up law is linear in Fr1
         assert fits["Fr"][group]["n"] == len(sel)
+
+
+def test_the_datum_of_fig_17s_shares_is_found_from_the_dissipated_energy():
+    """A zero of potential energy on the bed X past the cube adds the flow's weight times that
+    drop to E_p,0^f and leaves E_d^f as it is: runs made with the paper's 77 % and 73 % at X = 4 m
+    give X back, and the cube's kinetic share against it is E_k,max^b over the shifted E_p,0^f."""
+    import math
+    import pytest
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    import parametric_study_summary as summary
+    s10 = math.sin(math.radians(10))
+    weight = 0.3 * 0.9 * 0.2 * 1600 * 9.81  # the AR 3.0 column's, 847.6 N
+
+    def run(L0hb, share, t_end=4.5):
+        L0, Ep0 = 0.05 * L0hb, 354.0
+        shifted = Ep0 + weight * (0.3 + L0 + 4.0) * s10
+        return {"AR": 3.0, "L0_hb": L0hb, "L_i": 0.3, "H_i": 0.9, "L0": L0, "flow_potential_0": Ep0,
+                "flow_dissipated_end": share * shifted / Ep0, "block_kinetic_max": 3.0,
+                "energy": {"t": [0.0, t_end]}}
+
+    runs = [run(4, 0.77), run(24, 0.73), run(54, 0.5), run(24, 0.73, t_end=3.0)]
+    runs[3]["AR"] = 2.0  # not one of the paper's two cases
+    datum = summary.paperDatum(runs)
+    assert set(datum) == {(3.0, 4), (3.0, 24)}
+    assert datum[(3.0, 4)] == pytest.approx(4.0, rel=1e-12) and datum[(3.0, 24)] == pytest.approx(4.0, rel=1e-12)
+    assert summary.paperDatum([run(4, 0.77, t_end=3.0)]) == {}  # ended before 4.5 s
+    assert summary.blockShareAgainst(runs[0], 4.0) == pytest.approx(3.0 / (354.0 + weight * 4.5 * s10), rel=1e-12)
