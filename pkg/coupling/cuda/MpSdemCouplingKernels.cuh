@@ -125,6 +125,7 @@ static __global__ void __launch_bounds__(kSumThreads)
   __shared__ int handed[kSumThreads];
   __shared__ double part[kBlockSums][kSumThreads];
   handed[t] = -1;
+  __syncthreads();  // every slot cleared before the first chunk hands contacts out
   double acc[kBlockSums] = {};
   int ranked = 0;  // contacts of block b in the chunks before this one
   for (unsigned int chunk = 0; chunk < count; chunk += kSumThreads) {
