@@ -203,6 +203,18 @@ stage bench_mpm 240 python3 scripts/bench/bench_mpm.py --exe "$bin/mpmsdem-run" 
 flume full_cpu_4000 120 "$full" cpu double --steps 4000
 flume full_cuda_4000 60 "$full" cuda double --steps 4000
 [ -n "$baseline" ] && FLUME_EXE=$baseline/mpmsdem-run flume full_cuda_4000_baseline 60 "$full" cuda double --steps 4000
+# The new build against the baseline on the same 4,000 steps: the same results but for the timings?
+[ -n "$baseline" ] && stage baseline_same 10 python3 - "$out/full_cuda_4000.json" "$out/full_cuda_4000_baseline.json" <<'PY'
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:3])
+timing = lambda k: "second" in k or "per_s" in k or k in ("bytes_per_particle",)
+drop = lambda r: {k: v for k, v in r.items() if not timing(k)}
+print("the flume's 4,000 CUDA steps, new against the baseline:", "the same results" if drop(a) == drop(b) else
+      "differ: %s" % {k: (drop(a).get(k), drop(b).get(k)) for k in set(drop(a)) | set(drop(b)) if drop(a).get(k) != drop(b).get(k)})
+new, old = a["stage_seconds"], b["stage_seconds"]
+print("coupling / MPM step: new %.2f, baseline %.2f; coupling new/old time %.2f" % (
+    new["coupling"] / new["mpm"], old["coupling"] / old["mpm"], new["coupling"] / old["coupling"]))
+PY
 flume full_cuda_double 120 "$full" cuda double
 flume full_cuda_float 120 "$full" cuda float
 flume coarse_cpu_double 120 "$coarse" cpu double
