@@ -36,7 +36,10 @@ of Table 1, basal friction 0.21, no gate: the column starts free) with a column 
 L_i = 0.3 m and height H_i = AR · L_i (rounded to the grid: the coarse grid makes AR = 1.3 a
 column of 0.40 m, AR 1.33; the reported AR is the one simulated), the cube's upstream face at
 L_i + L0, and a flume long enough for the flow to carry the cube without reaching its end
-wall: L_i + L0 + h_b + ``margin`` (3 m by default: at the paper's blend a cube slid 1.2 m).
+wall: L_i + L0 + h_b + ``margin`` (3 m by default: at the paper's blend a cube slid 1.2 m). Runs
+to the paper's 4.5 s need more: at the paper's resolution and blend the fronts are then about
+4.5, 7.5, 11 and 15 m from the column at AR 1.3, 2.0, 3.0 and 4.0 (docs/studies.md); a cube still
+carried when the front reaches the end wall is flagged ``cube_at_end``.
 """
 import argparse
 import json
@@ -449,7 +452,8 @@ def parse(argv):
     ap.add_argument("--AR", type=float, default=None, help="one case: aspect ratio (default 1.3)")
     ap.add_argument("--L0-hb", type=float, default=None, help="one case: L0 / h_b (default 4)")
     ap.add_argument("--margin", type=float, default=None,
-                    help="flume length beyond the cube [m] where the table gives none (default %g)" % MARGIN)
+                    help="flume length beyond the cube [m] where the table gives none (default %g; to 4.5 s at "
+                         "AR 3.0 and 4.0 the flows need about 11 and 15 m from the column)" % MARGIN)
     ap.add_argument("--prepare", metavar="DIR", default=None,
                     help="write the driver scenes of the table's cases (or of --AR/--L0-hb) into DIR/CASE")
     ap.add_argument("--run-prepared", metavar="DIR", default=None,
