@@ -92,6 +92,7 @@ void MpmCuda<T>::allocateGrid() {
   CUDA_CHECK(cudaGetDevice(&device));
   CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
   gridLaunch_ = std::max(1, std::min(blocksFor(static_cast<std::size_t>(kBlockCells) * nBlocks_), 8 * sms));
+  p2gLaunch_ = kP2GBlocksPerSM * sms;
 }
 
 template <typename T>
@@ -443,7 +444,7 @@ void MpmCuda<T>::step(double dt) {
     sortParticles();
     mark(1);
     for (int colour = 0; colour < 8; ++colour) {
-      const int count = bg.colourCapacity(colour);
+      const int count = std::min(bg.colourCapacity(colour), p2gLaunch_);
       if (count == 0) continue;
       cudak::p2gBaseKernel<T><<<count, cudak::kBaseThreads>>>(bg, colour, activeLists(), in, sorted_, cellStart_,
                                                                cellEnd_, grid_, dtT, nodes_);

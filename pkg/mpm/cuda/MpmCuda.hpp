@@ -118,6 +118,11 @@ class MpmCuda : public MpmSolver {
   int* listCounts_ = nullptr;  // kTileLists: 8 colours, then the active tiles
   unsigned char* tileMark_ = nullptr;
   int gridLaunch_ = 1;  // CUDA blocks of the kernels over the active tiles' nodes
+  // CUDA blocks of a P2G colour launch at most: more than the device holds at once (the kernel's
+  // shared arrays allow a few per SM), so that a colour with fewer occupied blocks still gets one
+  // CUDA block each, and a colour with more loops over them
+  static constexpr int kP2GBlocksPerSM = 16;
+  int p2gLaunch_ = 1;
   int numberBits_ = 0;
   int keyBits_ = 0;
   unsigned long long* keys_[2] = {};

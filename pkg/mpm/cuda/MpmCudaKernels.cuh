@@ -93,13 +93,16 @@ __global__ void binKernel(int n, ParticleIn<T> in, GridConst<T> g, BlockGrid bg,
   slot[s] = s;
 }
 
-// P2G of the blocks of one parity colour, one CUDA block per block of bases, in three rows
-// (o0 = 0, 1, 2 of the bases (o0, o1, o2)): warp 3 o1 + o2 sums the particles of base
+// P2G of the blocks of one parity colour, one CUDA block per block of bases at a time, in three
+// rows (o0 = 0, 1, 2 of the bases (o0, o1, o2)): warp 3 o1 + o2 sums the particles of base
 // (row, o1, o2), prepared kBaseChunk at a time into shared memory, into that base's 27 nodes, a
 // lane per node; then thread m of the first 125 adds to tile node m the sums of the row's bases
 // that reach it (p2gBaseTileSum). After the third row it adds its node's sum to the grid. Blocks
 // of one colour share no node, so the adds need no atomics; the colours run one launch after
-// another.
+// another. The launch is bounded (p2gLaunch), not one CUDA block per block of the colour: the
+// occupied ones are known on the device only, and a long or wide grid has hundreds of thousands
+// of empty blocks per colour, each a CUDA block that would start only to return. Each CUDA block
+// takes occupied blocks blockIdx.x, blockIdx.x + gridDim.x, ... in turn, each summed as before.
 constexpr int kBaseWarps = 9;
 constexpr int kBaseThreads = 32 * kBaseWarps;
 template <typename T>
@@ -108,46 +111,48 @@ template <typename T>
 __global__ void __launch_bounds__(kBaseThreads)
     p2gBaseKernel(BlockGrid bg, int colour, ActiveLists lists, ParticleIn<T> in, const int* sorted, const int* start,
                   const int* end, GridConst<T> g, T dt, T* grid) {
-  // launched for every block of the colour; those past the colour's occupied ones have no work
-  if (static_cast<int>(blockIdx.x) >= lists.count[colour]) return;
-  const int block = lists.blocks[bg.colourStart(colour) + blockIdx.x];
-  int b[3];
-  blockCoordsOf(block, bg.blocks, b);
-  const int first = kBlockCells * block;
-  const int t = threadIdx.x, warp = t / 32, lane = t % 32;
   __shared__ int range[kBlockCells][2];
-  if (t < kBlockCells) {
-    range[t][0] = start[first + t];
-    range[t][1] = end[first + t];
-  }
-  if (!__syncthreads_or(t < kBlockCells && range[t][0] < range[t][1])) return;
   __shared__ P2GBaseParticle<T> stage[kBaseWarps][kBaseChunk<T>];
   __shared__ T part[kBaseWarps][kBlockCells][kNodeVNew + 3];
   constexpr int kTile = kBlockNodes * kBlockNodes * kBlockNodes;
+  const int t = threadIdx.x, warp = t / 32, lane = t % 32;
   const int n0 = t / (kBlockNodes * kBlockNodes), n1 = (t / kBlockNodes) % kBlockNodes, n2 = t % kBlockNodes;
-  T acc[kNodeVNew + 3] = {};
-  for (int row = 0; row < 3; ++row) {
-    const int q0 = range[9 * row + warp][0], q1 = range[9 * row + warp][1];
-    T mine[kNodeVNew + 3] = {};
-    for (int q = q0; q < q1; q += kBaseChunk<T>) {
-      const int m = min(kBaseChunk<T>, q1 - q);
-      __syncwarp();  // the previous chunk has been read
-      if (lane < m) p2gBasePrepare(sorted[q + lane], in, g, dt, stage[warp][lane]);
-      __syncwarp();
-      if (lane < kBlockCells)
-        for (int j = 0; j < m; ++j) p2gBaseNodeAdd(stage[warp][j], lane / 9, (lane / 3) % 3, lane % 3, mine);
+  const int occupied = lists.count[colour];
+  for (int q = blockIdx.x; q < occupied; q += gridDim.x) {
+    const int block = lists.blocks[bg.colourStart(colour) + q];
+    int b[3];
+    blockCoordsOf(block, bg.blocks, b);
+    const int first = kBlockCells * block;
+    __syncthreads();  // the previous block's ranges have been read
+    if (t < kBlockCells) {
+      range[t][0] = start[first + t];
+      range[t][1] = end[first + t];
     }
-    if (lane < kBlockCells)
-      for (int c = 0; c < kNodeVNew + 3; ++c) part[warp][lane][c] = mine[c];
-    __syncthreads();
-    if (t < kTile)
-      p2gBaseTileSum(row, n0, n1, n2, [&](int o1, int o2, int m) -> const T* { return part[3 * o1 + o2][m]; }, acc);
-    __syncthreads();  // the row's sums have been read
-  }
-  const int g0 = 3 * b[0] + n0, g1 = 3 * b[1] + n1, g2 = 3 * b[2] + n2;
-  if (t < kTile && g0 < g.nodes[0] && g1 < g.nodes[1] && g2 < g.nodes[2]) {
-    T* r = grid + kNodeValues * nodeRecordAt(g, g0, g1, g2);
-    for (int c = 0; c < kNodeVNew + 3; ++c) r[c] += acc[c];
+    if (!__syncthreads_or(t < kBlockCells && range[t][0] < range[t][1])) continue;
+    T acc[kNodeVNew + 3] = {};
+    for (int row = 0; row < 3; ++row) {
+      const int q0 = range[9 * row + warp][0], q1 = range[9 * row + warp][1];
+      T mine[kNodeVNew + 3] = {};
+      for (int p = q0; p < q1; p += kBaseChunk<T>) {
+        const int m = min(kBaseChunk<T>, q1 - p);
+        __syncwarp();  // the previous chunk has been read
+        if (lane < m) p2gBasePrepare(sorted[p + lane], in, g, dt, stage[warp][lane]);
+        __syncwarp();
+        if (lane < kBlockCells)
+          for (int j = 0; j < m; ++j) p2gBaseNodeAdd(stage[warp][j], lane / 9, (lane / 3) % 3, lane % 3, mine);
+      }
+      if (lane < kBlockCells)
+        for (int c = 0; c < kNodeVNew + 3; ++c) part[warp][lane][c] = mine[c];
+      __syncthreads();
+      if (t < kTile)
+        p2gBaseTileSum(row, n0, n1, n2, [&](int o1, int o2, int m) -> const T* { return part[3 * o1 + o2][m]; }, acc);
+      __syncthreads();  // the row's sums have been read
+    }
+    const int g0 = 3 * b[0] + n0, g1 = 3 * b[1] + n1, g2 = 3 * b[2] + n2;
+    if (t < kTile && g0 < g.nodes[0] && g1 < g.nodes[1] && g2 < g.nodes[2]) {
+      T* r = grid + kNodeValues * nodeRecordAt(g, g0, g1, g2);
+      for (int c = 0; c < kNodeVNew + 3; ++c) r[c] += acc[c];
+    }
   }
 }
 
