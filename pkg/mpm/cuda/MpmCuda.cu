@@ -81,6 +81,9 @@ void MpmCuda<T>::allocateGrid() {
   CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
   CUDA_CHECK(cudaMemset(listCounts_, 0, kTileLists * sizeof(int)));
   CUDA_CHECK(cudaMemset(tileMark_, 0, nBlocks_));
+  // every cell's particle range empty; from then on each step clears the ones the last one set
+  CUDA_CHECK(cudaMemset(cellStart_, 0, static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int)));
+  CUDA_CHECK(cudaMemset(cellEnd_, 0, static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int)));
   if (params_.terrain.enabled()) {
     const std::vector<T> z(params_.terrain.heights.begin(), params_.terrain.heights.end());
     deviceAlloc(&terrain_, z.size(), bytes_);
@@ -409,9 +412,6 @@ void MpmCuda<T>::sortParticles() {
   cub::DoubleBuffer<unsigned long long> k(keys_[0], keys_[1]);
   cub::DoubleBuffer<int> v(slots_[0], slots_[1]);
   CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_, sortScratchBytes_, k, v, n, 0, keyBits_));
-  const std::size_t cells = static_cast<std::size_t>(kBlockCells) * nBlocks_;
-  CUDA_CHECK(cudaMemsetAsync(cellStart_, 0, cells * sizeof(int)));
-  CUDA_CHECK(cudaMemsetAsync(cellEnd_, 0, cells * sizeof(int)));
   sortedkeys::rangesKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, cellStart_, cellEnd_);
   CUDA_CHECK(cudaGetLastError());
   cudak::occupiedBlocksKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, bg, activeLists());
@@ -430,6 +430,8 @@ void MpmCuda<T>::step(double dt) {
   const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
   // Only the last step's active tiles hold non-zero values; the lists are then built anew.
   cudak::clearTilesKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
+  CUDA_CHECK(cudaGetLastError());
+  cudak::clearRangesKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, cellStart_, cellEnd_);
   CUDA_CHECK(cudaGetLastError());
   CUDA_CHECK(cudaMemsetAsync(listCounts_, 0, kTileLists * sizeof(int)));
   CUDA_CHECK(cudaMemsetAsync(&flags_->firstBad, 0xff, sizeof(flags_->firstBad)));

@@ -182,6 +182,20 @@ __global__ void clearTilesKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst
   });
 }
 
+// The cell ranges the last sort wrote (those of its occupied blocks) set back to empty: the next
+// sort writes only the cells it fills, and clearing every cell of a long or wide grid each step
+// would move 8 bytes a cell.
+__global__ inline void clearRangesKernel(ActiveLists a, BlockGrid bg, int* start, int* end) {
+  for (int colour = 0; colour < 8; ++colour) {
+    const int cells = kBlockCells * a.count[colour], base = bg.colourStart(colour);
+    for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < cells; i += gridDim.x * blockDim.x) {
+      const std::size_t cell = static_cast<std::size_t>(kBlockCells) * a.blocks[base + i / kBlockCells] + i % kBlockCells;
+      start[cell] = 0;
+      end[cell] = 0;
+    }
+  }
+}
+
 // Largest value over the warp; every lane calls it (inactive lanes must pass 0 via the
 // caller, which keeps the whole warp alive).
 __device__ __forceinline__ unsigned int warpMaxU32(unsigned int v) {
