@@ -495,9 +495,13 @@ def _describe(r):
         return "-> the flow stopped at x = %.2f m, short of the cube" % r["front"]
     ff = r["free_flow"]
     ratio = "%.2f" % r["force_ratio"] if r["force_ratio"] is not None else "- (no static force left on the cube)"
+    cut = ""
+    if r.get("carried_past_wall"):
+        cut = " (cut short: still carried when the front reached the end wall at %.2f s)" % r["front_at_wall_time"]
+    elif r["cube_at_end"]:
+        cut = " (at the flume's end)"
     return ("-> h_f %.3f m (%s), Fr %.2f, Fr1 %.2f, S_b %.3f m%s, F_peak/F_static %s"
-            % (ff["h_f"], r["submersion"], ff["Fr"], ff["Fr1"], r["travel"],
-               " (at the flume's end)" if r["cube_at_end"] else "", ratio))
+            % (ff["h_f"], r["submersion"], ff["Fr"], ff["Fr1"], r["travel"], cut, ratio))
 
 
 def prepareMain(a):

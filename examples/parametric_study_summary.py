@@ -163,7 +163,7 @@ def main():
         print("%5.2f %6g %7.4f %7.3f %6.2f %6.2f %9.4f %s %9.3f %s%s"
               % (r["AR"], r["L0_hb"], ff["h_f"], ff["v_f"], ff["Fr"], ff["Fr1"], r["travel_L0"], ratio,
                  r["peak_force"], r["submersion"],
-                 " (cube at the flume's end: not in the travel fits)" if not travelled(r) else
+                 " (travel cut short by the end wall: not in the travel fits)" if not travelled(r) else
                  " (still carried at %.2f m/s at the run's end: the travel a lower bound)" % r["speed_end"]
                  if moving(r) else ""))
     for r in sorted((r for r in runs if "block_kinetic_ratio" in r), key=lambda r: (r["AR"], r["L0_hb"])):
