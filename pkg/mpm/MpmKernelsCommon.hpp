@@ -305,6 +305,33 @@ MPM_HD_INLINE void p2gBaseTileSum(int row, int n0, int n1, int n2, const Part& p
   }
 }
 
+// The tiles that reach node gn (grid coordinates) in a grid of nb blocks per axis: block b per
+// axis holds nodes 3b .. 3b + 4, so gn lies in the tiles of b = gn/3 and, when gn % 3 <= 1, of
+// b - 1; the up to 8 blocks have 8 different parity colours. For each colour: slotOf(block) of
+// its block (-1: none, or the block holds no tile this step) in slot[colour], and the node's
+// place in that block's tile (25 n0 + 5 n1 + n2) in local[colour]. Adding the tiles in colour
+// order from zero makes the same additions in the same order as adding each colour's tiles to
+// the grid one colour after another.
+template <typename SlotOf>
+MPM_HD_INLINE void tilesOfNode(const int gn[3], const int nb[3], const SlotOf& slotOf, int slot[8], int local[8]) {
+  for (int k = 0; k < 8; ++k) slot[k] = -1;
+  for (int k = 0; k < 8; ++k) {
+    int b[3], m = 0;
+    bool inside = true;
+    for (int d = 0; d < 3; ++d) {
+      b[d] = gn[d] / 3 - ((k >> (2 - d)) & 1);
+      const int o = gn[d] - 3 * b[d];
+      inside = inside && b[d] >= 0 && b[d] < nb[d] && o < kBlockNodes;
+      m = kBlockNodes * m + o;
+    }
+    if (!inside) continue;
+    const int s = slotOf((b[0] * nb[1] + b[1]) * nb[2] + b[2]);
+    if (s < 0) continue;
+    slot[blockColourOf(b)] = s;
+    local[blockColourOf(b)] = m;
+  }
+}
+
 // Grid velocities of one node (Eq 3): v_old = p/m, v_new = (p + dt f)/m + dt g; an empty node
 // is zeroed (mass included, so grid hooks see it at rest).
 template <typename T>

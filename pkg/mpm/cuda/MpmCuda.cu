@@ -77,10 +77,12 @@ void MpmCuda<T>::allocateGrid() {
   deviceAlloc(&activeTiles_, nBlocks_, bytes_);
   deviceAlloc(&listCounts_, kTileLists, bytes_);
   deviceAlloc(&tileMark_, nBlocks_, bytes_);
+  deviceAlloc(&slotOf_, nBlocks_, bytes_);
   // the state between steps: no active tile, so every node zero
   CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
   CUDA_CHECK(cudaMemset(listCounts_, 0, kTileLists * sizeof(int)));
   CUDA_CHECK(cudaMemset(tileMark_, 0, nBlocks_));
+  CUDA_CHECK(cudaMemset(slotOf_, 0xff, static_cast<std::size_t>(nBlocks_) * sizeof(int)));
   // every cell's particle range empty; from then on each step clears the ones the last one set
   CUDA_CHECK(cudaMemset(cellStart_, 0, static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int)));
   CUDA_CHECK(cudaMemset(cellEnd_, 0, static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int)));
@@ -116,6 +118,7 @@ void MpmCuda<T>::freeDevice() {
   deviceFree(activeTiles_);
   deviceFree(listCounts_);
   deviceFree(tileMark_);
+  deviceFree(slotOf_);
   deviceFree(diagnostics_);
 }
 
@@ -141,11 +144,13 @@ void MpmCuda<T>::freeParticles() {
   for (auto& a : keys_) deviceFree(a);
   for (auto& a : slots_) deviceFree(a);
   deviceFree(sortScratch_);
+  deviceFree(tileScratch_);
+  tileCapacity_ = 0;
   sortScratchBytes_ = 0;
   sorted_ = nullptr;
   bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags) +
            2 * static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int) +
-           static_cast<std::size_t>(nBlocks_) * (2 * sizeof(int) + 1) + kTileLists * sizeof(int) +
+           static_cast<std::size_t>(nBlocks_) * (3 * sizeof(int) + 1) + kTileLists * sizeof(int) +
            params_.terrain.heights.size() * sizeof(T);
   hasFext_ = false;
   forcesIncomplete_ = false;
@@ -197,6 +202,12 @@ void MpmCuda<T>::loadParticles(const ParticleSet& ps) {
     cub::DoubleBuffer<int> v(slots_[0], slots_[1]);
     CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sortScratchBytes_, k, v, static_cast<int>(n), 0, keyBits_));
     deviceAlloc(&sortScratch_, sortScratchBytes_, bytes_);
+  }
+  const std::size_t tiles = std::min<std::size_t>(n, static_cast<std::size_t>(nBlocks_));
+  const std::size_t tileValues = static_cast<std::size_t>(cudak::kTileNodes) * (kNodeVNew + 3);
+  if (n > 0 && tiles * tileValues * sizeof(T) <= kTileScratchBytes) {
+    deviceAlloc(&tileScratch_, tiles * tileValues, bytes_);
+    tileCapacity_ = static_cast<int>(tiles);
   }
   cur_ = 0;
   slotOfValid_ = false;
@@ -431,7 +442,7 @@ void MpmCuda<T>::step(double dt) {
   // Only the last step's active tiles hold non-zero values; the lists are then built anew.
   cudak::clearTilesKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
   CUDA_CHECK(cudaGetLastError());
-  cudak::clearRangesKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, cellStart_, cellEnd_);
+  cudak::clearRangesKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, cellStart_, cellEnd_, slotOf_);
   CUDA_CHECK(cudaGetLastError());
   CUDA_CHECK(cudaMemsetAsync(listCounts_, 0, kTileLists * sizeof(int)));
   CUDA_CHECK(cudaMemsetAsync(&flags_->firstBad, 0xff, sizeof(flags_->firstBad)));
@@ -445,12 +456,20 @@ void MpmCuda<T>::step(double dt) {
   if (n > 0) {
     sortParticles();
     mark(1);
-    for (int colour = 0; colour < 8; ++colour) {
-      const int count = std::min(bg.colourCapacity(colour), p2gLaunch_);
-      if (count == 0) continue;
-      cudak::p2gBaseKernel<T><<<count, cudak::kBaseThreads>>>(bg, colour, activeLists(), in, sorted_, cellStart_,
-                                                               cellEnd_, grid_, dtT, nodes_);
+    if (tileScratch_) {
+      cudak::p2gTilesKernel<T><<<std::min(tileCapacity_, p2gLaunch_), cudak::kBaseThreads>>>(
+          bg, activeLists(), in, sorted_, cellStart_, cellEnd_, grid_, dtT, tileScratch_, slotOf_);
       CUDA_CHECK(cudaGetLastError());
+      cudak::p2gTileSumsKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, tileScratch_, slotOf_, nodes_, grid_);
+      CUDA_CHECK(cudaGetLastError());
+    } else {
+      for (int colour = 0; colour < 8; ++colour) {
+        const int count = std::min(bg.colourCapacity(colour), p2gLaunch_);
+        if (count == 0) continue;
+        cudak::p2gBaseKernel<T><<<count, cudak::kBaseThreads>>>(bg, colour, activeLists(), in, sorted_, cellStart_,
+                                                                 cellEnd_, grid_, dtT, nodes_);
+        CUDA_CHECK(cudaGetLastError());
+      }
     }
   }
   mark(2);

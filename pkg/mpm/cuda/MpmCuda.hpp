@@ -4,7 +4,9 @@
 //
 // P2G without atomics, in a fixed order: each step the particles are sorted (radix sort) by
 // block of stencil bases, base and number, as the CPU backend bins them, and each block's
-// nodes gather their sums (p2gBaseKernel), the eight parity colours one launch after another.
+// nodes gather their sums (p2gBaseKernel), the eight parity colours one launch after another
+// (a grid small enough to hold a tile of sums for each block the particles could occupy: every
+// block's tile in one launch, then each node adds its tiles in colour order, the same additions).
 // A node's sum therefore has one order: two runs of a scene give the same bits, whatever the
 // storage order (a restart included), and a node is written once per block instead of taking
 // 7 atomic adds per particle. G2P writes each particle into the slot of its sorted place, so
@@ -123,6 +125,13 @@ class MpmCuda : public MpmSolver {
   // CUDA block each, and a colour with more loops over them
   static constexpr int kP2GBlocksPerSM = 16;
   int p2gLaunch_ = 1;
+  // P2G in one launch with a tile of sums per occupied block (p2gTilesKernel, p2gTileSumsKernel),
+  // where a tile for each block that particles could occupy (min(particles, blocks)) fits in
+  // kTileScratchBytes; null: the colour launches. slotOf_: each block's place in it this step.
+  static constexpr std::size_t kTileScratchBytes = std::size_t(512) << 20;
+  T* tileScratch_ = nullptr;
+  int tileCapacity_ = 0;
+  int* slotOf_ = nullptr;
   int numberBits_ = 0;
   int keyBits_ = 0;
   unsigned long long* keys_[2] = {};

@@ -93,67 +93,130 @@ __global__ void binKernel(int n, ParticleIn<T> in, GridConst<T> g, BlockGrid bg,
   slot[s] = s;
 }
 
-// P2G of the blocks of one parity colour, one CUDA block per block of bases at a time, in three
-// rows (o0 = 0, 1, 2 of the bases (o0, o1, o2)): warp 3 o1 + o2 sums the particles of base
-// (row, o1, o2), prepared kBaseChunk at a time into shared memory, into that base's 27 nodes, a
-// lane per node; then thread m of the first 125 adds to tile node m the sums of the row's bases
-// that reach it (p2gBaseTileSum). After the third row it adds its node's sum to the grid. Blocks
-// of one colour share no node, so the adds need no atomics; the colours run one launch after
-// another. The launch is bounded (p2gLaunch), not one CUDA block per block of the colour: the
-// occupied ones are known on the device only, and a long or wide grid has hundreds of thousands
-// of empty blocks per colour, each a CUDA block that would start only to return. Each CUDA block
-// takes occupied blocks blockIdx.x, blockIdx.x + gridDim.x, ... in turn, each summed as before.
+// P2G of one block of bases, with the whole CUDA block, in three rows (o0 = 0, 1, 2 of the bases
+// (o0, o1, o2)): warp 3 o1 + o2 sums the particles of base (row, o1, o2), prepared kBaseChunk at a
+// time into shared memory, into that base's 27 nodes, a lane per node; then thread m of the
+// first 125 adds to tile node m (m = 25 n0 + 5 n1 + n2) the sums of the row's bases that reach
+// it (p2gBaseTileSum). Its tile node's sums in acc; false (and acc untouched) for a block with no
+// particle. Every thread of the CUDA block calls it (it holds barriers).
 constexpr int kBaseWarps = 9;
 constexpr int kBaseThreads = 32 * kBaseWarps;
+constexpr int kTileNodes = kBlockNodes * kBlockNodes * kBlockNodes;
 template <typename T>
 constexpr int kBaseChunk = sizeof(T) == 8 ? 16 : 32;  // double: the shared arrays within 48 kB
+template <typename T>
+struct P2GShared {
+  int range[kBlockCells][2];
+  P2GBaseParticle<T> stage[kBaseWarps][kBaseChunk<T>];
+  T part[kBaseWarps][kBlockCells][kNodeVNew + 3];
+};
+template <typename T>
+__device__ bool p2gBlockTile(int block, ParticleIn<T> in, const int* sorted, const int* start, const int* end,
+                             GridConst<T> g, T dt, P2GShared<T>& sh, T acc[kNodeVNew + 3]) {
+  const int t = threadIdx.x, warp = t / 32, lane = t % 32;
+  const int n0 = t / (kBlockNodes * kBlockNodes), n1 = (t / kBlockNodes) % kBlockNodes, n2 = t % kBlockNodes;
+  const int first = kBlockCells * block;
+  __syncthreads();  // the previous block's ranges and sums have been read
+  if (t < kBlockCells) {
+    sh.range[t][0] = start[first + t];
+    sh.range[t][1] = end[first + t];
+  }
+  if (!__syncthreads_or(t < kBlockCells && sh.range[t][0] < sh.range[t][1])) return false;
+  for (int row = 0; row < 3; ++row) {
+    const int q0 = sh.range[9 * row + warp][0], q1 = sh.range[9 * row + warp][1];
+    T mine[kNodeVNew + 3] = {};
+    for (int q = q0; q < q1; q += kBaseChunk<T>) {
+      const int m = min(kBaseChunk<T>, q1 - q);
+      __syncwarp();  // the previous chunk has been read
+      if (lane < m) p2gBasePrepare(sorted[q + lane], in, g, dt, sh.stage[warp][lane]);
+      __syncwarp();
+      if (lane < kBlockCells)
+        for (int j = 0; j < m; ++j) p2gBaseNodeAdd(sh.stage[warp][j], lane / 9, (lane / 3) % 3, lane % 3, mine);
+    }
+    if (lane < kBlockCells)
+      for (int c = 0; c < kNodeVNew + 3; ++c) sh.part[warp][lane][c] = mine[c];
+    __syncthreads();
+    if (t < kTileNodes)
+      p2gBaseTileSum(row, n0, n1, n2, [&](int o1, int o2, int m) -> const T* { return sh.part[3 * o1 + o2][m]; },
+                     acc);
+    __syncthreads();  // the row's sums have been read
+  }
+  return true;
+}
+
+// P2G of the blocks of one parity colour: each adds its tile to the grid. Blocks of one colour
+// share no node, so the adds need no atomics; the colours run one launch after another. The
+// launch is bounded (p2gLaunch), not one CUDA block per block of the colour: the occupied ones
+// are known on the device only, and a long or wide grid has hundreds of thousands of empty
+// blocks per colour, each a CUDA block that would start only to return. Each CUDA block takes
+// occupied blocks blockIdx.x, blockIdx.x + gridDim.x, ... in turn.
 template <typename T>
 __global__ void __launch_bounds__(kBaseThreads)
     p2gBaseKernel(BlockGrid bg, int colour, ActiveLists lists, ParticleIn<T> in, const int* sorted, const int* start,
                   const int* end, GridConst<T> g, T dt, T* grid) {
-  __shared__ int range[kBlockCells][2];
-  __shared__ P2GBaseParticle<T> stage[kBaseWarps][kBaseChunk<T>];
-  __shared__ T part[kBaseWarps][kBlockCells][kNodeVNew + 3];
-  constexpr int kTile = kBlockNodes * kBlockNodes * kBlockNodes;
-  const int t = threadIdx.x, warp = t / 32, lane = t % 32;
+  __shared__ P2GShared<T> sh;
+  const int t = threadIdx.x;
   const int n0 = t / (kBlockNodes * kBlockNodes), n1 = (t / kBlockNodes) % kBlockNodes, n2 = t % kBlockNodes;
   const int occupied = lists.count[colour];
   for (int q = blockIdx.x; q < occupied; q += gridDim.x) {
     const int block = lists.blocks[bg.colourStart(colour) + q];
+    T acc[kNodeVNew + 3] = {};
+    if (!p2gBlockTile(block, in, sorted, start, end, g, dt, sh, acc)) continue;
     int b[3];
     blockCoordsOf(block, bg.blocks, b);
-    const int first = kBlockCells * block;
-    __syncthreads();  // the previous block's ranges have been read
-    if (t < kBlockCells) {
-      range[t][0] = start[first + t];
-      range[t][1] = end[first + t];
-    }
-    if (!__syncthreads_or(t < kBlockCells && range[t][0] < range[t][1])) continue;
-    T acc[kNodeVNew + 3] = {};
-    for (int row = 0; row < 3; ++row) {
-      const int q0 = range[9 * row + warp][0], q1 = range[9 * row + warp][1];
-      T mine[kNodeVNew + 3] = {};
-      for (int p = q0; p < q1; p += kBaseChunk<T>) {
-        const int m = min(kBaseChunk<T>, q1 - p);
-        __syncwarp();  // the previous chunk has been read
-        if (lane < m) p2gBasePrepare(sorted[p + lane], in, g, dt, stage[warp][lane]);
-        __syncwarp();
-        if (lane < kBlockCells)
-          for (int j = 0; j < m; ++j) p2gBaseNodeAdd(stage[warp][j], lane / 9, (lane / 3) % 3, lane % 3, mine);
-      }
-      if (lane < kBlockCells)
-        for (int c = 0; c < kNodeVNew + 3; ++c) part[warp][lane][c] = mine[c];
-      __syncthreads();
-      if (t < kTile)
-        p2gBaseTileSum(row, n0, n1, n2, [&](int o1, int o2, int m) -> const T* { return part[3 * o1 + o2][m]; }, acc);
-      __syncthreads();  // the row's sums have been read
-    }
     const int g0 = 3 * b[0] + n0, g1 = 3 * b[1] + n1, g2 = 3 * b[2] + n2;
-    if (t < kTile && g0 < g.nodes[0] && g1 < g.nodes[1] && g2 < g.nodes[2]) {
+    if (t < kTileNodes && g0 < g.nodes[0] && g1 < g.nodes[1] && g2 < g.nodes[2]) {
       T* r = grid + kNodeValues * nodeRecordAt(g, g0, g1, g2);
       for (int c = 0; c < kNodeVNew + 3; ++c) r[c] += acc[c];
     }
   }
+}
+
+// The same P2G for a grid small enough to keep every occupied block's tile apart (p2gTileSums
+// then adds them): all colours' occupied blocks in one launch, their tiles' sums into
+// scratch[place] (kTileNodes x (kNodeVNew + 3) values, place = the block's rank among the
+// step's occupied blocks, colour by colour), the place in slotOf[block]. A thin flow's colour
+// launches hold a few dozen blocks each and wait for one another; this one fills the device.
+template <typename T>
+__global__ void __launch_bounds__(kBaseThreads)
+    p2gTilesKernel(BlockGrid bg, ActiveLists lists, ParticleIn<T> in, const int* sorted, const int* start,
+                   const int* end, GridConst<T> g, T dt, T* scratch, int* slotOf) {
+  __shared__ P2GShared<T> sh;
+  const int t = threadIdx.x;
+  int total = 0;
+  for (int colour = 0; colour < 8; ++colour) total += lists.count[colour];
+  for (int q = blockIdx.x; q < total; q += gridDim.x) {
+    int colour = 0, rank = q;
+    while (rank >= lists.count[colour]) rank -= lists.count[colour++];
+    const int block = lists.blocks[bg.colourStart(colour) + rank];
+    T acc[kNodeVNew + 3] = {};
+    p2gBlockTile(block, in, sorted, start, end, g, dt, sh, acc);
+    if (t < kTileNodes) {
+      T* s = scratch + (static_cast<std::size_t>(q) * kTileNodes + t) * (kNodeVNew + 3);
+      for (int c = 0; c < kNodeVNew + 3; ++c) s[c] = acc[c];
+    }
+    if (t == 0) slotOf[block] = q;
+  }
+}
+
+// Each active node's sum of the tiles that reach it (tilesOfNode), added in colour order from
+// zero: the same additions, in the same order, as the colour launches of p2gBaseKernel make.
+template <typename T>
+__global__ void p2gTileSumsKernel(ActiveLists a, BlockGrid bg, const T* scratch, const int* slotOf, T* grid,
+                                  GridConst<T> g) {
+  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) {
+    const int gn[3] = {node / (g.nodes[1] * g.nodes[2]), (node / g.nodes[2]) % g.nodes[1], node % g.nodes[2]};
+    int slot[8], local[8];
+    tilesOfNode(gn, bg.blocks, [slotOf](int block) { return slotOf[block]; }, slot, local);
+    T sum[kNodeVNew + 3] = {};
+    for (int colour = 0; colour < 8; ++colour) {
+      if (slot[colour] < 0) continue;
+      const T* s = scratch + (static_cast<std::size_t>(slot[colour]) * kTileNodes + local[colour]) * (kNodeVNew + 3);
+      for (int c = 0; c < kNodeVNew + 3; ++c) sum[c] += s[c];
+    }
+    T* r = grid + kNodeValues * nodeRecord(g, node);
+    for (int c = 0; c < kNodeVNew + 3; ++c) r[c] = sum[c];
+  });
 }
 
 // The grid update (gridKernel), or its two halves with the grid hooks launched between them,
@@ -182,16 +245,18 @@ __global__ void clearTilesKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst
   });
 }
 
-// The cell ranges the last sort wrote (those of its occupied blocks) set back to empty: the next
-// sort writes only the cells it fills, and clearing every cell of a long or wide grid each step
-// would move 8 bytes a cell.
-__global__ inline void clearRangesKernel(ActiveLists a, BlockGrid bg, int* start, int* end) {
+// The cell ranges the last sort wrote (those of its occupied blocks) set back to empty, and their
+// places in the tiles' scratch forgotten: the next sort writes only the cells it fills, and
+// clearing every cell of a long or wide grid each step would move 8 bytes a cell.
+__global__ inline void clearRangesKernel(ActiveLists a, BlockGrid bg, int* start, int* end, int* slotOf) {
   for (int colour = 0; colour < 8; ++colour) {
     const int cells = kBlockCells * a.count[colour], base = bg.colourStart(colour);
     for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < cells; i += gridDim.x * blockDim.x) {
-      const std::size_t cell = static_cast<std::size_t>(kBlockCells) * a.blocks[base + i / kBlockCells] + i % kBlockCells;
+      const int block = a.blocks[base + i / kBlockCells];
+      const std::size_t cell = static_cast<std::size_t>(kBlockCells) * block + i % kBlockCells;
       start[cell] = 0;
       end[cell] = 0;
+      if (i % kBlockCells == 0) slotOf[block] = -1;  // its place in p2gTilesKernel's scratch
     }
   }
 }

@@ -254,3 +254,68 @@ TEST(P2GTiles, TheGatherGivesTheCpuBackendsNodeMasses) {
   }
   EXPECT_GT(compared, 600);
 }
+
+// The CUDA backend's one-launch P2G for small grids (p2gTilesKernel, p2gTileSumsKernel): every
+// occupied block's tile summed apart, then each node adding the tiles that reach it
+// (tilesOfNode) in colour order from zero. In a grid of 4 x 3 x 5 blocks with about half of them
+// occupied and random tiles of widely spread magnitudes (so that any other order of the additions
+// changes bits), every node equals, bit for bit, the grid that adding the tiles colour by colour
+// (p2gBaseKernel's launches) leaves; a node of a grid with every block occupied is reached by 8
+// tiles inside, fewer at the faces.
+TEST(P2GTiles, EachNodeAddingItsTilesInColourOrderIsTheColourLaunches) {
+  const int cells[3] = {10, 7, 13};
+  const int nb[3] = {blocksAlong(cells[0]), blocksAlong(cells[1]), blocksAlong(cells[2])};
+  const int nodes[3] = {cells[0] + 1, cells[1] + 1, cells[2] + 1};
+  ASSERT_EQ(nb[0] * nb[1] * nb[2], 60);
+  constexpr int kTile = kBlockNodes * kBlockNodes * kBlockNodes, kV = kNodeVNew + 3;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), e(-12.0, 12.0);
+  const int nBlocks = nb[0] * nb[1] * nb[2];
+  for (const bool every : {false, true}) {
+    std::vector<int> slotOf(nBlocks, -1);
+    std::vector<double> tiles;
+    for (int b = 0; b < nBlocks; ++b)
+      if (every || rng() % 2) {
+        slotOf[b] = static_cast<int>(tiles.size() / (kTile * kV));
+        for (int k = 0; k < kTile * kV; ++k) tiles.push_back(u(rng) * std::pow(10.0, e(rng)));
+      }
+    const std::size_t nNodes = static_cast<std::size_t>(nodes[0]) * nodes[1] * nodes[2];
+    std::vector<double> byColour(nNodes * kV, 0.0);
+    for (int colour = 0; colour < 8; ++colour)
+      for (int b = 0; b < nBlocks; ++b) {
+        int c[3];
+        blockCoordsOf(b, nb, c);
+        if (slotOf[b] < 0 || blockColourOf(c) != colour) continue;
+        for (int t = 0; t < kTile; ++t) {
+          const int g0 = 3 * c[0] + t / 25, g1 = 3 * c[1] + (t / 5) % 5, g2 = 3 * c[2] + t % 5;
+          if (g0 >= nodes[0] || g1 >= nodes[1] || g2 >= nodes[2]) continue;
+          for (int v = 0; v < kV; ++v)
+            byColour[((static_cast<std::size_t>(g0) * nodes[1] + g1) * nodes[2] + g2) * kV + v] +=
+                tiles[(static_cast<std::size_t>(slotOf[b]) * kTile + t) * kV + v];
+        }
+      }
+    int most = 0, least = 8, differing = 0;
+    for (int g0 = 0; g0 < nodes[0]; ++g0)
+      for (int g1 = 0; g1 < nodes[1]; ++g1)
+        for (int g2 = 0; g2 < nodes[2]; ++g2) {
+          const int gn[3] = {g0, g1, g2};
+          int slot[8], local[8];
+          tilesOfNode(gn, nb, [&](int b) { return slotOf[b]; }, slot, local);
+          double sum[kV] = {};
+          int reached = 0;
+          for (int colour = 0; colour < 8; ++colour) {
+            if (slot[colour] < 0) continue;
+            ++reached;
+            for (int v = 0; v < kV; ++v) sum[v] += tiles[(static_cast<std::size_t>(slot[colour]) * kTile + local[colour]) * kV + v];
+          }
+          most = std::max(most, reached), least = std::min(least, reached);
+          const std::size_t node = (static_cast<std::size_t>(g0) * nodes[1] + g1) * nodes[2] + g2;
+          for (int v = 0; v < kV; ++v) differing += sum[v] != byColour[node * kV + v];
+        }
+    EXPECT_EQ(differing, 0) << (every ? "every block occupied" : "half the blocks occupied");
+    if (every) {
+      EXPECT_EQ(most, 8);
+      EXPECT_EQ(least, 1);  // the corner node (0, 0, 0)
+    }
+  }
+}
