@@ -203,18 +203,26 @@ stage bench_mpm 240 python3 scripts/bench/bench_mpm.py --exe "$bin/mpmsdem-run" 
 flume full_cpu_4000 120 "$full" cpu double --steps 4000
 flume full_cuda_4000 60 "$full" cuda double --steps 4000
 [ -n "$baseline" ] && FLUME_EXE=$baseline/mpmsdem-run flume full_cuda_4000_baseline 60 "$full" cuda double --steps 4000
-# The new build against the baseline on the same 4,000 steps: the same results but for the timings?
-[ -n "$baseline" ] && stage baseline_same 10 python3 - "$out/full_cuda_4000.json" "$out/full_cuda_4000_baseline.json" <<'PY'
+# same_results LABEL A B [KEY...]: whether two --bench JSON lines hold the same results, their
+# timings and the KEYs aside (the differing keys if not), and each run's coupling share
+same_results() {
+  python3 - "$@" <<'PY'
 import json, sys
-a, b = (json.load(open(f)) for f in sys.argv[1:3])
-timing = lambda k: "second" in k or "per_s" in k or k in ("bytes_per_particle",)
-drop = lambda r: {k: v for k, v in r.items() if not timing(k)}
-print("the flume's 4,000 CUDA steps, new against the baseline:", "the same results" if drop(a) == drop(b) else
-      "differ: %s" % {k: (drop(a).get(k), drop(b).get(k)) for k in set(drop(a)) | set(drop(b)) if drop(a).get(k) != drop(b).get(k)})
-new, old = a["stage_seconds"], b["stage_seconds"]
-print("coupling / MPM step: new %.2f, baseline %.2f; coupling new/old time %.2f" % (
-    new["coupling"] / new["mpm"], old["coupling"] / old["mpm"], new["coupling"] / old["coupling"]))
+label, (a, b), ignored = sys.argv[1], (json.load(open(f)) for f in sys.argv[2:4]), set(sys.argv[4:])
+drop = lambda r: {k: v for k, v in r.items() if "second" not in k and "per_s" not in k and k not in ignored}
+da, db = drop(a), drop(b)
+print(label + ":", "the same results" if da == db else
+      "differ: %s" % {k: (da.get(k), db.get(k)) for k in set(da) | set(db) if da.get(k) != db.get(k)})
+if all("coupling" in r.get("stage_seconds", {}) for r in (a, b)):
+    new, old = a["stage_seconds"], b["stage_seconds"]
+    print("coupling / MPM step: %.2f and %.2f; coupling time %.2f of the second's" % (
+        new["coupling"] / new["mpm"], old["coupling"] / old["mpm"], new["coupling"] / old["coupling"]))
 PY
+}
+export -f same_results
+# The new build against the baseline on the same 4,000 steps (its memory may differ)
+[ -n "$baseline" ] && stage baseline_same 10 same_results "the flume's 4,000 CUDA steps, new against the baseline" \
+  "$out/full_cuda_4000.json" "$out/full_cuda_4000_baseline.json" bytes_per_particle
 flume full_cuda_double 120 "$full" cuda double
 flume full_cuda_float 120 "$full" cuda float
 flume coarse_cpu_double 120 "$coarse" cpu double
@@ -222,12 +230,8 @@ flume coarse_cuda_double 60 "$coarse" cuda double
 flume coarse_cuda_double_again 60 "$coarse" cuda double
 flume coarse_cuda_float 60 "$coarse" cuda float
 # Equal JSON lines but for the timings: the two CUDA runs gave the same travels and forces.
-stage cuda_repeat 10 python3 - "$out/coarse_cuda_double.json" "$out/coarse_cuda_double_again.json" <<'PY'
-import json, sys
-a, b = (json.load(open(f)) for f in sys.argv[1:3])
-drop = lambda r: {k: v for k, v in r.items() if "second" not in k and "per_s" not in k}
-print("two CUDA double runs of the coarse flume:", "the same results" if drop(a) == drop(b) else "differ: %s / %s" % (drop(a), drop(b)))
-PY
+stage cuda_repeat 10 same_results "two CUDA double runs of the coarse flume" "$out/coarse_cuda_double.json" \
+  "$out/coarse_cuda_double_again.json"
 # dam_scene SIZE: bench_mpm.py's dam break of about SIZE points, written to $out/damSIZE.json
 dam_scene() {
   python3 -c "import json, sys; sys.path.insert(0, 'scripts/bench'); import bench_mpm; \
