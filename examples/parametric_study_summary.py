@@ -101,8 +101,17 @@ def fitGroups(runs, x):
 
 # Fig 17's dissipated energy at 4.5 s, by (AR, L0/h_b) (§5.3)
 PAPER_DISSIPATED = {(3.0, 4): 0.77, (3.0, 24): 0.73}
+HALF_WINDOW = 8  # Fig 15's views reach this many h_b up- and downstream of the cube
+# Fig 15's flow height over the cube against h_b, by (AR, L0/h_b): (value, time [s] or None: the largest)
+PAPER_HEIGHT = {(1.3, 4): (2.31, 0.5), (1.3, 54): (0.31, None)}
 # the study's flume and flow (examples/parametric_study.py): width [m], incline [deg], bulk density
 FLUME_WIDTH, INCLINE_DEG, FLOW_DENSITY = 0.2, 10.0, 1600.0
+
+
+def potentialPerMetre(r):
+    """What E_p,0^f of run r gains [J] for each metre down the bed its zero of potential energy
+    moves: the flow's weight times the bed's drop per metre."""
+    return r["L_i"] * r["H_i"] * FLUME_WIDTH * FLOW_DENSITY * 9.81 * math.sin(math.radians(INCLINE_DEG))
 
 
 def paperDatum(runs):
@@ -111,28 +120,20 @@ def paperDatum(runs):
     downstream of the cube's upstream face [m] (ours is zero under the column's upstream end; a
     lower zero adds M g H to E_p,0^f and leaves E_d^f as it is). One distance per case run to
     4.5 s, or {} without them."""
-    s = math.sin(math.radians(INCLINE_DEG))
     out = {}
     for r in runs:
         share = PAPER_DISSIPATED.get((round(r["AR"], 2), r["L0_hb"]))
         if not share or "flow_potential_0" not in r or r["energy"]["t"][-1] < 4.5 - 0.01:
             continue
-        weight = r["L_i"] * r["H_i"] * FLUME_WIDTH * FLOW_DENSITY * 9.81
-        dissipated = r["flow_dissipated_end"] * r["flow_potential_0"]
-        drop = (dissipated / share - r["flow_potential_0"]) / weight
-        out[(round(r["AR"], 2), r["L0_hb"])] = drop / s - (r["L_i"] + r["L0"])
+        gained = r["flow_dissipated_end"] * r["flow_potential_0"] / share - r["flow_potential_0"]
+        out[(round(r["AR"], 2), r["L0_hb"])] = gained / potentialPerMetre(r) - (r["L_i"] + r["L0"])
     return out
 
 
 def blockShareAgainst(r, beyond):
     """E_k,max^b over E_p,0^f with the zero of potential energy on the bed `beyond` [m] past the
     cube's upstream face."""
-    weight = r["L_i"] * r["H_i"] * FLUME_WIDTH * FLOW_DENSITY * 9.81
-    drop = (r["L_i"] + r["L0"] + beyond) * math.sin(math.radians(INCLINE_DEG))
-    return r["block_kinetic_max"] / (r["flow_potential_0"] + weight * drop)
-HALF_WINDOW = 8  # Fig 15's views reach this many h_b up- and downstream of the cube
-# Fig 15's flow height over the cube against h_b, by (AR, L0/h_b): (value, time [s] or None: the largest)
-PAPER_HEIGHT = {(1.3, 4): (2.31, 0.5), (1.3, 54): (0.31, None)}
+    return r["block_kinetic_max"] / (r["flow_potential_0"] + potentialPerMetre(r) * (r["L_i"] + r["L0"] + beyond))
 
 
 def main():
