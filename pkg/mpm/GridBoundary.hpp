@@ -79,12 +79,22 @@ MPM_HD_INLINE int gateBandNode(int t, const GateBand& b) {
   return (i * b.nodes[1] + j) * b.nodes[2] + k;
 }
 
+// The record of the band's t-th node in a grid stored by node columns (GridConst::column,
+// GridView::column; null: the dense layout, the node's index), or -1 where its column is not
+// stored (no material point has reached it: its nodes are empty).
+MPM_HD_INLINE long gateBandRecord(int t, const GateBand& b, const int* column) {
+  const int node = gateBandNode(t, b);
+  if (!column) return node;
+  const int c = node / b.nodes[2];
+  return column[c] < 0 ? -1 : static_cast<long>(column[c]) * b.nodes[2] + (node - c * b.nodes[2]);
+}
+
 // The gate on one node of the band, whose values are element `element` of the grid view's arrays
-// (its index times GridView::stride): a wall facing -x (the velocity component into the gate,
+// (its record times GridView::stride): a wall facing -x (the velocity component into the gate,
 // +x, removed; Coulomb friction mu as for the walls). Returns the impulse the gate gives the
 // node's material this step, m (v_after - v_before) [N s].
 template <typename T>
-MPM_HD_INLINE Vec3T<T> applyGateNode(int element, const T* mass, T* vx, T* vy, T* vz, T mu) {
+MPM_HD_INLINE Vec3T<T> applyGateNode(long element, const T* mass, T* vx, T* vy, T* vz, T mu) {
   const Vec3T<T> before{vx[element], vy[element], vz[element]};
   Vec3T<T> v = before;
   applyWall(v, 0, T(1), mu);

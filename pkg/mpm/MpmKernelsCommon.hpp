@@ -244,6 +244,50 @@ MPM_HD_INLINE int tileNodeOf(int t, int k, const int n[3], const int nodes[3]) {
   return (a * nodes[1] + b) * nodes[2] + d;
 }
 
+// Which node columns a backend stores (GridConst::column). The CPU stores the columns of each
+// step's active tiles as its binning finds them. CUDA learns the active tiles on the device only,
+// so at each step's end it stores the columns near them (columnNearTile): the next step's
+// particles have moved less than a cell, so their blocks are at most one block from this step's,
+// and the tiles those reach lie within one tile of this step's active tiles, along x and y (a
+// column is the grid's whole height). The next step then finds its columns stored without a
+// host round trip; tileColumnsStored checks it.
+constexpr int kColumnsNearTile = 81;  // 9 tiles' (x, y) columns of 3 x 3 node columns each
+
+// Node column r (0 .. kColumnsNearTile - 1) near tile t in a grid of n tiles and `nodes` nodes
+// per axis: column (i, j) of the tile (r / 27 - 1, (r / 9) % 3 - 1) tiles from t along x and y,
+// its node column (r % 9) / 3, r % 3 in that tile. Its index i nodes[1] + j, or -1 outside the grid.
+MPM_HD_INLINE int columnNearTile(int t, int r, const int n[3], const int nodes[3]) {
+  int c[3];
+  blockCoordsOf(t, n, c);
+  const int k = r % 9;
+  const int i = 3 * (c[0] + r / 27 - 1) + k / 3, j = 3 * (c[1] + (r / 9) % 3 - 1) + k % 3;
+  if (i < 0 || j < 0 || i >= nodes[0] || j >= nodes[1]) return -1;
+  return i * nodes[1] + j;
+}
+
+// Whether every node column of tile t is stored (column[] >= 0).
+MPM_HD_INLINE bool tileColumnsStored(int t, const int n[3], const int nodes[3], const int* column) {
+  for (int k = 0; k < 9; ++k) {
+    const int c = columnNearTile(t, 36 + k, n, nodes);  // 36: the tile itself
+    if (c >= 0 && column[c] < 0) return false;
+  }
+  return true;
+}
+
+// The first place q in [lo, hi) of ascending keys whose bits from `shift` up are >= value, or hi:
+// where a value's run of keys starts (CUDA finds the stencil bases' particles in a block's range
+// of the sorted keys so, instead of keeping a range for every cell of the grid).
+MPM_HD_INLINE int firstKeyAtLeast(const unsigned long long* key, int lo, int hi, int shift, unsigned long long value) {
+  while (lo < hi) {
+    const int mid = lo + (hi - lo) / 2;
+    if ((key[mid] >> shift) < value)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo;
+}
+
 // A particle as the gather of its base keeps it: its offset from the base node per axis (the f of
 // Stencil::compute) and P2GParticle's coefficients without those that are always zero (cx, cy,
 // cz are non-zero only for the new momentum, values kNodeVNew..+2).

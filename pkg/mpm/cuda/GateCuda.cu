@@ -14,9 +14,9 @@ constexpr int kThreads = 256;  // a multiple of the warp size (the kernel reduce
 template <typename T>
 void launch(const GridView& g, const GateBand& b, int count, double friction, double* impulse) {
   const int blocks = (count + kThreads - 1) / kThreads;
-  cudak::gateKernel<T><<<blocks, kThreads>>>(b, count, g.stride, static_cast<const T*>(g.mass), static_cast<T*>(g.v[0]),
-                                             static_cast<T*>(g.v[1]), static_cast<T*>(g.v[2]),
-                                             static_cast<T>(friction), impulse);
+  cudak::gateKernel<T><<<blocks, kThreads>>>(b, count, g.stride, g.column, static_cast<const T*>(g.mass),
+                                             static_cast<T*>(g.v[0]), static_cast<T*>(g.v[1]),
+                                             static_cast<T*>(g.v[2]), static_cast<T>(friction), impulse);
   CUDA_CHECK(cudaGetLastError());
 }
 }  // namespace

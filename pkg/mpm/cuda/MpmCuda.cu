@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <sstream>
 
@@ -47,7 +48,7 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
       grid_(makeGridConst<T>(params, 0.0)),
       mat_(makeConstitutiveConst<T>(params.material)),
       maxSpeedAllowed_(blowUpSpeed(params)) {
-  nNodes_ = grid_.nodes[0] * grid_.nodes[1] * grid_.nodes[2];
+  nColumns_ = grid_.nodes[0] * grid_.nodes[1];
   for (int d = 0; d < 3; ++d) blocks_[d] = blocksAlong(params.cells[d]);
   nBlocks_ = blocks_[0] * blocks_[1] * blocks_[2];
   // What a grid too large for the device allocated is given back (a YADE session that tries a
@@ -56,39 +57,37 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
     allocateGrid();
   } catch (const RuntimeFailure& e) {
     freeDevice();
-    const std::size_t grid = static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T);
-    const std::size_t ranges = 2 * static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int);
+    const std::size_t map = static_cast<std::size_t>(nColumns_) * sizeof(int);
+    const std::size_t lists = static_cast<std::size_t>(nBlocks_) * (5 * sizeof(int) + 1);
     std::ostringstream os;
-    os << "the CUDA backend holds the grid of " << params.cells[0] << " x " << params.cells[1] << " x "
-       << params.cells[2] << " cells densely: " << nNodes_ << " nodes, " << grid / 1e9 << " GB of node records and "
-       << ranges / 1e9 << " GB of sorted cell ranges; it did not fit on the device (a smaller grid.cells, float, "
-       << "or the CPU backend, which holds only the node columns the flow reaches): " << e.what();
+    os << "the CUDA backend's index arrays for the grid of " << params.cells[0] << " x " << params.cells[1] << " x "
+       << params.cells[2] << " cells (" << map / 1e9 << " GB of column map, " << lists / 1e9
+       << " GB of block lists) did not fit on the device (a smaller grid.cells, or the CPU backend): " << e.what();
     throw RuntimeFailure(os.str());
   }
 }
 
 template <typename T>
 void MpmCuda<T>::allocateGrid() {
-  deviceAlloc(&nodes_, static_cast<std::size_t>(kNodeValues) * nNodes_, bytes_);
-  deviceAlloc(&flags_, 1, bytes_);
-  deviceAlloc(&cellStart_, static_cast<std::size_t>(kBlockCells) * nBlocks_, bytes_);
-  deviceAlloc(&cellEnd_, static_cast<std::size_t>(kBlockCells) * nBlocks_, bytes_);
-  deviceAlloc(&colourBlocks_, nBlocks_, bytes_);
-  deviceAlloc(&activeTiles_, nBlocks_, bytes_);
-  deviceAlloc(&listCounts_, kTileLists, bytes_);
-  deviceAlloc(&tileMark_, nBlocks_, bytes_);
-  deviceAlloc(&slotOf_, nBlocks_, bytes_);
-  // the state between steps: no active tile, so every node zero
-  CUDA_CHECK(cudaMemset(nodes_, 0, static_cast<std::size_t>(kNodeValues) * nNodes_ * sizeof(T)));
+  deviceAlloc(&column_, nColumns_, gridBytes_);
+  deviceAlloc(&flags_, 1, gridBytes_);
+  deviceAlloc(&blockStart_, nBlocks_, gridBytes_);
+  deviceAlloc(&blockEnd_, nBlocks_, gridBytes_);
+  deviceAlloc(&colourBlocks_, nBlocks_, gridBytes_);
+  deviceAlloc(&activeTiles_, nBlocks_, gridBytes_);
+  deviceAlloc(&listCounts_, kTileLists, gridBytes_);
+  deviceAlloc(&tileMark_, nBlocks_, gridBytes_);
+  deviceAlloc(&slotOf_, nBlocks_, gridBytes_);
+  // no column stored yet (the pool grows as the particles reach columns); no active tile
+  CUDA_CHECK(cudaMemset(column_, 0xff, static_cast<std::size_t>(nColumns_) * sizeof(int)));
+  CUDA_CHECK(cudaMemset(flags_, 0, sizeof(StepFlags)));
   CUDA_CHECK(cudaMemset(listCounts_, 0, kTileLists * sizeof(int)));
   CUDA_CHECK(cudaMemset(tileMark_, 0, nBlocks_));
   CUDA_CHECK(cudaMemset(slotOf_, 0xff, static_cast<std::size_t>(nBlocks_) * sizeof(int)));
-  // every cell's particle range empty; from then on each step clears the ones the last one set
-  CUDA_CHECK(cudaMemset(cellStart_, 0, static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int)));
-  CUDA_CHECK(cudaMemset(cellEnd_, 0, static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int)));
+  grid_.column = column_;
   if (params_.terrain.enabled()) {
     const std::vector<T> z(params_.terrain.heights.begin(), params_.terrain.heights.end());
-    deviceAlloc(&terrain_, z.size(), bytes_);
+    deviceAlloc(&terrain_, z.size(), gridBytes_);
     CUDA_CHECK(cudaMemcpy(terrain_, z.data(), z.size() * sizeof(T), cudaMemcpyHostToDevice));
     grid_.terrain.z = terrain_;
   }
@@ -110,10 +109,11 @@ void MpmCuda<T>::freeDevice() {
   setStageTiming(false);
   freeParticles();
   deviceFree(nodes_);
+  deviceFree(column_);
   deviceFree(terrain_);
   deviceFree(flags_);
-  deviceFree(cellStart_);
-  deviceFree(cellEnd_);
+  deviceFree(blockStart_);
+  deviceFree(blockEnd_);
   deviceFree(colourBlocks_);
   deviceFree(activeTiles_);
   deviceFree(listCounts_);
@@ -148,10 +148,8 @@ void MpmCuda<T>::freeParticles() {
   tileCapacity_ = 0;
   sortScratchBytes_ = 0;
   sorted_ = nullptr;
-  bytes_ = (static_cast<std::size_t>(kNodeValues) * nNodes_) * sizeof(T) + sizeof(StepFlags) +
-           2 * static_cast<std::size_t>(kBlockCells) * nBlocks_ * sizeof(int) +
-           static_cast<std::size_t>(nBlocks_) * (3 * sizeof(int) + 1) + kTileLists * sizeof(int) +
-           params_.terrain.heights.size() * sizeof(T);
+  sortedKeys_ = nullptr;
+  bytes_ = 0;
   hasFext_ = false;
   forcesIncomplete_ = false;
 }
@@ -178,7 +176,59 @@ void MpmCuda<T>::setParticles(const ParticleSet& ps) {
     throw;
   }
   n_ = ps.size();
+  // the node columns around the particles, so that the first step finds its columns stored
+  beginLists();
+  if (n_ > 0) sortParticles();
+  StepFlags flags;
+  storeColumnsNear(flags, false);
   if (!ps.fext.empty()) setExternalForces(ps.fext);
+}
+
+template <typename T>
+void MpmCuda<T>::storeColumnsNear(StepFlags& flags, bool launched) {
+  const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
+  auto launch = [&] {
+    cudak::storeColumnsNearKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, columnMap(), &flags_->columnsUsed,
+                                                             columnCapacity_);
+    CUDA_CHECK(cudaGetLastError());
+    CUDA_CHECK(cudaMemcpy(&flags, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
+  };
+  if (!launched) launch();
+  if (flags.columnsUsed > columnCapacity_) {
+    const unsigned int before = columnCapacity_;
+    // the places below the old capacity were all given; the columns past it wait unstored
+    CUDA_CHECK(cudaMemcpy(&flags_->columnsUsed, &before, sizeof(before), cudaMemcpyHostToDevice));
+    growColumns(flags.columnsUsed);
+    launch();
+  }
+  columnsStored_ = flags.columnsUsed;
+}
+
+template <typename T>
+void MpmCuda<T>::growColumns(unsigned int needed) {
+  // half as many again as needed: a flow spreading over new ground grows the pool a few times, not every step
+  const std::size_t capacity = std::min<std::size_t>(nColumns_, needed + needed / 2);
+  const std::size_t column = static_cast<std::size_t>(kNodeValues) * grid_.nodes[2];  // values a column
+  T* pool = nullptr;
+  std::size_t bytes = 0;
+  try {
+    deviceAlloc(&pool, capacity * column, bytes);
+  } catch (const RuntimeFailure& e) {
+    std::ostringstream os;
+    os << "the flow has reached " << needed << " node columns of the " << params_.cells[0] << " x "
+       << params_.cells[1] << " x " << params_.cells[2] << "-cell grid (" << grid_.nodes[2] << " nodes each, "
+       << needed * column * sizeof(T) / 1e9 << " GB of node records in " << name()
+       << "); they did not fit on the device beside the rest (fewer cells along z, float, fewer particles, or the "
+       << "CPU backend): " << e.what();
+    throw RuntimeFailure(os.str());
+  }
+  if (nodes_)
+    CUDA_CHECK(cudaMemcpy(pool, nodes_, columnCapacity_ * column * sizeof(T), cudaMemcpyDeviceToDevice));
+  CUDA_CHECK(cudaMemset(pool + columnCapacity_ * column, 0, (capacity - columnCapacity_) * column * sizeof(T)));
+  deviceFree(nodes_);
+  nodes_ = pool;
+  gridBytes_ += bytes - columnCapacity_ * column * sizeof(T);
+  columnCapacity_ = static_cast<unsigned int>(capacity);
 }
 
 template <typename T>
@@ -347,7 +397,7 @@ double MpmCuda<T>::stableTimeStep() {
 
 template <typename T>
 std::size_t MpmCuda<T>::memoryBytes() const {
-  return bytes_;
+  return gridBytes_ + bytes_;
 }
 
 template <typename T>
@@ -409,7 +459,25 @@ ParticleOut<T> MpmCuda<T>::output() const {
 template <typename T>
 cudak::ActiveLists MpmCuda<T>::activeLists() const {
   static_assert(kTileLists == cudak::kTilesCount + 1, "a count per colour and one for the tiles");
-  return {colourBlocks_, activeTiles_, listCounts_, tileMark_};
+  return {colourBlocks_, activeTiles_, listCounts_, tileMark_, blockStart_, blockEnd_};
+}
+
+template <typename T>
+cudak::ColumnMap MpmCuda<T>::columnMap() const {
+  return {column_, {grid_.nodes[0], grid_.nodes[1], grid_.nodes[2]}};
+}
+
+template <typename T>
+void MpmCuda<T>::beginLists() {
+  const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
+  // Only the last lists' tiles hold non-zero values, and only their blocks a place in the tiles' scratch.
+  cudak::clearTilesKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
+  CUDA_CHECK(cudaGetLastError());
+  if (tileScratch_) {
+    cudak::forgetTileSlotsKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, slotOf_);
+    CUDA_CHECK(cudaGetLastError());
+  }
+  CUDA_CHECK(cudaMemsetAsync(listCounts_, 0, kTileLists * sizeof(int)));
 }
 
 template <typename T>
@@ -423,13 +491,13 @@ void MpmCuda<T>::sortParticles() {
   cub::DoubleBuffer<unsigned long long> k(keys_[0], keys_[1]);
   cub::DoubleBuffer<int> v(slots_[0], slots_[1]);
   CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_, sortScratchBytes_, k, v, n, 0, keyBits_));
-  sortedkeys::rangesKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, cellStart_, cellEnd_);
-  CUDA_CHECK(cudaGetLastError());
-  cudak::occupiedBlocksKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, bg, activeLists());
+  cudak::occupiedBlocksKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, bg, activeLists(),
+                                                            columnMap(), &flags_->columnsMissing);
   CUDA_CHECK(cudaGetLastError());
   cudak::activeTilesKernel<<<blocksFor(nBlocks_), kThreads>>>(nBlocks_, activeLists());
   CUDA_CHECK(cudaGetLastError());
   sorted_ = v.Current();
+  sortedKeys_ = k.Current();
 }
 
 template <typename T>
@@ -439,14 +507,11 @@ void MpmCuda<T>::step(double dt) {
   const int n = static_cast<int>(n_);
   const T dtT = static_cast<T>(dt);
   const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
-  // Only the last step's active tiles hold non-zero values; the lists are then built anew.
-  cudak::clearTilesKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
-  CUDA_CHECK(cudaGetLastError());
-  cudak::clearRangesKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, cellStart_, cellEnd_, slotOf_);
-  CUDA_CHECK(cudaGetLastError());
-  CUDA_CHECK(cudaMemsetAsync(listCounts_, 0, kTileLists * sizeof(int)));
+  beginLists();
   CUDA_CHECK(cudaMemsetAsync(&flags_->firstBad, 0xff, sizeof(flags_->firstBad)));
-  CUDA_CHECK(cudaMemsetAsync(&flags_->maxSpeedBits, 0, sizeof(flags_->maxSpeedBits)));
+  static_assert(offsetof(StepFlags, columnsMissing) == offsetof(StepFlags, maxSpeedBits) + sizeof(unsigned int),
+                "one memset clears both");
+  CUDA_CHECK(cudaMemsetAsync(&flags_->maxSpeedBits, 0, 2 * sizeof(unsigned int)));
   const ParticleIn<T> in = input();
   const ParticleOut<T> out = output();
   auto mark = [this](int k) {
@@ -458,7 +523,7 @@ void MpmCuda<T>::step(double dt) {
     mark(1);
     if (tileScratch_) {
       cudak::p2gTilesKernel<T><<<std::min(tileCapacity_, p2gLaunch_), cudak::kBaseThreads>>>(
-          bg, activeLists(), in, sorted_, cellStart_, cellEnd_, grid_, dtT, tileScratch_, slotOf_);
+          bg, activeLists(), in, sorted_, sortedKeys_, numberBits_, grid_, dtT, tileScratch_, slotOf_);
       CUDA_CHECK(cudaGetLastError());
       cudak::p2gTileSumsKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, tileScratch_, slotOf_, nodes_, grid_);
       CUDA_CHECK(cudaGetLastError());
@@ -466,8 +531,9 @@ void MpmCuda<T>::step(double dt) {
       for (int colour = 0; colour < 8; ++colour) {
         const int count = std::min(bg.colourCapacity(colour), p2gLaunch_);
         if (count == 0) continue;
-        cudak::p2gBaseKernel<T><<<count, cudak::kBaseThreads>>>(bg, colour, activeLists(), in, sorted_, cellStart_,
-                                                                 cellEnd_, grid_, dtT, nodes_);
+        cudak::p2gBaseKernel<T><<<count, cudak::kBaseThreads>>>(bg, colour, activeLists(), in, sorted_,
+                                                                 sortedKeys_, numberBits_, grid_, dtT, nodes_,
+                                                                 &flags_->columnsMissing);
         CUDA_CHECK(cudaGetLastError());
       }
     }
@@ -483,7 +549,8 @@ void MpmCuda<T>::step(double dt) {
     view.precision = sizeof(T) == sizeof(float) ? Precision::Float : Precision::Double;
     view.device = true;
     view.stride = kNodeValues;
-    view.storedNodes = nNodes_;
+    view.column = column_;
+    view.storedNodes = static_cast<long>(columnsStored_) * grid_.nodes[2];
     view.mass = nodes_ + kNodeMass;
     for (int d = 0; d < 3; ++d) view.v[d] = nodes_ + kNodeVNew + d;
     applyGridHooks(view);
@@ -500,12 +567,26 @@ void MpmCuda<T>::step(double dt) {
   if (n > 0) {
     const cudak::MovedWith<T> moved{next.mass, next.vol0, next.id};
     cudak::g2pKernel<T><<<blocksFor(n_), kThreads>>>(n, in, out, moved, sorted_, nodes_, grid_, sc, &flags_->firstBad,
-                                                     &flags_->maxSpeedBits);
+                                                     &flags_->maxSpeedBits, &flags_->columnsMissing);
     CUDA_CHECK(cudaGetLastError());
   }
   mark(4);
+  // the columns the next step's particles can reach (they move less than a cell), in the copy back
+  // of the flags that every step waits for
+  cudak::storeColumnsNearKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, columnMap(), &flags_->columnsUsed,
+                                                           columnCapacity_);
+  CUDA_CHECK(cudaGetLastError());
   StepFlags res;
   CUDA_CHECK(cudaMemcpy(&res, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
+  storeColumnsNear(res, true);
+  if (res.columnsMissing) {
+    std::ostringstream os;
+    os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name()
+       << "): material points reached node columns that were not stored: they moved more than three cells "
+       << "in one step (the step " << dt << " s is far above the stable step " << stableTimeStep()
+       << " s). The particle state is kept at the start of this step, and the columns are stored now.";
+    throw RuntimeFailure(os.str());
+  }
   if (events_[0] && n > 0)
     for (int k = 0; k < kStages; ++k) {
       float ms = 0;
@@ -546,7 +627,7 @@ bool MpmCuda<T>::diagnosticSums(const std::array<double, 3>& gravity, const std:
     in.numProbes = static_cast<int>(stations.size());
     if (!diagnostics_) {
       cudak::DiagnosticPartial* p = nullptr;
-      deviceAlloc(&p, cudak::kDiagBlocks + 1, bytes_);
+      deviceAlloc(&p, cudak::kDiagBlocks + 1, gridBytes_);
       diagnostics_ = p;
     }
     auto* partial = static_cast<cudak::DiagnosticPartial*>(diagnostics_);

@@ -14,16 +14,19 @@
 // what setParticles/getParticles index by), and its mass and volume0 move with it. Grid work
 // follows the particles, as on the CPU: the sort's keys give the step's occupied blocks (P2G
 // launches only their work) and the tiles next to them (the only nodes zeroed and updated), so
-// a flow filling a few per cent of a long runout box does not pay for the box.
+// a flow filling a few per cent of a long runout box does not pay for the box. Grid memory
+// follows the flow as on the CPU: only the node columns (i, j) near the particles are stored
+// (GridConst::column), in a pool that grows at a step's end (storeColumnsNear), so a flow in a
+// kilometre-wide domain costs its footprint's columns, not the box.
 //
-// Device memory (T = float, N particles, G grid nodes): particle state double-buffered
-// (x, v, stress, J, gammaDotP, mass, volume0: 16 values, phase 1 byte, number 4 bytes, twice)
-// = 138 bytes/particle; the sort (two keys of 8 bytes, two slots of 4) 24 bytes/particle;
-// + 12 bytes/particle once external forces are set; + kNodeValues (8) values per grid node
-// (32 bytes; at 8 particles per cell 4 bytes/particle for a fully filled grid) and two ints per
-// cell (the sorted ranges of the block cells), two ints and a byte per block of 27 cells (the
-// active lists). Double-buffering makes a failed step leave the
-// previous state intact at no bandwidth cost.
+// Device memory (T = float, N particles, C stored node columns of nz nodes): particle state
+// double-buffered (x, v, stress, J, gammaDotP, mass, volume0: 16 values, phase 1 byte, number 4
+// bytes, twice) = 138 bytes/particle; the sort (two keys of 8 bytes, two slots of 4) 24
+// bytes/particle; + 12 bytes/particle once external forces are set; kNodeValues (8) values per
+// stored node (32 C nz bytes, the pool holding up to half as many columns again); an int per
+// node column of the box (the column map), five ints and a byte per block of 27 cells (the active
+// lists, the blocks' particle ranges and tile places). Double-buffering makes a failed step leave
+// the previous state intact at no bandwidth cost.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -36,6 +39,7 @@ namespace mpmsdem {
 namespace mpm {
 namespace cudak {
 struct ActiveLists;
+struct ColumnMap;
 }
 
 template <typename T>
@@ -78,6 +82,8 @@ class MpmCuda : public MpmSolver {
   struct StepFlags {
     unsigned long long firstBad;  // smallest (number << 32 | slot) of a failing particle, or all ones
     unsigned int maxSpeedBits;    // float bits of the largest particle speed (>= 0, so ordered as uint)
+    unsigned int columnsMissing;  // non-zero: a tile of this step had a node column not stored
+    unsigned int columnsUsed;     // places of the column pool taken (kept from step to step)
   };
   void freeParticles();
   void allocateGrid();  // the grid's arrays, the terrain's heights and the kernels' launch size
@@ -91,8 +97,14 @@ class MpmCuda : public MpmSolver {
   // count values of src for the particles numbered [first, first + count), into host dst
   template <typename U, typename H>
   void gatherByNumber(const U* src, std::size_t first, std::size_t count, std::vector<H>& dst, int stride, int offset);
-  void sortParticles();              // sorted_, cellStart_/End_ and the active lists for this step
+  void beginLists();                 // the last lists' tiles zeroed and slots forgotten, the lists emptied
+  void sortParticles();              // sorted_, sortedKeys_ and the active lists for this step
   cudak::ActiveLists activeLists() const;
+  cudak::ColumnMap columnMap() const;
+  // Stores the node columns near the active tiles (cudak::storeColumnsNearKernel), growing the
+  // pool as they need; `launched`: the kernel has been queued and its count copied into *flags.
+  void storeColumnsNear(StepFlags& flags, bool launched);
+  void growColumns(unsigned int needed);  // a pool of at least `needed` columns, the stored ones kept
 
   MpmParams params_;
   GridConst<T> grid_{};
@@ -104,14 +116,20 @@ class MpmCuda : public MpmSolver {
   int cur_ = 0;
   T* fext_[3] = {};
   bool hasFext_ = false;
+  // The stored node columns: column_ (device, an int per (i, j), -1 where none) gives each its
+  // place in nodes_, a pool of columnCapacity_ columns of nodes[2] records, columnsStored_ taken.
+  int* column_ = nullptr;
+  int nColumns_ = 0;
+  unsigned int columnCapacity_ = 0;
+  unsigned int columnsStored_ = 0;
   T* nodes_ = nullptr;
   T* terrain_ = nullptr;  // the terrain's heights (grid_.terrain.z); null without one
   StepFlags* flags_ = nullptr;
   // P2G order: blocks of stencil bases, the sort's double buffers and its scratch space.
   int blocks_[3];
   int nBlocks_;
-  int* cellStart_ = nullptr;  // per block cell (kBlockCells b + base): its sorted range
-  int* cellEnd_ = nullptr;
+  int* blockStart_ = nullptr;  // an occupied block b's particles: sorted places [blockStart_[b], blockEnd_[b])
+  int* blockEnd_ = nullptr;
   // The step's occupied blocks by colour and active tiles (cudak::ActiveLists); between steps
   // only the active tiles' nodes may be non-zero.
   int* colourBlocks_ = nullptr;
@@ -137,6 +155,7 @@ class MpmCuda : public MpmSolver {
   unsigned long long* keys_[2] = {};
   int* slots_[2] = {};
   const int* sorted_ = nullptr;  // slot of each sorted place, this step
+  const unsigned long long* sortedKeys_ = nullptr;  // their keys
   bool slotOfValid_ = false;      // slots_[0] holds slotsByNumber() of the current state
   unsigned char* sortScratch_ = nullptr;
   std::size_t sortScratchBytes_ = 0;
@@ -146,7 +165,8 @@ class MpmCuda : public MpmSolver {
   double stageTotals_[kStages] = {};
   double maxSpeed_ = 0;
   void* diagnostics_ = nullptr;  // the diagnostics' per-block results and total (allocated at first use)
-  std::size_t bytes_ = 0;
+  std::size_t gridBytes_ = 0;  // the grid's arrays, the column pool and the diagnostics' (kept by setParticles)
+  std::size_t bytes_ = 0;      // the particles' arrays
 };
 
 // Build a CUDA solver in the given precision (params validated by the caller).

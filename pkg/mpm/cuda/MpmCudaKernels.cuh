@@ -30,27 +30,43 @@ struct BlockGrid {
 // the device from the sorted keys: each colour's occupied blocks in its part of `blocks` (from
 // BlockGrid::colourStart), their numbers in count[colour]; the active tiles in `tiles`, their
 // number in count[8]. Lists fill in no fixed order: blocks of one colour share no node and a
-// tile's nodes are updated independently, so no result depends on it.
+// tile's nodes are updated independently, so no result depends on it. An occupied block b's
+// particles are the sorted places [start[b], end[b]) (the entries of other blocks are stale).
 struct ActiveLists {
   int* blocks;
   int* tiles;
   int* count;
   unsigned char* tileMark;  // all zero between steps
+  int* start;
+  int* end;
 };
 constexpr int kTilesCount = 8;  // count[] index of the active tiles
 
-// The first sorted particle of each block lists the block under its colour and marks its tiles.
+// The grid's node columns as the kernels that store and check them see them (GridConst::column).
+struct ColumnMap {
+  int* column;  // the stored column of each (i, j), -1 where none
+  int nodes[3];
+};
+
+// The first sorted particle of each block lists the block under its colour and marks its tiles;
+// the first and last give the block's range. A tile whose node columns are not all stored sets
+// *missing (the step then writes nothing: MpmCuda::step).
 __global__ inline void occupiedBlocksKernel(int n, const unsigned long long* key, int shift, BlockGrid bg,
-                                            ActiveLists a) {
+                                            ActiveLists a, ColumnMap cm, unsigned int* missing) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n) return;
   const int b = static_cast<int>((key[i] >> shift) / kBlockCells);
+  if (i == n - 1 || static_cast<int>((key[i + 1] >> shift) / kBlockCells) != b) a.end[b] = i + 1;
   if (i > 0 && static_cast<int>((key[i - 1] >> shift) / kBlockCells) == b) return;
+  a.start[b] = i;
   int c[3];
   blockCoordsOf(b, bg.blocks, c);
   const int colour = blockColourOf(c);
   a.blocks[bg.colourStart(colour) + atomicAdd(&a.count[colour], 1)] = b;
-  forTilesOfBlock(c, bg.blocks, [&a](int t) { a.tileMark[t] = 1; });
+  forTilesOfBlock(c, bg.blocks, [&](int t) {
+    a.tileMark[t] = 1;
+    if (!tileColumnsStored(t, bg.blocks, cm.nodes, cm.column)) *missing = 1u;
+  });
 }
 
 // The marked tiles as a list; the marks are cleared for the next step.
@@ -61,13 +77,31 @@ __global__ inline void activeTilesKernel(int nTiles, ActiveLists a) {
   a.tiles[atomicAdd(&a.count[kTilesCount], 1)] = t;
 }
 
-// f(node) for every node of the active tiles, a thread per node over the whole launch.
+// f(node) for every node of the active tiles, a thread per node over the whole launch; a node
+// whose column is not stored is left out (a step whose tiles' columns were not all stored
+// writes nothing to them and fails: MpmCuda::step).
 template <typename F>
-__device__ void forActiveTileNodes(const ActiveLists& a, const int tilesPerAxis[3], const int nodes[3], F&& f) {
+__device__ void forActiveTileNodes(const ActiveLists& a, const int tilesPerAxis[3], const int nodes[3],
+                                   const int* column, F&& f) {
   const int total = kBlockCells * a.count[kTilesCount];
   for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < total; i += gridDim.x * blockDim.x) {
     const int node = tileNodeOf(a.tiles[i / kBlockCells], i % kBlockCells, tilesPerAxis, nodes);
-    if (node >= 0) f(node);
+    if (node >= 0 && (!column || column[node / nodes[2]] >= 0)) f(node);
+  }
+}
+
+// At a step's end: the node columns near the step's active tiles (columnNearTile) that are not
+// stored yet get the next places of the column pool (*used of them taken, `capacity` there).
+// A column past the capacity is left unstored, *used still counting it: the host grows the pool
+// to *used, sets *used back to the old capacity and launches this again.
+__global__ inline void storeColumnsNearKernel(ActiveLists a, BlockGrid bg, ColumnMap cm, unsigned int* used,
+                                              unsigned int capacity) {
+  const int total = kColumnsNearTile * a.count[kTilesCount];
+  for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < total; i += gridDim.x * blockDim.x) {
+    const int c = columnNearTile(a.tiles[i / kColumnsNearTile], i % kColumnsNearTile, bg.blocks, cm.nodes);
+    if (c < 0 || cm.column[c] >= 0 || atomicCAS(&cm.column[c], -1, -2) != -1) continue;  // stored, or taken now
+    const unsigned int place = atomicAdd(used, 1u);
+    cm.column[c] = place < capacity ? static_cast<int>(place) : -1;
   }
 }
 
@@ -111,15 +145,17 @@ struct P2GShared {
   T part[kBaseWarps][kBlockCells][kNodeVNew + 3];
 };
 template <typename T>
-__device__ bool p2gBlockTile(int block, ParticleIn<T> in, const int* sorted, const int* start, const int* end,
-                             GridConst<T> g, T dt, P2GShared<T>& sh, T acc[kNodeVNew + 3]) {
+__device__ bool p2gBlockTile(int block, const ActiveLists& lists, const unsigned long long* key, int shift,
+                             ParticleIn<T> in, const int* sorted, GridConst<T> g, T dt, P2GShared<T>& sh,
+                             T acc[kNodeVNew + 3]) {
   const int t = threadIdx.x, warp = t / 32, lane = t % 32;
   const int n0 = t / (kBlockNodes * kBlockNodes), n1 = (t / kBlockNodes) % kBlockNodes, n2 = t % kBlockNodes;
-  const int first = kBlockCells * block;
   __syncthreads();  // the previous block's ranges and sums have been read
-  if (t < kBlockCells) {
-    sh.range[t][0] = start[first + t];
-    sh.range[t][1] = end[first + t];
+  if (t < kBlockCells) {  // base t's particles in the block's range of the sorted keys
+    const unsigned long long cell = static_cast<unsigned long long>(kBlockCells) * block + t;
+    const int hi = lists.end[block];
+    sh.range[t][0] = firstKeyAtLeast(key, lists.start[block], hi, shift, cell);
+    sh.range[t][1] = firstKeyAtLeast(key, sh.range[t][0], hi, shift, cell + 1);
   }
   if (!__syncthreads_or(t < kBlockCells && sh.range[t][0] < sh.range[t][1])) return false;
   for (int row = 0; row < 3; ++row) {
@@ -149,19 +185,22 @@ __device__ bool p2gBlockTile(int block, ParticleIn<T> in, const int* sorted, con
 // launch is bounded (p2gLaunch), not one CUDA block per block of the colour: the occupied ones
 // are known on the device only, and a long or wide grid has hundreds of thousands of empty
 // blocks per colour, each a CUDA block that would start only to return. Each CUDA block takes
-// occupied blocks blockIdx.x, blockIdx.x + gridDim.x, ... in turn.
+// occupied blocks blockIdx.x, blockIdx.x + gridDim.x, ... in turn. Nothing is written in a step
+// whose tiles' columns are not all stored (*missing).
 template <typename T>
 __global__ void __launch_bounds__(kBaseThreads)
-    p2gBaseKernel(BlockGrid bg, int colour, ActiveLists lists, ParticleIn<T> in, const int* sorted, const int* start,
-                  const int* end, GridConst<T> g, T dt, T* grid) {
+    p2gBaseKernel(BlockGrid bg, int colour, ActiveLists lists, ParticleIn<T> in, const int* sorted,
+                  const unsigned long long* key, int shift, GridConst<T> g, T dt, T* grid,
+                  const unsigned int* missing) {
   __shared__ P2GShared<T> sh;
+  if (*missing) return;
   const int t = threadIdx.x;
   const int n0 = t / (kBlockNodes * kBlockNodes), n1 = (t / kBlockNodes) % kBlockNodes, n2 = t % kBlockNodes;
   const int occupied = lists.count[colour];
   for (int q = blockIdx.x; q < occupied; q += gridDim.x) {
     const int block = lists.blocks[bg.colourStart(colour) + q];
     T acc[kNodeVNew + 3] = {};
-    if (!p2gBlockTile(block, in, sorted, start, end, g, dt, sh, acc)) continue;
+    if (!p2gBlockTile(block, lists, key, shift, in, sorted, g, dt, sh, acc)) continue;
     int b[3];
     blockCoordsOf(block, bg.blocks, b);
     const int g0 = 3 * b[0] + n0, g1 = 3 * b[1] + n1, g2 = 3 * b[2] + n2;
@@ -179,8 +218,8 @@ __global__ void __launch_bounds__(kBaseThreads)
 // launches hold a few dozen blocks each and wait for one another; this one fills the device.
 template <typename T>
 __global__ void __launch_bounds__(kBaseThreads)
-    p2gTilesKernel(BlockGrid bg, ActiveLists lists, ParticleIn<T> in, const int* sorted, const int* start,
-                   const int* end, GridConst<T> g, T dt, T* scratch, int* slotOf) {
+    p2gTilesKernel(BlockGrid bg, ActiveLists lists, ParticleIn<T> in, const int* sorted,
+                   const unsigned long long* key, int shift, GridConst<T> g, T dt, T* scratch, int* slotOf) {
   __shared__ P2GShared<T> sh;
   const int t = threadIdx.x;
   int total = 0;
@@ -190,7 +229,7 @@ __global__ void __launch_bounds__(kBaseThreads)
     while (rank >= lists.count[colour]) rank -= lists.count[colour++];
     const int block = lists.blocks[bg.colourStart(colour) + rank];
     T acc[kNodeVNew + 3] = {};
-    p2gBlockTile(block, in, sorted, start, end, g, dt, sh, acc);
+    p2gBlockTile(block, lists, key, shift, in, sorted, g, dt, sh, acc);
     if (t < kTileNodes) {
       T* s = scratch + (static_cast<std::size_t>(q) * kTileNodes + t) * (kNodeVNew + 3);
       for (int c = 0; c < kNodeVNew + 3; ++c) s[c] = acc[c];
@@ -204,7 +243,7 @@ __global__ void __launch_bounds__(kBaseThreads)
 template <typename T>
 __global__ void p2gTileSumsKernel(ActiveLists a, BlockGrid bg, const T* scratch, const int* slotOf, T* grid,
                                   GridConst<T> g) {
-  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) {
+  forActiveTileNodes(a, bg.blocks, g.nodes, g.column, [=](int node) {
     const int gn[3] = {node / (g.nodes[1] * g.nodes[2]), (node / g.nodes[2]) % g.nodes[1], node % g.nodes[2]};
     int slot[8], local[8];
     tilesOfNode(gn, bg.blocks, [slotOf](int block) { return slotOf[block]; }, slot, local);
@@ -223,41 +262,36 @@ __global__ void p2gTileSumsKernel(ActiveLists a, BlockGrid bg, const T* scratch,
 // over the active tiles' nodes.
 template <typename T>
 __global__ void gridKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<T> g, T dt) {
-  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) { gridNodeUpdate(node, grid, g, dt); });
+  forActiveTileNodes(a, bg.blocks, g.nodes, g.column, [=](int node) { gridNodeUpdate(node, grid, g, dt); });
 }
 
 template <typename T>
 __global__ void gridVelocityKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<T> g, T dt) {
-  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) { gridNodeVelocity(node, grid, g, dt); });
+  forActiveTileNodes(a, bg.blocks, g.nodes, g.column, [=](int node) { gridNodeVelocity(node, grid, g, dt); });
 }
 
 template <typename T>
 __global__ void gridWallsKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<T> g) {
-  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) { gridNodeWalls(node, grid, g); });
+  forActiveTileNodes(a, bg.blocks, g.nodes, g.column, [=](int node) { gridNodeWalls(node, grid, g); });
 }
 
 // The last step's active tiles back to zero before P2G (every other node is zero).
 template <typename T>
 __global__ void clearTilesKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst<T> g) {
-  forActiveTileNodes(a, bg.blocks, g.nodes, [=](int node) {
+  forActiveTileNodes(a, bg.blocks, g.nodes, g.column, [=](int node) {
     T* r = grid + kNodeValues * nodeRecord(g, node);
     for (int c = 0; c < kNodeValues; ++c) r[c] = T(0);
   });
 }
 
-// The cell ranges the last sort wrote (those of its occupied blocks) set back to empty, and their
-// places in the tiles' scratch forgotten: the next sort writes only the cells it fills, and
-// clearing every cell of a long or wide grid each step would move 8 bytes a cell.
-__global__ inline void clearRangesKernel(ActiveLists a, BlockGrid bg, int* start, int* end, int* slotOf) {
+// The last step's occupied blocks' places in p2gTilesKernel's scratch forgotten (every other
+// block's is -1 already): clearing the whole array each step would move 4 bytes a block of a long
+// or wide grid.
+__global__ inline void forgetTileSlotsKernel(ActiveLists a, BlockGrid bg, int* slotOf) {
   for (int colour = 0; colour < 8; ++colour) {
-    const int cells = kBlockCells * a.count[colour], base = bg.colourStart(colour);
-    for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < cells; i += gridDim.x * blockDim.x) {
-      const int block = a.blocks[base + i / kBlockCells];
-      const std::size_t cell = static_cast<std::size_t>(kBlockCells) * block + i % kBlockCells;
-      start[cell] = 0;
-      end[cell] = 0;
-      if (i % kBlockCells == 0) slotOf[block] = -1;  // its place in p2gTilesKernel's scratch
-    }
+    const int count = a.count[colour], base = bg.colourStart(colour);
+    for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < count; i += gridDim.x * blockDim.x)
+      slotOf[a.blocks[base + i]] = -1;
   }
 }
 
@@ -280,11 +314,13 @@ __device__ __forceinline__ double warpSum(double v) {
 // The gate on the `count` nodes of its band; one thread per node, the impulse summed per warp
 // and added to impulse[0..2] (blockDim is a multiple of 32, so whole warps reach the sums).
 template <typename T>
-__global__ void gateKernel(GateBand b, int count, int stride, const T* mass, T* vx, T* vy, T* vz, T mu, double* impulse) {
+__global__ void gateKernel(GateBand b, int count, int stride, const int* column, const T* mass, T* vx, T* vy, T* vz,
+                           T mu, double* impulse) {
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   double p[3] = {0.0, 0.0, 0.0};
-  if (t < count) {
-    const Vec3T<T> d = applyGateNode(stride * gateBandNode(t, b), mass, vx, vy, vz, mu);
+  const long r = t < count ? gateBandRecord(t, b, column) : -1;
+  if (r >= 0) {  // (a column no point has reached holds empty nodes and is not stored)
+    const Vec3T<T> d = applyGateNode(stride * r, mass, vx, vy, vz, mu);
     for (int c = 0; c < 3; ++c) p[c] = static_cast<double>(d[c]);
   }
   for (int c = 0; c < 3; ++c) {
@@ -301,7 +337,8 @@ __global__ void gateKernel(GateBand b, int count, int stride, const T* mass, T* 
 template <typename T>
 __global__ void g2pKernel(int n, ParticleIn<T> in, ParticleOut<T> out, MovedWith<T> moved, const int* sorted,
                           const T* grid, GridConst<T> g, StepConst<T> sc, unsigned long long* firstBad,
-                          unsigned int* maxSpeedBits) {
+                          unsigned int* maxSpeedBits, const unsigned int* missing) {
+  if (*missing) return;  // the whole launch: the step fails (MpmCuda::step)
   const int s = blockIdx.x * blockDim.x + threadIdx.x;
   unsigned int bits = 0u;
   if (s < n) {

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -212,31 +213,242 @@ TEST(CpuGrid, NodeRecordsPastTwoToThe28AreAddressedIn64Bits) {
   EXPECT_EQ(nodeRecordAt(g, 1, 1, 2), (1 * 2 + 1) * 401 + 2);
 }
 
-TEST(CudaGrid, AGridTooLargeForTheDeviceIsRefusedAndItsMemoryGivenBack) {
-  // 2001 x 2001 x 501 nodes, a dense grid of 128 GB in double and 16 GB of cell ranges: more than
-  // an H100's or H200's memory. The error names the grid's needs, whatever was allocated before
-  // the failing allocation is freed, and a grid that fits runs next in the same process.
-  if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
-#ifdef MPMSDEM_WITH_CUDA
-  std::size_t freeBefore = 0, total = 0, freeAfter = 0;
-  ASSERT_EQ(cudaMemGetInfo(&freeBefore, &total), cudaSuccess);
-  MpmParams big = testing_scenes::granularColumnParams(0.01, {2000, 2000, 500}, 2e5);
-  try {
-    makeSolver(big, Backend::Cuda, Precision::Double);
-    FAIL() << "a 144 GB grid was allocated";
-  } catch (const RuntimeFailure& e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find("2000 x 2000 x 500 cells densely"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("did not fit on the device"), std::string::npos) << msg;
+namespace {
+
+// The node columns (i nodes[1] + j) of the tiles the particles' blocks reach, found as the CUDA
+// step finds them (forTilesOfBlock of each particle's block).
+std::set<int> columnsOfTilesReached(const ParticleSet& ps, const GridConst<double>& g, const int nb[3]) {
+  std::set<int> columns;
+  for (std::size_t p = 0; p < ps.size(); ++p) {
+    double gc[3];
+    for (int d = 0; d < 3; ++d) gc[d] = (ps.x[3 * p + d] - g.origin[d]) * g.invDx;
+    int c[3];
+    blockCoordsOf(blockCellOf(gc, nb) / kBlockCells, nb, c);
+    forTilesOfBlock(c, nb, [&](int t) {
+      for (int k = 0; k < 9; ++k)
+        if (const int col = columnNearTile(t, 36 + k, nb, g.nodes); col >= 0) columns.insert(col);
+    });
   }
-  ASSERT_EQ(cudaMemGetInfo(&freeAfter, &total), cudaSuccess);
-  EXPECT_GT(freeAfter + (std::size_t(64) << 20), freeBefore);  // nothing held beyond the runtime's own
-  MpmParams prm = testing_scenes::granularColumnParams(0.01, {30, 5, 20}, 2e5);
+  return columns;
+}
+
+}  // namespace
+
+TEST(ColumnsNearTiles, AreTheNineTilesAroundAlongXAndY) {
+  // r = 0 .. 80 names each node column of the 3 x 3 tiles around a tile once (and none along z:
+  // a column is the grid's whole height); at the grid's edges, those outside are -1.
+  const int nb[3] = {5, 4, 3}, nodes[3] = {13, 11, 8};  // 12 x 10 x 7 cells
+  std::set<int> seen;
+  const int inner = (2 * nb[1] + 1) * nb[2] + 1;  // tile (2, 1, 1)
+  for (int r = 0; r < kColumnsNearTile; ++r) {
+    const int c = columnNearTile(inner, r, nb, nodes);
+    ASSERT_GE(c, 0) << r;
+    const int i = c / nodes[1], j = c % nodes[1];
+    EXPECT_GE(i, 3) << r;  // tiles 1 .. 3 along x: node columns 3 .. 11
+    EXPECT_LE(i, 11) << r;
+    EXPECT_GE(j, 0) << r;  // tiles 0 .. 2 along y: node columns 0 .. 8
+    EXPECT_LE(j, 8) << r;
+    seen.insert(c);
+  }
+  EXPECT_EQ(seen.size(), 81u);
+  int inside = 0;  // tile (4, 3, 0): the far corner, nodes 12 and 9 .. 10 its own
+  for (int r = 0; r < kColumnsNearTile; ++r) inside += columnNearTile((4 * nb[1] + 3) * nb[2], r, nb, nodes) >= 0;
+  EXPECT_EQ(inside, 4 * 5);  // node columns 9 .. 12 along x, 6 .. 10 along y
+}
+
+TEST(ColumnsNearTiles, ATileWithAColumnNotStoredIsFound) {
+  const int nb[3] = {3, 3, 2}, nodes[3] = {8, 7, 5};
+  std::vector<int> column(nodes[0] * nodes[1], -1);
+  const int tile = (1 * nb[1] + 2) * nb[2] + 1;  // node columns 3 .. 5 along x, 6 along y (the last)
+  EXPECT_FALSE(tileColumnsStored(tile, nb, nodes, column.data()));
+  for (int i = 3; i <= 5; ++i) column[i * nodes[1] + 6] = i;
+  EXPECT_TRUE(tileColumnsStored(tile, nb, nodes, column.data()));
+  column[4 * nodes[1] + 6] = -1;
+  EXPECT_FALSE(tileColumnsStored(tile, nb, nodes, column.data()));
+  column[4 * nodes[1] + 6] = 0;
+  column[4 * nodes[1] + 5] = -1;  // another tile's column
+  EXPECT_TRUE(tileColumnsStored(tile, nb, nodes, column.data()));
+}
+
+TEST(ColumnsNearTiles, HoldEveryColumnTheNextStepReachesInACollapse) {
+  // The CUDA backend stores at each step's end the columns near that step's tiles and checks at
+  // the next step that its tiles' columns are stored. A column collapsing in a box 4 times its
+  // runout, stepped at the stable step (the points move up to a few tenths of a cell a step),
+  // on the CPU: at every step, the columns the tiles reach lie in those stored so far, and what
+  // is stored follows the flow (a fraction of the box). Also printed: how far a point moved in a step.
+  MpmParams prm = testing_scenes::granularColumnParams(0.01, {120, 30, 20}, 1e4);  // soft: a long stable step
+  ParticleSet ps;
+  seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.05, 0.14}, {2, 2, 2}, ps);
+  for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.0, ps.v[3 * p + 1] = 0.5;  // thrown along x and y
+  const GridConst<double> g = makeGridConst<double>(prm, 0.0);
+  const int nb[3] = {blocksAlong(prm.cells[0]), blocksAlong(prm.cells[1]), blocksAlong(prm.cells[2])};
+  auto s = makeSolver(prm, Backend::Cpu, Precision::Double);
+  s->setParticles(ps);
+  std::vector<int> column(static_cast<std::size_t>(g.nodes[0]) * g.nodes[1], -1);
+  int stored = 0;
+  auto storeNear = [&](const ParticleSet& now) {
+    std::set<int> tiles;
+    for (std::size_t p = 0; p < now.size(); ++p) {
+      double gc[3];
+      for (int d = 0; d < 3; ++d) gc[d] = (now.x[3 * p + d] - g.origin[d]) * g.invDx;
+      int c[3];
+      blockCoordsOf(blockCellOf(gc, nb) / kBlockCells, nb, c);
+      forTilesOfBlock(c, nb, [&tiles](int t) { tiles.insert(t); });
+    }
+    for (int t : tiles)
+      for (int r = 0; r < kColumnsNearTile; ++r)
+        if (const int c = columnNearTile(t, r, nb, g.nodes); c >= 0 && column[c] < 0) column[c] = stored++;
+  };
+  storeNear(ps);  // as setParticles does
+  double maxStep = 0, front0 = 0, front = 0;
+  for (std::size_t p = 0; p < ps.size(); ++p) front0 = std::max(front0, ps.x[3 * p]);
+  ParticleSet before = ps, after;
+  for (int n = 0; n < 600; ++n, before = after) {
+    s->step(0.9 * s->stableTimeStep());
+    s->getParticles(after);
+    for (std::size_t p = 0; p < after.size(); ++p)
+      maxStep = std::max(maxStep,
+                         std::hypot(after.x[3 * p] - before.x[3 * p], after.x[3 * p + 1] - before.x[3 * p + 1]));
+    storeNear(before);  // the step's end: near the tiles the step's particles started in
+    for (int c : columnsOfTilesReached(after, g, nb)) ASSERT_GE(column[c], 0) << "step " << n + 1 << " column " << c;
+    if (n == 599)
+      for (std::size_t p = 0; p < after.size(); ++p) front = std::max(front, after.x[3 * p]);
+  }
+  EXPECT_GT(front - front0, 0.05);           // the column ran out 5 cells and more
+  EXPECT_GT(maxStep, 0.05 * prm.dx);         // the points crossed cells, up to a tenth of one a step
+  EXPECT_LT(maxStep, prm.dx);                // within the stable step's bound
+  EXPECT_LT(stored, static_cast<int>(column.size()) / 2);  // the stored columns follow the flow
+  std::printf("collapse: front %.4f m further, largest step %.3f dx, %d of %zu columns stored\n", front - front0,
+              maxStep / prm.dx, stored, column.size());
+}
+
+TEST(SortedKeys, FirstKeyAtLeastIsWhereAValuesRunStarts) {
+  // Ascending keys (a value above 12 bits of number, as the particles' sort keys): for every value
+  // and sub-range, the first place at or above it is the linear scan's.
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> value(0, 40), number(0, 4095);
+  std::vector<unsigned long long> key(300);
+  for (auto& k : key) k = (static_cast<unsigned long long>(value(rng)) << 12) | number(rng);
+  std::sort(key.begin(), key.end());
+  for (int lo : {0, 17, 150})
+    for (int hi : {lo, lo + 1, 200, 300})
+      for (unsigned long long v = 0; v <= 42; ++v) {
+        int scan = lo;
+        while (scan < hi && (key[scan] >> 12) < v) ++scan;
+        ASSERT_EQ(firstKeyAtLeast(key.data(), lo, hi, 12, v), scan) << lo << " " << hi << " " << v;
+      }
+}
+
+namespace {
+
+#ifdef MPMSDEM_WITH_CUDA
+// The collapsing column of EmptySpaceAroundAFlowChangesNothing in a grid of `cells`, `steps`
+// steps on CUDA in double: its particles at the end and the solver's memory then.
+ParticleSet collapseOnCuda(std::array<int, 3> cells, int steps, std::size_t& bytes) {
+  MpmParams prm = testing_scenes::granularColumnParams(0.01, cells, 2e5);
   ParticleSet ps;
   seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
   auto s = makeSolver(prm, Backend::Cuda, Precision::Double);
   s->setParticles(ps);
-  EXPECT_NO_THROW(s->step(2e-4));
+  for (int n = 0; n < steps; ++n) s->step(2e-4);
+  bytes = s->memoryBytes();
+  ParticleSet out;
+  s->getParticles(out);
+  return out;
+}
+#endif
+
+}  // namespace
+
+TEST(CudaGrid, StoresTheNodeColumnsTheFlowReachedNotTheBox) {
+  // CpuGrid.StoresTheNodeColumnsTheFlowReachedNotTheBox on CUDA: the collapsing column in its box
+  // and in one 100 times as long (a dense grid of 24 MB in double) agree bit for bit; the long
+  // box's solver holds its index arrays and the node columns near the flow, a sixth of the
+  // dense grid.
+  if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
+#ifdef MPMSDEM_WITH_CUDA
+  std::size_t snugBytes = 0, longBytes = 0;
+  const ParticleSet snug = collapseOnCuda({30, 5, 20}, 1000, snugBytes);
+  const ParticleSet far = collapseOnCuda({3000, 5, 20}, 1000, longBytes);
+  EXPECT_TRUE(snug.x == far.x);
+  EXPECT_TRUE(snug.v == far.v);
+  EXPECT_TRUE(snug.stress == far.stress);
+  // the long box: 0.4 MB of index arrays, 2 MB of P2G tile scratch (a tile per particle, 288),
+  // the columns near the flow (at most the snug box's 186 and half again: 0.4 MB), 0.1 MB of points
+  EXPECT_GT(longBytes, snugBytes);
+  EXPECT_LT(longBytes, std::size_t(4) << 20);
+#endif
+}
+
+TEST(CudaGrid, RunsAGridWhoseDenseValuesPassTwoToThe31) {
+  // CpuGrid.RunsAGridWhoseDenseValuesPassTwoToThe31 on CUDA: the collapsing column in a box 22 km
+  // long (a dense grid of 18 GB in double) moves as in its own box, to the bit, in its index arrays
+  // (an int per node column, 21 bytes per block: 2.8e8 bytes) and the columns near the flow.
+  if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
+#ifdef MPMSDEM_WITH_CUDA
+  std::size_t snugBytes = 0, hugeBytes = 0;
+  const ParticleSet snug = collapseOnCuda({30, 5, 20}, 300, snugBytes);
+  const ParticleSet far = collapseOnCuda({2200000, 5, 20}, 300, hugeBytes);
+  EXPECT_TRUE(snug.x == far.x);
+  EXPECT_TRUE(snug.v == far.v);
+  EXPECT_TRUE(snug.stress == far.stress);
+  EXPECT_LT(hugeBytes, std::size_t(350) << 20);
+#endif
+}
+
+TEST(CudaGrid, AFlowReachingMoreColumnsThanTheDeviceHoldsIsRefusedWithItsStateKept) {
+  // A blob sliding across a tall grid (3001 nodes a column: 192 kB of records in double) with
+  // the device filled but for 8 MB: when the column pool has to grow, the step is refused with
+  // what the flow needs, the particles are those of the step's start, and once the memory is
+  // given back the run goes on as one that was never refused, to the bit.
+  if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
+#ifdef MPMSDEM_WITH_CUDA
+  MpmParams prm = testing_scenes::granularColumnParams(0.01, {60, 40, 3000}, 1e4);
+  prm.gravity = {0, 0, 0};
+  ParticleSet ps;
+  seedBox(prm, {0.03, 0.03, 0.03}, {0.09, 0.07, 0.08}, {2, 2, 2}, ps);
+  for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.5, ps.v[3 * p + 1] = 1.0;
+  const double dt = 5e-4;  // 0.075 cells a step along x
+  auto refused = makeSolver(prm, Backend::Cuda, Precision::Double);
+  auto unbroken = makeSolver(prm, Backend::Cuda, Precision::Double);
+  refused->setParticles(ps);
+  unbroken->setParticles(ps);
+  std::size_t freeBytes = 0, total = 0;
+  ASSERT_EQ(cudaMemGetInfo(&freeBytes, &total), cudaSuccess);
+  void* hog = nullptr;
+  for (std::size_t leave = std::size_t(8) << 20; !hog && leave < freeBytes; leave *= 2)
+    if (cudaMalloc(&hog, freeBytes - leave) != cudaSuccess) {
+      hog = nullptr;
+      cudaGetLastError();
+    }
+  ASSERT_NE(hog, nullptr);
+  int failedAt = -1;
+  ParticleSet before, after;
+  for (int n = 0; n < 600 && failedAt < 0; ++n) {
+    refused->getParticles(before);
+    try {
+      refused->step(dt);
+    } catch (const RuntimeFailure& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("node columns"), std::string::npos) << msg;
+      EXPECT_NE(msg.find("did not fit on the device"), std::string::npos) << msg;
+      failedAt = n;
+    }
+  }
+  ASSERT_GE(failedAt, 1) << "the pool had to grow within 600 steps (45 cells along x)";
+  refused->getParticles(after);
+  EXPECT_TRUE(after.x == before.x);
+  EXPECT_TRUE(after.v == before.v);
+  EXPECT_EQ(refused->steps(), failedAt);
+  ASSERT_EQ(cudaFree(hog), cudaSuccess);
+  for (int n = 0; n < failedAt + 100; ++n) unbroken->step(dt);
+  for (int n = failedAt; n < failedAt + 100; ++n) refused->step(dt);
+  ParticleSet a, b;
+  refused->getParticles(a);
+  unbroken->getParticles(b);
+  EXPECT_TRUE(a.x == b.x);
+  EXPECT_TRUE(a.v == b.v);
+  EXPECT_TRUE(a.stress == b.stress);
 #endif
 }
 
