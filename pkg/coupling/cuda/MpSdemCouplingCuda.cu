@@ -4,12 +4,14 @@
 // per step). Particle data never leaves the device.
 //
 // Block sums in a fixed order: the contacts' shares go to a list, are placed in particle-number
-// and contact order by a scan of the particles' contact counts, and each block's are added in
-// that order by a fixed tree, so two runs give the same bits. A step with more contacts than the
+// and contact order by a scan of the particles' contact counts, then sorted stably by block
+// alone, and each block's are added in that order by a fixed tree, so two runs give the same
+// bits. A step with more contacts than the
 // list holds uses sums added atomically (the order of those changes from run to run), and the
 // list grows for the next. The step's flags and sums come back in one copy at its end.
 #include <cuda_runtime.h>
 
+#include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
 
 #include <algorithm>
@@ -250,8 +252,23 @@ class CouplingCuda : public CouplingDeviceBackend {
       cudak::placeKernel<<<kPlaceBlocks, kThreads>>>(flagsD, listCapacity_, key_.ptr, entry_.ptr, first_.ptr,
                                                      numberBits, order_.ptr);
       CUDA_CHECK(cudaGetLastError());
+      // each block's contacts side by side, in that order: a stable sort of the whole list's places
+      // (the count is on the device) by the few bits of the block
+      const unsigned long long blockValues = static_cast<unsigned long long>(numBlocks) + 1;  // and the end mark
+      cudak::blockKeysKernel<<<kPlaceBlocks, kThreads>>>(flagsD, listCapacity_, key_.ptr, order_.ptr, numberBits,
+                                                         static_cast<unsigned long long>(numBlocks), blockKey_[0].ptr);
+      CUDA_CHECK(cudaGetLastError());
+      const int blockBits = sortedkeys::bitsFor(blockValues);
+      std::size_t sortBytes = 0;
+      CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, sortBytes, blockKey_[0].ptr, blockKey_[1].ptr, order_.ptr,
+                                                 byBlock_.ptr, static_cast<int>(listCapacity_), 0, blockBits));
+      sortScratch_.reserve(sortBytes);
+      sortBytes = sortScratch_.capacity;
+      CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_.ptr, sortBytes, blockKey_[0].ptr, blockKey_[1].ptr,
+                                                 order_.ptr, byBlock_.ptr, static_cast<int>(listCapacity_), 0,
+                                                 blockBits));
       cudak::blockSumsKernel<<<numBlocks, cudak::kSumThreads>>>(flagsD, listCapacity_, share_.ptr, key_.ptr,
-                                                                order_.ptr, numberBits, sums_.ptr);
+                                                                blockKey_[1].ptr, byBlock_.ptr, numberBits, sums_.ptr);
       CUDA_CHECK(cudaGetLastError());
     }
     mark(3);
@@ -294,11 +311,14 @@ class CouplingCuda : public CouplingDeviceBackend {
   static constexpr int kPlaceBlocks = 264;
 
   void growList(unsigned long long capacity) {
-    listCapacity_ = static_cast<unsigned int>(std::min<unsigned long long>(capacity, 1ull << 31));
+    // (places are ints)
+    listCapacity_ = static_cast<unsigned int>(std::min<unsigned long long>(capacity, (1ull << 31) - 1));
     share_.reserve(static_cast<std::size_t>(kBlockSums) * listCapacity_);
     key_.reserve(listCapacity_);
     entry_.reserve(listCapacity_);
     order_.reserve(listCapacity_);
+    byBlock_.reserve(listCapacity_);
+    for (auto& k : blockKey_) k.reserve(listCapacity_);
     if (recording_) record_.reserve(static_cast<std::size_t>(kContactValues) * listCapacity_);
   }
 
@@ -339,6 +359,10 @@ class CouplingCuda : public CouplingDeviceBackend {
   DeviceArray<double> record_;  // kContactValues per list entry while recording
   DeviceArray<unsigned long long> key_;
   DeviceArray<int> entry_, order_;
+  // the places of order_ sorted stably by block (byBlock_), their blocks before and after the sort
+  DeviceArray<int> byBlock_;
+  DeviceArray<unsigned long long> blockKey_[2];
+  DeviceArray<unsigned char> sortScratch_;
   std::size_t counted_ = ~std::size_t(0);  // the particles count_ and first_ are sized for
   DeviceArray<int> count_, first_;          // per particle number: contacts, and the scan of them
   DeviceArray<unsigned char> scanScratch_;

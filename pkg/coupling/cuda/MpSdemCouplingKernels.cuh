@@ -1,8 +1,8 @@
 // CUDA kernel of the MP–SDEM coupling: a thin wrapper over the shared coupleParticle().
 #pragma once
-#include <cub/block/block_scan.cuh>
 
 #include "coupling/CouplingKernelsCommon.hpp"
+#include "mpm/MpmKernelsCommon.hpp"
 
 namespace mpmsdem {
 namespace coupling {
@@ -27,9 +27,11 @@ struct AtomicAdd {
 // atomic counter gives it, with its block and particle number (key) and its place among the
 // particle's own contacts (entry, the order the CPU backend adds them in), and each particle's
 // count of contacts by number. A scan of the counts then gives every contact a place that
-// depends on the contacts alone (placeKernel), in particle-number order, and each block adds its
-// contacts in that order (blockSumsKernel): the sums of a sort by block, number and contact order
-// without the sort.
+// depends on the contacts alone (placeKernel), in particle-number order; a stable sort of those
+// places by block alone (blockKeysKernel, then a radix sort of a few bits) gives each block its
+// contacts in that order, side by side, and each block adds them (blockSumsKernel): the sums of a
+// sort by block, number and contact order, without sorting the whole keys and with the count
+// left on the device.
 struct ContactList {
   double* share;            // kBlockSums per entry
   unsigned long long* key;  // block << numberBits | number
@@ -96,17 +98,29 @@ static __global__ void placeKernel(const CouplingFlags* flags, unsigned int capa
     order[first[key[i] & numberMask] + entry[i]] = static_cast<int>(i);
 }
 
-// Block b's sums from its contacts in particle-number order: its r-th contact goes to thread
+// The block of each place of the particle-number order (the key's bits from numberBits up), for
+// the stable sort by block; the places past the step's contacts get numBlocks, after every block.
+// Nothing in a step that overflowed the list.
+static __global__ void blockKeysKernel(const CouplingFlags* flags, unsigned int capacity, const unsigned long long* key,
+                                       const int* order, int numberBits, unsigned long long numBlocks,
+                                       unsigned long long* blockKey) {
+  const unsigned int count = flags->contacts;
+  if (count > capacity) return;
+  for (unsigned int i = blockIdx.x * blockDim.x + threadIdx.x; i < capacity; i += gridDim.x * blockDim.x)
+    blockKey[i] = i < count ? key[order[i]] >> numberBits : numBlocks;
+}
+
+// Block b's sums from its contacts in particle-number order (byBlock: the listed contacts
+// sorted stably by block, blockKey their blocks): its r-th contact goes to thread
 // r mod kSumThreads, which adds its contacts in turn, then a fixed tree adds the threads' sums.
-// The order depends on the contacts alone, not on thread timing. The list is read a chunk at a
-// time: a block scan ranks the chunk's contacts of block b, and shared memory hands each to its
-// thread (a chunk's ranks are consecutive: one contact a thread at most). In a step that
-// overflowed the list the listed shares of block b are added atomically instead (its other
-// contacts were added so in coupleKernel).
+// The order depends on the contacts alone, not on thread timing. In a step that overflowed the
+// list the listed shares of block b are added atomically instead (its other contacts were added
+// so in coupleKernel).
 constexpr int kSumThreads = 128;
 static __global__ void __launch_bounds__(kSumThreads)
     blockSumsKernel(const CouplingFlags* flags, unsigned int capacity, const double* share,
-                    const unsigned long long* key, const int* order, int blockShift, double* sums) {
+                    const unsigned long long* key, const unsigned long long* blockKey, const int* byBlock,
+                    int blockShift, double* sums) {
   const unsigned long long b = blockIdx.x;
   const int t = threadIdx.x;
   const unsigned int count = flags->contacts;
@@ -120,28 +134,14 @@ static __global__ void __launch_bounds__(kSumThreads)
       }
     return;
   }
-  using Scan = cub::BlockScan<int, kSumThreads>;
-  __shared__ typename Scan::TempStorage scanStorage;
-  __shared__ int handed[kSumThreads];
   __shared__ double part[kBlockSums][kSumThreads];
-  handed[t] = -1;
-  __syncthreads();  // every slot cleared before the first chunk hands contacts out
+  const int listed = static_cast<int>(count);  // the places past them hold numBlocks
+  const int lo = mpm::firstKeyAtLeast(blockKey, 0, listed, 0, b);
+  const int hi = mpm::firstKeyAtLeast(blockKey, lo, listed, 0, b + 1);
   double acc[kBlockSums] = {};
-  int ranked = 0;  // contacts of block b in the chunks before this one
-  for (unsigned int chunk = 0; chunk < count; chunk += kSumThreads) {
-    int e = chunk + t < count ? order[chunk + t] : -1;
-    if (e >= 0 && key[e] >> blockShift != b) e = -1;
-    int rank, inChunk;
-    Scan(scanStorage).ExclusiveSum(e >= 0 ? 1 : 0, rank, inChunk);
-    if (e >= 0) handed[(ranked + rank) % kSumThreads] = e;
-    __syncthreads();
-    if (handed[t] >= 0) {
-      const double* s = share + static_cast<std::size_t>(kBlockSums) * handed[t];
-      for (int k = 0; k < kBlockSums; ++k) acc[k] += s[k];
-      handed[t] = -1;
-    }
-    ranked += inChunk;
-    __syncthreads();
+  for (int i = lo + t; i < hi; i += kSumThreads) {
+    const double* s = share + static_cast<std::size_t>(kBlockSums) * byBlock[i];
+    for (int k = 0; k < kBlockSums; ++k) acc[k] += s[k];
   }
   for (int k = 0; k < kBlockSums; ++k) part[k][t] = acc[k];
   __syncthreads();

@@ -177,29 +177,39 @@ void MpmCuda<T>::setParticles(const ParticleSet& ps) {
   }
   n_ = ps.size();
   // the node columns around the particles, so that the first step finds its columns stored
-  beginLists();
-  if (n_ > 0) sortParticles();
-  StepFlags flags;
-  storeColumnsNear(flags, false);
+  try {
+    beginLists();
+    if (n_ > 0) sortParticles();
+    StepFlags flags;
+    storeColumnsNear(flags, false);
+  } catch (...) {
+    freeParticles();
+    n_ = 0;
+    throw;
+  }
   if (!ps.fext.empty()) setExternalForces(ps.fext);
 }
 
 template <typename T>
 void MpmCuda<T>::storeColumnsNear(StepFlags& flags, bool launched) {
   const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
-  auto launch = [&] {
-    cudak::storeColumnsNearKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, columnMap(), &flags_->columnsUsed,
-                                                             columnCapacity_);
+  if (!launched) {
+    cudak::storeColumnsNearKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, columnMap(), &flags_->columnsUsed);
     CUDA_CHECK(cudaGetLastError());
     CUDA_CHECK(cudaMemcpy(&flags, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
-  };
-  if (!launched) launch();
+  }
   if (flags.columnsUsed > columnCapacity_) {
-    const unsigned int before = columnCapacity_;
-    // the places below the old capacity were all given; the columns past it wait unstored
-    CUDA_CHECK(cudaMemcpy(&flags_->columnsUsed, &before, sizeof(before), cudaMemcpyHostToDevice));
-    growColumns(flags.columnsUsed);
-    launch();
+    try {
+      growColumns(flags.columnsUsed);
+    } catch (const RuntimeFailure&) {
+      // the pool keeps what it holds: the places past it are taken back
+      const unsigned int capacity = columnCapacity_;
+      cudak::unstoreColumnsPastKernel<<<gridLaunch_, kThreads>>>(nColumns_, static_cast<int>(capacity), column_);
+      CUDA_CHECK_NOTHROW(cudaGetLastError());
+      CUDA_CHECK_NOTHROW(cudaMemcpy(&flags_->columnsUsed, &capacity, sizeof(capacity), cudaMemcpyHostToDevice));
+      columnsStored_ = capacity;
+      throw;
+    }
   }
   columnsStored_ = flags.columnsUsed;
 }
@@ -213,7 +223,11 @@ void MpmCuda<T>::growColumns(unsigned int needed) {
   std::size_t bytes = 0;
   try {
     deviceAlloc(&pool, capacity * column, bytes);
+    if (nodes_)
+      CUDA_CHECK(cudaMemcpy(pool, nodes_, columnCapacity_ * column * sizeof(T), cudaMemcpyDeviceToDevice));
+    CUDA_CHECK(cudaMemset(pool + columnCapacity_ * column, 0, (capacity - columnCapacity_) * column * sizeof(T)));
   } catch (const RuntimeFailure& e) {
+    deviceFree(pool);
     std::ostringstream os;
     os << "the flow has reached " << needed << " node columns of the " << params_.cells[0] << " x "
        << params_.cells[1] << " x " << params_.cells[2] << "-cell grid (" << grid_.nodes[2] << " nodes each, "
@@ -222,9 +236,6 @@ void MpmCuda<T>::growColumns(unsigned int needed) {
        << "CPU backend): " << e.what();
     throw RuntimeFailure(os.str());
   }
-  if (nodes_)
-    CUDA_CHECK(cudaMemcpy(pool, nodes_, columnCapacity_ * column * sizeof(T), cudaMemcpyDeviceToDevice));
-  CUDA_CHECK(cudaMemset(pool + columnCapacity_ * column, 0, (capacity - columnCapacity_) * column * sizeof(T)));
   deviceFree(nodes_);
   nodes_ = pool;
   gridBytes_ += bytes - columnCapacity_ * column * sizeof(T);
@@ -256,8 +267,12 @@ void MpmCuda<T>::loadParticles(const ParticleSet& ps) {
   const std::size_t tiles = std::min<std::size_t>(n, static_cast<std::size_t>(nBlocks_));
   const std::size_t tileValues = static_cast<std::size_t>(cudak::kTileNodes) * (kNodeVNew + 3);
   if (n > 0 && tiles * tileValues * sizeof(T) <= kTileScratchBytes) {
-    deviceAlloc(&tileScratch_, tiles * tileValues, bytes_);
-    tileCapacity_ = static_cast<int>(tiles);
+    try {
+      deviceAlloc(&tileScratch_, tiles * tileValues, bytes_);
+      tileCapacity_ = static_cast<int>(tiles);
+    } catch (const RuntimeFailure&) {
+      tileScratch_ = nullptr;  // a device nearly full: the colour launches need no scratch
+    }
   }
   cur_ = 0;
   slotOfValid_ = false;
@@ -473,10 +488,9 @@ void MpmCuda<T>::beginLists() {
   // Only the last lists' tiles hold non-zero values, and only their blocks a place in the tiles' scratch.
   cudak::clearTilesKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
   CUDA_CHECK(cudaGetLastError());
-  if (tileScratch_) {
-    cudak::forgetTileSlotsKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, slotOf_);
-    CUDA_CHECK(cudaGetLastError());
-  }
+  // (whether or not this particle set has the tiles' scratch: the last one's may have had it)
+  cudak::forgetTileSlotsKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, slotOf_);
+  CUDA_CHECK(cudaGetLastError());
   CUDA_CHECK(cudaMemsetAsync(listCounts_, 0, kTileLists * sizeof(int)));
 }
 
@@ -573,8 +587,7 @@ void MpmCuda<T>::step(double dt) {
   mark(4);
   // the columns the next step's particles can reach (they move less than a cell), in the copy back
   // of the flags that every step waits for
-  cudak::storeColumnsNearKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, columnMap(), &flags_->columnsUsed,
-                                                           columnCapacity_);
+  cudak::storeColumnsNearKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, columnMap(), &flags_->columnsUsed);
   CUDA_CHECK(cudaGetLastError());
   StepFlags res;
   CUDA_CHECK(cudaMemcpy(&res, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));

@@ -91,18 +91,23 @@ __device__ void forActiveTileNodes(const ActiveLists& a, const int tilesPerAxis[
 }
 
 // At a step's end: the node columns near the step's active tiles (columnNearTile) that are not
-// stored yet get the next places of the column pool (*used of them taken, `capacity` there).
-// A column past the capacity is left unstored, *used still counting it: the host grows the pool
-// to *used, sets *used back to the old capacity and launches this again.
-__global__ inline void storeColumnsNearKernel(ActiveLists a, BlockGrid bg, ColumnMap cm, unsigned int* used,
-                                              unsigned int capacity) {
+// stored yet get the next places of the column pool (*used of them taken), each once: the first
+// thread to reach a column takes it (-2 while it draws its place). Places past the pool's
+// capacity are given too; the host grows the pool to *used before any kernel reads the map, or,
+// where it cannot, takes those places back (unstoreColumnsPastKernel).
+__global__ inline void storeColumnsNearKernel(ActiveLists a, BlockGrid bg, ColumnMap cm, unsigned int* used) {
   const int total = kColumnsNearTile * a.count[kTilesCount];
   for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < total; i += gridDim.x * blockDim.x) {
     const int c = columnNearTile(a.tiles[i / kColumnsNearTile], i % kColumnsNearTile, bg.blocks, cm.nodes);
-    if (c < 0 || cm.column[c] >= 0 || atomicCAS(&cm.column[c], -1, -2) != -1) continue;  // stored, or taken now
-    const unsigned int place = atomicAdd(used, 1u);
-    cm.column[c] = place < capacity ? static_cast<int>(place) : -1;
+    if (c < 0 || cm.column[c] != -1 || atomicCAS(&cm.column[c], -1, -2) != -1) continue;  // stored, or taken now
+    cm.column[c] = static_cast<int>(atomicAdd(used, 1u));
   }
+}
+
+// The columns given places at or past `capacity` (a pool that could not grow) unstored again.
+__global__ inline void unstoreColumnsPastKernel(int columns, int capacity, int* column) {
+  for (int c = blockIdx.x * blockDim.x + threadIdx.x; c < columns; c += gridDim.x * blockDim.x)
+    if (column[c] >= capacity) column[c] = -1;
 }
 
 // What a particle carries from slot to slot besides its state.
