@@ -256,7 +256,8 @@ class CouplingCuda : public CouplingDeviceBackend {
       // (the count is on the device) by the few bits of the block
       const unsigned long long blockValues = static_cast<unsigned long long>(numBlocks) + 1;  // and the end mark
       cudak::blockKeysKernel<<<kPlaceBlocks, kThreads>>>(flagsD, listCapacity_, key_.ptr, order_.ptr, numberBits,
-                                                         static_cast<unsigned long long>(numBlocks), blockKey_[0].ptr);
+                                                         static_cast<unsigned long long>(numBlocks), blockKey_[0].ptr,
+                                                         share_.ptr, sums_.ptr);
       CUDA_CHECK(cudaGetLastError());
       const int blockBits = sortedkeys::bitsFor(blockValues);
       std::size_t sortBytes = 0;
@@ -267,8 +268,8 @@ class CouplingCuda : public CouplingDeviceBackend {
       CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_.ptr, sortBytes, blockKey_[0].ptr, blockKey_[1].ptr,
                                                  order_.ptr, byBlock_.ptr, static_cast<int>(listCapacity_), 0,
                                                  blockBits));
-      cudak::blockSumsKernel<<<numBlocks, cudak::kSumThreads>>>(flagsD, listCapacity_, share_.ptr, key_.ptr,
-                                                                blockKey_[1].ptr, byBlock_.ptr, numberBits, sums_.ptr);
+      cudak::blockSumsKernel<<<numBlocks, cudak::kSumThreads>>>(flagsD, listCapacity_, share_.ptr, blockKey_[1].ptr,
+                                                                byBlock_.ptr, sums_.ptr);
       CUDA_CHECK(cudaGetLastError());
     }
     mark(3);
@@ -312,14 +313,20 @@ class CouplingCuda : public CouplingDeviceBackend {
 
   void growList(unsigned long long capacity) {
     // (places are ints)
-    listCapacity_ = static_cast<unsigned int>(std::min<unsigned long long>(capacity, (1ull << 31) - 1));
-    share_.reserve(static_cast<std::size_t>(kBlockSums) * listCapacity_);
-    key_.reserve(listCapacity_);
-    entry_.reserve(listCapacity_);
-    order_.reserve(listCapacity_);
-    byBlock_.reserve(listCapacity_);
-    for (auto& k : blockKey_) k.reserve(listCapacity_);
-    if (recording_) record_.reserve(static_cast<std::size_t>(kContactValues) * listCapacity_);
+    const auto n = static_cast<unsigned int>(std::min<unsigned long long>(capacity, (1ull << 31) - 1));
+    try {
+      share_.reserve(static_cast<std::size_t>(kBlockSums) * n);
+      key_.reserve(n);
+      entry_.reserve(n);
+      order_.reserve(n);
+      byBlock_.reserve(n);
+      for (auto& k : blockKey_) k.reserve(n);
+      if (recording_) record_.reserve(static_cast<std::size_t>(kContactValues) * n);
+    } catch (...) {
+      listCapacity_ = 0;  // some arrays are smaller or gone: the next step sizes them again
+      throw;
+    }
+    listCapacity_ = n;
   }
 
   void mark(int k) {

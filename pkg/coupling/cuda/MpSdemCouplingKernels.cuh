@@ -100,40 +100,38 @@ static __global__ void placeKernel(const CouplingFlags* flags, unsigned int capa
 
 // The block of each place of the particle-number order (the key's bits from numberBits up), for
 // the stable sort by block; the places past the step's contacts get numBlocks, after every block.
-// Nothing in a step that overflowed the list.
+// In a step that overflowed the list, the listed shares are added to their blocks' sums
+// atomically instead, in one pass (the contacts past the list were added so in coupleKernel).
 static __global__ void blockKeysKernel(const CouplingFlags* flags, unsigned int capacity, const unsigned long long* key,
                                        const int* order, int numberBits, unsigned long long numBlocks,
-                                       unsigned long long* blockKey) {
+                                       unsigned long long* blockKey, const double* share, double* sums) {
   const unsigned int count = flags->contacts;
-  if (count > capacity) return;
-  for (unsigned int i = blockIdx.x * blockDim.x + threadIdx.x; i < capacity; i += gridDim.x * blockDim.x)
-    blockKey[i] = i < count ? key[order[i]] >> numberBits : numBlocks;
+  for (unsigned int i = blockIdx.x * blockDim.x + threadIdx.x; i < capacity; i += gridDim.x * blockDim.x) {
+    if (count <= capacity) {
+      blockKey[i] = i < count ? key[order[i]] >> numberBits : numBlocks;
+      continue;
+    }
+    const double* s = share + static_cast<std::size_t>(kBlockSums) * i;
+    double* dst = sums + static_cast<std::size_t>(kBlockSums) * (key[i] >> numberBits);
+    for (int k = 0; k < kBlockSums; ++k)
+      if (s[k] != 0.0) atomicAdd(dst + k, s[k]);
+  }
 }
 
 // Block b's sums from its contacts in particle-number order (byBlock: the listed contacts
 // sorted stably by block, blockKey their blocks): its r-th contact goes to thread
 // r mod kSumThreads, which adds its contacts in turn, then a fixed tree adds the threads' sums.
-// The order depends on the contacts alone, not on thread timing. In a step that overflowed the
-// list the listed shares of block b are added atomically instead (its other contacts were added
-// so in coupleKernel).
+// The order depends on the contacts alone, not on thread timing. Nothing in a step that
+// overflowed the list (its sums are atomic: blockKeysKernel).
 constexpr int kSumThreads = 128;
 static __global__ void __launch_bounds__(kSumThreads)
     blockSumsKernel(const CouplingFlags* flags, unsigned int capacity, const double* share,
-                    const unsigned long long* key, const unsigned long long* blockKey, const int* byBlock,
-                    int blockShift, double* sums) {
+                    const unsigned long long* blockKey, const int* byBlock, double* sums) {
   const unsigned long long b = blockIdx.x;
   const int t = threadIdx.x;
   const unsigned int count = flags->contacts;
   double* dst = sums + static_cast<std::size_t>(kBlockSums) * b;
-  if (count > capacity) {
-    for (unsigned int i = t; i < capacity; i += kSumThreads)
-      if (key[i] >> blockShift == b) {
-        const double* s = share + static_cast<std::size_t>(kBlockSums) * i;
-        for (int k = 0; k < kBlockSums; ++k)
-          if (s[k] != 0.0) atomicAdd(dst + k, s[k]);
-      }
-    return;
-  }
+  if (count > capacity) return;
   __shared__ double part[kBlockSums][kSumThreads];
   const int listed = static_cast<int>(count);  // the places past them hold numBlocks
   const int lo = mpm::firstKeyAtLeast(blockKey, 0, listed, 0, b);
