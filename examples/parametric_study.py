@@ -38,8 +38,9 @@ column of 0.40 m, AR 1.33; the reported AR is the one simulated), the cube's ups
 L_i + L0, and a flume long enough for the flow to carry the cube without reaching its end
 wall: L_i + L0 + h_b + ``margin`` (3 m by default: at the paper's blend a cube slid 1.2 m). Runs
 to the paper's 4.5 s need more: at the paper's resolution and blend the fronts are then about
-4.5, 7.5, 11 and 15 m from the column at AR 1.3, 2.0, 3.0 and 4.0 (docs/studies.md); a cube still
-carried when the front reaches the end wall is flagged ``cube_at_end``.
+4.5, 6.75, 11.0 and 15 m from the column's back wall at AR 1.3, 2.0, 3.0 and 4.0 (docs/studies.md;
+``FRONT_AT_END``); --prepare says when a flume is shorter, with the margin that gives room. A cube
+still carried when the front reaches the end wall is flagged ``cube_at_end``.
 """
 import argparse
 import json
@@ -52,6 +53,11 @@ COLUMN = 0.3       # column length L_i [m] (the §3.2 storage container)
 RHO = 1600.0       # bulk density of the glass beads [kg/m³] (Table 1)
 K_STATIC = 1.6     # static pressure coefficient of the paper's Eq 21 fit
 MARGIN = 3.0       # flume length downstream of the cube [m]
+# (AR, the front's distance from the column's back wall at the paper's 4.5 s [m]) at the paper's
+# resolution and blend: AR 2.0 and 3.0 measured (docs/studies.md, flumes long enough), AR 1.3 about,
+# AR 4.0 from its front's slowing (its runs reached the end wall)
+FRONT_AT_END = ((1.3, 4.5), (2.0, 6.75), (3.0, 11.0), (4.0, 15.0))
+END_ROOM = 1.0     # flume length kept beyond that front [m]
 PROBE_EVERY = 0.005   # free flow: the station is read every this much simulated time [s]
 PROBE_WINDOW = 0.05   # h_f, v_f: means over this long after the front's arrival [s]
 FRONT_STILL = 0.3     # free flow: a front that has not advanced dx/2 for this long has stopped [s]
@@ -504,6 +510,22 @@ def _describe(r):
             % (ff["h_f"], r["submersion"], ff["Fr"], ff["Fr1"], r["travel"], cut, ratio))
 
 
+def frontAtEnd(AR):
+    """Where the flow's front is at 4.5 s, from the column's back wall [m] (FRONT_AT_END, linear
+    between its aspect ratios and beyond them)."""
+    pts = FRONT_AT_END
+    i = max(1, min(len(pts) - 1, sum(1 for a, _ in pts if a < AR)))
+    (a0, x0), (a1, x1) = pts[i - 1], pts[i]
+    return x0 + (x1 - x0) * (AR - a0) / (a1 - a0)
+
+
+def marginToEnd(AR, L0_hb):
+    """The smallest whole ``margin`` [m] whose flume holds the flow's front at 4.5 s with END_ROOM
+    to spare at the paper's resolution and blend."""
+    import math
+    return max(1.0, math.ceil(frontAtEnd(AR) + END_ROOM - (COLUMN + L0_hb * HB + HB)))
+
+
 def prepareMain(a):
     if a.AR or a.L0_hb:
         cases = [{"AR": a.AR or 1.3, "L0_hb": a.L0_hb or 4}]
@@ -515,6 +537,13 @@ def prepareMain(a):
             c["margin"] = a.margin
         folder = prepareCase(folder=os.path.join(a.prepare, caseName(c["AR"], c["L0_hb"], c["full"])), **c)
         print("prepared %s" % folder)
+        with open(os.path.join(folder, "case.json")) as f:
+            length = json.load(f)["result"]["flume_length"]
+        if length < frontAtEnd(c["AR"]) + END_ROOM:
+            print("  note: its flume ends %.2f m from the column; at the paper's resolution and blend the front is "
+                  "about %.1f m from it at 4.5 s, so a run --until 4.5 would be cut short by the end wall "
+                  "(cube_at_end): --margin %g gives room" % (length, frontAtEnd(c["AR"]), marginToEnd(c["AR"],
+                                                                                                     c["L0_hb"])))
     print("next: python3 %s --run-prepared %s [--backend cuda] [--exe PATH/mpmsdem-run]" % (__file__, a.prepare))
 
 

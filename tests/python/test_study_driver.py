@@ -389,3 +389,20 @@ def test_a_signal_to_the_runner_stops_its_drivers_which_save_and_no_other_case_s
     for c in "ab":
         assert (tmp_path / (c + ".stopped")).read_text() == str(int(signal.SIGTERM))
     assert not (tmp_path / "c.started").exists()
+
+
+def test_the_margin_that_holds_the_front_at_the_papers_end():
+    # FRONT_AT_END at its aspect ratios, linear between and beyond them; the margin is the whole
+    # metres that put the flume's end END_ROOM (1 m) past that front, counted from the cube's far
+    # face at L_i + L0 + h_b (hand-computed: AR 3.0 at L0/h_b 14, 11.0 + 1 - 1.05 = 10.95 -> 11 m).
+    ps = study()
+    assert ps.frontAtEnd(3.0) == pytest.approx(11.0)
+    assert ps.frontAtEnd(2.5) == pytest.approx((6.75 + 11.0) / 2)
+    assert ps.frontAtEnd(4.5) == pytest.approx(15.0 + 0.5 * 4.0)  # the last slope, 4 m per unit AR
+    assert ps.marginToEnd(3.0, 14) == 11
+    assert ps.marginToEnd(2.0, 24) == 7   # 6.75 + 1 - 1.55 = 6.2 -> 7
+    assert ps.marginToEnd(1.3, 74) == 2   # 4.5 + 1 - 4.05 = 1.45 -> 2
+    assert ps.marginToEnd(1.3, 200) == 1  # the front short of the cube: at least 1 m
+    for AR, L0_hb in ((1.3, 4), (2.0, 54), (4.0, 74)):
+        length = ps.COLUMN + L0_hb * ps.HB + ps.HB + ps.marginToEnd(AR, L0_hb)
+        assert ps.frontAtEnd(AR) + ps.END_ROOM <= length < ps.frontAtEnd(AR) + ps.END_ROOM + 1
