@@ -58,7 +58,7 @@ MpmCuda<T>::MpmCuda(const MpmParams& params)
   } catch (const RuntimeFailure& e) {
     freeDevice();
     const std::size_t map = static_cast<std::size_t>(nColumns_) * sizeof(int);
-    const std::size_t lists = static_cast<std::size_t>(nBlocks_) * (5 * sizeof(int) + 1);
+    const std::size_t lists = static_cast<std::size_t>(nBlocks_) * 6 * sizeof(int);
     std::ostringstream os;
     os << "the CUDA backend's index arrays for the grid of " << params.cells[0] << " x " << params.cells[1] << " x "
        << params.cells[2] << " cells (" << map / 1e9 << " GB of column map, " << lists / 1e9
@@ -82,7 +82,7 @@ void MpmCuda<T>::allocateGrid() {
   CUDA_CHECK(cudaMemset(column_, 0xff, static_cast<std::size_t>(nColumns_) * sizeof(int)));
   CUDA_CHECK(cudaMemset(flags_, 0, sizeof(StepFlags)));
   CUDA_CHECK(cudaMemset(listCounts_, 0, kTileLists * sizeof(int)));
-  CUDA_CHECK(cudaMemset(tileMark_, 0, nBlocks_));
+  CUDA_CHECK(cudaMemset(tileMark_, 0, static_cast<std::size_t>(nBlocks_) * sizeof(int)));
   CUDA_CHECK(cudaMemset(slotOf_, 0xff, static_cast<std::size_t>(nBlocks_) * sizeof(int)));
   grid_.column = column_;
   if (params_.terrain.enabled()) {
@@ -485,11 +485,11 @@ cudak::ColumnMap MpmCuda<T>::columnMap() const {
 template <typename T>
 void MpmCuda<T>::beginLists() {
   const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
-  // Only the last lists' tiles hold non-zero values, and only their blocks a place in the tiles' scratch.
+  // Only the last lists' tiles hold non-zero values, and only they and their blocks marks.
   cudak::clearTilesKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
   CUDA_CHECK(cudaGetLastError());
-  // (whether or not this particle set has the tiles' scratch: the last one's may have had it)
-  cudak::forgetTileSlotsKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, slotOf_);
+  // (the tiles' scratch places whether or not this particle set has it: the last one's may have had it)
+  cudak::forgetListsKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, slotOf_);
   CUDA_CHECK(cudaGetLastError());
   CUDA_CHECK(cudaMemsetAsync(listCounts_, 0, kTileLists * sizeof(int)));
 }
@@ -507,8 +507,6 @@ void MpmCuda<T>::sortParticles() {
   CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_, sortScratchBytes_, k, v, n, 0, keyBits_));
   cudak::occupiedBlocksKernel<<<blocksFor(n_), kThreads>>>(n, k.Current(), numberBits_, bg, activeLists(),
                                                             columnMap(), &flags_->columnsMissing);
-  CUDA_CHECK(cudaGetLastError());
-  cudak::activeTilesKernel<<<blocksFor(nBlocks_), kThreads>>>(nBlocks_, activeLists());
   CUDA_CHECK(cudaGetLastError());
   sorted_ = v.Current();
   sortedKeys_ = k.Current();

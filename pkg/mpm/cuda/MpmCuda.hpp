@@ -24,8 +24,8 @@
 // bytes, twice) = 138 bytes/particle; the sort (two keys of 8 bytes, two slots of 4) 24
 // bytes/particle; + 12 bytes/particle once external forces are set; kNodeValues (8) values per
 // stored node (32 C nz bytes, the pool holding up to half as many columns again); an int per
-// node column of the box (the column map), five ints and a byte per block of 27 cells (the active
-// lists, the blocks' particle ranges and tile places). Double-buffering makes a failed step leave
+// node column of the box (the column map), six ints per block of 27 cells (the active lists and
+// marks, the blocks' particle ranges and tile places). Double-buffering makes a failed step leave
 // the previous state intact at no bandwidth cost.
 #pragma once
 #include <cstdint>
@@ -136,7 +136,7 @@ class MpmCuda : public MpmSolver {
   int* activeTiles_ = nullptr;
   static constexpr int kTileLists = 9;
   int* listCounts_ = nullptr;  // kTileLists: 8 colours, then the active tiles
-  unsigned char* tileMark_ = nullptr;
+  int* tileMark_ = nullptr;
   int gridLaunch_ = 1;  // CUDA blocks of the kernels over the active tiles' nodes
   // CUDA blocks of a P2G colour launch at most: more than the device holds at once (the kernel's
   // shared arrays allow a few per SM), so that a colour with fewer occupied blocks still gets one

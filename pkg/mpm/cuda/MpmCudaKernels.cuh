@@ -29,14 +29,16 @@ struct BlockGrid {
 // The step's occupied blocks and active tiles (MpmKernelsCommon.hpp, forTilesOfBlock), built on
 // the device from the sorted keys: each colour's occupied blocks in its part of `blocks` (from
 // BlockGrid::colourStart), their numbers in count[colour]; the active tiles in `tiles`, their
-// number in count[8]. Lists fill in no fixed order: blocks of one colour share no node and a
-// tile's nodes are updated independently, so no result depends on it. An occupied block b's
-// particles are the sorted places [start[b], end[b]) (the entries of other blocks are stale).
+// number in count[8], each listed by the first occupied block to mark it (tileMark), so that no
+// pass visits the tiles of the whole box. Lists fill in no fixed order: blocks of one colour
+// share no node and a tile's nodes are updated independently, so no result depends on it. An
+// occupied block b's particles are the sorted places [start[b], end[b]) (the entries of other
+// blocks are stale).
 struct ActiveLists {
   int* blocks;
   int* tiles;
   int* count;
-  unsigned char* tileMark;  // all zero between steps
+  int* tileMark;  // 1 for the listed tiles, 0 elsewhere (forgetListsKernel clears them)
   int* start;
   int* end;
 };
@@ -48,9 +50,9 @@ struct ColumnMap {
   int nodes[3];
 };
 
-// The first sorted particle of each block lists the block under its colour and marks its tiles;
-// the first and last give the block's range. A tile whose node columns are not all stored sets
-// *missing (the step then writes nothing: MpmCuda::step).
+// The first sorted particle of each block lists the block under its colour and its tiles not
+// listed yet; the first and last give the block's range. A tile whose node columns are not all
+// stored sets *missing (the step then writes nothing: MpmCuda::step).
 __global__ inline void occupiedBlocksKernel(int n, const unsigned long long* key, int shift, BlockGrid bg,
                                             ActiveLists a, ColumnMap cm, unsigned int* missing) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -64,17 +66,10 @@ __global__ inline void occupiedBlocksKernel(int n, const unsigned long long* key
   const int colour = blockColourOf(c);
   a.blocks[bg.colourStart(colour) + atomicAdd(&a.count[colour], 1)] = b;
   forTilesOfBlock(c, bg.blocks, [&](int t) {
-    a.tileMark[t] = 1;
+    if (atomicExch(&a.tileMark[t], 1) != 0) return;  // listed by another block
+    a.tiles[atomicAdd(&a.count[kTilesCount], 1)] = t;
     if (!tileColumnsStored(t, bg.blocks, cm.nodes, cm.column)) *missing = 1u;
   });
-}
-
-// The marked tiles as a list; the marks are cleared for the next step.
-__global__ inline void activeTilesKernel(int nTiles, ActiveLists a) {
-  const int t = blockIdx.x * blockDim.x + threadIdx.x;
-  if (t >= nTiles || !a.tileMark[t]) return;
-  a.tileMark[t] = 0;
-  a.tiles[atomicAdd(&a.count[kTilesCount], 1)] = t;
 }
 
 // f(node) for every node of the active tiles, a thread per node over the whole launch; a node
@@ -289,15 +284,16 @@ __global__ void clearTilesKernel(ActiveLists a, BlockGrid bg, T* grid, GridConst
   });
 }
 
-// The last step's occupied blocks' places in p2gTilesKernel's scratch forgotten (every other
-// block's is -1 already): clearing the whole array each step would move 4 bytes a block of a long
-// or wide grid.
-__global__ inline void forgetTileSlotsKernel(ActiveLists a, BlockGrid bg, int* slotOf) {
+// The last lists forgotten where they left marks: their occupied blocks' places in
+// p2gTilesKernel's scratch (every other block's is -1 already) and their tiles' marks. Clearing
+// the whole arrays each step would move 8 bytes a block of a long or wide grid.
+__global__ inline void forgetListsKernel(ActiveLists a, BlockGrid bg, int* slotOf) {
+  const int stride = gridDim.x * blockDim.x;
   for (int colour = 0; colour < 8; ++colour) {
     const int count = a.count[colour], base = bg.colourStart(colour);
-    for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < count; i += gridDim.x * blockDim.x)
-      slotOf[a.blocks[base + i]] = -1;
+    for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < count; i += stride) slotOf[a.blocks[base + i]] = -1;
   }
+  for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < a.count[kTilesCount]; i += stride) a.tileMark[a.tiles[i]] = 0;
 }
 
 // Largest value over the warp; every lane calls it (inactive lanes must pass 0 via the

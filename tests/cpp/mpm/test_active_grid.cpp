@@ -383,7 +383,7 @@ TEST(CudaGrid, StoresTheNodeColumnsTheFlowReachedNotTheBox) {
 TEST(CudaGrid, RunsAGridWhoseDenseValuesPassTwoToThe31) {
   // CpuGrid.RunsAGridWhoseDenseValuesPassTwoToThe31 on CUDA: the collapsing column in a box 22 km
   // long (a dense grid of 18 GB in double) moves as in its own box, to the bit, in its index arrays
-  // (an int per node column, 21 bytes per block: 2.8e8 bytes) and the columns near the flow.
+  // (an int per node column, six ints per block: 3.0e8 bytes) and the columns near the flow.
   if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
 #ifdef MPMSDEM_WITH_CUDA
   std::size_t snugBytes = 0, hugeBytes = 0;
