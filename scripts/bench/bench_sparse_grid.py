@@ -7,9 +7,11 @@ the large domain to the tight box, and what a dense grid of the large domain wou
 
     python3 scripts/bench/bench_sparse_grid.py [--exe build/mpmsdem-run] [--baseline-exe OLD]
                                               [--points 5e5] [--steps 100] [--threads 2]
+                                              [--backend cpu|cuda] [--precision double|float]
 
---baseline-exe runs an older mpmsdem-run on both scenes too (new/old time and memory).
-Goals: the large domain below 2 GB and within 1.5 times the tight box's time.
+--baseline-exe runs an older mpmsdem-run on both scenes too (new/old time and memory); a run that
+fails (a grid the device cannot hold) is reported as such. Goals: the large domain below 2 GB
+and within 1.5 times the tight box's time.
 """
 import argparse
 import json
@@ -37,7 +39,7 @@ def scenes(points, dx):
     return tight, large, n
 
 
-def run(exe, scene, steps, threads):
+def run(exe, scene, steps, threads, backend, precision):
     with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as f:
         json.dump(scene, f)
         path = f.name
@@ -46,11 +48,12 @@ def run(exe, scene, steps, threads):
     t0 = time.time()
     # one process per run, so that its peak resident memory is its own (ru_maxrss of the children
     # is the largest so far: the runs go smallest first)
-    p = subprocess.run([exe, path, "--bench", "--steps", str(steps)], env=env, capture_output=True, text=True)
+    p = subprocess.run([exe, path, "--bench", "--steps", str(steps), "--backend", backend, "--precision", precision],
+                       env=env, capture_output=True, text=True)
     wall = time.time() - t0
     os.unlink(path)
     if p.returncode != 0:
-        sys.exit("%s failed (exit %d): %s" % (exe, p.returncode, p.stderr[-2000:]))
+        return {"failed": "%s failed (exit %d): %s" % (exe, p.returncode, p.stderr.strip()[-600:])}
     r = json.loads(p.stdout.strip().splitlines()[-1])
     peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
     r["peak_rss"] = peak if peak > before * 1024 else None
@@ -67,31 +70,42 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=100)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--dx", type=float, default=1.0, help="grid spacing [m] (default 1)")
+    ap.add_argument("--backend", choices=("cpu", "cuda"), default="cpu")
+    ap.add_argument("--precision", choices=("double", "float"), default="double")
     a = ap.parse_args(argv)
     tight, large, n = scenes(int(a.points), a.dx)
     dense = NODE_BYTES
     for c in large["grid"]["cells"]:
         dense *= c + 1
-    print("machine: %s; %d material points, Δx %g m, %d steps, OMP_NUM_THREADS=%d" % (
-        bench_mpm.machine(), n, a.dx, a.steps, a.threads))
+    print("machine: %s; %d material points, Δx %g m, %d steps, OMP_NUM_THREADS=%d, %s %s" % (
+        bench_mpm.machine(), n, a.dx, a.steps, a.threads, a.backend, a.precision))
     print("tight box %s cells; large domain %s cells (a dense grid of it: %.1f GB of node records in double)" % (
         "x".join(map(str, tight["grid"]["cells"])), "x".join(map(str, large["grid"]["cells"])), dense / 1e9))
     builds = [("new", a.exe)] + ([("old", a.baseline_exe)] if a.baseline_exe else [])
     results = {}
     for name, exe in builds:
         for label, scene in (("tight", tight), ("large", large)):
-            results[name, label] = run(exe, scene, a.steps, a.threads)
+            results[name, label] = run(exe, scene, a.steps, a.threads, a.backend, a.precision)
     print("| build | domain | step loop [s] | particle-updates/s | solver memory [MB] | peak RSS [MB] |")
     print("|---|---|---:|---:|---:|---:|")
     for (name, label), r in results.items():
+        if "failed" in r:
+            print("| %s | %s | refused | - | - | - |" % (name, label))
+            continue
         print("| %s | %s | %.2f | %.3g | %.0f | %s |" % (
             name, label, r["seconds"], r["particle_updates_per_s"], r["solver_bytes"] / 1e6,
             "%.0f" % (r["peak_rss"] / 1e6) if r["peak_rss"] else "-"))
+    for (name, label), r in results.items():
+        if "failed" in r:
+            print("%s, %s domain: %s" % (name, label, r["failed"]))
+    ok = {k: r for k, r in results.items() if "failed" not in r}
     for name, _ in builds:
-        t, l = results[name, "tight"], results[name, "large"]
+        if (name, "tight") not in ok or (name, "large") not in ok:
+            continue
+        t, l = ok[name, "tight"], ok[name, "large"]
         print("%s: large / tight time %.2f (goal <= 1.5), solver memory %.0f MB in the large domain (goal < 2000)" % (
             name, l["seconds"] / t["seconds"], l["solver_bytes"] / 1e6))
-    if a.baseline_exe:
+    if a.baseline_exe and ("new", "large") in ok and ("old", "large") in ok:
         print("new / old in the large domain: time %.2f, solver memory %.3f" % (
             results["new", "large"]["seconds"] / results["old", "large"]["seconds"],
             results["new", "large"]["solver_bytes"] / results["old", "large"]["solver_bytes"]))

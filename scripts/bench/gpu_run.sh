@@ -49,7 +49,8 @@
 # updates/s at 1e5..1e7 points, against the CPU and the baseline); the flume at the paper's
 # resolution (flume_block_full.json): 4,000 steps on the CPU and on CUDA (new and baseline: the
 # coupling's share of the step is in each JSON line), then the whole 2 s on CUDA in double and
-# float (the project's goal: at most 8 s on one H100); the coarse flume
+# float (the project's goal: at most 8 s on one H100); the grid's cost against the domain (stage
+# sparse_grid: a dam break in its box and in a 1 km x 1 km x 200 m domain); the coarse flume
 # (examples/scenes/flume_block.json) over its 1.2 s on the CPU (every core) and on CUDA in double
 # and float, and once more in double (are two CUDA runs equal?); the device time of the MPM
 # step's stages (--device-stages) on dam breaks and the flume; an Nsight Compute profile of
@@ -223,6 +224,12 @@ export -f same_results
 # The new build against the baseline on the same 4,000 steps (its memory may differ)
 [ -n "$baseline" ] && stage baseline_same 10 same_results "the flume's 4,000 CUDA steps, new against the baseline" \
   "$out/full_cuda_4000.json" "$out/full_cuda_4000_baseline.json" bytes_per_particle
+# The grid's cost against the domain on CUDA (bench_sparse_grid.py): a dam break of GPU_SPARSE_POINTS
+# (1e7) points at Δx 1 m in its box and in a 1 km x 1 km x 200 m domain, 300 steps, new against
+# the baseline (whose grid held the whole box); its table in $out/sparse_grid.md
+stage sparse_grid 240 bash -c "python3 scripts/bench/bench_sparse_grid.py --exe '$bin/mpmsdem-run' --backend cuda \
+  --points '${GPU_SPARSE_POINTS:-1e7}' --steps 300 --threads '$(nproc)' ${baseline:+--baseline-exe '$baseline/mpmsdem-run'} \
+  2>&1 | tee '$out/sparse_grid.md'"
 flume full_cuda_double 120 "$full" cuda double
 flume full_cuda_float 120 "$full" cuda float
 flume coarse_cpu_double 120 "$coarse" cpu double
