@@ -146,18 +146,29 @@ TEST_P(ActiveGridEveryBackend, EmptySpaceAroundAFlowChangesNothing) {
 namespace {
 
 // The collapsing column of EmptySpaceAroundAFlowChangesNothing in a grid of `cells`, `steps`
-// steps on the CPU in double: its particles at the end and the solver's memory then.
-ParticleSet collapseOnTheCpu(std::array<int, 3> cells, int steps, std::size_t& bytes) {
+// steps on `backend` in double: its particles at the end and the solver's memory then.
+ParticleSet collapseIn(std::array<int, 3> cells, int steps, std::size_t& bytes, Backend backend) {
   MpmParams prm = testing_scenes::granularColumnParams(0.01, cells, 2e5);
   ParticleSet ps;
   seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
-  auto s = makeSolver(prm, Backend::Cpu, Precision::Double);
+  auto s = makeSolver(prm, backend, Precision::Double);
   s->setParticles(ps);
   for (int n = 0; n < steps; ++n) s->step(2e-4);
   bytes = s->memoryBytes();
   ParticleSet out;
   s->getParticles(out);
   return out;
+}
+
+// That collapse in its own box (30 cells long) and in a grid of `cells`: the same particles to the
+// bit. The two solvers' memory in snugBytes and farBytes.
+void expectTheCollapseOfItsOwnBox(Backend backend, std::array<int, 3> cells, int steps, std::size_t& snugBytes,
+                                  std::size_t& farBytes) {
+  const ParticleSet snug = collapseIn({30, 5, 20}, steps, snugBytes, backend);
+  const ParticleSet far = collapseIn(cells, steps, farBytes, backend);
+  EXPECT_TRUE(snug.x == far.x);
+  EXPECT_TRUE(snug.v == far.v);
+  EXPECT_TRUE(snug.stress == far.stress);
 }
 
 }  // namespace
@@ -170,10 +181,7 @@ TEST(CpuGrid, StoresTheNodeColumnsTheFlowReachedNotTheBox) {
   // 3 x 3 x 3 cells for the binning, a byte per tile), not its grid: both store the node
   // columns the flow reached, in the same order.
   std::size_t snugBytes = 0, longBytes = 0;
-  const ParticleSet snug = collapseOnTheCpu({30, 5, 20}, 1000, snugBytes);
-  const ParticleSet far = collapseOnTheCpu({3000, 5, 20}, 1000, longBytes);
-  EXPECT_TRUE(snug.x == far.x);
-  EXPECT_TRUE(snug.stress == far.stress);
+  expectTheCollapseOfItsOwnBox(Backend::Cpu, {3000, 5, 20}, 1000, snugBytes, longBytes);
   auto indexBytes = [](int cellsX) {
     const std::size_t blocks = static_cast<std::size_t>(blocksAlong(cellsX)) * blocksAlong(5) * blocksAlong(20);
     const std::size_t tiles = blocks;  // as many tiles per axis as blocks
@@ -191,11 +199,7 @@ TEST(CpuGrid, RunsAGridWhoseDenseValuesPassTwoToThe31) {
   const std::array<int, 3> huge = {2200000, 5, 20};
   EXPECT_GT(double(kNodeValues) * (huge[0] + 1) * (huge[1] + 1) * (huge[2] + 1), 2147483647.0);
   std::size_t snugBytes = 0, hugeBytes = 0;
-  const ParticleSet snug = collapseOnTheCpu({30, 5, 20}, 300, snugBytes);
-  const ParticleSet far = collapseOnTheCpu(huge, 300, hugeBytes);
-  EXPECT_TRUE(snug.x == far.x);
-  EXPECT_TRUE(snug.v == far.v);
-  EXPECT_TRUE(snug.stress == far.stress);
+  expectTheCollapseOfItsOwnBox(Backend::Cpu, huge, 300, snugBytes, hugeBytes);
   EXPECT_LT(hugeBytes, std::size_t(250) << 20);  // index arrays of 1.5e8 B, no dense grid
 }
 
@@ -339,45 +343,18 @@ TEST(SortedKeys, FirstKeyAtLeastIsWhereAValuesRunStarts) {
       }
 }
 
-namespace {
-
-#ifdef MPMSDEM_WITH_CUDA
-// The collapsing column of EmptySpaceAroundAFlowChangesNothing in a grid of `cells`, `steps`
-// steps on CUDA in double: its particles at the end and the solver's memory then.
-ParticleSet collapseOnCuda(std::array<int, 3> cells, int steps, std::size_t& bytes) {
-  MpmParams prm = testing_scenes::granularColumnParams(0.01, cells, 2e5);
-  ParticleSet ps;
-  seedBox(prm, {0.02, 0.02, 0.02}, {0.08, 0.03, 0.14}, {2, 1, 2}, ps);
-  auto s = makeSolver(prm, Backend::Cuda, Precision::Double);
-  s->setParticles(ps);
-  for (int n = 0; n < steps; ++n) s->step(2e-4);
-  bytes = s->memoryBytes();
-  ParticleSet out;
-  s->getParticles(out);
-  return out;
-}
-#endif
-
-}  // namespace
-
 TEST(CudaGrid, StoresTheNodeColumnsTheFlowReachedNotTheBox) {
   // CpuGrid.StoresTheNodeColumnsTheFlowReachedNotTheBox on CUDA: the collapsing column in its box
   // and in one 100 times as long (a dense grid of 24 MB in double) agree bit for bit; the long
   // box's solver holds its index arrays and the node columns near the flow, a sixth of the
   // dense grid.
   if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
-#ifdef MPMSDEM_WITH_CUDA
   std::size_t snugBytes = 0, longBytes = 0;
-  const ParticleSet snug = collapseOnCuda({30, 5, 20}, 1000, snugBytes);
-  const ParticleSet far = collapseOnCuda({3000, 5, 20}, 1000, longBytes);
-  EXPECT_TRUE(snug.x == far.x);
-  EXPECT_TRUE(snug.v == far.v);
-  EXPECT_TRUE(snug.stress == far.stress);
+  expectTheCollapseOfItsOwnBox(Backend::Cuda, {3000, 5, 20}, 1000, snugBytes, longBytes);
   // the long box: 0.4 MB of index arrays, 2 MB of P2G tile scratch (a tile per particle, 288),
   // the columns near the flow (at most the snug box's 186 and half again: 0.4 MB), 0.1 MB of points
   EXPECT_GT(longBytes, snugBytes);
   EXPECT_LT(longBytes, std::size_t(4) << 20);
-#endif
 }
 
 TEST(CudaGrid, RunsAGridWhoseDenseValuesPassTwoToThe31) {
@@ -385,15 +362,9 @@ TEST(CudaGrid, RunsAGridWhoseDenseValuesPassTwoToThe31) {
   // long (a dense grid of 18 GB in double) moves as in its own box, to the bit, in its index arrays
   // (an int per node column, six ints per block: 3.0e8 bytes) and the columns near the flow.
   if (!cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine";
-#ifdef MPMSDEM_WITH_CUDA
   std::size_t snugBytes = 0, hugeBytes = 0;
-  const ParticleSet snug = collapseOnCuda({30, 5, 20}, 300, snugBytes);
-  const ParticleSet far = collapseOnCuda({2200000, 5, 20}, 300, hugeBytes);
-  EXPECT_TRUE(snug.x == far.x);
-  EXPECT_TRUE(snug.v == far.v);
-  EXPECT_TRUE(snug.stress == far.stress);
+  expectTheCollapseOfItsOwnBox(Backend::Cuda, {2200000, 5, 20}, 300, snugBytes, hugeBytes);
   EXPECT_LT(hugeBytes, std::size_t(350) << 20);
-#endif
 }
 
 TEST(CudaGrid, AFlowReachingMoreColumnsThanTheDeviceHoldsIsRefusedWithItsStateKept) {
