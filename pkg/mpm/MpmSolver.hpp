@@ -62,10 +62,11 @@ struct GridView {
   // n = (i * nodes[1] + j) * nodes[2] + k and its values are at element record(n) * stride. Null
   // column: the dense layout, record(n) = n. Otherwise column[i * nodes[1] + j] is the stored
   // column of (i, j), or -1 where no material point has reached it (its nodes are empty and not
-  // stored). storedNodes: the records behind the arrays.
+  // stored); in the backend's memory like the arrays (a device view's map is read on the device:
+  // gateBandRecord). storedNodes: the records behind the arrays.
   const int* column = nullptr;
   long storedNodes = 0;
-  // The record of the node with index n, or -1 where it is not stored.
+  // The record of the node with index n, or -1 where it is not stored (a host view's).
   long record(long n) const {
     if (!column) return n;
     const long c = n / nodes[2];
