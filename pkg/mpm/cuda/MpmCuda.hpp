@@ -135,7 +135,9 @@ class MpmCuda : public MpmSolver {
   int* colourBlocks_ = nullptr;
   int* activeTiles_ = nullptr;
   static constexpr int kTileLists = 9;
-  int* listCounts_ = nullptr;  // kTileLists: 8 colours, then the active tiles
+  // kTileLists: 8 colours, then the active tiles. Reset only by beginLists, after the last lists'
+  // tiles are cleared and their marks forgotten: a mark left would keep its tile out of every list.
+  int* listCounts_ = nullptr;
   int* tileMark_ = nullptr;
   int gridLaunch_ = 1;  // CUDA blocks of the kernels over the active tiles' nodes
   // CUDA blocks of a P2G colour launch at most: more than the device holds at once (the kernel's

@@ -78,9 +78,10 @@ __global__ inline void occupiedBlocksKernel(int n, const unsigned long long* key
 template <typename F>
 __device__ void forActiveTileNodes(const ActiveLists& a, const int tilesPerAxis[3], const int nodes[3],
                                    const int* column, F&& f) {
-  const int total = kBlockCells * a.count[kTilesCount];
-  for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < total; i += gridDim.x * blockDim.x) {
-    const int node = tileNodeOf(a.tiles[i / kBlockCells], i % kBlockCells, tilesPerAxis, nodes);
+  // (64-bit: a flow over most of a kilometre at 0.5 m lists 6e7 tiles)
+  const long long total = static_cast<long long>(kBlockCells) * a.count[kTilesCount];
+  for (long long i = blockIdx.x * blockDim.x + threadIdx.x; i < total; i += gridDim.x * blockDim.x) {
+    const int node = tileNodeOf(a.tiles[i / kBlockCells], static_cast<int>(i % kBlockCells), tilesPerAxis, nodes);
     if (node >= 0 && (!column || column[node / nodes[2]] >= 0)) f(node);
   }
 }
@@ -91,9 +92,10 @@ __device__ void forActiveTileNodes(const ActiveLists& a, const int tilesPerAxis[
 // capacity are given too; the host grows the pool to *used before any kernel reads the map, or,
 // where it cannot, takes those places back (unstoreColumnsPastKernel).
 __global__ inline void storeColumnsNearKernel(ActiveLists a, BlockGrid bg, ColumnMap cm, unsigned int* used) {
-  const int total = kColumnsNearTile * a.count[kTilesCount];
-  for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < total; i += gridDim.x * blockDim.x) {
-    const int c = columnNearTile(a.tiles[i / kColumnsNearTile], i % kColumnsNearTile, bg.blocks, cm.nodes);
+  const long long total = static_cast<long long>(kColumnsNearTile) * a.count[kTilesCount];
+  for (long long i = blockIdx.x * blockDim.x + threadIdx.x; i < total; i += gridDim.x * blockDim.x) {
+    const int c = columnNearTile(a.tiles[i / kColumnsNearTile], static_cast<int>(i % kColumnsNearTile), bg.blocks,
+                                 cm.nodes);
     if (c < 0 || cm.column[c] != -1 || atomicCAS(&cm.column[c], -1, -2) != -1) continue;  // stored, or taken now
     cm.column[c] = static_cast<int>(atomicAdd(used, 1u));
   }
@@ -293,7 +295,8 @@ __global__ inline void forgetListsKernel(ActiveLists a, BlockGrid bg, int* slotO
     const int count = a.count[colour], base = bg.colourStart(colour);
     for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < count; i += stride) slotOf[a.blocks[base + i]] = -1;
   }
-  for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < a.count[kTilesCount]; i += stride) a.tileMark[a.tiles[i]] = 0;
+  const int tiles = a.count[kTilesCount];
+  for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < tiles; i += stride) a.tileMark[a.tiles[i]] = 0;
 }
 
 // Largest value over the warp; every lane calls it (inactive lanes must pass 0 via the
