@@ -26,7 +26,7 @@ void applyHost(const GridView& g, const GateBand& b, double friction, std::array
   // of the thread count.
   const int n = gateBandSize(b);
   for (int t = 0; t < n; ++t) {
-    const long r = gateBandRecord(t, b, g.column);
+    const long r = storedNodeRecord(g.column, b.nodes[2], gateBandNode(t, b));
     if (r < 0) continue;  // a column no point has reached: empty nodes
     const Vec3T<T> p = applyGateNode(g.stride * r, mass, v[0], v[1], v[2], static_cast<T>(friction));
     for (int d = 0; d < 3; ++d) impulse[d] += static_cast<double>(p[d]);

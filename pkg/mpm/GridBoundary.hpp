@@ -79,14 +79,14 @@ MPM_HD_INLINE int gateBandNode(int t, const GateBand& b) {
   return (i * b.nodes[1] + j) * b.nodes[2] + k;
 }
 
-// The record of the band's t-th node in a grid stored by node columns (GridConst::column,
-// GridView::column; null: the dense layout, the node's index), or -1 where its column is not
-// stored (no material point has reached it: its nodes are empty).
-MPM_HD_INLINE long gateBandRecord(int t, const GateBand& b, const int* column) {
-  const int node = gateBandNode(t, b);
+// The record of the node with index `node` in a grid of nz nodes along z stored by node columns
+// (GridConst::column, GridView::column; null: the dense layout, the node's index), or -1 where
+// its column is not stored (no material point has reached it: its nodes are empty). The step's
+// own loops, which reach stored columns only, use nodeRecord (MpmKernelsCommon.hpp).
+MPM_HD_INLINE long storedNodeRecord(const int* column, int nz, long node) {
   if (!column) return node;
-  const int c = node / b.nodes[2];
-  return column[c] < 0 ? -1 : static_cast<long>(column[c]) * b.nodes[2] + (node - c * b.nodes[2]);
+  const long c = node / nz;
+  return column[c] < 0 ? -1 : static_cast<long>(column[c]) * nz + (node - c * nz);
 }
 
 // The gate on one node of the band, whose values are element `element` of the grid view's arrays

@@ -10,6 +10,7 @@
 #include "common/Error.hpp"
 
 #include "mpm/Diagnostics.hpp"
+#include "mpm/GridBoundary.hpp"
 #include "mpm/MpmTypes.hpp"
 
 namespace mpmsdem {
@@ -63,15 +64,11 @@ struct GridView {
   // column: the dense layout, record(n) = n. Otherwise column[i * nodes[1] + j] is the stored
   // column of (i, j), or -1 where no material point has reached it (its nodes are empty and not
   // stored); in the backend's memory like the arrays (a device view's map is read on the device:
-  // gateBandRecord). storedNodes: the records behind the arrays.
+  // storedNodeRecord). storedNodes: the records behind the arrays.
   const int* column = nullptr;
   long storedNodes = 0;
   // The record of the node with index n, or -1 where it is not stored (a host view's).
-  long record(long n) const {
-    if (!column) return n;
-    const long c = n / nodes[2];
-    return column[c] < 0 ? -1 : static_cast<long>(column[c]) * nodes[2] + (n - c * nodes[2]);
-  }
+  long record(long n) const { return storedNodeRecord(column, nodes[2], n); }
   double time = 0;          // time at the start of the step [s] (the velocities are those of time + dt)
   double dt = 0;            // step [s]
 };

@@ -322,7 +322,7 @@ __global__ void gateKernel(GateBand b, int count, int stride, const int* column,
                            T mu, double* impulse) {
   const int t = blockIdx.x * blockDim.x + threadIdx.x;
   double p[3] = {0.0, 0.0, 0.0};
-  const long r = t < count ? gateBandRecord(t, b, column) : -1;
+  const long r = t < count ? storedNodeRecord(column, b.nodes[2], gateBandNode(t, b)) : -1;
   if (r >= 0) {  // (a column no point has reached holds empty nodes and is not stored)
     const Vec3T<T> d = applyGateNode(stride * r, mass, vx, vy, vz, mu);
     for (int c = 0; c < 3; ++c) p[c] = static_cast<double>(d[c]);
