@@ -180,8 +180,10 @@ void MpmCuda<T>::setParticles(const ParticleSet& ps) {
   try {
     beginLists();
     if (n_ > 0) sortParticles();
+    queueColumnsNear();
     StepFlags flags;
-    storeColumnsNear(flags, false);
+    CUDA_CHECK(cudaMemcpy(&flags, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
+    takeColumns(flags);
   } catch (...) {
     freeParticles();
     n_ = 0;
@@ -191,13 +193,14 @@ void MpmCuda<T>::setParticles(const ParticleSet& ps) {
 }
 
 template <typename T>
-void MpmCuda<T>::storeColumnsNear(StepFlags& flags, bool launched) {
-  const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
-  if (!launched) {
-    cudak::storeColumnsNearKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, columnMap(), &flags_->columnsUsed);
-    CUDA_CHECK(cudaGetLastError());
-    CUDA_CHECK(cudaMemcpy(&flags, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
-  }
+void MpmCuda<T>::queueColumnsNear() {
+  cudak::storeColumnsNearKernel<<<gridLaunch_, kThreads>>>(activeLists(), blockGrid(), columnMap(),
+                                                           &flags_->columnsUsed);
+  CUDA_CHECK(cudaGetLastError());
+}
+
+template <typename T>
+void MpmCuda<T>::takeColumns(const StepFlags& flags) {
   if (flags.columnsUsed > columnCapacity_) {
     try {
       growColumns(flags.columnsUsed);
@@ -483,8 +486,13 @@ cudak::ColumnMap MpmCuda<T>::columnMap() const {
 }
 
 template <typename T>
+cudak::BlockGrid MpmCuda<T>::blockGrid() const {
+  return {{blocks_[0], blocks_[1], blocks_[2]}};
+}
+
+template <typename T>
 void MpmCuda<T>::beginLists() {
-  const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
+  const cudak::BlockGrid bg = blockGrid();
   // Only the last lists' tiles hold non-zero values, and only they and their blocks marks.
   cudak::clearTilesKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
   CUDA_CHECK(cudaGetLastError());
@@ -499,7 +507,7 @@ void MpmCuda<T>::sortParticles() {
   slotOfValid_ = false;  // the sort takes slots_ back
   const int n = static_cast<int>(n_);
   const ParticleIn<T> in = input();
-  const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
+  const cudak::BlockGrid bg = blockGrid();
   cudak::binKernel<T><<<blocksFor(n_), kThreads>>>(n, in, grid_, bg, numberBits_, keys_[0], slots_[0]);
   CUDA_CHECK(cudaGetLastError());
   cub::DoubleBuffer<unsigned long long> k(keys_[0], keys_[1]);
@@ -518,7 +526,7 @@ void MpmCuda<T>::step(double dt) {
   if (steps_ % 100 == 0) checkTimeStep(dt);
   const int n = static_cast<int>(n_);
   const T dtT = static_cast<T>(dt);
-  const cudak::BlockGrid bg{{blocks_[0], blocks_[1], blocks_[2]}};
+  const cudak::BlockGrid bg = blockGrid();
   beginLists();
   CUDA_CHECK(cudaMemsetAsync(&flags_->firstBad, 0xff, sizeof(flags_->firstBad)));
   static_assert(offsetof(StepFlags, columnsMissing) == offsetof(StepFlags, maxSpeedBits) + sizeof(unsigned int),
@@ -583,13 +591,12 @@ void MpmCuda<T>::step(double dt) {
     CUDA_CHECK(cudaGetLastError());
   }
   mark(4);
-  // the columns the next step's particles can reach (they move less than a cell), in the copy back
-  // of the flags that every step waits for
-  cudak::storeColumnsNearKernel<<<gridLaunch_, kThreads>>>(activeLists(), bg, columnMap(), &flags_->columnsUsed);
-  CUDA_CHECK(cudaGetLastError());
+  // the columns the next step's particles can reach (they move less than a cell), counted in the
+  // copy back of the flags that every step waits for
+  queueColumnsNear();
   StepFlags res;
   CUDA_CHECK(cudaMemcpy(&res, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
-  storeColumnsNear(res, true);
+  takeColumns(res);
   if (res.columnsMissing) {
     std::ostringstream os;
     os << "MPM step " << steps_ + 1 << " (t = " << time_ + dt << " s, " << name()

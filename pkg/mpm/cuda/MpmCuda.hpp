@@ -16,7 +16,7 @@
 // launches only their work) and the tiles next to them (the only nodes zeroed and updated), so
 // a flow filling a few per cent of a long runout box does not pay for the box. Grid memory
 // follows the flow as on the CPU: only the node columns (i, j) near the particles are stored
-// (GridConst::column), in a pool that grows at a step's end (storeColumnsNear), so a flow in a
+// (GridConst::column), in a pool that grows at a step's end (takeColumns), so a flow in a
 // kilometre-wide domain costs its footprint's columns, not the box.
 //
 // Device memory (T = float, N particles, C stored node columns of nz nodes): particle state
@@ -39,6 +39,7 @@ namespace mpmsdem {
 namespace mpm {
 namespace cudak {
 struct ActiveLists;
+struct BlockGrid;
 struct ColumnMap;
 }
 
@@ -100,10 +101,13 @@ class MpmCuda : public MpmSolver {
   void beginLists();                 // the last lists' tiles zeroed and slots forgotten, the lists emptied
   void sortParticles();              // sorted_, sortedKeys_ and the active lists for this step
   cudak::ActiveLists activeLists() const;
+  cudak::BlockGrid blockGrid() const;
   cudak::ColumnMap columnMap() const;
-  // Stores the node columns near the active tiles (cudak::storeColumnsNearKernel), growing the
-  // pool as they need; `launched`: the kernel has been queued and its count copied into *flags.
-  void storeColumnsNear(StepFlags& flags, bool launched);
+  // Queues the storing of the node columns near the active tiles (cudak::storeColumnsNearKernel);
+  // takeColumns then grows the pool to the count the flags copied back hold (or, where it cannot,
+  // takes the places past the pool back and throws).
+  void queueColumnsNear();
+  void takeColumns(const StepFlags& flags);
   void growColumns(unsigned int needed);  // a pool of at least `needed` columns, the stored ones kept
 
   MpmParams params_;
