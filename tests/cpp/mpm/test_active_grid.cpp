@@ -249,21 +249,18 @@ TEST(CpuGrid, NodeRecordsPastTwoToThe28AreAddressedIn64Bits) {
 
 namespace {
 
-// The node columns (i nodes[1] + j) of the tiles the particles' blocks reach, found as the CUDA
-// step finds them (forTilesOfBlock of each particle's block).
-std::set<int> columnsOfTilesReached(const ParticleSet& ps, const GridConst<double>& g, const int nb[3]) {
-  std::set<int> columns;
+// The tiles the particles' blocks reach, found as the CUDA step finds them (forTilesOfBlock of
+// each particle's block).
+std::set<int> tilesReached(const ParticleSet& ps, const GridConst<double>& g, const int nb[3]) {
+  std::set<int> tiles;
   for (std::size_t p = 0; p < ps.size(); ++p) {
     double gc[3];
     for (int d = 0; d < 3; ++d) gc[d] = (ps.x[3 * p + d] - g.origin[d]) * g.invDx;
     int c[3];
     blockCoordsOf(blockCellOf(gc, nb) / kBlockCells, nb, c);
-    forTilesOfBlock(c, nb, [&](int t) {
-      for (int k = 0; k < 9; ++k)
-        if (const int col = columnNearTile(t, 36 + k, nb, g.nodes); col >= 0) columns.insert(col);
-    });
+    forTilesOfBlock(c, nb, [&tiles](int t) { tiles.insert(t); });
   }
-  return columns;
+  return tiles;
 }
 
 }  // namespace
@@ -321,15 +318,7 @@ TEST(ColumnsNearTiles, HoldEveryColumnTheNextStepReachesInACollapse) {
   std::vector<int> column(static_cast<std::size_t>(g.nodes[0]) * g.nodes[1], -1);
   int stored = 0;
   auto storeNear = [&](const ParticleSet& now) {
-    std::set<int> tiles;
-    for (std::size_t p = 0; p < now.size(); ++p) {
-      double gc[3];
-      for (int d = 0; d < 3; ++d) gc[d] = (now.x[3 * p + d] - g.origin[d]) * g.invDx;
-      int c[3];
-      blockCoordsOf(blockCellOf(gc, nb) / kBlockCells, nb, c);
-      forTilesOfBlock(c, nb, [&tiles](int t) { tiles.insert(t); });
-    }
-    for (int t : tiles)
+    for (int t : tilesReached(now, g, nb))
       for (int r = 0; r < kColumnsNearTile; ++r)
         if (const int c = columnNearTile(t, r, nb, g.nodes); c >= 0 && column[c] < 0) column[c] = stored++;
   };
@@ -344,7 +333,8 @@ TEST(ColumnsNearTiles, HoldEveryColumnTheNextStepReachesInACollapse) {
       maxStep = std::max(maxStep,
                          std::hypot(after.x[3 * p] - before.x[3 * p], after.x[3 * p + 1] - before.x[3 * p + 1]));
     storeNear(before);  // the step's end: near the tiles the step's particles started in
-    for (int c : columnsOfTilesReached(after, g, nb)) ASSERT_GE(column[c], 0) << "step " << n + 1 << " column " << c;
+    for (int t : tilesReached(after, g, nb))  // the check the CUDA step makes of each tile it lists
+      ASSERT_TRUE(tileColumnsStored(t, nb, g.nodes, column.data())) << "step " << n + 1 << " tile " << t;
     if (n == 599)
       for (std::size_t p = 0; p < after.size(); ++p) front = std::max(front, after.x[3 * p]);
   }
