@@ -2,7 +2,7 @@
 // MPM–SDEM scenes when the scene has "blocks" (pkg/coupling/CoupledScene.hpp).
 //
 //   mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR]
-//                          [--steps N] [--restart] [--bench]
+//                          [--steps N] [--restart | --flow-from DIR] [--bench]
 //
 // The scene schema is documented in pkg/mpm/MpmScene.hpp (flow), pkg/coupling/CoupledScene.hpp
 // (blocks) and examples/scenes/README.md.
@@ -19,6 +19,16 @@
 //                            With blocks, from the snapshot that coupled.checkpoint.json
 //                            names (pkg/coupling/CoupledCheckpoint.hpp): the same run, bit
 //                            for bit, on the CPU and on CUDA (whose sums have a fixed order)
+//   --flow-from DIR          start from the flow of the run in DIR, at the state it saved when
+//                            its front reached run.snapshot_when_front_at (front_snapshot.json):
+//                            a scene of the same flow (checkFlowFromScene: the keys a restart
+//                            keeps, but for grid cells added on free sides) with blocks that the
+//                            flow had not reached, its own fixed blocks first (a bed). The other
+//                            blocks take their steps before that state alone, so the run is the
+//                            one this scene would give from the start, bit for bit, without
+//                            computing the flow's way to them again (coupling::startFromFlow).
+//                            Needs a fixed run.dt, the same in both, and no flow_probes;
+//                            --steps counts the steps of this run
 //   --bench                  write no files, take no diagnostics; print one JSON line on
 //                            stdout at the end: backend, precision, solver, particles,
 //                            steps, seconds (step loop wall time), particle_updates_per_s
@@ -60,6 +70,9 @@
 //                   and run.stop_when_front_still end the run early (MpmScene.hpp). Such a run
 //                   is not restarted (its probe records are not in the checkpoint); --bench
 //                   takes no records, so it ignores the probes and those two stop rules.
+//   With run.snapshot_when_front_at: front_snapshot.json (and with blocks
+//                   front_snapshot.checkpoint.json), the state --flow-from starts from (a
+//                   restart keeps it when it is older than the restart point).
 // Progress lines go to stdout (stderr with --bench) every 5 % of the run and at least every
 // run.progress_every seconds of wall time (10), with the step and what sets it (the flow's CFL
 // step, a contact, a block's approach naming the block). With "dt": "auto" a step below
@@ -133,7 +146,7 @@ const char* signalName(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTE
 
 const char* const kUsage =
     "usage: mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR] [--steps N] "
-    "[--restart] [--bench [--device-stages]]\n";
+    "[--restart | --flow-from DIR] [--bench [--device-stages]]\n";
 
 struct Options {
   std::string scene;
@@ -142,6 +155,7 @@ struct Options {
   std::optional<std::string> out;
   long steps = 0;  // 0: run for run.duration
   bool restart = false;
+  std::optional<std::string> flowFrom;  // output folder of the run whose flow this one starts from
   bool bench = false;
   bool deviceStages = false;
 };
@@ -171,6 +185,8 @@ Options parseArgs(int argc, char** argv) {
       if (v.empty() || *end != '\0' || o.steps < 1) throwParameter("--steps", v, "", "an integer >= 1");
     } else if (a == "--restart") {
       o.restart = true;
+    } else if (a == "--flow-from") {
+      o.flowFrom = value(i, "--flow-from");
     } else if (a == "--bench") {
       o.bench = true;
     } else if (a == "--device-stages") {
@@ -188,6 +204,9 @@ Options parseArgs(int argc, char** argv) {
   }
   if (o.scene.empty()) throw ParameterError(std::string("no scene file given\n") + kUsage);
   if (o.restart && o.bench) throw ParameterError("--restart and --bench: choose one (a benchmark writes no files)");
+  if (o.restart && o.flowFrom)
+    throw ParameterError("--restart and --flow-from: choose one (a run started from another's flow is restarted from "
+                         "its own outputs, with --restart alone)");
   if (o.deviceStages && !o.bench) throw ParameterError(std::string("--device-stages: only with --bench\n") + kUsage);
   return o;
 }
@@ -439,11 +458,18 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
 const char* const kRestartFree[] = {"description", "run.duration", "run.output_every", "run.series_every",
                                     "run.output_dir", "run.vtk", "run.backend", "run.precision"};
 
-// Key paths where two scenes differ (objects compared key by key, anything else as a whole).
+// Scene keys a run started from another's flow (--flow-from) may have changed besides those:
+// the stop rules, probes and snapshots of the run it starts from, its blocks (checked apart:
+// that run's blocks come first), and grid cells (checked apart: added on free sides only).
+const char* const kFlowFromFree[] = {"run.stop_when_probed", "run.stop_when_front_still", "run.snapshot_when_front_at",
+                                     "run.max_block_speed",  "run.progress_every",          "flow_probes",
+                                     "blocks",               "block_materials",             "grid.cells"};
+
+// Key paths where two scenes differ (objects compared key by key, anything else as a whole),
+// but for the paths in `free`.
 void sceneDifferences(const nlohmann::json& a, const nlohmann::json& b, const std::string& path,
-                      std::vector<std::string>& out) {
-  for (const char* free : kRestartFree)
-    if (path == free) return;
+                      const std::vector<std::string>& free, std::vector<std::string>& out) {
+  if (std::find(free.begin(), free.end(), path) != free.end()) return;
   if (a.is_object() && b.is_object()) {
     std::vector<std::string> keys;
     for (auto it = a.begin(); it != a.end(); ++it) keys.push_back(it.key());
@@ -452,52 +478,103 @@ void sceneDifferences(const nlohmann::json& a, const nlohmann::json& b, const st
     for (const std::string& k : keys) {
       const std::string sub = path.empty() ? k : path + "." + k;
       static const nlohmann::json absent;  // null: key missing on one side
-      sceneDifferences(a.contains(k) ? a.at(k) : absent, b.contains(k) ? b.at(k) : absent, sub, out);
+      sceneDifferences(a.contains(k) ? a.at(k) : absent, b.contains(k) ? b.at(k) : absent, sub, free, out);
     }
     return;
   }
   if (a != b) out.push_back(path);
 }
 
+std::string joined(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& i : items) out += (out.empty() ? "" : ", ") + i;
+  return out;
+}
+
+// The scene stored in the mpm.h5 of an earlier run (its "parameters"), for `option`.
+nlohmann::json storedScene(const std::string& option, const std::string& h5) {
+  try {
+    return nlohmann::json::parse(io::readStringAttribute(h5, "parameters"));
+  } catch (const RuntimeFailure&) {
+    throwParameter(option, h5, "", "an mpm.h5 written by mpmsdem-run (it has no \"parameters\" attribute)");
+  }
+  return {};
+}
+
+// The same scene text means the same blend only if the defaults are the same: a file from
+// before the blend was recorded ran the per-step default when its scene named none.
+void checkSameBlend(const std::string& option, const MpmScene& scene, const std::string& h5) {
+  std::string blend;
+  try {
+    blend = io::readStringAttribute(h5, "flip_blend");
+  } catch (const RuntimeFailure&) {
+    blend = "(not recorded: written before the FLIP/PIC blend became per unit time)";
+  }
+  const std::string ours = mpm::describeFlipBlend(scene.params);
+  if (blend != ours)
+    throw ParameterError(option + ": the run in " + h5 + " blended FLIP/PIC as " + blend + ", this scene as " + ours +
+                         ": going on from it would glue two different flows into one. Start a new run.");
+}
+
 // --restart with a scene that is not the one stored in the output's mpm.h5: a ParameterError.
 void checkRestartScene(const MpmScene& scene, const std::string& h5) {
-  std::string stored;
-  try {
-    stored = io::readStringAttribute(h5, "parameters");
-  } catch (const RuntimeFailure&) {
-    throwParameter("--restart", h5, "", "an mpm.h5 written by mpmsdem-run (it has no \"parameters\" attribute)");
-  }
+  const std::vector<std::string> free(std::begin(kRestartFree), std::end(kRestartFree));
   std::vector<std::string> diff;
-  sceneDifferences(nlohmann::json::parse(stored), nlohmann::json::parse(scene.sourceJson), "", diff);
-  if (diff.empty()) {
-    // The same scene text means the same blend only if the defaults are the same: a file from
-    // before the blend was recorded ran the per-step default when its scene named none.
-    std::string blend;
-    try {
-      blend = io::readStringAttribute(h5, "flip_blend");
-    } catch (const RuntimeFailure&) {
-      blend = "(not recorded: written before the FLIP/PIC blend became per unit time)";
-    }
-    const std::string ours = mpm::describeFlipBlend(scene.params);
-    if (blend != ours)
-      throw ParameterError("--restart: the run in " + h5 + " blended FLIP/PIC as " + blend + ", this scene as " +
-                           ours + ": continuing it would glue two different flows " +
-                           "into one output. Start a new run in another output folder (--out).");
-    return;
-  }
-  std::string changed, free;
-  for (const auto& d : diff) changed += (changed.empty() ? "" : ", ") + d;
-  for (const char* f : kRestartFree) free += (free.empty() ? "" : ", ") + std::string(f);
+  sceneDifferences(storedScene("--restart", h5), nlohmann::json::parse(scene.sourceJson), "", free, diff);
+  if (diff.empty()) return checkSameBlend("--restart", scene, h5);
   throw ParameterError("--restart: the scene differs from the one the run in " + h5 + " was started with (changed: " +
-                       changed + "). A restart continues that run: only " + free +
+                       joined(diff) + "). A restart continues that run: only " + joined(free) +
                        " may change. Undo the change, or start a new run in another output folder (--out).");
+}
+
+// --flow-from: this scene must run the flow of the one stored in `h5` (every key a restart
+// keeps but grid cells, which may differ only on a side whose wall is "free": the grid's origin
+// and spacing stay, so a point sees the same nodes), and begin with its blocks, in its order,
+// with the same materials.
+void checkFlowFromScene(const MpmScene& scene, const std::string& h5) {
+  const nlohmann::json stored = storedScene("--flow-from", h5), ours = nlohmann::json::parse(scene.sourceJson);
+  std::vector<std::string> free(std::begin(kRestartFree), std::end(kRestartFree));
+  free.insert(free.end(), std::begin(kFlowFromFree), std::end(kFlowFromFree));
+  std::vector<std::string> diff;
+  sceneDifferences(stored, ours, "", free, diff);
+  const auto walls = [](const nlohmann::json& j, const std::string& side) {
+    return j.contains("walls") && j["walls"].contains(side) ? j["walls"][side] : nlohmann::json();
+  };
+  for (int d = 0; d < 3; ++d) {
+    const std::string side = std::string("+") + "xyz"[d];
+    if (stored["grid"]["cells"][d] != ours["grid"]["cells"][d] &&
+        (walls(stored, side) != "free" || walls(ours, side) != "free"))
+      diff.push_back("grid.cells[" + std::to_string(d) + "] (the " + side + " wall is not \"free\" in both)");
+  }
+  const nlohmann::json none = nlohmann::json::array();
+  const nlohmann::json& theirs = stored.contains("blocks") ? stored["blocks"] : none;
+  const nlohmann::json& mine = ours.contains("blocks") ? ours["blocks"] : none;
+  for (std::size_t i = 0; i < theirs.size(); ++i) {
+    if (i >= mine.size() || theirs[i] != mine[i]) {
+      diff.push_back("blocks[" + std::to_string(i) + "] (the run started from had it as this scene's block " +
+                     std::to_string(i) + ")");
+      continue;
+    }
+    const std::string m = theirs[i].value("material", "");
+    if (stored["block_materials"][m] != ours.value("block_materials", nlohmann::json::object()).value(m, nlohmann::json()))
+      diff.push_back("block_materials." + m);
+  }
+  if (diff.empty()) return checkSameBlend("--flow-from", scene, h5);
+  throw ParameterError("--flow-from: this scene's flow is not the one of the run in " + h5 + " (changed: " + joined(diff) +
+                       "). It must differ only by " + joined(free) +
+                       ", grid cells added on free sides, and blocks after that run's own.");
 }
 
 class OutputRun {
  public:
   // restart: append to the outputs already in the folder instead of starting them anew;
-  // checkpoint: the coupled state it continues (null without blocks).
-  OutputRun(Stepper& stepper, const MpmScene& scene, bool restart, const coupling::CoupledCheckpoint* checkpoint)
+  // referenceOrientations: what the blocks' rotation is measured from, when not their
+  // orientations now (a restart's checkpoint, or the scene's for a run started from another's
+  // flow: its blocks settled before); null: now, or no blocks. startPositions: the blocks'
+  // centroids at the scene's start, where the run does not begin there (coupled.h5's attribute
+  // start_positions, what travel is counted from); null: now.
+  OutputRun(Stepper& stepper, const MpmScene& scene, bool restart, const std::vector<Quat>* referenceOrientations,
+            const std::vector<Vec3>* startPositions = nullptr)
       : stepper_(stepper),
         solver_(stepper.solver),
         scene_(scene),
@@ -524,10 +601,25 @@ class OutputRun {
       coupled_->h5().setAttribute("parameters", scene.sourceJson);
       // the ParaView contacts: on CUDA they stay on the device unless recorded
       stepper.coupled->coupling.setRecordContacts(scene.run.vtk != "none");
-      if (restart) {
-        coupled_->dropAfter(solver_.time() * (1 + 1e-12));
-        coupled_->setReferenceOrientations(checkpoint->referenceOrientations);
+      if (restart) coupled_->dropAfter(solver_.time() * (1 + 1e-12));
+      if (referenceOrientations) coupled_->setReferenceOrientations(*referenceOrientations);
+      if (!restart) {  // (a restart's file has it from the run's start)
+        const sdem::SdemEngine& e = stepper.coupled->world.engine;
+        nlohmann::json start = nlohmann::json::array();
+        for (int i = 0; i < e.numBodies(); ++i) {
+          const Vec3& p = startPositions ? (*startPositions)[i] : e.position(i);
+          start.push_back({p.x(), p.y(), p.z()});
+        }
+        coupled_->h5().setAttribute("start_positions", start.dump());
       }
+    }
+    if (scene.run.snapshotWhenFrontAt) {
+      // A restart point before the front snapshot (a run killed between the two) writes it again.
+      std::error_code ec;
+      if (restart && std::filesystem::exists(frontPath()))
+        frontWritten_ = coupling::readFrontSnapshot(frontPath().string()).time <= solver_.time();
+      else
+        std::filesystem::remove(frontPath(), ec);  // an earlier run's, in the same folder
     }
     io::writeMpmHeader(h5_, scene.sourceJson, scene.params, solver_.name());
     if (coupled_) coupled_->h5().setAttribute("flip_blend", mpm::describeFlipBlend(scene.params));
@@ -543,6 +635,7 @@ class OutputRun {
     } else {
       recordSeries(diagnose());
       writeSnapshot();
+      writeFrontSnapshot();
     }
     // next record and snapshot times: the first multiples of their intervals after now
     const double t0sim = solver_.time();
@@ -587,6 +680,11 @@ class OutputRun {
         if (output) {
           timedSnapshot();
           while (nextOutput <= t * (1 + 1e-12)) nextOutput += run.outputEvery;
+        }
+        if (frontReached_ && !frontWritten_) {
+          const auto start = Clock::now();
+          writeFrontSnapshot();
+          snapshotSeconds += since(start);
         }
         if (report) {
           const double el = since(t0);
@@ -675,7 +773,7 @@ class OutputRun {
 
   // The flow probes' records and the run's stop rules, at a series record of time t.
   void recordProbes(const mpm::Diagnostics& d, double t) {
-    if (probes_.empty() && scene_.run.stopWhenFrontStill == 0) return;
+    if (probes_.empty() && scene_.run.stopWhenFrontStill == 0 && !scene_.run.snapshotWhenFrontAt) return;
     std::vector<double> depth, velocity, points;
     bool complete = true;
     for (std::size_t k = 0; k < probes_.size(); ++k) {
@@ -691,6 +789,8 @@ class OutputRun {
       h5_.appendVector("probe_points", points);
     }
     if (d.frontX > front_ + 0.5 * scene_.params.dx) front_ = d.frontX, frontAt_ = t;
+    if (scene_.run.snapshotWhenFrontAt && d.frontX >= *scene_.run.snapshotWhenFrontAt && !frontReached_)
+      frontReached_ = true, frontXAtSnapshot_ = d.frontX;
     if (scene_.run.stopWhenProbed && complete)
       stopReason_ = "probes";
     else if (scene_.run.stopWhenFrontStill > 0 && t - frontAt_ > scene_.run.stopWhenFrontStill)
@@ -757,6 +857,30 @@ class OutputRun {
   }
 
 
+  std::filesystem::path frontPath() const { return dir_ / "front_snapshot.json"; }
+
+  // run.snapshot_when_front_at, once the front has reached it: the state now as a snapshot (the
+  // one just written, if it is of now) and front_snapshot.json naming it, with the blocks'
+  // coupled state beside it (the run's own checkpoint is replaced at every snapshot).
+  void writeFrontSnapshot() {
+    if (!frontReached_ || frontWritten_) return;
+    const long index = state_time_ == solver_.time() ? lastSnapshot_ : writeSnapshot();
+    coupling::FrontSnapshot f{*scene_.run.snapshotWhenFrontAt, frontXAtSnapshot_, index, solver_.time(),
+                              solver_.steps(), ""};
+    if (coupled_) {
+      f.checkpoint = "front_snapshot.checkpoint.json";
+      coupling::writeCheckpoint((dir_ / f.checkpoint).string(),
+                                coupling::captureCheckpoint(*stepper_.coupled, index, stepper_.lastDt,
+                                                            coupled_->referenceOrientations()));
+    }
+    coupling::writeFrontSnapshot(frontPath().string(), f);
+    frontWritten_ = true;
+    std::printf("mpmsdem-run: the front reached x = %.6g m (run.snapshot_when_front_at %.6g m) at t = %.6g s: "
+                "snapshot %ld, front_snapshot.json (mpmsdem-run --flow-from %s starts other scenes there)\n",
+                f.frontX, f.x, f.time, index, dir_.string().c_str());
+    std::fflush(stdout);
+  }
+
   // checkpoint: also write the coupled state beside it (blocks and particles at one time).
   long writeSnapshot(bool checkpoint = true) {
     const long index = h5_.writeSnapshot(slices_, solver_.time(), solver_.steps());
@@ -778,6 +902,7 @@ class OutputRun {
                                 coupling::captureCheckpoint(*stepper_.coupled, index, stepper_.lastDt,
                                                             coupled_->referenceOrientations()));
     state_time_ = solver_.time();
+    lastSnapshot_ = index;
     return index;
   }
 
@@ -793,6 +918,9 @@ class OutputRun {
   // the solver's memory while it is written.
   mpm::SolverParticleSlices slices_{solver_, 1 << 16};
   double state_time_ = -1;  // time of the last snapshot written
+  long lastSnapshot_ = -1;  // and its index
+  bool frontReached_ = false, frontWritten_ = false;  // run.snapshot_when_front_at: reached, saved
+  double frontXAtSnapshot_ = 0;                       // the front when it was reached [m]
   std::vector<mpm::FlowProbeRecord> probes_;
   double front_ = -INFINITY, frontAt_ = 0;  // the front's largest x so far and when it got there [m, s]
   std::string stopReason_;                  // a stop rule that ended the run ("probes", "front_still")
@@ -818,6 +946,10 @@ int main(int argc, char** argv) {
     auto solver = makeSolver(scene.params, scene.run.backend, scene.run.precision);
     long maxSteps = opt.steps;
     std::optional<coupling::CoupledCheckpoint> checkpoint;
+    // --flow-from: the state started from (its particles, record, and the blocks' MP contacts)
+    std::optional<io::SnapshotSlices> flowParticles;
+    std::optional<coupling::FrontSnapshot> flowFront;
+    std::optional<coupling::CoupledCheckpoint> flowCheckpoint;
 #ifndef MPMSDEM_WITH_HDF5
     if (!opt.bench)
       throw ParameterError("this mpmsdem-run was built without HDF5 (an MPM-only build, CMakeLists.txt): it runs "
@@ -859,6 +991,38 @@ int main(int argc, char** argv) {
       if (maxSteps > 0) maxSteps += step;
       std::printf("mpmsdem-run: restarting from snapshot %ld of %s (t = %.6g s, step %ld)\n", last, h5.c_str(), time,
                   step);
+    } else if (opt.flowFrom) {
+      const std::filesystem::path src(*opt.flowFrom);
+      const std::string h5 = (src / "mpm.h5").string();
+      flowFront = coupling::readFrontSnapshot((src / "front_snapshot.json").string());
+      if (!(scene.run.dt > 0))
+        throwParameter("--flow-from: run.dt", "\"auto\"", "",
+                       "a fixed step, the one of the run started from: the blocks' steps before its state are "
+                       "taken again, and an automatic step would depend on the flow they did not see");
+      if (!scene.probes.empty())
+        throw ParameterError("--flow-from: this scene has flow_probes, which would miss the flow before the state "
+                             "it starts from; probe the run started from instead");
+      checkFlowFromScene(scene, h5);
+      const long count = io::readNumSnapshots(h5);
+      if (flowFront->snapshot < 0 || flowFront->snapshot >= count)
+        throwParameter("--flow-from: front_snapshot.json snapshot", flowFront->snapshot, "",
+                       "a snapshot of " + h5 + ", 0 to " + std::to_string(count - 1));
+      flowParticles.emplace(h5, flowFront->snapshot);
+      if (flowParticles->step() != flowFront->step || flowParticles->time() != flowFront->time)
+        throw ParameterError("--flow-from: front_snapshot.json (step " + std::to_string(flowFront->step) +
+                             ") and snapshot " + std::to_string(flowFront->snapshot) + " of " + h5 +
+                             " are not of one time: the folder's files were not written by one run");
+      if (!flowFront->checkpoint.empty()) {
+        flowCheckpoint = coupling::readCheckpoint((src / flowFront->checkpoint).string(), "--flow-from");
+        if (flowCheckpoint->step != flowFront->step || flowCheckpoint->time != flowFront->time)
+          throw ParameterError("--flow-from: " + flowFront->checkpoint + " and front_snapshot.json in " + src.string() +
+                               " are not of one time: the folder's files were not written by one run");
+      }
+      if (blocks.empty()) {  // a flow alone: the state as it was
+        solver->setParticles(*flowParticles);
+        solver->setClock(flowFront->time, flowFront->step);
+      }
+      if (maxSteps > 0) maxSteps += flowFront->step;
     } else
 #endif
     {
@@ -868,13 +1032,34 @@ int main(int argc, char** argv) {
     MpmSolver& mpm = *solver;
     std::optional<coupling::CoupledWorld> coupled;
     std::vector<std::string> warnings;
+    std::vector<Quat> sceneOrientations;  // the blocks' at the scene's start
+    std::vector<Vec3> scenePositions;
     if (!blocks.empty()) {
       coupled.emplace(std::move(solver));
       coupling::addBlocks(blocks, *coupled);
       warnings = coupling::checkBlockStates(blocks, *coupled, scene.run.maxBlockSpeed);
       for (const std::string& w : warnings) std::fprintf(stderr, "mpmsdem-run: warning: %s\n", w.c_str());
       if (checkpoint) coupling::restoreCheckpoint(*checkpoint, *coupled);
+#ifdef MPMSDEM_WITH_HDF5
+      if (flowFront) {
+        for (int i = 0; i < coupled->world.engine.numBodies(); ++i) {
+          sceneOrientations.push_back(coupled->world.engine.orientation(i));
+          scenePositions.push_back(coupled->world.engine.position(i));
+        }
+        const auto start = Clock::now();
+        // a point nearer than a grid cell and a point's radius may already be in the broad phase
+        coupling::startFromFlow(*coupled, *flowParticles, flowFront->step, flowFront->time, scene.run.dt,
+                                flowCheckpoint ? &*flowCheckpoint : nullptr, 2 * scene.params.dx);
+        std::printf("mpmsdem-run: the blocks took the %ld steps before it alone (%.3g s wall)\n", flowFront->step,
+                    since(start));
+      }
+#endif
     }
+#ifdef MPMSDEM_WITH_HDF5
+    if (flowFront)
+      std::printf("mpmsdem-run: starting from the flow of %s (t = %.6g s, step %ld; its front at x = %.6g m)\n",
+                  opt.flowFrom->c_str(), flowFront->time, flowFront->step, flowFront->frontX);
+#endif
     Stepper stepper{mpm, coupled ? &*coupled : nullptr};
     if (checkpoint) stepper.lastDt = checkpoint->lastDt;
     if (scene.run.dt > 0 && scene.run.dt > mpm.stableTimeStep() * kStepSlack) {
@@ -889,7 +1074,9 @@ int main(int argc, char** argv) {
     }
 #ifdef MPMSDEM_WITH_HDF5
     if (opt.bench) return runBench(stepper, scene, maxSteps);
-    OutputRun out(stepper, scene, opt.restart, checkpoint ? &*checkpoint : nullptr);
+    OutputRun out(stepper, scene, opt.restart,
+                  checkpoint ? &checkpoint->referenceOrientations : flowFront && coupled ? &sceneOrientations : nullptr,
+                  flowFront && coupled ? &scenePositions : nullptr);
     out.recordWarnings(warnings);
     return out.run(maxSteps);
 #else

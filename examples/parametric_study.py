@@ -24,7 +24,9 @@ The coupled runs last until the front's arrival + 1.5 s; ``--until 4.5`` runs th
 paper's 4.5 s (§5.4: "when the system approaches quasi-steady state") in every mode, and with
 --run-prepared continues cases that ended earlier from their last snapshot. --run-prepared also
 resumes a case that was stopped part-way (killed): its finished free flow is kept and its
-coupled run goes on from its last snapshot.
+coupled run goes on from its last snapshot. Its coupled runs start from the free flow's state
+when the front is AHEAD cells short of the cube (mpmsdem-run --flow-from): the run from the
+release to the last bit, without the flow's way to the cube.
 
 Resolution: coarse by default (dx = 0.02 m, 8 points per cell); table column ``full = 1`` or
 ``--full``: the paper's (dx = 0.01 m). A coarse case takes from 6 minutes on one core (AR 1.3,
@@ -65,6 +67,8 @@ SAMPLE_EVERY = 0.002  # coupled run: the cube's record interval [s]
 ENERGY_EVERY = 0.01   # coupled run: the energies kept in the results (Fig 17) every this long [s]
 MOVING = 0.01         # a cube faster than this [m/s] is still carried
 STATIC_FLOOR = 0.01   # a static force below this fraction of the peak: nothing rests against the cube (no ratio)
+AHEAD = 8             # driver: the free flow saves its state when its front is this many cells short of the cube,
+                      # and the coupled run starts there (mpmsdem-run --flow-from) instead of at the release
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from driver_runs import (STOPPED_EXIT, DriverStopped, eachCase, recordSteps, runDriver,  # noqa: E402
@@ -170,12 +174,14 @@ def _cube(station):
     return Block(half=(HB / 2,) * 3, x=station, density=8900, friction=0.67, flowFriction=0.21)
 
 
-def _coupledResults(out, ff, s, duration, potential0):
+def _coupledResults(out, ff, s, duration, potential0, before=None):
     """The coupled run's results into ``out`` from the cube's series ``s`` (the keys of
     Flume.series, the flow's front among them), the free flow ``ff`` (FlowProbe.result) and the
     flow's potential energy at the start, ``potential0`` [J] (zero at the bed under the column's
     upstream end): the energies of the paper's Figs 17 and 18 (the flow's kinetic peak and its
-    time; the cube's largest kinetic energy E_k,max^b and its ratio to E_p,0^f)."""
+    time; the cube's largest kinetic energy E_k,max^b and its ratio to E_p,0^f). ``before``: the
+    flow's energies before the first record of ``s`` (t, flow_kinetic, flow_potential,
+    block_kinetic), for a run that started later than the release."""
     from mpmsdem import analysis
     peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
     # the same over 50 ms: past the first 10-20 ms of a blow, whose size the flow's E sets
@@ -205,10 +211,16 @@ def _coupledResults(out, ff, s, duration, potential0):
                rotation_deg=float(s["rotation"][-1]), speed_end=float(abs(s["vx"][-1])),
                flow_potential_0=potential0)
     for key in ("flow_kinetic", "block_kinetic"):
-        i = int(s[key].argmax())
-        out.update({key + "_max": float(s[key][i]), key + "_max_time": float(s["t"][i])})
+        t, e = s["t"], s[key]
+        if before is not None and len(before["t"]):
+            t, e = list(before["t"]) + list(t), list(before[key]) + list(e)
+        i = max(range(len(e)), key=lambda k: e[k])
+        out.update({key + "_max": float(e[i]), key + "_max_time": float(t[i])})
     out["block_kinetic_ratio"] = out["block_kinetic_max"] / potential0
     out["energy"] = energySeries(s, potential0)
+    if before is not None and len(before["t"]):
+        early = energySeries(before, potential0)
+        out["energy"] = {k: early[k] + out["energy"][k] for k in early}
     out["flow_dissipated_end"] = out["energy"]["dissipated"][-1]
 
 
@@ -241,10 +253,13 @@ def energySeries(s, potential0):
 # of runCase, one CASE.json beside the case folders.
 
 def prepareCase(AR, L0_hb, folder, full=0, dx=None, ppc=None, settle=1.5, margin=MARGIN, maxFreeTime=5.0,
-                backend="cpu", precision="double"):
+                backend="cpu", precision="double", startAhead=True):
     """Write one case's two driver scenes and case.json into ``folder`` (created). The scenes
     are the ones runCase runs (the same O.dt, records at the same steps): the driver's results
-    are runCase's to round-off. Returns the folder."""
+    are runCase's to round-off. With ``startAhead`` (default) the free flow saves its state
+    when its front is AHEAD cells short of the cube, and --run-prepared starts the coupled run
+    there: the same run, bit for bit, without its flow's way to the cube (the energies before
+    that state come from the free flow's records, every PROBE_EVERY). Returns the folder."""
     import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
     from yade import O
     from mpmsdem import driver
@@ -256,9 +271,10 @@ def prepareCase(AR, L0_hb, folder, full=0, dx=None, ppc=None, settle=1.5, margin
     result["particles"] = scene.mpm.numParticles
     result["flip_blend"] = scene.flipBlend()
     probe = {"x": station, "halfWidth": result["dx"], "bedZ": 0.0, "window": PROBE_WINDOW}
+    ahead = {"snapshotWhenFrontAt": station - AHEAD * result["dx"]} if startAhead else {}
     driver.writeScene(os.path.join(folder, "free.json"), scene.coupled, duration=maxFreeTime, dt=O.dt,
                       flowProbes=[probe], seriesEvery=stepsOf(PROBE_EVERY, O.dt) * O.dt, outputEvery=maxFreeTime,
-                      vtk="none", stopWhenProbed=True, stopWhenFrontStill=FRONT_STILL)
+                      vtk="none", stopWhenProbed=True, stopWhenFrontStill=FRONT_STILL, **ahead)
     dt = O.dt
     scene = Flume(blocks=[_cube(station)], **common)
     if O.dt != dt:
@@ -277,7 +293,8 @@ def runPrepared(folder, exe="mpmsdem-run", backend=None, precision=None, threads
     """Run the prepared cases under ``folder`` through the driver, ``workers`` at a time (each
     its own mpmsdem-run; on a GPU, small cases leave room for several): the free flow, then
     (if its front reached the station) the coupled run to the arrival + settle, or to
-    ``until`` [s] if later (see runCase). Standard library only (no YADE, numpy or h5py): it
+    ``until`` [s] if later (see runCase), from the free flow's state ahead of the cube where it
+    saved one (prepareCase's ``startAhead``). Standard library only (no YADE, numpy or h5py): it
     runs where only mpmsdem-run is built. A case with run.json is done and skipped unless
     ``rerun``, or unless its coupled run ended before ``until``: that run then goes on from
     its last snapshot (mpmsdem-run --restart, the same run as one to ``until``). A case
@@ -338,7 +355,14 @@ def _runCaseFolder(case, meta, until, drive, how, restart):
         record.update(coupled_steps=steps, coupled_started=True)
         keep()
         seconds = 0.0
-        if start == 0:
+        front = _frontSnapshot(case)
+        if start == 0 and front is not None and front["step"] < steps:
+            record["coupled_from_step"] = front["step"]
+            keep()
+            seconds = drive("coupled.json", "coupled",
+                            ["--flow-from", os.path.join(case, "free"), "--steps", str(steps - front["step"])])
+        elif start == 0:
+            record.pop("coupled_from_step", None)
             seconds = drive("coupled.json", "coupled", ["--steps", str(steps)])
         elif start < steps:
             print("%s: coupled run resumed from step %d of %d" % (name, start, steps))
@@ -385,6 +409,32 @@ def _checkpointStep(case):
         return json.load(f)["step"]
 
 
+def _frontSnapshot(case):
+    """The state the free flow saved ahead of the cube (free/front_snapshot.json), or None (a
+    case prepared without it, or a flow that never came so far)."""
+    path = os.path.join(case, "free", "front_snapshot.json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
+def _flowBefore(case, t):
+    """The free flow's records before ``t`` [s] (t, flow_kinetic, flow_potential, block_kinetic
+    0: the cube at rest before the flow comes) and its potential energy at the release, from
+    free/coupled.h5: what a coupled run started from the free flow's state does not record."""
+    import h5py
+    with h5py.File(os.path.join(case, "free", "coupled.h5"), "r") as f:
+        g = f["series"]
+        times = g["time"][:]
+        keep = (times > 0) & (times < t * (1 - 1e-12))  # (no record at the release: as runCase's series)
+        out = {"t": times[keep], "flow_kinetic": g["flow_kinetic"][:][keep],
+               "flow_potential": g["flow_potential"][:][keep]}
+        potential0 = float(g["flow_potential"][0])
+    out["block_kinetic"] = 0.0 * out["t"]
+    return out, potential0
+
+
 def _freeFlow(case):
     """What the driver's free flow of a case folder reported (free/flow_probes.json)."""
     with open(os.path.join(case, "free", "flow_probes.json")) as f:
@@ -411,8 +461,13 @@ def collectCase(case):
     s, _ = analysis.driverBlockSeries(os.path.join(case, "coupled"))
     if "flow_front" not in s:
         raise ValueError("%s: no mpm.h5 beside coupled.h5 (the flow's front series)" % os.path.join(case, "coupled"))
-    potential0 = float(s["flow_potential"][0])  # the driver's record at the start
-    _coupledResults(out, ff, {k: v[1:] for k, v in s.items()}, record["coupled_steps"] * meta["dt"], potential0)
+    before = None
+    if record.get("coupled_from_step"):  # started from the free flow's state: its records before
+        before, potential0 = _flowBefore(case, float(s["t"][0]))
+    else:
+        potential0 = float(s["flow_potential"][0])  # the driver's record at the start
+    _coupledResults(out, ff, {k: v[1:] for k, v in s.items()}, record["coupled_steps"] * meta["dt"], potential0,
+                    before)
     out["wall_seconds"]["coupled"] = record["coupled_seconds"]
     return out
 

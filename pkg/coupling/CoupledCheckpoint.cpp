@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/Error.hpp"
+#include "mpm/MpmTypes.hpp"
 
 namespace mpmsdem {
 namespace coupling {
@@ -16,6 +17,7 @@ namespace {
 
 using nlohmann::json;
 constexpr const char* kFormat = "mpmsdem-driver-coupled-1";
+constexpr const char* kFrontFormat = "mpmsdem-front-snapshot-1";
 
 json vec(const Vec3& v) { return json::array({v[0], v[1], v[2]}); }
 json quat(const Quat& q) { return json::array({q.w(), q.x(), q.y(), q.z()}); }
@@ -28,22 +30,31 @@ Quat toQuat(const json& j) {
 }
 double toStep(const json& j, double none) { return j.is_null() ? none : j.get<double>(); }
 
-}  // namespace
+// Through a temporary file renamed over `path`: a run killed while writing leaves the old file.
+void writeAtomically(const std::string& path, const json& j, const char* what) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    f << j.dump();
+    f.flush();
+    if (!f) throw RuntimeFailure(std::string(what) + ": cannot write " + tmp);
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw RuntimeFailure(std::string(what) + ": cannot rename " + tmp + " to " + path + ": " + ec.message());
+}
 
-CoupledCheckpoint captureCheckpoint(CoupledWorld& w, long snapshot, double lastDt,
-                                    const std::vector<Quat>& referenceOrientations) {
-  CoupledCheckpoint c;
-  c.snapshot = snapshot;
-  c.step = w.mpm().steps();
-  c.time = w.mpm().time();
-  c.worldTime = w.world.time();
-  c.lastDt = lastDt;
-  c.contactStep = w.contactStep();
-  c.contactStepLow = w.contactStepLow();
-  c.particleApproachStep = w.coupling.particleApproachStep();
+
+// The SDEM side of a checkpoint: the blocks' states, clock, contact histories and dissipations.
+void captureBlocks(CoupledWorld& w, CoupledCheckpoint& c) {
   const sdem::SdemEngine& e = w.world.engine;
-  const int n = e.numBodies();
-  for (int i = 0; i < n; ++i) {
+  c.pos.clear();
+  c.ori.clear();
+  c.vel.clear();
+  c.angVel.clear();
+  c.hasAngMom.clear();
+  c.angMom.clear();
+  for (int i = 0; i < e.numBodies(); ++i) {
     c.pos.push_back(e.position(i));
     c.ori.push_back(e.orientation(i));
     c.vel.push_back(e.velocity(i));
@@ -52,9 +63,24 @@ CoupledCheckpoint captureCheckpoint(CoupledWorld& w, long snapshot, double lastD
     c.hasAngMom.push_back(w.world.angularMomentum(i, L) ? 1 : 0);
     c.angMom.push_back(L);
   }
+  c.worldTime = w.world.time();
   c.sdemHistories = e.contactHistories();
   c.sdemFriction = e.frictionDissipation();
   c.sdemDamping = e.dampingDissipation();
+}
+}  // namespace
+
+CoupledCheckpoint captureCheckpoint(CoupledWorld& w, long snapshot, double lastDt,
+                                    const std::vector<Quat>& referenceOrientations) {
+  CoupledCheckpoint c;
+  c.snapshot = snapshot;
+  c.step = w.mpm().steps();
+  c.time = w.mpm().time();
+  c.lastDt = lastDt;
+  c.contactStep = w.contactStep();
+  c.contactStepLow = w.contactStepLow();
+  c.particleApproachStep = w.coupling.particleApproachStep();
+  captureBlocks(w, c);
   c.historySlots = w.coupling.historySlots();
   w.coupling.pullHistories();
   const std::vector<long long>& keys = w.coupling.historyKeys();
@@ -107,24 +133,15 @@ void writeCheckpoint(const std::string& path, const CoupledCheckpoint& c) {
   for (const Quat& q : c.referenceOrientations) ro.push_back(quat(q));
   j["reference_orientations"] = ro;
 
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    f << j.dump();
-    f.flush();
-    if (!f) throw RuntimeFailure("coupled checkpoint: cannot write " + tmp);
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw RuntimeFailure("coupled checkpoint: cannot rename " + tmp + " to " + path + ": " + ec.message());
+  writeAtomically(path, j, "coupled checkpoint");
 }
 
-CoupledCheckpoint readCheckpoint(const std::string& path) {
+CoupledCheckpoint readCheckpoint(const std::string& path, const std::string& option) {
   std::ifstream f(path);
   if (!f)
-    throw ParameterError("--restart: " + path +
-                         " is missing; a coupled run is restarted from the checkpoint its outputs hold, which "
-                         "mpmsdem-run writes beside every snapshot (the CPU backend only)");
+    throw ParameterError(option + ": " + path +
+                         " is missing; a coupled run goes on from the checkpoint its outputs hold, which "
+                         "mpmsdem-run writes beside every snapshot");
   CoupledCheckpoint c;
   try {
     const json j = json::parse(f);
@@ -172,9 +189,9 @@ CoupledCheckpoint readCheckpoint(const std::string& path) {
     c.couplingDamping = j.at("coupling_dissipation").at(1).get<double>();
     for (const json& q : j.at("reference_orientations")) c.referenceOrientations.push_back(toQuat(q));
   } catch (const json::exception& e) {
-    throw ParameterError("--restart: " + path + " is not a readable coupled checkpoint: " + e.what());
+    throw ParameterError(option + ": " + path + " is not a readable coupled checkpoint: " + e.what());
   } catch (const ParameterError& e) {
-    throw ParameterError("--restart: " + path + ": " + e.what());
+    throw ParameterError(option + ": " + path + ": " + e.what());
   }
   return c;
 }
@@ -212,6 +229,93 @@ void restoreCheckpoint(const CoupledCheckpoint& c, CoupledWorld& w) {
   w.coupling.setDissipation(c.couplingFriction, c.couplingDamping);
   w.coupling.restoreParticleApproachStep(c.particleApproachStep);
   w.restoreContactSteps(c.contactStep, c.contactStepLow);
+}
+
+void writeFrontSnapshot(const std::string& path, const FrontSnapshot& f) {
+  json j = {{"format", kFrontFormat}, {"x", f.x},       {"front_x", f.frontX}, {"snapshot", f.snapshot},
+            {"time", f.time},        {"step", f.step}, {"checkpoint", f.checkpoint.empty() ? json() : json(f.checkpoint)}};
+  writeAtomically(path, j, "front snapshot");
+}
+
+FrontSnapshot readFrontSnapshot(const std::string& path) {
+  std::ifstream in(path);
+  if (!in)
+    throw ParameterError("--flow-from: " + path + " is missing: the run in that folder wrote no state to start from "
+                         "(give its scene run.snapshot_when_front_at, upstream of this scene's blocks, and run it again)");
+  FrontSnapshot f;
+  try {
+    const json j = json::parse(in);
+    if (j.value("format", "") != kFrontFormat) throw ParameterError("format: not \"" + std::string(kFrontFormat) + "\"");
+    f.x = j.at("x").get<double>();
+    f.frontX = j.at("front_x").get<double>();
+    f.snapshot = j.at("snapshot").get<long>();
+    f.time = j.at("time").get<double>();
+    f.step = j.at("step").get<long>();
+    if (!j.at("checkpoint").is_null()) f.checkpoint = j.at("checkpoint").get<std::string>();
+  } catch (const json::exception& e) {
+    throw ParameterError("--flow-from: " + path + " is not a readable front snapshot record: " + e.what());
+  } catch (const ParameterError& e) {
+    throw ParameterError("--flow-from: " + path + ": " + e.what());
+  }
+  return f;
+}
+
+void startFromFlow(CoupledWorld& w, mpm::ParticleSlices& particles, long step, double time, double dt,
+                   const CoupledCheckpoint* source, double reach) {
+  sdem::SdemEngine& e = w.world.engine;
+  const int n = e.numBodies();
+  const int kept = source ? static_cast<int>(source->pos.size()) : 0;
+  if (kept > n)
+    throwParameter("--flow-from: the blocks of the run started from", kept, "", "at most this scene's " + std::to_string(n));
+  for (int i = 0; i < kept; ++i)
+    if (!e.isFixed(i) || e.position(i) != source->pos[i] || e.orientation(i).coeffs() != source->ori[i].coeffs())
+      throw ParameterError("--flow-from: block " + std::to_string(e.externalId(i)) +
+                           " of the run started from must be fixed, and this scene's block " + std::to_string(i) +
+                           " must be it, fixed where it was: a block that moves would move without the flow's "
+                           "forces in the steps this run does not take again");
+  if (w.mpm().numParticles() != 0) throw ParameterError("--flow-from: the solver must start without particles");
+  if (step < 0) throwParameter("--flow-from: step", step, "", ">= 0");
+  if (!(dt > 0)) throwParameter("--flow-from: run.dt", dt, "s", "> 0 (a fixed step)");
+  // What each new block does before the flow reaches it, in the steps the scene's own run takes:
+  // without particles a coupled step moves the blocks alone (no MP contacts, no force buffer).
+  for (long k = 0; k < step; ++k) w.step(dt);
+  if (w.time() != time || w.mpm().time() != time) {
+    char msg[256];
+    std::snprintf(msg, sizeof msg, "%ld steps of run.dt = %.17g s reach t = %.17g s, the state started from is at "
+                  "t = %.17g s: that run took other steps (both scenes need the same fixed run.dt)",
+                  step, dt, w.time(), time);
+    throw ParameterError("--flow-from: " + std::string(msg));
+  }
+  for (int i = kept; i < n; ++i) {
+    const Vec3 c = e.position(i);
+    const double r = e.shape(i).boundingRadius + reach;
+    mpm::forEachSlice(particles, [&](std::size_t first, const mpm::ParticleSet& p) {
+      for (std::size_t q = 0; q < p.size(); ++q) {
+        const Vec3 x(p.x[3 * q], p.x[3 * q + 1], p.x[3 * q + 2]);
+        if ((x - c).norm() < r) {
+          char msg[320];
+          std::snprintf(msg, sizeof msg, "particle %zu is %.4g m from the centre of block %d at t = %.6g s, within "
+                        "its bounding radius %.4g m and %.4g m: the flow had reached it there; start from a state "
+                        "saved earlier (a smaller run.snapshot_when_front_at)",
+                        first + q, (x - c).norm(), e.externalId(i), time, e.shape(i).boundingRadius, reach);
+          throw ParameterError("--flow-from: " + std::string(msg));
+        }
+      }
+    });
+  }
+  w.mpm().setParticles(particles);
+  w.mpm().setClock(time, step);
+  if (source) {
+    // The new blocks' contact steps (with the fixed ones) and the source's MP contacts: the
+    // scene's run had both, step by step; its lowest is the lower of the two.
+    const double blocksStep = w.contactStep();
+    const CoupledWorld::ContactStepLow blocksLow = w.contactStepLow();
+    CoupledCheckpoint c = *source;
+    captureBlocks(w, c);
+    c.contactStep = std::min(c.contactStep, blocksStep);
+    if (blocksLow.step < c.contactStepLow.step) c.contactStepLow = blocksLow;
+    restoreCheckpoint(c, w);
+  }
 }
 
 }  // namespace coupling

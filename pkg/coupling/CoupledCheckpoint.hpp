@@ -55,12 +55,44 @@ CoupledCheckpoint captureCheckpoint(CoupledWorld& world, long snapshot, double l
 // the previous checkpoint. RuntimeFailure naming the path when it cannot be written.
 void writeCheckpoint(const std::string& path, const CoupledCheckpoint& c);
 
-// ParameterError naming the path when it is missing, not such a checkpoint, or malformed.
-CoupledCheckpoint readCheckpoint(const std::string& path);
+// ParameterError naming the path (and the command-line option that asked for it) when it is
+// missing, not such a checkpoint, or malformed.
+CoupledCheckpoint readCheckpoint(const std::string& path, const std::string& option = "--restart");
 
 // Put `world` (blocks added, particles of the snapshot loaded) into the checkpointed state.
 // ParameterError when the checkpoint does not fit the scene (number of blocks or particles).
 void restoreCheckpoint(const CoupledCheckpoint& c, CoupledWorld& world);
+
+// A run's state when its front first reached run.snapshot_when_front_at: the driver writes it
+// as <dir>/front_snapshot.json, naming the snapshot of mpm.h5 that holds the particles, and
+// with blocks their MP contacts in <dir>/front_snapshot.checkpoint.json (a CoupledCheckpoint).
+// File (JSON): {"format": "mpmsdem-front-snapshot-1", "x", "front_x", "snapshot", "time",
+//   "step", "checkpoint" (the checkpoint's file name, or null for a run without blocks)}.
+struct FrontSnapshot {
+  double x = 0;        // run.snapshot_when_front_at [m]
+  double frontX = 0;   // the front then [m]
+  long snapshot = -1;  // index in mpm.h5
+  double time = 0;     // [s]
+  long step = 0;
+  std::string checkpoint;  // file name beside it; empty: no blocks
+};
+void writeFrontSnapshot(const std::string& path, const FrontSnapshot& f);
+// ParameterError naming the path when it is missing or malformed.
+FrontSnapshot readFrontSnapshot(const std::string& path);
+
+// Start `world` from the flow of another run (mpmsdem-run --flow-from): a run of the same flow
+// whose blocks, all fixed, are the first blocks of `world` (a flume's bed, walls), saved
+// before its particles came near the others. `world` holds the scene's blocks and a solver
+// without particles. The other blocks first take, alone, the `step` steps of `dt` [s] that the
+// scene's own run gives them before the flow arrives (they settle on the fixed ones); then the
+// solver takes `particles` at (time, step), and the coupling the MP–block state of `source`
+// (the other run's checkpoint of that time; null: it had no blocks). The run then goes on as the
+// scene's own run from the start would, to the bit. ParameterError when the source's blocks
+// are not the world's first ones, fixed and in place, when `step` steps of `dt` do not reach
+// `time`, or when a particle lies within `reach` [m] of another block's bounding sphere (the
+// flow had reached it: start from an earlier state).
+void startFromFlow(CoupledWorld& world, mpm::ParticleSlices& particles, long step, double time, double dt,
+                   const CoupledCheckpoint* source, double reach);
 
 }  // namespace coupling
 }  // namespace mpmsdem

@@ -397,7 +397,7 @@ void parseRun(const json& root, RunSettings& r) {
   const json& j = requireObject(root, "", "run");
   checkKeys(j, "run", {"duration", "dt", "dt_factor", "output_every", "series_every", "output_dir", "vtk", "backend",
                        "precision", "min_step_fraction", "max_block_speed", "progress_every", "stop_when_probed",
-                       "stop_when_front_still"});
+                       "stop_when_front_still", "snapshot_when_front_at"});
   r.duration = requireNumber(j, "run", "duration");
   checkRange("run.duration", r.duration, "s", 0, true, kInf, true);
   if (j.contains("dt")) {
@@ -428,6 +428,10 @@ void parseRun(const json& root, RunSettings& r) {
   }
   r.stopWhenFrontStill = optNumber(j, "run", "stop_when_front_still", r.stopWhenFrontStill);
   checkRange("run.stop_when_front_still", r.stopWhenFrontStill, "s", 0, false, kInf, true);
+  if (j.contains("snapshot_when_front_at")) {
+    r.snapshotWhenFrontAt = requireNumber(j, "run", "snapshot_when_front_at");
+    checkRange("run.snapshot_when_front_at", *r.snapshotWhenFrontAt, "m", -kInf, true, kInf, true);
+  }
   r.outputEvery = optNumber(j, "run", "output_every", r.duration / 20);
   checkRange("run.output_every", r.outputEvery, "s", 0, true, kInf, true);
   r.seriesEvery = optNumber(j, "run", "series_every", r.outputEvery / 10);

@@ -110,6 +110,12 @@
 //     "stop_when_front_still": 0,   [s] >= 0: end the run when the front (the largest particle x)
 //                                   has not advanced by dx/2 for this long at the series records
 //                                   (a flow that stopped); 0: never
+//     "snapshot_when_front_at": none, [m] any number: at the first series record where the front
+//                                   (the largest particle x) has reached this x, write a snapshot
+//                                   and front_snapshot.json naming it (with the blocks' MP
+//                                   contacts in a coupled run): another scene of the same flow
+//                                   starts there with mpmsdem-run --flow-from (the blocks ahead
+//                                   of the front join it, their steps before it run alone)
 //     "progress_every": 10,         [s] of wall time, > 0: a progress line at least this often
 //                                   (and every 5 % of the run), with the step and what limits it
 //     "output_every": duration/20,  snapshot interval [s], > 0 (HDF5 snapshot + VTK file)
@@ -132,6 +138,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -167,6 +174,7 @@ struct RunSettings {
   double progressEvery = 10;      // wall-time interval of progress lines [s], > 0
   bool stopWhenProbed = false;    // end once every flow probe's result is complete
   double stopWhenFrontStill = 0;  // end when the front has been still this long [s]; 0: never
+  std::optional<double> snapshotWhenFrontAt;  // snapshot when the front first reaches this x [m]
   double outputEvery = 0;         // snapshot interval [s], > 0
   double seriesEvery = 0;         // time-series record interval [s], > 0
   std::string outputDir = "out";  // output folder

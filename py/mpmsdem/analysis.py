@@ -297,7 +297,7 @@ def driverBlockSeries(folder, block=None, initial=True):
     """A block's series from the coupled.h5 that ``mpmsdem-run`` wrote in ``folder``, with the
     keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, Ft, Ff, Fe
     (downstream flow force: total, on faces, on edges) [N], rotation (the whole angle turned
-    since the start), tilt and yaw [deg], and the scene's flow_kinetic, flow_potential and
+    since the scene's start), tilt and yaw [deg], and the scene's flow_kinetic, flow_potential and
     block_kinetic [J], and flow_front [m] (the flow's most downstream point, from the mpm.h5
     beside it where there is one). ``block``: its index in the file (default: the first
     block that moves; a flume's bed is fixed). ``initial``: keep the driver's record at the
@@ -323,7 +323,9 @@ def driverBlockSeries(folder, block=None, initial=True):
         if not 0 <= block < pos.shape[1] // 3:
             raise ValueError("block = %r: must be in [0, %d) (the blocks of %s)" % (block, pos.shape[1] // 3, path))
         c = slice(3 * block, 3 * block + 3)
-        s = {"t": t, "travel": pos[:, c][:, 0] - pos[0, c][0], "vx": vel[:, c][:, 0],
+        # from the scene's start: a run started from another's flow records from later on
+        x0 = json.loads(f.attrs["start_positions"])[block][0] if "start_positions" in f.attrs else pos[0, c][0]
+        s = {"t": t, "travel": pos[:, c][:, 0] - x0, "vx": vel[:, c][:, 0],
              "Ft": g["flow_force"][:, c][:, 0], "Ff": g["face_force"][:, c][:, 0], "Fe": g["edge_force"][:, c][:, 0],
              "rotation": np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))}
         turns = np.array([tiltAndYaw(np.linalg.norm(r), r) for r in g["rotation"][:, c]]).reshape(-1, 2)

@@ -24,7 +24,8 @@ from yade import O
 
 RUN_KEYS = {"outputEvery": "output_every", "seriesEvery": "series_every", "outputDir": "output_dir",
             "vtk": "vtk", "backend": "backend", "precision": "precision", "dtFactor": "dt_factor",
-            "stopWhenProbed": "stop_when_probed", "stopWhenFrontStill": "stop_when_front_still"}
+            "stopWhenProbed": "stop_when_probed", "stopWhenFrontStill": "stop_when_front_still",
+            "snapshotWhenFrontAt": "snapshot_when_front_at"}
 PROBE_KEYS = {"x": "x", "halfWidth": "half_width", "bedZ": "bed_z", "minPoints": "min_points", "window": "window"}
 
 
@@ -119,7 +120,8 @@ def writeScene(path, coupled, duration, dt="auto", flowProbes=(), **run):
         ``flow_probes``: pkg/mpm/MpmScene.hpp); results in the output's flow_probes.json.
     :param run: other run settings of the scene (``outputEvery``, ``seriesEvery`` [s],
         ``outputDir``, ``vtk``, ``backend``, ``precision``, ``dtFactor``, ``stopWhenProbed``,
-        ``stopWhenFrontStill`` [s]).
+        ``stopWhenFrontStill`` [s], ``snapshotWhenFrontAt`` [m]: the state where another scene of
+        the same flow starts, ``mpmsdem-run --flow-from``).
     :returns: the path written.
     """
     scene = sceneDict(coupled, duration, dt, flowProbes, **run)

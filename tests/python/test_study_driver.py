@@ -1,7 +1,8 @@
 """The paper's studies through the plain C++ driver, as a GPU machine (no YADE) runs them:
 - §5 (examples/parametric_study.py --prepare, --run-prepared, --collect): a case's free flow,
   read by the driver's flow probe, and its coupled run give runCase's results in YADE to
-  round-off; a flow that never reaches the station is reported as such by both; the driver's
+  round-off; a coupled run started from the free flow's state ahead of the cube is the run
+  from the release, to the bit; a flow that never reaches the station is reported as such by both; the driver's
   probe and stop rules are refused or recorded as documented.
 - §3.2 (examples/calibrate_flume.py prepareFlume / flumeResultOfDriver, used by
   scripts/validation/paper_flume_design.py): a candidate through the driver gives flumeRun's
@@ -150,6 +151,72 @@ def test_a_case_stopped_part_way_resumes_where_it_stopped(tmp_path):
     assert ps.runPrepared(str(tmp_path / "study"), exe=real, until=until, rerun=True) == [folder]
     assert "resumed_from_steps" not in json.load(open(os.path.join(folder, "run.json")))
     assertSameCase(ps.collectCase(folder), ref)
+
+
+def test_a_coupled_run_started_ahead_of_the_cube_is_the_run_from_the_release(tmp_path):
+    """--prepare's free flow saves its state when its front is AHEAD cells short of the cube and
+    the coupled run starts there (mpmsdem-run --flow-from): the cube's series, the flow's state
+    and every result are those of the coupled run from the release, to the last bit; the energies
+    before that state come from the free flow's records. Scenes that are not the same flow, or
+    whose cube the flow already reaches, are refused by name."""
+    import h5py
+    import numpy as np
+    ps = study()
+    case = dict(CASE, L0_hb=14)  # the cube 0.7 m downstream: the front saved at x 0.6 m
+    runs = {}
+    for name, ahead in (("ahead", True), ("release", False)):
+        folder = ps.prepareCase(folder=str(tmp_path / name / "case"), startAhead=ahead, **case)
+        assert ps.runPrepared(str(tmp_path / name), exe=driver.executable()) == [folder]
+        runs[name] = folder
+    record = json.load(open(os.path.join(runs["ahead"], "run.json")))
+    front = json.load(open(os.path.join(runs["ahead"], "free", "front_snapshot.json")))
+    assert 0 < record["coupled_from_step"] == front["step"] < record["coupled_steps"] / 2
+    assert 0.6 <= front["front_x"] < 0.6 + 0.05 and front["x"] == pytest.approx(0.6, abs=1e-12)
+    assert "coupled_from_step" not in json.load(open(os.path.join(runs["release"], "run.json")))
+    got, ref = ps.collectCase(runs["ahead"]), ps.collectCase(runs["release"])
+    for k in ref:
+        if k not in ("driver", "wall_seconds", "energy"):
+            assert got[k] == ref[k], k
+    assert got["travel"] > 0.05  # the cube was carried
+    tk = front["time"]
+    for k in ref["energy"]:  # after the start: the same records; before it, the free flow's
+        after = [e for t, e in zip(ref["energy"]["t"], ref["energy"][k]) if t > tk + 0.01]
+        assert after == got["energy"][k][-len(after):], k
+    early = [t for t in got["energy"]["t"] if t < tk]
+    assert early[0] == pytest.approx(0.01, abs=0.006) and len(early) == pytest.approx(tk / ps.ENERGY_EVERY, abs=1.5)
+    with h5py.File(os.path.join(runs["ahead"], "coupled", "coupled.h5"), "r") as a, \
+            h5py.File(os.path.join(runs["release"], "coupled", "coupled.h5"), "r") as b:
+        t = a["series/time"][:]
+        assert t[0] == tk
+        at = np.searchsorted(b["series/time"][:], t[1:])
+        for k in a["series"]:
+            assert np.array_equal(a["series"][k][1:], b["series"][k][:][at]), k
+
+    exe, free = driver.executable(), os.path.join(runs["ahead"], "free")
+    scene = json.load(open(os.path.join(runs["ahead"], "coupled.json")))
+
+    def refused(changed, expect, extra=(), source=free):
+        path = str(tmp_path / "changed.json")
+        json.dump(changed, open(path, "w"))
+        r = subprocess.run([exe, path, "--out", str(tmp_path / "refused"), "--flow-from", source] + list(extra),
+                           capture_output=True, text=True)
+        assert r.returncode == 2 and expect in r.stderr, r.stderr
+
+    import copy
+    other = copy.deepcopy(scene)
+    other["material"]["mu_2"] = 0.7
+    refused(other, "material.mu_2")
+    other = copy.deepcopy(scene)
+    other["grid"]["cells"][1] += 2  # the +y side is a wall
+    refused(other, "grid.cells[1]")
+    other = copy.deepcopy(scene)
+    other["blocks"][1]["position"][0] = 0.55  # the cube where the front already is
+    refused(other, "the flow had reached it")
+    other = copy.deepcopy(scene)
+    other["run"]["dt"] = "auto"
+    refused(other, "run.dt")
+    refused(scene, "--restart and --flow-from", ["--restart"])
+    refused(scene, "front_snapshot.json is missing", source=str(tmp_path))
 
 
 def test_a_flow_that_stops_short_of_the_station_has_no_coupled_run(tmp_path):

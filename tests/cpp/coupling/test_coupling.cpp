@@ -259,6 +259,105 @@ TEST_P(CoupledCheckpointEveryBackend, RestoredWorldContinuesTheSameRunBitForBit)
   mpm::agreement::expectBitIdentical(pa, pb);
 }
 
+// A coupled run started from another run's flow (driver --flow-from): a blob falls onto a fixed
+// bed and slides along it at 1 m/s towards a cube spinning in place 9 cm ahead (blocks without
+// gravity). The run of the bed alone, stopped once the blob rests on the bed but is still
+// short of the cube, with the cube's steps before it taken alone, goes on as the run of bed and
+// cube from the start, to the last bit, on every backend; a state in which the blob already
+// reaches the cube, and worlds that do not fit, are refused.
+class StartFromFlowEveryBackend : public mpm::agreement::EveryBackend {};
+INSTANTIATE_TEST_SUITE_P(Kinds, StartFromFlowEveryBackend, ::testing::ValuesIn(mpm::agreement::everyKind()),
+                         mpm::agreement::kindName);
+TEST_P(StartFromFlowEveryBackend, GoesOnAsTheRunFromTheStart) {
+  const double dt = 1e-5;
+  const long ahead = 3500, later = 6000, end = 10000;
+  auto withBed = [](std::unique_ptr<CoupledWorld> w) {
+    w->world.engine.addMaterial(sdem::SdemMaterial{});
+    static const auto bed = SpheroPolyhedron::box(Vec3(0.11, 0.06, 0.01), 0.003);
+    const int i = w->world.engine.addBody(bed, 0, 1.0, Vec3::Ones(), 7);
+    w->world.engine.setFixed(i, true);
+    w->world.engine.setState(i, Vec3(0.12, 0.07, 0.0385), Quat::Identity(), Vec3::Zero(), Vec3::Zero());
+    w->coupling.setPair(0, pair(0.3, 0.2));
+    return w;
+  };
+  auto withCube = [](std::unique_ptr<CoupledWorld> w) {
+    const int i = addCube(*w, 0.01, 0.002, Vec3(0.17, 0.07, 0.07), 2000);
+    w->world.engine.setState(i, Vec3(0.17, 0.07, 0.07), Quat::Identity(), Vec3::Zero(), Vec3(0, 0, 5));
+    return w;
+  };
+  auto blob = [&] {  // blobWorld's, under gravity: it stays on the bed
+    auto prm = gridParams({24, 14, 14});
+    prm.gravity = {0, 0, -9.81};
+    mpm::ParticleSet ps;
+    mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
+    for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 1.0;
+    auto solver = this->solver(prm);
+    solver->setParticles(ps);
+    auto w = std::make_unique<CoupledWorld>(std::move(solver));
+    w->world.gravity = Vec3::Zero();
+    return w;
+  };
+  auto fresh = [&](const mpm::MpmParams& p) {
+    auto w = std::make_unique<CoupledWorld>(this->solver(p));
+    w->world.gravity = Vec3::Zero();
+    return w;
+  };
+
+  auto whole = withCube(withBed(blob()));
+  double cubeImpulse = 0;
+  for (long k = 0; k < end; ++k) {
+    whole->step(dt);
+    cubeImpulse += dt * whole->coupling.force(1).norm();
+  }
+  ASSERT_GT(cubeImpulse, 1e-4) << "the blob never hit the cube";
+
+  auto source = withBed(blob());
+  mpm::ParticleSet ahead0, later0;
+  CoupledCheckpoint atAhead, atLater;
+  for (long k = 1; k <= later; ++k) {
+    source->step(dt);
+    if (k == ahead || k == later) {
+      (k == ahead ? atAhead : atLater) = captureCheckpoint(*source, 0, dt, {Quat::Identity()});
+      source->mpm().getParticles(k == ahead ? ahead0 : later0);
+    }
+  }
+  ASSERT_FALSE(atAhead.historyIndex.empty()) << "the blob does not rest on the bed";
+
+  const mpm::MpmParams& prm = whole->mpm().params();
+  auto started = withCube(withBed(fresh(prm)));
+  mpm::WholeParticleSet particles(ahead0);
+  startFromFlow(*started, particles, ahead, atAhead.time, dt, &atAhead, 2 * prm.dx);
+  for (long k = ahead; k < end; ++k) started->step(dt);
+  EXPECT_EQ(started->mpm().steps(), whole->mpm().steps());
+  EXPECT_EQ(started->time(), whole->time());
+  EXPECT_EQ(started->world.engine.position(1), whole->world.engine.position(1));
+  EXPECT_EQ(started->world.engine.orientation(1).coeffs(), whole->world.engine.orientation(1).coeffs());
+  EXPECT_EQ(started->world.engine.angularVelocity(1), whole->world.engine.angularVelocity(1));
+  EXPECT_EQ(started->coupling.force(1), whole->coupling.force(1));
+  EXPECT_EQ(started->coupling.frictionDissipation(), whole->coupling.frictionDissipation());
+  EXPECT_EQ(started->contactStepLow().step, whole->contactStepLow().step);
+  mpm::ParticleSet pa, pb;
+  whole->mpm().getParticles(pa);
+  started->mpm().getParticles(pb);
+  mpm::agreement::expectBitIdentical(pa, pb);
+
+  auto refused = [&](const char* what, long step, double time, const CoupledCheckpoint& c, mpm::ParticleSet& ps,
+                     bool bedFixed) {
+    auto w = withCube(withBed(fresh(prm)));
+    if (!bedFixed) w->world.engine.setFixed(0, false);
+    mpm::WholeParticleSet p(ps);
+    try {
+      startFromFlow(*w, p, step, time, dt, &c, 2 * prm.dx);
+      ADD_FAILURE() << "started: " << what;
+    } catch (const ParameterError& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  refused("the flow had reached it", later, atLater.time, atLater, later0, true);
+  refused("that run took other steps", ahead, atAhead.time + dt, atAhead, ahead0, true);
+  refused("must be fixed", ahead, atAhead.time, atAhead, ahead0, false);
+}
+
 // A checkpoint file that is missing or not one is refused by name.
 TEST(CoupledCheckpoint, BadFilesAreRefusedByName) {
   const std::string path = (std::filesystem::temp_directory_path() / "mpmsdem_test_bad_checkpoint.json").string();

@@ -315,6 +315,7 @@ TEST(MpmScene, FlowProbesAndStopRules) {
                                       "window": 0}])");
   j["run"]["stop_when_probed"] = true;
   j["run"]["stop_when_front_still"] = 0.3;
+  j["run"]["snapshot_when_front_at"] = -0.5;  // any x: a snapshot from the start when the front is past it
   const MpmScene s = parseScene(j.dump());
   ASSERT_EQ(s.probes.size(), 2u);
   EXPECT_EQ(s.probes[0].x, 0.3);
@@ -328,7 +329,9 @@ TEST(MpmScene, FlowProbesAndStopRules) {
   EXPECT_EQ(s.probes[1].window, 0.0);
   EXPECT_TRUE(s.run.stopWhenProbed);
   EXPECT_EQ(s.run.stopWhenFrontStill, 0.3);
+  EXPECT_EQ(s.run.snapshotWhenFrontAt, -0.5);
   const MpmScene plain = parseScene(goodScene().dump());
+  EXPECT_FALSE(plain.run.snapshotWhenFrontAt.has_value());
   EXPECT_TRUE(plain.probes.empty());
   EXPECT_FALSE(plain.run.stopWhenProbed);
   EXPECT_EQ(plain.run.stopWhenFrontStill, 0.0);
@@ -337,7 +340,8 @@ TEST(MpmScene, FlowProbesAndStopRules) {
       {"/flow_probes/0/x", 0.39},           // beyond the material region [0.02, 0.38]
       {"/flow_probes/0/half_width", 0},     {"/flow_probes/0/min_points", 0},
       {"/flow_probes/0/min_points", 2.5},   {"/flow_probes/0/window", -0.01},
-      {"/run/stop_when_front_still", -1},   {"/run/stop_when_probed", 1}};
+      {"/run/stop_when_front_still", -1},   {"/run/stop_when_probed", 1},
+      {"/run/snapshot_when_front_at", "far"}};
   for (const auto& [ptr, value] : bad) {
     json b = j;
     b[json::json_pointer(ptr)] = value;
