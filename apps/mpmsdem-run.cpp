@@ -19,8 +19,9 @@
 //                            With blocks, from the snapshot that coupled.checkpoint.json
 //                            names (pkg/coupling/CoupledCheckpoint.hpp): the same run, bit
 //                            for bit, on the CPU and on CUDA (whose sums have a fixed order)
-//   --flow-from DIR          start from the flow of the run in DIR, at the state it saved when
-//                            its front reached run.snapshot_when_front_at (front_snapshot.json):
+//   --flow-from DIR|FILE     start from the flow of the run in DIR, at the state it saved when
+//                            its front reached run.snapshot_when_front_at (DIR/front_snapshot.json,
+//                            or the record FILE, e.g. DIR/front_snapshot_2.json for a list of x):
 //                            a scene of the same flow (checkFlowFromScene: the keys a restart
 //                            keeps, but for grid cells added on free sides) with blocks that the
 //                            flow had not reached, its own fixed blocks first (a bed). The other
@@ -71,8 +72,9 @@
 //                   is not restarted (its probe records are not in the checkpoint); --bench
 //                   takes no records, so it ignores the probes and those two stop rules.
 //   With run.snapshot_when_front_at: front_snapshot.json (and with blocks
-//                   front_snapshot.checkpoint.json), the state --flow-from starts from (a
-//                   restart keeps it when it is older than the restart point).
+//                   front_snapshot.checkpoint.json), the state --flow-from starts from; for a
+//                   list of x, front_snapshot_<k>.json for each (a restart keeps those older than
+//                   the restart point).
 // Progress lines go to stdout (stderr with --bench) every 5 % of the run and at least every
 // run.progress_every seconds of wall time (10), with the step and what sets it (the flow's CFL
 // step, a contact, a block's approach naming the block). With "dt": "auto" a step below
@@ -146,7 +148,7 @@ const char* signalName(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTE
 
 const char* const kUsage =
     "usage: mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR] [--steps N] "
-    "[--restart | --flow-from DIR] [--bench [--device-stages]]\n";
+    "[--restart | --flow-from DIR|FILE] [--bench [--device-stages]]\n";
 
 struct Options {
   std::string scene;
@@ -613,13 +615,15 @@ class OutputRun {
         coupled_->h5().setAttribute("start_positions", start.dump());
       }
     }
-    if (scene.run.snapshotWhenFrontAt) {
-      // A restart point before the front snapshot (a run killed between the two) writes it again.
+    // A restart keeps the front snapshots before its restart point (a run killed between a
+    // snapshot and its record writes it again); a new run removes an earlier run's.
+    for (std::size_t k = 0; k < scene.run.snapshotsWhenFrontAt.size(); ++k) {
       std::error_code ec;
-      if (restart && std::filesystem::exists(frontPath()))
-        frontWritten_ = coupling::readFrontSnapshot(frontPath().string()).time <= solver_.time();
+      if (restart && frontsWritten_ == k && std::filesystem::exists(frontPath(k)) &&
+          coupling::readFrontSnapshot(frontPath(k).string()).time <= solver_.time())
+        frontsReached_ = frontsWritten_ = k + 1;
       else
-        std::filesystem::remove(frontPath(), ec);  // an earlier run's, in the same folder
+        std::filesystem::remove(frontPath(k), ec);
     }
     io::writeMpmHeader(h5_, scene.sourceJson, scene.params, solver_.name());
     if (coupled_) coupled_->h5().setAttribute("flip_blend", mpm::describeFlipBlend(scene.params));
@@ -635,7 +639,7 @@ class OutputRun {
     } else {
       recordSeries(diagnose());
       writeSnapshot();
-      writeFrontSnapshot();
+      writeFrontSnapshots();
     }
     // next record and snapshot times: the first multiples of their intervals after now
     const double t0sim = solver_.time();
@@ -681,9 +685,9 @@ class OutputRun {
           timedSnapshot();
           while (nextOutput <= t * (1 + 1e-12)) nextOutput += run.outputEvery;
         }
-        if (frontReached_ && !frontWritten_) {
+        if (frontsReached_ > frontsWritten_) {
           const auto start = Clock::now();
-          writeFrontSnapshot();
+          writeFrontSnapshots();
           snapshotSeconds += since(start);
         }
         if (report) {
@@ -773,7 +777,7 @@ class OutputRun {
 
   // The flow probes' records and the run's stop rules, at a series record of time t.
   void recordProbes(const mpm::Diagnostics& d, double t) {
-    if (probes_.empty() && scene_.run.stopWhenFrontStill == 0 && !scene_.run.snapshotWhenFrontAt) return;
+    if (probes_.empty() && scene_.run.stopWhenFrontStill == 0 && scene_.run.snapshotsWhenFrontAt.empty()) return;
     std::vector<double> depth, velocity, points;
     bool complete = true;
     for (std::size_t k = 0; k < probes_.size(); ++k) {
@@ -789,8 +793,8 @@ class OutputRun {
       h5_.appendVector("probe_points", points);
     }
     if (d.frontX > front_ + 0.5 * scene_.params.dx) front_ = d.frontX, frontAt_ = t;
-    if (scene_.run.snapshotWhenFrontAt && d.frontX >= *scene_.run.snapshotWhenFrontAt && !frontReached_)
-      frontReached_ = true, frontXAtSnapshot_ = d.frontX;
+    const std::vector<double>& at = scene_.run.snapshotsWhenFrontAt;
+    while (frontsReached_ < at.size() && d.frontX >= at[frontsReached_]) ++frontsReached_, frontXAtSnapshot_ = d.frontX;
     if (scene_.run.stopWhenProbed && complete)
       stopReason_ = "probes";
     else if (scene_.run.stopWhenFrontStill > 0 && t - frontAt_ > scene_.run.stopWhenFrontStill)
@@ -857,27 +861,35 @@ class OutputRun {
   }
 
 
-  std::filesystem::path frontPath() const { return dir_ / "front_snapshot.json"; }
+  // The record of run.snapshot_when_front_at's k-th x (front_snapshot.json for a single number).
+  std::filesystem::path frontPath(std::size_t k) const {
+    return dir_ / (scene_.run.snapshotsIndexed ? "front_snapshot_" + std::to_string(k) + ".json"
+                                               : std::string("front_snapshot.json"));
+  }
 
-  // run.snapshot_when_front_at, once the front has reached it: the state now as a snapshot (the
-  // one just written, if it is of now) and front_snapshot.json naming it, with the blocks'
-  // coupled state beside it (the run's own checkpoint is replaced at every snapshot).
-  void writeFrontSnapshot() {
-    if (!frontReached_ || frontWritten_) return;
+  // The x of run.snapshot_when_front_at that the front has reached since the last record: the
+  // state now as a snapshot (the one just written, if it is of now) and a record naming it for
+  // each, with the blocks' coupled state beside it (the run's own checkpoint is replaced at every
+  // snapshot).
+  void writeFrontSnapshots() {
+    if (frontsReached_ == frontsWritten_) return;
     const long index = state_time_ == solver_.time() ? lastSnapshot_ : writeSnapshot();
-    coupling::FrontSnapshot f{*scene_.run.snapshotWhenFrontAt, frontXAtSnapshot_, index, solver_.time(),
-                              solver_.steps(), ""};
-    if (coupled_) {
-      f.checkpoint = "front_snapshot.checkpoint.json";
-      coupling::writeCheckpoint((dir_ / f.checkpoint).string(),
-                                coupling::captureCheckpoint(*stepper_.coupled, index, stepper_.lastDt,
-                                                            coupled_->referenceOrientations()));
+    for (; frontsWritten_ < frontsReached_; ++frontsWritten_) {
+      const std::filesystem::path path = frontPath(frontsWritten_);
+      coupling::FrontSnapshot f{scene_.run.snapshotsWhenFrontAt[frontsWritten_], frontXAtSnapshot_, index,
+                                solver_.time(), solver_.steps(), ""};
+      if (coupled_) {
+        f.checkpoint = path.stem().string() + ".checkpoint.json";
+        coupling::writeCheckpoint((dir_ / f.checkpoint).string(),
+                                  coupling::captureCheckpoint(*stepper_.coupled, index, stepper_.lastDt,
+                                                              coupled_->referenceOrientations()));
+      }
+      coupling::writeFrontSnapshot(path.string(), f);
+      std::printf("mpmsdem-run: the front reached x = %.6g m (run.snapshot_when_front_at %.6g m) at t = %.6g s: "
+                  "snapshot %ld, %s (mpmsdem-run --flow-from %s starts other scenes there)\n",
+                  f.frontX, f.x, f.time, index, path.filename().c_str(),
+                  (scene_.run.snapshotsIndexed ? path : dir_).string().c_str());
     }
-    coupling::writeFrontSnapshot(frontPath().string(), f);
-    frontWritten_ = true;
-    std::printf("mpmsdem-run: the front reached x = %.6g m (run.snapshot_when_front_at %.6g m) at t = %.6g s: "
-                "snapshot %ld, front_snapshot.json (mpmsdem-run --flow-from %s starts other scenes there)\n",
-                f.frontX, f.x, f.time, index, dir_.string().c_str());
     std::fflush(stdout);
   }
 
@@ -919,8 +931,8 @@ class OutputRun {
   mpm::SolverParticleSlices slices_{solver_, 1 << 16};
   double state_time_ = -1;  // time of the last snapshot written
   long lastSnapshot_ = -1;  // and its index
-  bool frontReached_ = false, frontWritten_ = false;  // run.snapshot_when_front_at: reached, saved
-  double frontXAtSnapshot_ = 0;                       // the front when it was reached [m]
+  std::size_t frontsReached_ = 0, frontsWritten_ = 0;  // run.snapshot_when_front_at's x reached, saved
+  double frontXAtSnapshot_ = 0;                        // the front when the last was reached [m]
   std::vector<mpm::FlowProbeRecord> probes_;
   double front_ = -INFINITY, frontAt_ = 0;  // the front's largest x so far and when it got there [m, s]
   std::string stopReason_;                  // a stop rule that ended the run ("probes", "front_still")
@@ -992,9 +1004,12 @@ int main(int argc, char** argv) {
       std::printf("mpmsdem-run: restarting from snapshot %ld of %s (t = %.6g s, step %ld)\n", last, h5.c_str(), time,
                   step);
     } else if (opt.flowFrom) {
-      const std::filesystem::path src(*opt.flowFrom);
+      // a run's folder (its front_snapshot.json) or one of its front snapshot records
+      const std::filesystem::path given(*opt.flowFrom);
+      const bool folder = std::filesystem::is_directory(given);
+      const std::filesystem::path src = folder ? given : given.parent_path();
       const std::string h5 = (src / "mpm.h5").string();
-      flowFront = coupling::readFrontSnapshot((src / "front_snapshot.json").string());
+      flowFront = coupling::readFrontSnapshot((folder ? given / "front_snapshot.json" : given).string());
       if (!(scene.run.dt > 0))
         throwParameter("--flow-from: run.dt", "\"auto\"", "",
                        "a fixed step, the one of the run started from: the blocks' steps before its state are "

@@ -429,8 +429,18 @@ void parseRun(const json& root, RunSettings& r) {
   r.stopWhenFrontStill = optNumber(j, "run", "stop_when_front_still", r.stopWhenFrontStill);
   checkRange("run.stop_when_front_still", r.stopWhenFrontStill, "s", 0, false, kInf, true);
   if (j.contains("snapshot_when_front_at")) {
-    r.snapshotWhenFrontAt = requireNumber(j, "run", "snapshot_when_front_at");
-    checkRange("run.snapshot_when_front_at", *r.snapshotWhenFrontAt, "m", -kInf, true, kInf, true);
+    const json& at = j.at("snapshot_when_front_at");
+    r.snapshotsIndexed = at.is_array();
+    if (r.snapshotsIndexed && at.empty())
+      throwParameter("run.snapshot_when_front_at", "[]", "", "a number or a non-empty list of ascending numbers [m]");
+    for (std::size_t k = 0; k < (r.snapshotsIndexed ? at.size() : 1); ++k) {
+      const std::string name = "run.snapshot_when_front_at" + (r.snapshotsIndexed ? "[" + std::to_string(k) + "]" : "");
+      const json& x = r.snapshotsIndexed ? at.at(k) : at;
+      if (!x.is_number()) throwParameter(name, x.dump(), "", "a number [m]");
+      const double v = x.get<double>();
+      checkRange(name, v, "m", r.snapshotsWhenFrontAt.empty() ? -kInf : r.snapshotsWhenFrontAt.back(), true, kInf, true);
+      r.snapshotsWhenFrontAt.push_back(v);
+    }
   }
   r.outputEvery = optNumber(j, "run", "output_every", r.duration / 20);
   checkRange("run.output_every", r.outputEvery, "s", 0, true, kInf, true);

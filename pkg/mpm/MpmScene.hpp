@@ -110,12 +110,14 @@
 //     "stop_when_front_still": 0,   [s] >= 0: end the run when the front (the largest particle x)
 //                                   has not advanced by dx/2 for this long at the series records
 //                                   (a flow that stopped); 0: never
-//     "snapshot_when_front_at": none, [m] any number: at the first series record where the front
+//     "snapshot_when_front_at": none, [m] a number: at the first series record where the front
 //                                   (the largest particle x) has reached this x, write a snapshot
 //                                   and front_snapshot.json naming it (with the blocks' MP
 //                                   contacts in a coupled run): another scene of the same flow
 //                                   starts there with mpmsdem-run --flow-from (the blocks ahead
-//                                   of the front join it, their steps before it run alone)
+//                                   of the front join it, their steps before it run alone). A
+//                                   list of ascending numbers: one such state for each, named
+//                                   front_snapshot_<k>.json (k from 0, the list's order)
 //     "progress_every": 10,         [s] of wall time, > 0: a progress line at least this often
 //                                   (and every 5 % of the run), with the step and what limits it
 //     "output_every": duration/20,  snapshot interval [s], > 0 (HDF5 snapshot + VTK file)
@@ -174,7 +176,10 @@ struct RunSettings {
   double progressEvery = 10;      // wall-time interval of progress lines [s], > 0
   bool stopWhenProbed = false;    // end once every flow probe's result is complete
   double stopWhenFrontStill = 0;  // end when the front has been still this long [s]; 0: never
-  std::optional<double> snapshotWhenFrontAt;  // snapshot when the front first reaches this x [m]
+  // run.snapshot_when_front_at: the x [m] at which the front's first arrival is saved, ascending
+  // (empty: none); indexed: given as a list, so the records are front_snapshot_<k>.json
+  std::vector<double> snapshotsWhenFrontAt;
+  bool snapshotsIndexed = false;
   double outputEvery = 0;         // snapshot interval [s], > 0
   double seriesEvery = 0;         // time-series record interval [s], > 0
   std::string outputDir = "out";  // output folder

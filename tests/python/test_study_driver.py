@@ -194,6 +194,24 @@ def test_a_coupled_run_started_ahead_of_the_cube_is_the_run_from_the_release(tmp
 
     exe, free = driver.executable(), os.path.join(runs["ahead"], "free")
     scene = json.load(open(os.path.join(runs["ahead"], "coupled.json")))
+    # a list of x: a state for each, front_snapshot_<k>.json; the one at 0.6 m is the state above
+    flow = json.load(open(os.path.join(runs["ahead"], "free.json")))
+    flow["run"]["snapshot_when_front_at"] = [0.5, 0.6]
+    json.dump(flow, open(str(tmp_path / "several.json"), "w"))
+    r = subprocess.run([exe, str(tmp_path / "several.json"), "--out", str(tmp_path / "several")], capture_output=True,
+                       text=True)
+    assert r.returncode == 0, r.stderr
+    states = [json.load(open(tmp_path / "several" / ("front_snapshot_%d.json" % k))) for k in (0, 1)]
+    assert [s["x"] for s in states] == [0.5, 0.6] and states[0]["step"] < states[1]["step"] == front["step"]
+    assert not os.path.exists(tmp_path / "several" / "front_snapshot.json")
+    r = subprocess.run([exe, os.path.join(runs["ahead"], "coupled.json"), "--out", str(tmp_path / "from1"),
+                        "--flow-from", str(tmp_path / "several" / "front_snapshot_1.json"), "--steps", "200"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    with h5py.File(tmp_path / "from1" / "coupled.h5", "r") as a, \
+            h5py.File(os.path.join(runs["ahead"], "coupled", "coupled.h5"), "r") as b:
+        n = len(a["series/time"])
+        assert n > 10 and all(np.array_equal(a["series"][k][:], b["series"][k][:n]) for k in a["series"])
 
     def refused(changed, expect, extra=(), source=free):
         path = str(tmp_path / "changed.json")

@@ -329,9 +329,15 @@ TEST(MpmScene, FlowProbesAndStopRules) {
   EXPECT_EQ(s.probes[1].window, 0.0);
   EXPECT_TRUE(s.run.stopWhenProbed);
   EXPECT_EQ(s.run.stopWhenFrontStill, 0.3);
-  EXPECT_EQ(s.run.snapshotWhenFrontAt, -0.5);
+  EXPECT_EQ(s.run.snapshotsWhenFrontAt, std::vector<double>{-0.5});
+  EXPECT_FALSE(s.run.snapshotsIndexed);
+  json several = j;
+  several["run"]["snapshot_when_front_at"] = json::array({0.1, 0.2});
+  const MpmScene list = parseScene(several.dump());
+  EXPECT_EQ(list.run.snapshotsWhenFrontAt, (std::vector<double>{0.1, 0.2}));
+  EXPECT_TRUE(list.run.snapshotsIndexed);
   const MpmScene plain = parseScene(goodScene().dump());
-  EXPECT_FALSE(plain.run.snapshotWhenFrontAt.has_value());
+  EXPECT_TRUE(plain.run.snapshotsWhenFrontAt.empty());
   EXPECT_TRUE(plain.probes.empty());
   EXPECT_FALSE(plain.run.stopWhenProbed);
   EXPECT_EQ(plain.run.stopWhenFrontStill, 0.0);
@@ -341,7 +347,8 @@ TEST(MpmScene, FlowProbesAndStopRules) {
       {"/flow_probes/0/half_width", 0},     {"/flow_probes/0/min_points", 0},
       {"/flow_probes/0/min_points", 2.5},   {"/flow_probes/0/window", -0.01},
       {"/run/stop_when_front_still", -1},   {"/run/stop_when_probed", 1},
-      {"/run/snapshot_when_front_at", "far"}};
+      {"/run/snapshot_when_front_at", "far"}, {"/run/snapshot_when_front_at", json::array({0.2, 0.1})},
+      {"/run/snapshot_when_front_at", json::array()}};
   for (const auto& [ptr, value] : bad) {
     json b = j;
     b[json::json_pointer(ptr)] = value;
