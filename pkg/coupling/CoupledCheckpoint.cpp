@@ -1,5 +1,6 @@
 #include "coupling/CoupledCheckpoint.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -286,23 +287,34 @@ void startFromFlow(CoupledWorld& w, mpm::ParticleSlices& particles, long step, d
                   step, dt, w.time(), time);
     throw ParameterError("--flow-from: " + std::string(msg));
   }
+  // No point may lie in a new block's bounding sphere grown by `reach`. The spheres sorted by
+  // their lowest x: a point tests only those whose x extent holds it (a field's hundreds of
+  // blocks against millions of points).
+  std::vector<std::pair<double, int>> byLowX;
+  double widest = 0;
   for (int i = kept; i < n; ++i) {
-    const Vec3 c = e.position(i);
     const double r = e.shape(i).boundingRadius + reach;
-    mpm::forEachSlice(particles, [&](std::size_t first, const mpm::ParticleSet& p) {
-      for (std::size_t q = 0; q < p.size(); ++q) {
-        const Vec3 x(p.x[3 * q], p.x[3 * q + 1], p.x[3 * q + 2]);
-        if ((x - c).norm() < r) {
-          char msg[320];
-          std::snprintf(msg, sizeof msg, "particle %zu is %.4g m from the centre of block %d at t = %.6g s, within "
-                        "its bounding radius %.4g m and %.4g m: the flow had reached it there; start from a state "
-                        "saved earlier (a smaller run.snapshot_when_front_at)",
-                        first + q, (x - c).norm(), e.externalId(i), time, e.shape(i).boundingRadius, reach);
-          throw ParameterError("--flow-from: " + std::string(msg));
-        }
-      }
-    });
+    byLowX.push_back({e.position(i).x() - r, i});
+    widest = std::max(widest, 2 * r);
   }
+  std::sort(byLowX.begin(), byLowX.end());
+  mpm::forEachSlice(particles, [&](std::size_t first, const mpm::ParticleSet& p) {
+    for (std::size_t q = 0; q < p.size() && !byLowX.empty(); ++q) {
+      const Vec3 x(p.x[3 * q], p.x[3 * q + 1], p.x[3 * q + 2]);
+      auto b = std::lower_bound(byLowX.begin(), byLowX.end(), std::make_pair(x.x() - widest, -1));
+      for (; b != byLowX.end() && b->first <= x.x(); ++b) {
+        const int i = b->second;
+        const double d = (x - e.position(i)).norm();
+        if (d >= e.shape(i).boundingRadius + reach) continue;
+        char msg[320];
+        std::snprintf(msg, sizeof msg, "particle %zu is %.4g m from the centre of block %d at t = %.6g s, within "
+                      "its bounding radius %.4g m and %.4g m: the flow had reached it there; start from a state "
+                      "saved earlier (a smaller run.snapshot_when_front_at)",
+                      first + q, d, e.externalId(i), time, e.shape(i).boundingRadius, reach);
+        throw ParameterError("--flow-from: " + std::string(msg));
+      }
+    }
+  });
   w.mpm().setParticles(particles);
   w.mpm().setClock(time, step);
   if (source) {
