@@ -6,6 +6,7 @@ and bad arguments are reported by name.
 
 The candidates' child processes load this file for the analytic task below, so it imports
 only the standard library at the top (see test_sweep.py)."""
+import fcntl
 import math
 import os
 import signal
@@ -93,6 +94,18 @@ def test_resume_after_kill_runs_only_the_rest_and_finds_the_same_optimum(tmp_pat
     assert proc.poll() is None, "the search ended before it could be killed: %s" % proc.stderr.read()[-2000:]
     os.killpg(proc.pid, signal.SIGKILL)  # the search and its running candidates, as a crash or a lost node
     proc.wait()
+    # the killed candidates release the store's lock as they finish exiting, which a loaded machine
+    # may delay past the search's own exit: the restart waits for that, as a user would
+    with open(store + ".lock", "a") as held:
+        deadline = time.time() + 30
+        while True:
+            try:
+                fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                fcntl.flock(held, fcntl.LOCK_UN)
+                break
+            except OSError:
+                assert time.time() < deadline, "the killed search's processes still hold the store after 30 s"
+                time.sleep(0.02)
     from mpmsdem import sweep
     finished = {r["key"] for r in sweep.readStore(store) if r["status"] == "ok"}
     assert 0 < len(finished) < n
