@@ -2,7 +2,7 @@
 // MPM–SDEM scenes when the scene has "blocks" (pkg/coupling/CoupledScene.hpp).
 //
 //   mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR]
-//                          [--steps N] [--restart | --flow-from DIR] [--bench]
+//                          [--steps N] [--restart | --flow-from DIR|FILE] [--bench]
 //
 // The scene schema is documented in pkg/mpm/MpmScene.hpp (flow), pkg/coupling/CoupledScene.hpp
 // (blocks) and examples/scenes/README.md.
@@ -157,7 +157,7 @@ struct Options {
   std::optional<std::string> out;
   long steps = 0;  // 0: run for run.duration
   bool restart = false;
-  std::optional<std::string> flowFrom;  // output folder of the run whose flow this one starts from
+  std::optional<std::string> flowFrom;  // the run whose flow this one starts from: its folder or a front record
   bool bench = false;
   bool deviceStages = false;
 };

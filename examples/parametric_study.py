@@ -210,17 +210,18 @@ def _coupledResults(out, ff, s, duration, potential0, before=None):
                eq20_force=analysis.hydrodynamicForce(RHO, ff["v_f"], ff["h_f"], A),
                rotation_deg=float(s["rotation"][-1]), speed_end=float(abs(s["vx"][-1])),
                flow_potential_0=potential0)
+    early = before if before is not None and len(before["t"]) else None
     for key in ("flow_kinetic", "block_kinetic"):
         t, e = s["t"], s[key]
-        if before is not None and len(before["t"]):
-            t, e = list(before["t"]) + list(t), list(before[key]) + list(e)
+        if early:
+            t, e = list(early["t"]) + list(t), list(early[key]) + list(e)
         i = max(range(len(e)), key=lambda k: e[k])
         out.update({key + "_max": float(e[i]), key + "_max_time": float(t[i])})
     out["block_kinetic_ratio"] = out["block_kinetic_max"] / potential0
     out["energy"] = energySeries(s, potential0)
-    if before is not None and len(before["t"]):
-        early = energySeries(before, potential0)
-        out["energy"] = {k: early[k] + out["energy"][k] for k in early}
+    if early:
+        head = energySeries(early, potential0)
+        out["energy"] = {k: head[k] + out["energy"][k] for k in head}
     out["flow_dissipated_end"] = out["energy"]["dissipated"][-1]
 
 
