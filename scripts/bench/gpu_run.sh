@@ -276,7 +276,7 @@ export full
 # dam break in float: duration, throughput against the device's peak, occupancy
 ncu_profile() {
   dam_scene 1000000 || return 1
-  "$ncu" -k 'regex:p2g|g2p|binKernel|rangesKernel|gridKernel|Onesweep|Histogram' --launch-skip 26 --launch-count 13 \
+  "$ncu" --clock-control none -k 'regex:p2g|g2p|binKernel|rangesKernel|gridKernel|Onesweep|Histogram' --launch-skip 26 --launch-count 13 \
     --section SpeedOfLight --section Occupancy "$1" "$out/dam1000000.json" --backend cuda --precision float --bench \
     --steps 4 > "$out/ncu_$2.txt" 2>&1
   grep -E '^  [A-Za-z_].*[(]|Duration|Memory Throughput|DRAM Throughput|Compute [(]SM[)] Throughput|Achieved Occupancy' \
