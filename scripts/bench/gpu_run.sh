@@ -23,6 +23,11 @@
 #   ... --design DIR                                   # the §3.2 cases prepared in DIR
 #                                                      # (scripts/validation/paper_flume_design.py
 #                                                      # --prepare), likewise: $OUT/design.tgz
+#   ... --field SCENE                                  # a field scene's run (examples/field_valley.py
+#                                                      # --driver-scene) on CUDA for GPU_FIELD_SECONDS
+#                                                      # (300): its simulated time against the wall
+#                                                      # clock as the flow develops, and the time
+#                                                      # its whole duration would take at the last rate
 #   ... --profile-scene FILE                           # (repeatable) where a driver scene's step
 #                                                      # goes on CUDA: GPU_PROFILE_STEPS steps
 #                                                      # (2000) with --bench --device-stages, and
@@ -69,6 +74,7 @@ study=""
 design=""
 sweep=""
 until=""
+field=""
 workers=1
 profile=()
 while [ $# -gt 0 ]; do
@@ -79,6 +85,7 @@ while [ $# -gt 0 ]; do
     --design) design=${2:?"--design needs a folder of prepared cases"}; shift 2 ;;
     --sweep) sweep=${2:?"--sweep needs a folder of prepared runs"}; shift 2 ;;
     --until) until=${2:?"--until needs a time [s]"}; shift 2 ;;
+    --field) field=${2:?"--field needs a driver scene"}; shift 2 ;;
     --profile-scene) profile+=("${2:?"--profile-scene needs a driver scene"}"); shift 2 ;;
     --workers) workers=${2:?"--workers needs a number of cases"}; shift 2 ;;
     *) echo "gpu_run.sh: unknown argument $1" >&2; exit 2 ;;
@@ -340,6 +347,38 @@ export -f scene_profile
 for f in "${profile[@]}"; do
   stage "profile_$(basename "$(dirname "$f")")" 120 scene_profile "$f"
 done
+
+# field_run SCENE SECONDS: the scene on CUDA (--bench: no outputs, progress lines on stderr)
+# stopped after SECONDS; each progress line with the wall-clock seconds since the start in
+# $out/field.log, then the simulated time reached against the wall time, and the scene's whole
+# duration at the rate of the last minute
+field_run() {
+  local scene=$1 t0=$SECONDS
+  timeout -s TERM "$2" "$bin/mpmsdem-run" "$scene" --backend cuda --bench 2>&1 >/dev/null |
+    while IFS= read -r line; do echo "$(( SECONDS - t0 )) $line"; done > "$out/field.log"
+  python3 - "$out/field.log" "$scene" <<'PY'
+import json, re, sys
+rows = []
+for line in open(sys.argv[1]):
+    m = re.match(r"(\d+) \[.*?\] t=([0-9.eE+-]+) s step=(\d+) dt=([0-9.eE+-]+) s", line)
+    if m:
+        rows.append((int(m.group(1)), float(m.group(2)), int(m.group(3)), float(m.group(4))))
+if not rows:
+    sys.exit("field: no progress line (the log's end:\n%s)" % "".join(open(sys.argv[1]).readlines()[-5:]))
+duration = json.load(open(sys.argv[2]))["run"]["duration"]
+for w, t, n, dt in rows[:: max(1, len(rows) // 12)] + rows[-1:]:
+    print("field: %4d s wall: t %.3f s, step %d, dt %.3g s" % (w, t, n, dt))
+w1, t1 = rows[-1][0], rows[-1][1]
+past = [r for r in rows if r[0] <= w1 - 60] or rows[:1]
+w0, t0 = past[-1][0], past[-1][1]
+if t1 > t0 and w1 > w0:
+    rate = (t1 - t0) / (w1 - w0)
+    print("field: %.3f s simulated in %d s; the last %d s at %.4f s per wall second: %.0f s of %.0f s to go, "
+          "%.1f h in all at that rate" % (t1, w1, w1 - w0, rate, duration - t1, duration, (w1 + (duration - t1) / rate) / 3600))
+PY
+}
+export -f field_run
+[ -n "$field" ] && stage field $(( ${GPU_FIELD_SECONDS:-300} + 30 )) field_run "$field" "${GPU_FIELD_SECONDS:-300}"
 
 # the §5 cases last: they take what is left of the budget (a case not finished by then is run
 # again from its start by the next call)
