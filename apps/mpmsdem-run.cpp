@@ -43,7 +43,7 @@
 //                            the narrow phase computed, all steps) and block_contacts (the
 //                            blocks' contacts with blocks and terrain after the last step)
 //   --device-stages          with --bench on CUDA: time the MPM step's stages on the device
-//                            (events; sort, p2g, grid, g2p) and add device_stage_seconds to
+//                            (events; lists, sort, p2g, grid, g2p, columns) and add device_stage_seconds to
 //                            the JSON line; in a coupled run also the coupling's parts
 //                            (coupling_stage_seconds: MpSdemCoupling::setStageTiming)
 // Outputs (not with --bench), in the output folder:

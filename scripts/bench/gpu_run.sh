@@ -253,18 +253,25 @@ json.dump(bench_mpm.dam_break_scene($1)[0], open('$out/dam$1.json', 'w'))"
 }
 export -f dam_scene
 
-# Where a step's device time goes (mpmsdem-run --device-stages: sort, P2G, grid, G2P by device
-# events) on dam breaks of 1e5 and 1e6 points in float and on the flume's first 4,000 steps,
-# against the step loop's wall time.
+# Where a step's device time goes (mpmsdem-run --device-stages: the lists, sort, P2G, grid, G2P
+# and columns by device events) on dam breaks of 1e5, 1e6 and 1e7 points in float (the 1e7 one
+# with the baseline too) and on the flume's first 4,000 steps, against the step loop's wall time.
 device_stages() {
-  for size in 100000 1000000; do
+  local files=()
+  for size in 100000 1000000 10000000; do
     dam_scene "$size" || return 1
     "$bin/mpmsdem-run" "$out/dam$size.json" --backend cuda --precision float --bench --device-stages --steps 500 \
       2> /dev/null | tail -1 > "$out/stages_dam$size.json"
+    files+=("$out/stages_dam$size.json")
   done
+  if [ -n "$baseline" ]; then
+    "$baseline/mpmsdem-run" "$out/dam10000000.json" --backend cuda --precision float --bench --device-stages \
+      --steps 500 2> /dev/null | tail -1 > "$out/stages_dam10000000_baseline.json"
+    files+=("$out/stages_dam10000000_baseline.json")
+  fi
   OMP_NUM_THREADS=$(nproc) "$bin/mpmsdem-run" "$full" --backend cuda --precision double --bench --device-stages \
     --steps 4000 2> /dev/null | tail -1 > "$out/stages_full.json"
-  python3 - "$out"/stages_dam100000.json "$out"/stages_dam1000000.json "$out"/stages_full.json <<'PY'
+  python3 - "${files[@]}" "$out"/stages_full.json <<'PY'
 import json, sys
 for f in sys.argv[1:]:
     r = json.load(open(f))

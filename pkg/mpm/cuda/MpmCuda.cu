@@ -436,7 +436,7 @@ void MpmCuda<T>::setStageTiming(bool on) {
 template <typename T>
 std::vector<std::pair<std::string, double>> MpmCuda<T>::stageSeconds() const {
   if (!events_[0]) return {};
-  static const char* kNames[kStages] = {"sort", "p2g", "grid", "g2p"};
+  static const char* kNames[kStages] = {"lists", "sort", "p2g", "grid", "g2p", "columns"};
   std::vector<std::pair<std::string, double>> out;
   for (int k = 0; k < kStages; ++k) out.emplace_back(kNames[k], stageTotals_[k]);
   return out;
@@ -527,6 +527,10 @@ void MpmCuda<T>::step(double dt) {
   const int n = static_cast<int>(n_);
   const T dtT = static_cast<T>(dt);
   const cudak::BlockGrid bg = blockGrid();
+  auto mark = [this](int k) {
+    if (events_[k]) CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(events_[k])));
+  };
+  mark(0);
   beginLists();
   CUDA_CHECK(cudaMemsetAsync(&flags_->firstBad, 0xff, sizeof(flags_->firstBad)));
   static_assert(offsetof(StepFlags, columnsMissing) == offsetof(StepFlags, maxSpeedBits) + sizeof(unsigned int),
@@ -534,13 +538,10 @@ void MpmCuda<T>::step(double dt) {
   CUDA_CHECK(cudaMemsetAsync(&flags_->maxSpeedBits, 0, 2 * sizeof(unsigned int)));
   const ParticleIn<T> in = input();
   const ParticleOut<T> out = output();
-  auto mark = [this](int k) {
-    if (events_[k]) CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(events_[k])));
-  };
-  mark(0);
+  mark(1);
   if (n > 0) {
     sortParticles();
-    mark(1);
+    mark(2);
     if (tileScratch_) {
       cudak::p2gTilesKernel<T><<<std::min(tileCapacity_, p2gLaunch_), cudak::kBaseThreads>>>(
           bg, activeLists(), in, sorted_, sortedKeys_, numberBits_, grid_, dtT, tileScratch_, slotOf_);
@@ -558,7 +559,7 @@ void MpmCuda<T>::step(double dt) {
       }
     }
   }
-  mark(2);
+  mark(3);
   if (hooks_.empty()) {
     cudak::gridKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_, dtT);
     CUDA_CHECK(cudaGetLastError());
@@ -577,7 +578,7 @@ void MpmCuda<T>::step(double dt) {
     cudak::gridWallsKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
     CUDA_CHECK(cudaGetLastError());
   }
-  mark(3);
+  mark(4);
   StepConst<T> sc;
   sc.dt = dtT;
   sc.alpha = static_cast<T>(params_.flipAlphaFor(dt));
@@ -590,10 +591,11 @@ void MpmCuda<T>::step(double dt) {
                                                      &flags_->maxSpeedBits, &flags_->columnsMissing);
     CUDA_CHECK(cudaGetLastError());
   }
-  mark(4);
+  mark(5);
   // the columns the next step's particles can reach (they move less than a cell), counted in the
   // copy back of the flags that every step waits for
   queueColumnsNear();
+  mark(6);
   StepFlags res;
   CUDA_CHECK(cudaMemcpy(&res, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
   takeColumns(res);

@@ -165,8 +165,10 @@ class MpmCuda : public MpmSolver {
   bool slotOfValid_ = false;      // slots_[0] holds slotsByNumber() of the current state
   unsigned char* sortScratch_ = nullptr;
   std::size_t sortScratchBytes_ = 0;
-  // Stage timing (setStageTiming): events before the sort and after each stage, and the sums.
-  static constexpr int kStages = 4;  // sort, p2g, grid, g2p
+  // Stage timing (setStageTiming): events at the step's start and after each stage, and the sums.
+  // "lists" clears the last step's tiles and marks, "columns" stores the columns near the flow:
+  // the work the grid stored by columns adds to the four stages of the step.
+  static constexpr int kStages = 6;  // lists, sort, p2g, grid, g2p, columns
   void* events_[kStages + 1] = {};
   double stageTotals_[kStages] = {};
   double maxSpeed_ = 0;
