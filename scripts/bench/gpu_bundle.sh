@@ -26,6 +26,8 @@ rm -rf "$dir" && mkdir -p "$dir/lib"
 for b in mpmsdem-run test_mpm test_coupling; do
   cp "build-gpunew/$b" "$dir/" && strip "$dir/$b"
 done
+# the sources they were built from, for the results' records (the GPU machine's checkout may be newer)
+echo "$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- pkg apps tests CMakeLists.txt || echo ' with changes')" > "$dir/COMMIT"
 # every library the binaries load, except the C library's own (the GPU machine's must serve:
 # a copied libc would not match its loader) and the CUDA driver (the machine's own)
 ldd "$dir"/mpmsdem-run "$dir"/test_mpm "$dir"/test_coupling | awk '$2 == "=>" && $3 ~ /^\// {print $3}' | sort -u |

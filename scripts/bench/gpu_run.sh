@@ -120,7 +120,8 @@ if [ -n "$baseline" ] && ! "$baseline/mpmsdem-run" --help > /dev/null 2>&1; then
 fi
 if [ -n "$prebuilt" ] && "$prebuilt/mpmsdem-run" --help > /dev/null 2>&1; then
   bin=$prebuilt
-  echo "binaries: $prebuilt (built elsewhere)" | tee -a "$out/gpu.txt"
+  echo "binaries: $prebuilt (built elsewhere, at $(cat "$prebuilt/COMMIT" 2>/dev/null || echo 'an unrecorded commit'))" |
+    tee -a "$out/gpu.txt"
 else
   [ -n "$prebuilt" ] && echo "binaries in $prebuilt do not start here: building" | tee -a "$out/gpu.txt"
   cmake -S . -B build-gpu -DCMAKE_BUILD_TYPE=Release -DMPMSDEM_DRIVER_ONLY=ON -DMPMSDEM_DEPS="$PWD/.deps" \
