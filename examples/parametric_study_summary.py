@@ -32,7 +32,8 @@ Figs 14, 16b and 19:
     python3 examples/parametric_study_summary.py --views DIR/AR=3_L0hb=4_full [--times 0.5,1,4.5]
 
 Reads the sweep's store (runs.jsonl) and the per-case JSON files of yade-batch jobs in the
-folder; writes parametric_study.png, parametric_study_energy.png and fits.json there.
+folder; writes parametric_study.png, parametric_study_energy.png, fits.json and cases.md (every
+case's flow, travel and forces in one markdown table, with the fits beside the paper's) there.
 """
 import argparse
 import glob
@@ -223,7 +224,47 @@ def main():
         energyPlot(withEnergy, os.path.join(a.results, "parametric_study_energy.png"))
     with open(js, "w") as f:
         json.dump(fits, f, indent=1)
-    print("plot: %s; fits: %s" % (png, js))
+    md = os.path.join(a.results, "cases.md")
+    with open(md, "w") as f:
+        f.write(casesTable(runs, fits))
+    print("plot: %s; fits: %s; table: %s" % (png, js, md))
+
+
+def cell(r, key, form):
+    """A run's value in a table cell, or a dash where the run has none."""
+    v = r.get(key)
+    return form % v if v is not None and finite(v) else "–"
+
+
+def casesTable(runs, fits):
+    """Every case of ``runs`` in one markdown table (AR, then L0/h_b), the way its travel counts
+    in the fits (cut short by the end wall; still carried at the run's end: a lower bound), and
+    the fits of ``fits`` beside the paper's."""
+    head = ("| AR | L0/h_b | h_f [m] (h_f/h_b) | v_f [m/s] | Fr | Fr1 | S_b/L0 (S_b [m]) | rotation [°] | "
+            "speed at the end [m/s] | F_peak [N] | F_static: force over the last 0.1 s [N] | "
+            "F_peak/F_static (the paper's Eq 21 fit) | "
+            "submersion | travel |")
+    lines = [head, "|" + "---:|" * 12 + "---|---|"]
+    for r in sorted(runs, key=lambda r: (r["AR"], r["L0_hb"])):
+        ff = r["free_flow"]
+        ratio = "%.1f" % r["force_ratio"] if finite(r.get("force_ratio")) else "–"
+        paper = analysis.impactForceRatio(ff["Fr"], k=K_STATIC)
+        how = ("cut short by the end wall (in no fit)" if not travelled(r) else
+               "still carried: a lower bound" if moving(r) else "at rest")
+        lines.append("| %.1f | %g | %.4f (%.2f) | %.2f | %.2f | %.2f | %.2f (%.2f) | %s | %s | %.1f | %s | %s (%.2f) | %s | %s |"
+                     % (r["AR"], r["L0_hb"], ff["h_f"], ff["h_f"] / r["h_b"], ff["v_f"], ff["Fr"], ff["Fr1"],
+                        r["travel_L0"], r["travel"], cell(r, "rotation_deg", "%.0f"), cell(r, "speed_end", "%.2f"),
+                        r["peak_force"], cell(r, "static_force", "%.2f"), ratio, paper, r["submersion"], how))
+    lines.append("")
+    eq21 = fits.get("eq21")
+    if eq21:
+        lines.append("Eq 21 fit: α_f %.2f at k %.1f over %d cases with a static force (the paper: 0.18)."
+                     % (eq21["alphaF"], eq21["k"], eq21["n"]))
+    for xname, paper in (("Fr1", ("0.91", "0.83")), ("Fr", ("0.02", "−0.11"))):
+        text = "; ".join("%s: %s (the paper: %s)" % (g, "r = %.2f, n %d" % (f["r"], f["n"]) if f else "too few cases", p)
+                         for (g, f), p in zip(fits[xname].items(), paper))
+        lines.append("S_b/L0 against %s: %s." % (xname, text))
+    return "\n".join(lines).replace(" -", " −") + "\n"
 
 
 def plot(runs, fits, path):

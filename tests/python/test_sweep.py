@@ -274,6 +274,19 @@ def test_parametric_study_summary_on_known_data(tmp_path):
         assert fits["Fr1"][group]["r"] == pytest.approx(expect["r"], rel=1e-9)
         assert fits["Fr1"][group]["r"] > 0.9  # the made-up law is linear in Fr1
         assert fits["Fr"][group]["n"] == len(sel)
+    # cases.md: a row per case in (AR, L0/h_b) order with its values and how its travel counts,
+    # and the fits' r beside the paper's
+    table = (out / "cases.md").read_text().splitlines()
+    rows = [line.split(" | ") for line in table[2:] if line.startswith("| ")]
+    assert [(float(c[0][2:]), float(c[1])) for c in rows] == [(r["AR"], r["L0_hb"]) for r in runs]
+    for c, r in zip(rows, runs):
+        assert c[6] == "%.2f (%.2f)" % (r["travel_L0"], r["travel"])
+        assert c[11] == "%.1f (%.2f)" % (r["force_ratio"], analysis.impactForceRatio(r["free_flow"]["Fr"]))
+        assert c[12] == r["submersion"]
+    assert [c[13] for c in rows].count("still carried: a lower bound |") == 1 and "still carried" in rows[3][13]
+    assert rows[7][13] == "cut short by the end wall (in no fit) |" and rows[9][13] == "at rest |"
+    assert "partial: r = %.2f, n %d (the paper: 0.83)" % (fits["Fr1"]["partial"]["r"], fits["Fr1"]["partial"]["n"]) in \
+        "\n".join(table)
 
 
 def test_the_datum_of_fig_17s_shares_is_found_from_the_dissipated_energy():
