@@ -100,6 +100,8 @@ def fitGroups(runs, x):
     return fits
 
 
+# Fig 19's Pearson r of S_b/L0 against Fr and against Fr1, by submersion group (§5.4)
+PAPER_R = {"Fr": {"complete": 0.02, "partial": -0.11}, "Fr1": {"complete": 0.91, "partial": 0.83}}
 # Fig 17's dissipated energy at 4.5 s, by (AR, L0/h_b) (§5.3)
 PAPER_DISSIPATED = {(3.0, 4): 0.77, (3.0, 24): 0.73}
 HALF_WINDOW = 8  # Fig 15's views reach this many h_b up- and downstream of the cube
@@ -198,10 +200,11 @@ def main():
         print("Eq 21 fit with the 50 ms peak: alpha_f = %.3f at k = %.1f (%d runs; F_peak over 50 ms / F_peak over "
               "10 ms: %s)" % (eq21Long["alphaF"], eq21Long["k"], eq21Long["n"],
                               ", ".join("%.2f" % (r["peak_force_50ms"] / r["peak_force"]) for r in longer)))
-    for xname, paper in (("Fr", "0.02 / -0.11"), ("Fr1", "0.91 / 0.83")):
+    for xname in ("Fr", "Fr1"):
         text = ", ".join("%s: %s" % (g, "r = %.2f (n %d)" % (f["r"], f["n"]) if f else "too few runs")
                          for g, f in fits[xname].items())
-        print("S_b/L0 against %s: %s (paper, complete / partial: r = %s)" % (xname, text, paper))
+        print("S_b/L0 against %s: %s (paper, complete / partial: r = %s)"
+              % (xname, text, " / ".join("%g" % PAPER_R[xname][g] for g, *_ in GROUPS)))
 
     withEnergy = sorted((r for r in runs if "energy" in r), key=lambda r: (r["AR"], r["L0_hb"]))
     for r in withEnergy:
@@ -247,7 +250,7 @@ def casesTable(runs, fits):
     lines = [head, "|" + "---:|" * 12 + "---|---|"]
     for r in sorted(runs, key=lambda r: (r["AR"], r["L0_hb"])):
         ff = r["free_flow"]
-        ratio = "%.1f" % r["force_ratio"] if finite(r.get("force_ratio")) else "–"
+        ratio = cell(r, "force_ratio", "%.1f")
         paper = analysis.impactForceRatio(ff["Fr"], k=K_STATIC)
         how = ("cut short by the end wall (in no fit)" if not travelled(r) else
                "still carried: a lower bound" if moving(r) else "at rest")
@@ -260,9 +263,10 @@ def casesTable(runs, fits):
     if eq21:
         lines.append("Eq 21 fit: α_f %.2f at k %.1f over %d cases with a static force (the paper: 0.18)."
                      % (eq21["alphaF"], eq21["k"], eq21["n"]))
-    for xname, paper in (("Fr1", ("0.91", "0.83")), ("Fr", ("0.02", "−0.11"))):
-        text = "; ".join("%s: %s (the paper: %s)" % (g, "r = %.2f, n %d" % (f["r"], f["n"]) if f else "too few cases", p)
-                         for (g, f), p in zip(fits[xname].items(), paper))
+    for xname in ("Fr1", "Fr"):
+        text = "; ".join("%s: %s (the paper: %g)" % (g, "r = %.2f, n %d" % (f["r"], f["n"]) if f else "too few cases",
+                                                    PAPER_R[xname][g])
+                         for g, f in fits[xname].items())
         lines.append("S_b/L0 against %s: %s." % (xname, text))
     return "\n".join(lines).replace(" -", " −") + "\n"
 
