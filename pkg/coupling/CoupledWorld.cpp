@@ -22,22 +22,47 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 
 void CoupledWorld::step(double dt) {
   const auto t0 = Clock::now();
-  coupling.computeForces(*solver_, dt);
-  const int n = world.engine.numBodies();
-  blockForce_.resize(n);
-  blockTorque_.resize(n);
-  for (int i = 0; i < n; ++i) {
-    blockForce_[i] = coupling.force(i);
-    blockTorque_[i] = coupling.torque(i);
-  }
+  coupling.launchForces(*solver_, dt);
   const auto t1 = Clock::now();
-  world.step(dt, &blockForce_, &blockTorque_);
+  // A solver on a device runs its step while the host waits for the block sums and moves the
+  // blocks: the step reads the particle forces the contacts leave on the device (queued after
+  // them) and nothing the blocks' update changes. A failure of either host part abandons it, so
+  // that the flow stays at the step's start as it does on the CPU.
+  const bool queued = solver_->queuesSteps() && solver_->numParticles() > 0;
+  if (queued) {
+    try {
+      solver_->launchStep(dt);
+    } catch (...) {
+      coupling.collectForces();  // the contacts' step is over; its own failure, if any, comes first
+      throw;
+    }
+  }
   const auto t2 = Clock::now();
-  advanceFlow(*solver_, dt);
-  const auto t3 = Clock::now();
-  stageSeconds_.coupling += seconds(t0, t1);
-  stageSeconds_.blocks += seconds(t1, t2);
-  stageSeconds_.mpm += seconds(t2, t3);
+  auto t3 = t2, t4 = t2;
+  try {
+    coupling.collectForces();
+    const int n = world.engine.numBodies();
+    blockForce_.resize(n);
+    blockTorque_.resize(n);
+    for (int i = 0; i < n; ++i) {
+      blockForce_[i] = coupling.force(i);
+      blockTorque_[i] = coupling.torque(i);
+    }
+    t3 = Clock::now();
+    world.step(dt, &blockForce_, &blockTorque_);
+    t4 = Clock::now();
+  } catch (...) {
+    if (queued) solver_->abandonStep();
+    throw;
+  }
+  if (queued)
+    solver_->finishStep();
+  else
+    advanceFlow(*solver_, dt);
+  const auto t5 = Clock::now();
+  stageSeconds_.coupling += seconds(t0, t1) + seconds(t2, t3);
+  stageSeconds_.blocks += seconds(t3, t4);
+  stageSeconds_.mpm += seconds(t1, t2) + seconds(t4, t5);
   contactStep_ = coupledContactStep(world.engine, coupling);
   if (contactStep_ < contactStepLow_.step) contactStepLow_ = {contactStep_, solver_->time()};
 }

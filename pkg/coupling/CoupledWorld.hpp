@@ -5,6 +5,8 @@
 //   2. block–block contacts and the rigid-body update with those extra forces (SdemWorld,
 //      the same leapfrog as YADE's NewtonIntegrator);
 //   3. the MPM step, which spreads the particle forces to the grid (Eq 14).
+// Steps 2 and 3 do not read each other's results: a solver on a device (MpmSolver::queuesSteps)
+// runs step 3 while the host waits for step 1's block sums and does step 2.
 // Inside YADE the same order is kept by mpmsdem.CoupledEngine, with NewtonIntegrator in place
 // of step 2's integration.
 #pragma once
@@ -42,8 +44,9 @@ class CoupledWorld {
 
   // Wall time spent in each stage of step() since construction [s], for benchmarks: the
   // MP–block contacts, the blocks (block–block contacts and the rigid-body update), the MPM
-  // step. Both backends' steps return when their work is done (the CUDA step waits for its
-  // failure flags), so the stages do not absorb each other's device time.
+  // step. On the CPU each is its own work. On CUDA, contacts is their host part and the wait for
+  // their block sums, mpm the queuing of the MPM step and the wait for it after the blocks'
+  // update: the device's MPM time that the blocks' update hides is in neither.
   struct StageSeconds {
     double coupling = 0, blocks = 0, mpm = 0;
   };

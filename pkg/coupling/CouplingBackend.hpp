@@ -56,7 +56,12 @@ struct CouplingStepOutput {
 class CouplingDeviceBackend {
  public:
   virtual ~CouplingDeviceBackend() = default;
-  virtual void run(const CouplingStepInput& in, CouplingStepOutput& out) = 0;
+  // One step in two halves: launch queues the uploads, the contact kernel, the ordered sums and
+  // their copy back, and returns; collect waits for that copy alone (work queued after launch,
+  // such as the flow's step, goes on) and fills `out`'s sums and flags. Each launch is collected
+  // before the next.
+  virtual void launch(const CouplingStepInput& in) = 0;
+  virtual void collect(CouplingStepOutput& out) = 0;
   virtual void resetHistories() = 0;
   // The tangential histories (HistoryView: keys and 3 xi per slot, the step each particle's
   // were written) to and from the host, for checkpoints; xi in double either way.

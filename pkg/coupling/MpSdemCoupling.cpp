@@ -205,7 +205,21 @@ void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
 }
 
 void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
+  launchForces(solver, dt);
+  collectForces();
+}
+
+void MpSdemCoupling::lap(int stage) {
+  if (!stageTiming_) return;
+  const auto now = std::chrono::steady_clock::now();
+  hostStage_[stage] += std::chrono::duration<double>(now - lapStart_).count();
+  lapStart_ = now;
+}
+
+void MpSdemCoupling::launchForces(mpm::MpmSolver& solver, double dt) {
   if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
+  if (pending_ == Pending::Device) device_->collect(last_);  // (its results are dropped)
+  pending_ = Pending::None;
   const mpm::MpmParams& g = solver.params();
   contactsIn_ = ContactsIn::None;
   syncBlocks();
@@ -217,14 +231,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
     barrierEnergy_ = springEnergy_ = 0;
     return;
   }
-  auto clockStart = std::chrono::steady_clock::now();
-  // host seconds since clockStart into hostStage_[k], when timing, and restart the clock
-  auto lap = [&](int k) {
-    if (!stageTiming_) return;
-    const auto now = std::chrono::steady_clock::now();
-    hostStage_[k] += std::chrono::duration<double>(now - clockStart).count();
-    clockStart = now;
-  };
+  lapStart_ = std::chrono::steady_clock::now();
   mpm::ParticleView view = solver.openForceBuffer();
   lap(kStageForceBuffer);
   if (view.device && !device_) {
@@ -299,7 +306,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   out.badParticle = -1;
   out.badBlock = -1;
   if (view.device) {
-    device_->run(in, out);
+    device_->launch(in);
   } else if (hostFloat) {
     syncFloatTables();
     const sdem::ShapeTableView<double> d = shapes_.view();
@@ -314,6 +321,22 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
   }
   lap(kStageContacts);
   shapesChanged_ = false;
+  pending_ = view.device ? Pending::Device : Pending::Host;
+  contactsIn_ = view.device ? ContactsIn::Device : hostFloat ? ContactsIn::HostFloat : ContactsIn::HostDouble;
+}
+
+void MpSdemCoupling::collectForces() {
+  if (pending_ == Pending::None) return;
+  const bool onDevice = pending_ == Pending::Device;
+  pending_ = Pending::None;
+  const ContactsIn where = contactsIn_;
+  contactsIn_ = ContactsIn::None;  // until this step's results are in
+  CouplingStepOutput& out = last_;
+  if (onDevice) {
+    lapStart_ = std::chrono::steady_clock::now();
+    device_->collect(out);
+    lap(kStageContacts);
+  }
   if (out.badParticle >= 0) {
     std::ostringstream os;
     os << "MP-SDEM coupling: the centre of material point " << out.badParticle << " reached the core of block "
@@ -322,7 +345,7 @@ void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
        << sdem::coreContactRemedy();
     throw RuntimeFailure(os.str());
   }
-  contactsIn_ = view.device ? ContactsIn::Device : hostFloat ? ContactsIn::HostFloat : ContactsIn::HostDouble;
+  contactsIn_ = where;
   minParticleStep_ = out.minParticleStep;
   minApproachStep_ = out.minApproachStep;
   overflow_ += out.overflow;

@@ -18,9 +18,11 @@
 // impulse the blocks receive (Eqs 17–18).
 //
 // Block sums are reduced in a fixed order on the CPU (results do not depend on the thread
-// count); on the GPU with atomics in double.
+// count) and on the GPU (by particle number; atomics only in a step whose contacts overflow the
+// device's contact list).
 #pragma once
 #include <array>
+#include <chrono>
 #include <limits>
 #include <map>
 #include <memory>
@@ -73,6 +75,14 @@ class MpSdemCoupling {
   // RuntimeFailure when a particle centre reaches a block core (names both; at the first step
   // this means particles were seeded inside a block), ParameterError for a missing pair.
   void computeForces(mpm::MpmSolver& solver, double dt);
+  // computeForces in two halves, for a caller with device work to queue behind the contacts
+  // (CoupledWorld queues the flow's step there on CUDA): launchForces does the host part and
+  // queues the device part (on the CPU it does all the work), collectForces waits for the block
+  // sums alone and ends the step, with computeForces' failures. The results below are those of
+  // the last collected step; a launch left uncollected (a step that failed between the two) is
+  // waited for and dropped by the next launch.
+  void launchForces(mpm::MpmSolver& solver, double dt);
+  void collectForces();
 
   // ---- results of the last computeForces, per SDEM body index (world frame)
   Vec3 force(int block) const;        // force of the flow on the block [N]
@@ -199,6 +209,12 @@ class MpSdemCoupling {
   enum { kStageForceBuffer, kStageSetup, kStageBins, kStageContacts, kHostStages };
   bool stageTiming_ = false;
   double hostStage_[kHostStages] = {};
+  // host seconds since lapStart_ into hostStage_[stage] when timing, and the clock restarted
+  void lap(int stage);
+  std::chrono::steady_clock::time_point lapStart_;
+  // What launchForces left for collectForces: nothing (no step, or nothing could touch), the
+  // host loop's results in last_, or the device's to wait for.
+  enum class Pending { None, Host, Device } pending_ = Pending::None;
   template <typename T>
   static void appendContacts(const HostSide<T>& side, int block, std::vector<MpContactRecord>& out);
   bool historiesToDevice_ = false;  // setHistories() since the last step: the device takes them

@@ -98,6 +98,18 @@ void MpmSolver::getParticles(ParticleSet& out, std::size_t first, std::size_t co
   copyParticleRange(all, first, count, out);
 }
 
+void MpmSolver::launchStep(double) {
+  throw RuntimeFailure(name() + ": launchStep: this solver does not queue steps (queuesSteps() is false); call step()");
+}
+
+void MpmSolver::finishStep() {
+  throw RuntimeFailure(name() + ": finishStep: this solver does not queue steps (queuesSteps() is false)");
+}
+
+void MpmSolver::abandonStep() {
+  throw RuntimeFailure(name() + ": abandonStep: this solver does not queue steps (queuesSteps() is false)");
+}
+
 std::unique_ptr<MpmSolver> makeSolver(const MpmParams& params, Backend backend, Precision precision) {
   validate(params);
   if (backend == Backend::Cpu) {

@@ -120,6 +120,17 @@ class MpmSolver {
   // constitutive update. Throws RuntimeFailure on a NaN / blow-up (names the particle).
   virtual void step(double dt) = 0;
 
+  // The step in two halves, for a caller with host work to do while a device runs the step
+  // (CoupledWorld moves the blocks meanwhile). Only where queuesSteps() (CUDA): launchStep(dt)
+  // queues what step(dt) does and returns; then one of finishStep(), which waits for it and ends
+  // it as step(dt) does (the same failures), or abandonStep(), which waits for it and leaves the
+  // particles and the clock as they were before it (for a caller whose own part of the step
+  // failed), must come before any other call. Elsewhere they throw: step() is the whole step.
+  virtual bool queuesSteps() const { return false; }
+  virtual void launchStep(double dt);
+  virtual void finishStep();
+  virtual void abandonStep();
+
   // False once a step failed in a solver that keeps one copy of the particles
   // (MpmParams::keepLastGoodState false): they are then partly advanced, and step(),
   // getParticles() and openForceBuffer() throw RuntimeFailure until setParticles() replaces

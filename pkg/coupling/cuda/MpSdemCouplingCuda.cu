@@ -126,6 +126,7 @@ class CouplingCuda : public CouplingDeviceBackend {
   ~CouplingCuda() override {
     for (auto& e : events_)
       if (e) CUDA_CHECK_NOTHROW(cudaEventDestroy(e));
+    if (done_) CUDA_CHECK_NOTHROW(cudaEventDestroy(done_));
   }
 
   void recordContacts(bool on) override {
@@ -141,7 +142,9 @@ class CouplingCuda : public CouplingDeviceBackend {
     return true;
   }
 
-  void run(const CouplingStepInput& in, CouplingStepOutput& out) override {
+  void launch(const CouplingStepInput& in) override {
+    if (launched_) throw RuntimeFailure("MP-block coupling on CUDA: a step was launched before the last one was collected");
+    if (!done_) CUDA_CHECK(cudaEventCreateWithFlags(&done_, cudaEventDisableTiming));
     const mpm::ParticleView& v = in.particles;
     const sdem::ShapeTableView<double>& s = in.shapes;
     if (in.shapesChanged || !vertex_.ptr) {
@@ -211,8 +214,9 @@ class CouplingCuda : public CouplingDeviceBackend {
                            std::to_string(v.n) + " particles need a contact key of " + std::to_string(keyBits) +
                            " bits, at most 64 are supported");
     if (listCapacity_ == 0) growList(firstListCapacity_);
-    sums_.reserve(out.sums.size());
-    CUDA_CHECK(cudaMemsetAsync(sums_.ptr, 0, std::max<std::size_t>(out.sums.size(), 1) * sizeof(double)));
+    const std::size_t numSums = static_cast<std::size_t>(kBlockSums) * nb;
+    sums_.reserve(numSums);
+    CUDA_CHECK(cudaMemsetAsync(sums_.ptr, 0, std::max<std::size_t>(numSums, 1) * sizeof(double)));
     if (counted_ != v.n) {  // every particle writes its count each step: no clearing
       count_.reserve(v.n);
       first_.reserve(v.n);
@@ -268,18 +272,36 @@ class CouplingCuda : public CouplingDeviceBackend {
       CUDA_CHECK(cub::DeviceRadixSort::SortPairs(sortScratch_.ptr, sortBytes, blockKey_[0].ptr, blockKey_[1].ptr,
                                                  order_.ptr, byBlock_.ptr, static_cast<int>(listCapacity_), 0,
                                                  blockBits));
-      cudak::blockSumsKernel<<<numBlocks, cudak::kSumThreads>>>(flagsD, listCapacity_, share_.ptr, blockKey_[1].ptr,
-                                                                byBlock_.ptr, sums_.ptr);
+      const int chunks = std::max(1, std::min(kMaxSumChunks, kSumChunksInAll / numBlocks));
+      partial_.reserve(static_cast<std::size_t>(kBlockSums) * numBlocks * chunks);
+      cudak::blockSumsKernel<<<numBlocks * chunks, cudak::kSumThreads>>>(flagsD, listCapacity_, share_.ptr,
+                                                                         blockKey_[1].ptr, byBlock_.ptr, chunks,
+                                                                         partial_.ptr);
+      CUDA_CHECK(cudaGetLastError());
+      const int totals = numBlocks * kBlockSums;
+      cudak::blockTotalsKernel<<<std::min(kPlaceBlocks, (totals + kThreads - 1) / kThreads), kThreads>>>(
+          flagsD, listCapacity_, numBlocks, chunks, partial_.ptr, sums_.ptr);
       CUDA_CHECK(cudaGetLastError());
     }
     mark(3);
-    const std::size_t sumBytes = out.sums.size() * sizeof(double);
+    const std::size_t sumBytes = numSums * sizeof(double);
     resultHost_.reserve(alignUp(sizeof(cudak::CouplingFlags)) + sumBytes);
     CUDA_CHECK(cudaMemcpyAsync(resultHost_.ptr, flagsD, sizeof(cudak::CouplingFlags), cudaMemcpyDeviceToHost));
     if (sumBytes)
       CUDA_CHECK(cudaMemcpyAsync(resultHost_.ptr + alignUp(sizeof(cudak::CouplingFlags)), sums_.ptr, sumBytes,
                                  cudaMemcpyDeviceToHost));
-    waited([&] { CUDA_CHECK(cudaStreamSynchronize(0)); });
+    // what the host waits for: the work queued after it (the flow's step) goes on meanwhile
+    CUDA_CHECK(cudaEventRecord(done_));
+    launched_ = true;
+    launchedSums_ = numSums;
+  }
+
+  void collect(CouplingStepOutput& out) override {
+    if (!launched_) throw RuntimeFailure("MP-block coupling on CUDA: no step was launched to collect");
+    launched_ = false;
+    waited([&] { CUDA_CHECK(cudaEventSynchronize(done_)); });
+    const std::size_t sumBytes = launchedSums_ * sizeof(double);
+    out.sums.resize(launchedSums_);
     cudak::CouplingFlags res;
     std::memcpy(&res, resultHost_.ptr, sizeof(res));
     if (sumBytes) std::memcpy(out.sums.data(), resultHost_.ptr + alignUp(sizeof(cudak::CouplingFlags)), sumBytes);
@@ -310,6 +332,10 @@ class CouplingCuda : public CouplingDeviceBackend {
 
   // The placing kernel's grid: it loops over the step's contacts, whose number the device holds.
   static constexpr int kPlaceBlocks = 264;
+  // The block sums in runs (blockSumsKernel): about this many CUDA blocks in all, so that a scene
+  // of a few blocks spreads their contacts over the device, and at most this many runs a block.
+  static constexpr int kSumChunksInAll = 264;
+  static constexpr int kMaxSumChunks = 32;
 
   void growList(unsigned long long capacity) {
     // (places are ints)
@@ -345,6 +371,10 @@ class CouplingCuda : public CouplingDeviceBackend {
   cudaEvent_t events_[kStages + 1] = {};
   double stageTotals_[kStages] = {};
   double hostWait_ = 0;  // host time blocked in the step's copy back [s]
+  // A launched step (launch): its flags and sums come back into resultHost_ before done_.
+  cudaEvent_t done_ = nullptr;
+  bool launched_ = false;
+  std::size_t launchedSums_ = 0;
   int numShapes_ = 0;
   DeviceArray<T> vertex_, faceNormal_, faceOffset_, sweepRadius_, boundingRadius_;
   DeviceArray<int> faceLoopStart_, loopVertex_, loopEdge_, shapeFaceStart_, shapeVertexStart_, shapeEdgeStart_;
@@ -369,6 +399,7 @@ class CouplingCuda : public CouplingDeviceBackend {
   // the places of order_ sorted stably by block (byBlock_), their blocks before and after the sort
   DeviceArray<int> byBlock_;
   DeviceArray<unsigned long long> blockKey_[2];
+  DeviceArray<double> partial_;  // blockSumsKernel's sum of each run of a block's contacts
   DeviceArray<unsigned char> sortScratch_;
   std::size_t counted_ = ~std::size_t(0);  // the particles count_ and first_ are sized for
   DeviceArray<int> count_, first_;          // per particle number: contacts, and the scan of them

@@ -119,23 +119,27 @@ static __global__ void blockKeysKernel(const CouplingFlags* flags, unsigned int 
 }
 
 // Block b's sums from its contacts in particle-number order (byBlock: the listed contacts
-// sorted stably by block, blockKey their blocks): its r-th contact goes to thread
-// r mod kSumThreads, which adds its contacts in turn, then a fixed tree adds the threads' sums.
-// The order depends on the contacts alone, not on thread timing. Nothing in a step that
-// overflowed the list (its sums are atomic: blockKeysKernel).
+// sorted stably by block, blockKey their blocks), in `chunks` equal runs of them: CUDA block
+// b * chunks + c takes run c, whose r-th contact goes to thread r mod kSumThreads, which adds its
+// contacts in turn; a fixed tree adds the threads' sums into partial[b * chunks + c], and
+// blockTotalsKernel adds a block's runs in their order. The order depends on the contacts alone,
+// not on thread timing; the runs spread a block with thousands of contacts (a flume's bed) over
+// the device. Nothing in a step that overflowed the list (its sums are atomic: blockKeysKernel).
 constexpr int kSumThreads = 128;
 static __global__ void __launch_bounds__(kSumThreads)
     blockSumsKernel(const CouplingFlags* flags, unsigned int capacity, const double* share,
-                    const unsigned long long* blockKey, const int* byBlock, double* sums) {
-  const unsigned long long b = blockIdx.x;
+                    const unsigned long long* blockKey, const int* byBlock, int chunks, double* partial) {
+  const unsigned long long b = blockIdx.x / chunks;
+  const long long c = blockIdx.x % chunks;
   const int t = threadIdx.x;
   const unsigned int count = flags->contacts;
-  double* dst = sums + static_cast<std::size_t>(kBlockSums) * b;
   if (count > capacity) return;
   __shared__ double part[kBlockSums][kSumThreads];
   const int listed = static_cast<int>(count);  // the places past them hold numBlocks
-  const int lo = mpm::firstKeyAtLeast(blockKey, 0, listed, 0, b);
-  const int hi = mpm::firstKeyAtLeast(blockKey, lo, listed, 0, b + 1);
+  const int first = mpm::firstKeyAtLeast(blockKey, 0, listed, 0, b);
+  const long long length = mpm::firstKeyAtLeast(blockKey, first, listed, 0, b + 1) - first;
+  const int lo = first + static_cast<int>(length * c / chunks);
+  const int hi = first + static_cast<int>(length * (c + 1) / chunks);
   double acc[kBlockSums] = {};
   for (int i = lo + t; i < hi; i += kSumThreads) {
     const double* s = share + static_cast<std::size_t>(kBlockSums) * byBlock[i];
@@ -148,7 +152,21 @@ static __global__ void __launch_bounds__(kSumThreads)
       for (int k = 0; k < kBlockSums; ++k) part[k][t] += part[k][t + half];
     __syncthreads();
   }
-  if (t < kBlockSums) dst[t] = part[t][0];
+  if (t < kBlockSums) partial[static_cast<std::size_t>(kBlockSums) * blockIdx.x + t] = part[t][0];
+}
+
+// sums[b][k]: block b's runs (blockSumsKernel) added in their order.
+static __global__ void blockTotalsKernel(const CouplingFlags* flags, unsigned int capacity, int numBlocks, int chunks,
+                                         const double* partial, double* sums) {
+  if (flags->contacts > capacity) return;
+  const int n = numBlocks * kBlockSums;
+  for (int i = blockIdx.x * blockDim.x + threadIdx.x; i < n; i += gridDim.x * blockDim.x) {
+    const int b = i / kBlockSums, k = i % kBlockSums;
+    const double* p = partial + static_cast<std::size_t>(kBlockSums) * b * chunks + k;
+    double s = p[0];
+    for (int c = 1; c < chunks; ++c) s += p[static_cast<std::size_t>(kBlockSums) * c];
+    sums[i] = s;
+  }
 }
 
 template <typename T>

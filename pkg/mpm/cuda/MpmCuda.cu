@@ -71,6 +71,10 @@ template <typename T>
 void MpmCuda<T>::allocateGrid() {
   deviceAlloc(&column_, nColumns_, gridBytes_);
   deviceAlloc(&flags_, 1, gridBytes_);
+  CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&flagsHost_), sizeof(StepFlags)));
+  cudaEvent_t done;
+  CUDA_CHECK(cudaEventCreateWithFlags(&done, cudaEventDisableTiming));
+  stepDone_ = done;
   deviceAlloc(&blockStart_, nBlocks_, gridBytes_);
   deviceAlloc(&blockEnd_, nBlocks_, gridBytes_);
   deviceAlloc(&colourBlocks_, nBlocks_, gridBytes_);
@@ -112,6 +116,10 @@ void MpmCuda<T>::freeDevice() {
   deviceFree(column_);
   deviceFree(terrain_);
   deviceFree(flags_);
+  if (flagsHost_) CUDA_CHECK_NOTHROW(cudaFreeHost(flagsHost_));
+  flagsHost_ = nullptr;
+  if (stepDone_) CUDA_CHECK_NOTHROW(cudaEventDestroy(static_cast<cudaEvent_t>(stepDone_)));
+  stepDone_ = nullptr;
   deviceFree(blockStart_);
   deviceFree(blockEnd_);
   deviceFree(colourBlocks_);
@@ -522,6 +530,13 @@ void MpmCuda<T>::sortParticles() {
 
 template <typename T>
 void MpmCuda<T>::step(double dt) {
+  launchStep(dt);
+  finishStep();
+}
+
+template <typename T>
+void MpmCuda<T>::launchStep(double dt) {
+  if (launched_) throw RuntimeFailure(name() + ": launchStep: the step launched before has not been finished or abandoned");
   requireCompleteForces("step");
   if (steps_ % 100 == 0) checkTimeStep(dt);
   const int n = static_cast<int>(n_);
@@ -596,8 +611,36 @@ void MpmCuda<T>::step(double dt) {
   // copy back of the flags that every step waits for
   queueColumnsNear();
   mark(6);
-  StepFlags res;
-  CUDA_CHECK(cudaMemcpy(&res, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
+  CUDA_CHECK(cudaMemcpyAsync(flagsHost_, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
+  CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(stepDone_)));
+  launched_ = true;
+  launchedDt_ = dt;
+}
+
+template <typename T>
+typename MpmCuda<T>::StepFlags MpmCuda<T>::waitForLaunched(const char* what) {
+  if (!launched_) throw RuntimeFailure(name() + ": " + what + ": no step was launched (launchStep)");
+  launched_ = false;
+  CUDA_CHECK(cudaEventSynchronize(static_cast<cudaEvent_t>(stepDone_)));
+  return *flagsHost_;
+}
+
+template <typename T>
+void MpmCuda<T>::abandonStep() {
+  const StepFlags res = waitForLaunched("abandonStep");
+  // The columns the step stored stay (a superset of what the particles reach); a pool that cannot
+  // grow to them takes them back (takeColumns), which the caller's failure already reports.
+  try {
+    takeColumns(res);
+  } catch (const RuntimeFailure&) {
+  }
+}
+
+template <typename T>
+void MpmCuda<T>::finishStep() {
+  const StepFlags res = waitForLaunched("finishStep");
+  const double dt = launchedDt_;
+  const ParticleOut<T> out = output();
   takeColumns(res);
   if (res.columnsMissing) {
     std::ostringstream os;
@@ -607,7 +650,7 @@ void MpmCuda<T>::step(double dt) {
        << " s). The particle state is kept at the start of this step, and the columns are stored now.";
     throw RuntimeFailure(os.str());
   }
-  if (events_[0] && n > 0)
+  if (events_[0] && n_ > 0)
     for (int k = 0; k < kStages; ++k) {
       float ms = 0;
       CUDA_CHECK(cudaEventElapsedTime(&ms, static_cast<cudaEvent_t>(events_[k]), static_cast<cudaEvent_t>(events_[k + 1])));

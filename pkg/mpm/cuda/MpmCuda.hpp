@@ -61,6 +61,10 @@ class MpmCuda : public MpmSolver {
   void setExternalForces(const std::vector<double>& f) override;
   ParticleView openForceBuffer() override;
   void step(double dt) override;
+  bool queuesSteps() const override { return true; }
+  void launchStep(double dt) override;
+  void finishStep() override;
+  void abandonStep() override;
   double stableTimeStep() override;
   std::size_t memoryBytes() const override;
   void setStageTiming(bool on) override;
@@ -129,6 +133,13 @@ class MpmCuda : public MpmSolver {
   T* nodes_ = nullptr;
   T* terrain_ = nullptr;  // the terrain's heights (grid_.terrain.z); null without one
   StepFlags* flags_ = nullptr;
+  // A launched step (launchStep): its flags come back into flagsHost_ (pinned) before the event
+  // stepDone_ (a cudaEvent_t without timing), which finishStep and abandonStep wait for.
+  StepFlags* flagsHost_ = nullptr;
+  void* stepDone_ = nullptr;
+  bool launched_ = false;
+  double launchedDt_ = 0;
+  StepFlags waitForLaunched(const char* what);  // waits for the launched step's flags; launched_ off
   // P2G order: blocks of stencil bases, the sort's double buffers and its scratch space.
   int blocks_[3];
   int nBlocks_;

@@ -101,16 +101,64 @@ Vec3 particleMomentum(mpm::MpmSolver& s) {
   return m;
 }
 
+// A CPU solver that queues its steps as the CUDA one does (MpmSolver::queuesSteps): launchStep
+// keeps the step, finishStep takes it, abandonStep drops it. A CoupledWorld over it takes the
+// order of a CUDA step on the CPU: the flow's step launched before the sums are collected and
+// the blocks move, and run after them.
+class QueuedCpuSolver : public mpm::MpmSolver {
+ public:
+  explicit QueuedCpuSolver(std::unique_ptr<mpm::MpmSolver> inner) : inner_(std::move(inner)) {}
+  std::string name() const override { return "queued " + inner_->name(); }
+  const mpm::MpmParams& params() const override { return inner_->params(); }
+  void setParticles(const mpm::ParticleSet& ps) override { inner_->setParticles(ps); }
+  using mpm::MpmSolver::setParticles;
+  void getParticles(mpm::ParticleSet& out) override { inner_->getParticles(out); }
+  std::size_t numParticles() const override { return inner_->numParticles(); }
+  void setExternalForces(const std::vector<double>& f) override { inner_->setExternalForces(f); }
+  mpm::ParticleView openForceBuffer() override { return inner_->openForceBuffer(); }
+  void step(double dt) override {
+    launchStep(dt);
+    finishStep();
+  }
+  double stableTimeStep() override { return inner_->stableTimeStep(); }
+  std::size_t memoryBytes() const override { return inner_->memoryBytes(); }
+  bool queuesSteps() const override { return true; }
+  void launchStep(double dt) override {
+    if (launched_) throw RuntimeFailure("QueuedCpuSolver: launched twice");
+    launched_ = true;
+    dt_ = dt;
+    ++launches;
+  }
+  void finishStep() override {
+    if (!launched_) throw RuntimeFailure("QueuedCpuSolver: nothing launched to finish");
+    launched_ = false;
+    inner_->step(dt_);
+    setClock(inner_->time(), inner_->steps());
+  }
+  void abandonStep() override {
+    if (!launched_) throw RuntimeFailure("QueuedCpuSolver: nothing launched to abandon");
+    launched_ = false;
+    ++abandoned;
+  }
+  int launches = 0, abandoned = 0;
+
+ private:
+  std::unique_ptr<mpm::MpmSolver> inner_;
+  bool launched_ = false;
+  double dt_ = 0;
+};
+
 // Zero gravity: a 4 x 4 x 4-cell blob of glass beads (8 points per cell) moving at vx along x
-// in a grid of `cellsX` x 14 x 14 cells.
+// in a grid of `cellsX` x 14 x 14 cells; its solver wrapped in a QueuedCpuSolver if `queued`.
 std::unique_ptr<CoupledWorld> blobWorld(int cellsX, double vx, mpm::Backend backend = mpm::Backend::Cpu,
-                                        mpm::Precision precision = mpm::Precision::Double) {
+                                        mpm::Precision precision = mpm::Precision::Double, bool queued = false) {
   auto prm = gridParams({cellsX, 14, 14});
   mpm::ParticleSet ps;
   mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.08, 0.09, 0.09}, 8, ps);
   for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = vx;
-  auto solver = mpm::makeSolver(prm, backend, precision);
+  std::unique_ptr<mpm::MpmSolver> solver = mpm::makeSolver(prm, backend, precision);
   solver->setParticles(ps);
+  if (queued) solver = std::make_unique<QueuedCpuSolver>(std::move(solver));
   auto w = std::make_unique<CoupledWorld>(std::move(solver));
   w->world.gravity = Vec3::Zero();
   return w;
@@ -853,6 +901,74 @@ TEST(MpSdemCoupling, BadInputIsRefusedClearly) {
   bad.friction = -1;
   EXPECT_THROW(w.coupling.setPair(0, bad), ParameterError);
   EXPECT_THROW(w.coupling.setPair(3, pair()), ParameterError);
+}
+
+// The flow's step queued behind the contacts and run after the blocks' update (CUDA's order,
+// here with a CPU solver that queues) gives the run of the plain order to the last bit: the
+// blob presses a free cube against a fixed one, so the contacts, the block–block contact and
+// the flow all act.
+TEST(CoupledWorld, QueuedFlowStepGivesTheSameRunBitForBit) {
+  auto run = [](bool queued) {
+    auto w = blobWorld(24, 1.0, mpm::Backend::Cpu, mpm::Precision::Double, queued);
+    addCube(*w, 0.02, 0.003, Vec3(0.115, 0.07, 0.07), 2000);
+    addCube(*w, 0.02, 0.003, Vec3(0.1549, 0.07, 0.07), 2000, true);
+    w->coupling.setPair(0, pair(0.3, 0.2));
+    for (int s = 0; s < 1500; ++s) w->step(1e-5);
+    return w;
+  };
+  auto plain = run(false), queued = run(true);
+  const auto* q = dynamic_cast<const QueuedCpuSolver*>(&queued->mpm());
+  ASSERT_NE(q, nullptr);
+  EXPECT_EQ(q->launches, 1500);
+  EXPECT_EQ(q->abandoned, 0);
+  ASSERT_GT(plain->coupling.contactCount(0), 0) << "the blob does not press the cube";
+  EXPECT_GT(plain->world.engine.contacts().size(), 0u) << "the cubes are not in contact";
+  EXPECT_EQ(queued->mpm().steps(), 1500);
+  EXPECT_EQ(queued->mpm().time(), plain->mpm().time());
+  EXPECT_EQ(queued->world.engine.position(0), plain->world.engine.position(0));
+  EXPECT_EQ(queued->world.engine.orientation(0).coeffs(), plain->world.engine.orientation(0).coeffs());
+  EXPECT_EQ(queued->coupling.force(0), plain->coupling.force(0));
+  mpm::ParticleSet a, b;
+  plain->mpm().getParticles(a);
+  queued->mpm().getParticles(b);
+  EXPECT_EQ(a.x, b.x);
+  EXPECT_EQ(a.v, b.v);
+  EXPECT_EQ(a.stress, b.stress);
+}
+
+// A coupling step that fails (particles seeded inside a block) abandons the flow's step queued
+// behind it: the flow stays at the step's start, untouched, and takes a step of its own after.
+class QueuedStepEveryBackend : public mpm::agreement::EveryBackend {};
+INSTANTIATE_TEST_SUITE_P(Kinds, QueuedStepEveryBackend, ::testing::ValuesIn(mpm::agreement::everyKind()),
+                         mpm::agreement::kindName);
+TEST_P(QueuedStepEveryBackend, AFailedCouplingStepLeavesTheFlowAtItsStart) {
+  for (bool wrap : {false, true}) {
+    if (wrap && backend() != mpm::Backend::Cpu) continue;  // CUDA queues its own steps
+    auto prm = gridParams({20, 14, 14});
+    mpm::ParticleSet ps;
+    mpm::seedBox(prm, {0.04, 0.05, 0.05}, {0.10, 0.09, 0.09}, 8, ps);
+    for (std::size_t p = 0; p < ps.size(); ++p) ps.v[3 * p] = 0.5;
+    std::unique_ptr<mpm::MpmSolver> solver = mpm::makeSolver(prm, backend(), precision());
+    solver->setParticles(ps);
+    mpm::ParticleSet before;
+    solver->getParticles(before);
+    if (wrap) solver = std::make_unique<QueuedCpuSolver>(std::move(solver));
+    CoupledWorld w(std::move(solver));
+    addCube(w, 0.02, 0.003, Vec3(0.07, 0.07, 0.07), 2000);  // inside the blob
+    w.coupling.setPair(0, pair());
+    EXPECT_EQ(w.mpm().queuesSteps(), wrap || backend() == mpm::Backend::Cuda) << w.mpm().name();
+    EXPECT_THROW(w.step(1e-5), RuntimeFailure) << w.mpm().name();
+    EXPECT_EQ(w.mpm().time(), 0.0) << w.mpm().name();
+    EXPECT_EQ(w.mpm().steps(), 0) << w.mpm().name();
+    mpm::ParticleSet after;
+    w.mpm().getParticles(after);
+    EXPECT_EQ(after.x, before.x) << w.mpm().name();
+    EXPECT_EQ(after.v, before.v) << w.mpm().name();
+    if (wrap) EXPECT_EQ(dynamic_cast<const QueuedCpuSolver&>(w.mpm()).abandoned, 1);
+    w.mpm().step(1e-5);  // nothing left launched
+    EXPECT_EQ(w.mpm().steps(), 1) << w.mpm().name();
+    EXPECT_GT(w.mpm().time(), 0.0) << w.mpm().name();
+  }
 }
 
 // The approach step of one material point closing on the upstream face of a fixed cube (outer
