@@ -20,6 +20,8 @@ struct CouplingStepInput {
   const std::vector<sdem::BarrierCoulombPhys<double>>* phys;
   BinGridView bins;                     // host arrays
   int numBins, numBinEntries;
+  const int* slotBins;                  // the bin of each slot (numSlots): where bins.slot is not -1
+  int numSlots;
   bool binsChanged;                     // the bin table differs from the last step's
   mpm::ParticleView particles;
   double dt;

@@ -59,14 +59,29 @@ sdem::BarrierCoulombPhys<T> convertPhys(const sdem::BarrierCoulombPhys<double>& 
 
 // Uniform bins over the MPM grid box listing the blocks whose rounded-body box, grown by the
 // largest particle radius and by `watch`, touches them (compressed rows).
+// The bins some block's box reaches are few against the grid's (a village's blocks in a valley):
+// each bin holds a slot, -1 for none, and the blocks of slot s are blocks[first[s] ..
+// first[s + 1]), in ascending order; so a table that changes costs its slots, not the grid.
 struct BinGridView {
   double origin[3];   // lower corner [m]
   double invSize;     // 1 / bin edge [1/m]
   int dims[3];        // bins per axis
-  const int* start;   // dims[0] dims[1] dims[2] + 1 offsets into blocks
+  const int* slot;    // per bin (dims[0] dims[1] dims[2]): its slot, or -1
+  const int* first;   // per slot + 1: offsets into blocks
   const int* blocks;  // block indices
   double watch;       // how far beyond the largest particle radius the block boxes were grown [m]
 };
+
+// The bin of a point at (x, y, z) [m]; points outside the bins take the nearest.
+MPM_HD_INLINE int binOf(const BinGridView& bins, double x, double y, double z) {
+  const double p[3] = {x, y, z};
+  int bc[3];
+  for (int d = 0; d < 3; ++d) {
+    const int c = static_cast<int>(mpm::hdFloor((p[d] - bins.origin[d]) * bins.invSize));
+    bc[d] = c < 0 ? 0 : (c >= bins.dims[d] ? bins.dims[d] - 1 : c);
+  }
+  return (bc[0] * bins.dims[1] + bc[1]) * bins.dims[2] + bc[2];
+}
 
 // Stable-step bound for the step after this one, from a particle that does not touch a block
 // yet but closes on it [s]: gap g = d - R_p0 - R_b > 0 at normal speed vn > 0, R = R_p0 + R_b
@@ -220,17 +235,13 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
                                  const BinGridView& bins, const HistoryView<T>& H, T dt, T safety, Sink& sink,
                                  int* badBlock, int* overflow, T* approach, CouplingLoopMemo<T>& memo) {
   const Vec3T<T> x{P.x[0][p], P.x[1][p], P.x[2][p]};
-  int bc[3];
-  for (int d = 0; d < 3; ++d) {
-    int c = static_cast<int>(mpm::hdFloor((static_cast<double>(x[d]) - bins.origin[d]) * bins.invSize));
-    bc[d] = c < 0 ? 0 : (c >= bins.dims[d] ? bins.dims[d] - 1 : c);
-  }
-  const int bin = (bc[0] * bins.dims[1] + bc[1]) * bins.dims[2] + bc[2];
+  const int bin = binOf(bins, x[0], x[1], x[2]);
   const int h = particleNumber(P, p);
   // its first history slot; 64-bit, as 3 x slots x number passes 2^31 at a few 10^8 points
   const long long slot0 = static_cast<long long>(H.slots) * h;
-  const int b0 = bins.start[bin], b1 = bins.start[bin + 1];
-  if (b0 == b1) return kCoupleOk;  // no block near; its history goes stale (HistoryView)
+  const int s = bins.slot[bin];
+  if (s < 0) return kCoupleOk;  // no block near; its history goes stale (HistoryView)
+  const int b0 = bins.first[s], b1 = bins.first[s + 1];
   constexpr int kMaxSlots = 4;
   long long oldKey[kMaxSlots];
   T oldXi[3 * kMaxSlots];

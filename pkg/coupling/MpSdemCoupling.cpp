@@ -185,23 +185,64 @@ void MpSdemCoupling::buildBins(const mpm::MpmParams& g) {
   // The table only changes when a block's box enters or leaves a bin (for a block that moves
   // less than a bin per step, every few hundred steps): otherwise it is kept, and the CUDA
   // coupling keeps its copy.
-  binsChanged_ = range != binRanges_ || binStart_.size() != static_cast<std::size_t>(nb) + 1;
+  binsChanged_ = range != binRanges_ || binSlot_.size() != static_cast<std::size_t>(nb);
   if (!binsChanged_) return;
   binRanges_.swap(range);
   const std::vector<std::array<int, 6>>& ranges = binRanges_;
-  binCount_.assign(nb, 0);
+  if (binSlot_.size() != static_cast<std::size_t>(nb)) {
+    binSlot_.assign(nb, -1);
+    slotBins_.clear();
+  }
+  for (int bin : slotBins_) binSlot_[bin] = -1;
+  slotBins_.clear();
   auto forEachBin = [&](const std::array<int, 6>& r, auto&& fn) {
     for (int a = r[0]; a <= r[3]; ++a)
       for (int b = r[1]; b <= r[4]; ++b)
         for (int c = r[2]; c <= r[5]; ++c) fn((a * binDims_[1] + b) * binDims_[2] + c);
   };
-  for (const auto& r : ranges) forEachBin(r, [&](int bin) { ++binCount_[bin]; });
-  binStart_.assign(nb + 1, 0);
-  for (int b = 0; b < nb; ++b) binStart_[b + 1] = binStart_[b] + binCount_[b];
-  binBlocks_.resize(binStart_[nb]);
-  std::vector<int> fill(binStart_.begin(), binStart_.end() - 1);
+  // slots in the order the blocks first reach their bins, each slot's blocks in ascending order
+  std::vector<int>& count = binFirst_;
+  count.clear();
+  for (const auto& r : ranges)
+    forEachBin(r, [&](int bin) {
+      int& s = binSlot_[bin];
+      if (s < 0) {
+        s = static_cast<int>(slotBins_.size());
+        slotBins_.push_back(bin);
+        count.push_back(0);
+      }
+      ++count[s];
+    });
+  int total = 0;
+  for (int& c : count) {
+    const int n = c;
+    c = total;
+    total += n;
+  }
+  count.push_back(total);
+  binBlocks_.resize(total);
+  std::vector<int> fill(binFirst_.begin(), binFirst_.end() - 1);
   for (std::size_t i = 0; i < ranges.size(); ++i)
-    forEachBin(ranges[i], [&](int bin) { binBlocks_[fill[bin]++] = static_cast<int>(i); });
+    forEachBin(ranges[i], [&](int bin) { binBlocks_[fill[binSlot_[bin]]++] = static_cast<int>(i); });
+}
+
+BinGridView MpSdemCoupling::binView() const {
+  return BinGridView{{binOrigin_[0], binOrigin_[1], binOrigin_[2]},
+                     1.0 / binSize_,
+                     {binDims_[0], binDims_[1], binDims_[2]},
+                     binSlot_.data(),
+                     binFirst_.data(),
+                     binBlocks_.data(),
+                     binWatch_};
+}
+
+std::vector<int> MpSdemCoupling::binnedBlocks(const Vec3& x) const {
+  std::vector<int> out;
+  if (binSlot_.empty()) return out;
+  const BinGridView bins = binView();
+  const int s = bins.slot[binOf(bins, x[0], x[1], x[2])];
+  if (s >= 0) out.assign(binBlocks_.begin() + binFirst_[s], binBlocks_.begin() + binFirst_[s + 1]);
+  return out;
 }
 
 void MpSdemCoupling::computeForces(mpm::MpmSolver& solver, double dt) {
@@ -285,14 +326,11 @@ void MpSdemCoupling::launchForces(mpm::MpmSolver& solver, double dt) {
   in.shapesChanged = shapesChanged_;
   in.blocks = &blocks_;
   in.phys = &phys_;
-  in.bins = BinGridView{{binOrigin_[0], binOrigin_[1], binOrigin_[2]},
-                        1.0 / binSize_,
-                        {binDims_[0], binDims_[1], binDims_[2]},
-                        binStart_.data(),
-                        binBlocks_.data(),
-                        binWatch_};
+  in.bins = binView();
   in.numBins = binDims_[0] * binDims_[1] * binDims_[2];
   in.numBinEntries = static_cast<int>(binBlocks_.size());
+  in.slotBins = slotBins_.data();
+  in.numSlots = static_cast<int>(slotBins_.size());
   in.binsChanged = binsChanged_;
   in.particles = view;
   in.dt = dt;

@@ -155,10 +155,14 @@ class MpSdemCoupling {
 
   // Bin edge of the broad phase [m] (set on the first step from the grid spacing).
   double binSize() const { return binSize_; }
+  // The blocks (SDEM body indices, ascending) the broad phase of the last step lists for a point
+  // at x: those whose box, grown by the largest particle radius and a grid cell, reaches its bin.
+  std::vector<int> binnedBlocks(const Vec3& x) const;
 
  private:
   void syncBlocks();
   void buildBins(const mpm::MpmParams& grid);
+  BinGridView binView() const;  // the host's bin table
   // What the CPU loop writes in precision T: the tangential forces xi of the histories (3 x slots
   // per particle, keys in key_) and the contacts of each particle chunk.
   template <typename T>
@@ -190,7 +194,9 @@ class MpSdemCoupling {
   double binWatch_ = 0;  // growth of the block boxes beyond the largest particle radius [m]
   double binOrigin_[3] = {0, 0, 0};
   int binDims_[3] = {0, 0, 0};
-  std::vector<int> binStart_, binBlocks_, binCount_;
+  // The bin table (BinGridView): a slot per bin some block's box reaches, their blocks, and the
+  // bin of each slot (the slots a rebuild clears, so that it costs the slots, not the grid).
+  std::vector<int> binSlot_, binFirst_, binBlocks_, slotBins_;
   std::vector<std::array<int, 6>> binRanges_, binRangesNew_;  // bins of each block's box (last built, this step)
   bool binsChanged_ = true;  // the last buildBins() changed the table
 

@@ -188,8 +188,26 @@ class CouplingCuda : public CouplingDeviceBackend {
     init.contacts = 0;
     std::memcpy(h + offFlags, &init, sizeof(init));
     CUDA_CHECK(cudaMemcpyAsync(staged_.ptr, h, bytes, cudaMemcpyHostToDevice));
-    if (in.binsChanged || binStart_.capacity < static_cast<std::size_t>(in.numBins) + 1) {
-      binStart_.upload(in.bins.start, in.numBins + 1);
+    if (in.binsChanged || binsHeld_ != in.numBins) {
+      // The slot of every bin stays on the device: the last table's slots are cleared and the new
+      // ones set, so a change costs the bins the blocks reach, not the grid.
+      if (binsHeld_ != in.numBins) {
+        binSlot_.reserve(in.numBins);
+        CUDA_CHECK(cudaMemset(binSlot_.ptr, 0xff, std::max<std::size_t>(in.numBins, 1) * sizeof(int)));
+        binsHeld_ = in.numBins;
+        slotsHeld_ = 0;
+      }
+      if (slotsHeld_ > 0)
+        cudak::binSlotsKernel<<<std::min(kPlaceBlocks, (slotsHeld_ + kThreads - 1) / kThreads), kThreads>>>(
+            slotsHeld_, slotBins_.ptr, true, binSlot_.ptr);
+      CUDA_CHECK(cudaGetLastError());
+      slotBins_.upload(in.slotBins, in.numSlots);
+      slotsHeld_ = in.numSlots;
+      if (slotsHeld_ > 0)
+        cudak::binSlotsKernel<<<std::min(kPlaceBlocks, (slotsHeld_ + kThreads - 1) / kThreads), kThreads>>>(
+            slotsHeld_, slotBins_.ptr, false, binSlot_.ptr);
+      CUDA_CHECK(cudaGetLastError());
+      binFirst_.upload(in.bins.first, in.numSlots + 1);
       binBlocks_.upload(in.bins.blocks, in.numBinEntries);
     }
     const auto* blocksD = reinterpret_cast<const BlockState<T>*>(staged_.ptr);
@@ -235,7 +253,8 @@ class CouplingCuda : public CouplingDeviceBackend {
                                     shapeEdgeStart_.ptr, sweepRadius_.ptr,    boundingRadius_.ptr,
                                     convex_.ptr};
     BinGridView bins = in.bins;
-    bins.start = binStart_.ptr;
+    bins.slot = binSlot_.ptr;
+    bins.first = binFirst_.ptr;
     bins.blocks = binBlocks_.ptr;
     const HistoryView<T> H{histKey_.ptr, histXi_.ptr, histWritten_.ptr, in.historyStep, in.historySlots};
     const int n = static_cast<int>(v.n);
@@ -380,7 +399,10 @@ class CouplingCuda : public CouplingDeviceBackend {
   DeviceArray<int> faceLoopStart_, loopVertex_, loopEdge_, shapeFaceStart_, shapeVertexStart_, shapeEdgeStart_;
   DeviceArray<std::uint8_t> convex_;
   DeviceArray<unsigned char> staged_;  // this step's blocks, pair physics and flags
-  DeviceArray<int> binStart_, binBlocks_;  // the bin table, uploaded when it changes
+  // the bin table (BinGridView), changed when the host's changes; the bin of each slot
+  DeviceArray<int> binSlot_, binFirst_, binBlocks_, slotBins_;
+  int binsHeld_ = -1;  // the bins binSlot_ covers
+  int slotsHeld_ = 0;  // the slots set in it
   PinnedArray stagedHost_;
   PinnedArray resultHost_;  // the step's flags and block sums, copied back together
   DeviceArray<long long> histKey_;

@@ -86,6 +86,12 @@ struct DeviceSink {
   }
 };
 
+// The slots of the bin table (BinGridView): bin slotBins[s] gets slot s, or -1 when clearing.
+static __global__ void binSlotsKernel(int numSlots, const int* slotBins, bool clear, int* slot) {
+  for (int s = blockIdx.x * blockDim.x + threadIdx.x; s < numSlots; s += gridDim.x * blockDim.x)
+    slot[slotBins[s]] = clear ? -1 : s;
+}
+
 // The listed contacts in particle-number order: contact i of particle `number`, its entry-th,
 // goes to order[first[number] + entry], where first is the exclusive scan of the particles'
 // counts. Nothing in a step that overflowed the list (its sums are atomic).

@@ -628,8 +628,8 @@ typename MpmCuda<T>::StepFlags MpmCuda<T>::waitForLaunched(const char* what) {
 template <typename T>
 void MpmCuda<T>::abandonStep() {
   const StepFlags res = waitForLaunched("abandonStep");
-  // The columns the step stored stay (a superset of what the particles reach); a pool that cannot
-  // grow to them takes them back (takeColumns), which the caller's failure already reports.
+  // The columns the step stored stay (a superset of what the particles reach). Where the pool
+  // cannot grow to them, takeColumns takes them back, and a later step that reaches them says so.
   try {
     takeColumns(res);
   } catch (const RuntimeFailure&) {

@@ -586,8 +586,8 @@ TEST(CouplingKernels, LoopMemoGivesExactlyWhatAFreshMemoGives) {
     k.fixed = b == 2;
   }
   const sdem::BarrierCoulombPhys<double> phys{1e4, 0.4, 0.3, 0.0, 0.1};
-  const int binStart[2] = {0, 3}, binBlocks[3] = {0, 1, 2};
-  const BinGridView bins{{-1, -1, -1}, 0.5, {1, 1, 1}, binStart, binBlocks, 0.01};
+  const int binSlot[1] = {0}, binFirst[2] = {0, 3}, binBlocks[3] = {0, 1, 2};
+  const BinGridView bins{{-1, -1, -1}, 0.5, {1, 1, 1}, binSlot, binFirst, binBlocks, 0.01};
   // A jittered lattice in seeding order (neighbours follow each other, as in a solver's
   // storage) of points whose centre stays clear of every core over both steps (else the step
   // fails), with random velocities and runs of equal volumes.
@@ -689,8 +689,8 @@ TEST(CouplingKernels, TangentialHistoryEndsWithTheContact) {
   box.fixed = 1;
   const sdem::BarrierCoulombPhys<double> phys{1e4, 0.5, 0.3, 0.0, 0.0};
   // Bins of 0.2 m along x from -0.2: the first two list the box, the third none.
-  const int binStart[4] = {0, 1, 2, 2}, binBlocks[2] = {0, 0};
-  const BinGridView bins{{-0.2, -0.2, -0.2}, 5.0, {3, 1, 1}, binStart, binBlocks, 0.01};
+  const int binSlot[3] = {0, 1, -1}, binFirst[3] = {0, 1, 2}, binBlocks[2] = {0, 0};
+  const BinGridView bins{{-0.2, -0.2, -0.2}, 5.0, {3, 1, 1}, binSlot, binFirst, binBlocks, 0.01};
   const double vol0 = 1e-6, mass = 1.6e-3;
   const double rp = std::cbrt(3 * vol0 / (4 * M_PI));
   const double top = 1 - sdem::closestPointOnCore(S, 0, mpm::Vec3T<double>{0, 0, 1}).distance;
@@ -901,6 +901,48 @@ TEST(MpSdemCoupling, BadInputIsRefusedClearly) {
   bad.friction = -1;
   EXPECT_THROW(w.coupling.setPair(0, bad), ParameterError);
   EXPECT_THROW(w.coupling.setPair(3, pair()), ParameterError);
+}
+
+// The bin table, changed in place as blocks move (the slots of the bins they left cleared, those
+// they reach set), lists at every point what a table built afresh at the same poses lists: five
+// cubes moved at random through the bins ahead of a blob for 30 steps, every bin checked.
+TEST(MpSdemCoupling, BinTableChangedInPlaceIsTheFreshOne) {
+  auto w = blobWorld(24, 0.0);
+  std::vector<int> cubes;
+  for (int k = 0; k < 5; ++k) cubes.push_back(addCube(*w, 0.02, 0.003, Vec3(0.13 + 0.02 * k, 0.07, 0.07), 2000));
+  w->coupling.setPair(0, pair());
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> ux(0.12, 0.22), uyz(0.02, 0.12);
+  int changed = 0;
+  std::vector<std::vector<int>> last;
+  for (int s = 0; s < 30; ++s) {
+    for (int c : cubes)
+      w->world.engine.setState(c, Vec3(ux(rng), uyz(rng), uyz(rng)), Quat::Identity(), Vec3::Zero(), Vec3::Zero());
+    w->coupling.computeForces(w->mpm(), 1e-5);
+    MpSdemCoupling fresh(w->world.engine);
+    fresh.setPair(0, pair());
+    fresh.computeForces(w->mpm(), 1e-5);
+    ASSERT_EQ(fresh.binSize(), w->coupling.binSize());
+    const double h = w->coupling.binSize();
+    std::vector<std::vector<int>> now;
+    int listed = 0;
+    for (double x = 0.5 * h; x < 0.24; x += h)
+      for (double y = 0.5 * h; y < 0.14; y += h)
+        for (double z = 0.5 * h; z < 0.14; z += h) {
+          now.push_back(w->coupling.binnedBlocks(Vec3(x, y, z)));
+          EXPECT_EQ(now.back(), fresh.binnedBlocks(Vec3(x, y, z))) << "step " << s << " at " << x << ", " << y << ", " << z;
+          EXPECT_TRUE(std::is_sorted(now.back().begin(), now.back().end()));
+          listed += !now.back().empty();
+        }
+    for (int c : cubes) {
+      const std::vector<int> at = w->coupling.binnedBlocks(w->world.engine.position(c));
+      EXPECT_NE(std::find(at.begin(), at.end(), c), at.end()) << "cube " << c << " is not in its own bin";
+    }
+    EXPECT_GT(listed, 0);
+    changed += now != last;
+    last = now;
+  }
+  EXPECT_EQ(changed, 30) << "the table did not change every step";
 }
 
 // The flow's step queued behind the contacts and run after the blocks' update (CUDA's order,
