@@ -330,7 +330,8 @@ def _runCaseFolder(case, meta, until, drive, how, restart):
     """The free flow and the coupled run of one prepared case (``how``: backend, precision and
     driver, recorded); writes run.json at the end. What has finished is kept in run.partial.json
     as it finishes; with ``restart`` a case stopped part-way goes on from there (the coupled run
-    from coupled/coupled.checkpoint.json; the wall seconds then count the leg that finished)."""
+    from coupled/coupled.checkpoint.json; its wall seconds add up the legs, the stopped ones
+    kept in run.partial.json as coupled_seconds_before)."""
     partialPath = os.path.join(case, "run.partial.json")
     record = {}
     if restart and os.path.exists(partialPath):
@@ -356,20 +357,28 @@ def _runCaseFolder(case, meta, until, drive, how, restart):
         record.update(coupled_steps=steps, coupled_started=True)
         keep()
         seconds = 0.0
+        if start == 0:
+            record.pop("coupled_seconds_before", None)  # a run from its start: earlier legs do not count
         front = _frontSnapshot(case)
-        if start == 0 and front is not None and front["step"] < steps:
-            record["coupled_from_step"] = front["step"]
+        legStart = time.time()
+        try:
+            if start == 0 and front is not None and front["step"] < steps:
+                record["coupled_from_step"] = front["step"]
+                keep()
+                seconds = drive("coupled.json", "coupled",
+                                ["--flow-from", os.path.join(case, "free"), "--steps", str(steps - front["step"])])
+            elif start == 0:
+                record.pop("coupled_from_step", None)
+                seconds = drive("coupled.json", "coupled", ["--steps", str(steps)])
+            elif start < steps:
+                print("%s: coupled run resumed from step %d of %d" % (name, start, steps))
+                record.setdefault("resumed_from_steps", []).append(start)
+                seconds = drive("coupled.json", "coupled", ["--restart", "--steps", str(steps - start)])
+        except BaseException:
+            record["coupled_seconds_before"] = record.get("coupled_seconds_before", 0.0) + time.time() - legStart
             keep()
-            seconds = drive("coupled.json", "coupled",
-                            ["--flow-from", os.path.join(case, "free"), "--steps", str(steps - front["step"])])
-        elif start == 0:
-            record.pop("coupled_from_step", None)
-            seconds = drive("coupled.json", "coupled", ["--steps", str(steps)])
-        elif start < steps:
-            print("%s: coupled run resumed from step %d of %d" % (name, start, steps))
-            record.setdefault("resumed_from_steps", []).append(start)
-            seconds = drive("coupled.json", "coupled", ["--restart", "--steps", str(steps - start)])
-        record["coupled_seconds"] = seconds
+            raise
+        record["coupled_seconds"] = seconds + record.pop("coupled_seconds_before", 0.0)
     record.pop("coupled_started", None)
     with open(os.path.join(case, "run.json"), "w") as f:
         json.dump(record, f, indent=1)

@@ -139,12 +139,14 @@ def test_a_case_stopped_part_way_resumes_where_it_stopped(tmp_path):
     assert not os.path.exists(os.path.join(folder, "run.json"))
     partial = json.load(open(os.path.join(folder, "run.partial.json")))
     assert partial["coupled_steps"] == steps and partial["free_flow_seconds"] > 0
+    assert partial["coupled_seconds_before"] > 0  # the killed leg's wall time, kept for the total
     freeLog = os.path.join(folder, "free.log")
     freeWritten = os.stat(freeLog).st_mtime_ns
     assert ps.runPrepared(str(tmp_path / "study"), exe=real, until=until) == [folder]
     assert os.stat(freeLog).st_mtime_ns == freeWritten  # the free flow was not run again
     record = json.load(open(os.path.join(folder, "run.json")))
     assert record["resumed_from_steps"] == [stop] and record["coupled_steps"] == steps
+    assert record["coupled_seconds"] > partial["coupled_seconds_before"] and "coupled_seconds_before" not in record
     assert not os.path.exists(os.path.join(folder, "run.partial.json"))
     assertSameCase(ps.collectCase(folder), ref)
     # --rerun starts the case afresh: the same results again
