@@ -197,16 +197,20 @@ class CouplingCuda : public CouplingDeviceBackend {
         binsHeld_ = in.numBins;
         slotsHeld_ = 0;
       }
-      if (slotsHeld_ > 0)
+      if (slotsHeld_ > 0) {
         cudak::binSlotsKernel<<<std::min(kPlaceBlocks, (slotsHeld_ + kThreads - 1) / kThreads), kThreads>>>(
             slotsHeld_, slotBins_.ptr, true, binSlot_.ptr);
-      CUDA_CHECK(cudaGetLastError());
+        CUDA_CHECK(cudaGetLastError());
+        // a longer list replaces the array the clearing reads: it must be done first
+        if (static_cast<std::size_t>(in.numSlots) > slotBins_.capacity) CUDA_CHECK(cudaStreamSynchronize(0));
+      }
       slotBins_.upload(in.slotBins, in.numSlots);
       slotsHeld_ = in.numSlots;
-      if (slotsHeld_ > 0)
+      if (slotsHeld_ > 0) {
         cudak::binSlotsKernel<<<std::min(kPlaceBlocks, (slotsHeld_ + kThreads - 1) / kThreads), kThreads>>>(
             slotsHeld_, slotBins_.ptr, false, binSlot_.ptr);
-      CUDA_CHECK(cudaGetLastError());
+        CUDA_CHECK(cudaGetLastError());
+      }
       binFirst_.upload(in.bins.first, in.numSlots + 1);
       binBlocks_.upload(in.bins.blocks, in.numBinEntries);
     }
