@@ -58,10 +58,10 @@ sdem::BarrierCoulombPhys<T> convertPhys(const sdem::BarrierCoulombPhys<double>& 
 }
 
 // Uniform bins over the MPM grid box listing the blocks whose rounded-body box, grown by the
-// largest particle radius and by `watch`, touches them (compressed rows).
-// The bins some block's box reaches are few against the grid's (a village's blocks in a valley):
-// each bin holds a slot, -1 for none, and the blocks of slot s are blocks[first[s] ..
-// first[s + 1]), in ascending order; so a table that changes costs its slots, not the grid.
+// largest particle radius and by `watch`, touches them. The bins some block's box reaches are
+// few against the grid's (a village's blocks in a valley): each bin holds a slot, -1 for none,
+// and the blocks of slot s are blocks[first[s] .. first[s + 1]), in ascending order; so a table
+// that changes costs its slots, not the grid.
 struct BinGridView {
   double origin[3];   // lower corner [m]
   double invSize;     // 1 / bin edge [1/m]
