@@ -1,10 +1,9 @@
 // Binding of the MP–SDEM coupling inside YADE (C++ side of mpmsdem.CoupledEngine). One call
-// per YADE step keeps the order of a coupled step (paper §2.3):
-//   block states from YADE -> block–block contacts -> MP–block contacts (particle forces into
-//   the MPM force buffer, block shares) -> MPM step -> block forces (contacts + flow) to
-//   O.forces; YADE's NewtonIntegrator then moves the blocks.
+// per YADE step is the driver's coupled step (coupling::coupledStep, paper §2.3): block states
+// from YADE -> MP–block contacts (particle forces into the MPM force buffer, block shares) ->
+// block–block contacts and the block forces (contacts + flow) to O.forces, while a device runs
+// the MPM step -> the MPM step's end; YADE's NewtonIntegrator then moves the blocks.
 // Particle data stays in the solver's memory (on the GPU for the CUDA backend).
-#include <chrono>
 #include <cstring>
 #include <cmath>
 #include <filesystem>
@@ -45,29 +44,20 @@ class PyCoupling {
   void setHistorySlots(int s) { coupling_.setHistorySlots(s); }
 
   void step(const bp::object& bodies, const bp::object& forces, double dt) {
-    using Clock = std::chrono::steady_clock;
     sdem_.readStates(bodies);
-    sdem_.computeForces(dt);
-    const auto t0 = Clock::now();
-    coupling_.computeForces(mpm_.solver(), dt);
+    coupling::coupledStep(mpm_.solver(), coupling_, dt, [&] {
+      sdem_.computeForces(dt);
+      const int n = coupling_.numBlocks();
+      force_.resize(n);
+      torque_.resize(n);
+      for (int i = 0; i < n; ++i) {
+        force_[i] = coupling_.force(i);
+        torque_[i] = coupling_.torque(i);
+      }
+      sdem_.writeForces(forces, &force_, &torque_);
+      sdem_.countStep();
+    }, stages_);
     restoredApproach_ = std::numeric_limits<double>::quiet_NaN();
-    const auto t1 = Clock::now();
-    if (mpm_.numParticles() > 0)
-      mpm_.step(dt);  // PyMpm's step, which also marks its particle cache stale
-    else
-      coupling::advanceFlow(mpm_.solver(), dt);
-    const auto t2 = Clock::now();
-    const int n = coupling_.numBlocks();
-    force_.resize(n);
-    torque_.resize(n);
-    for (int i = 0; i < n; ++i) {
-      force_[i] = coupling_.force(i);
-      torque_[i] = coupling_.torque(i);
-    }
-    sdem_.writeForces(forces, &force_, &torque_);
-    sdem_.countStep();
-    couplingSeconds_ += std::chrono::duration<double>(t1 - t0).count();
-    mpmSeconds_ += std::chrono::duration<double>(t2 - t1).count();
     ++steps_;
     const double limit = contactStep();
     if (dt > checkFactor_ * limit) {
@@ -140,13 +130,13 @@ class PyCoupling {
   bp::dict timings() const {
     bp::dict d;
     d["steps"] = steps_;
-    d["coupling"] = couplingSeconds_;
-    d["mpm"] = mpmSeconds_;
+    d["coupling"] = stages_.coupling;
+    d["mpm"] = stages_.mpm;
     return d;
   }
   void resetTimings() {
     steps_ = 0;
-    couplingSeconds_ = mpmSeconds_ = 0;
+    stages_ = {};
   }
 
   // ---- outputs: <dir>/coupled.h5 and <dir>/scene.pvd (coupling::CoupledOutput, the layout the
@@ -298,7 +288,7 @@ class PyCoupling {
   bool chosen_ = false;
   long warnings_ = 0;
   long steps_ = 0;
-  double couplingSeconds_ = 0, mpmSeconds_ = 0;
+  coupling::CoupledStageSeconds stages_;  // its blocks' part is in the SDEM bridge's timings
   std::unique_ptr<coupling::CoupledOutput> output_;
 };
 

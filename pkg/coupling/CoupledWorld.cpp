@@ -21,17 +21,32 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 }  // namespace
 
 void CoupledWorld::step(double dt) {
+  coupledStep(*solver_, coupling, dt, [this, dt] {
+    const int n = world.engine.numBodies();
+    blockForce_.resize(n);
+    blockTorque_.resize(n);
+    for (int i = 0; i < n; ++i) {
+      blockForce_[i] = coupling.force(i);
+      blockTorque_[i] = coupling.torque(i);
+    }
+    world.step(dt, &blockForce_, &blockTorque_);
+  }, stageSeconds_);
+  contactStep_ = coupledContactStep(world.engine, coupling);
+  if (contactStep_ < contactStepLow_.step) contactStepLow_ = {contactStep_, solver_->time()};
+}
+
+void coupledStep(mpm::MpmSolver& solver, MpSdemCoupling& coupling, double dt, const std::function<void()>& blocks,
+                 CoupledStageSeconds& stages) {
   const auto t0 = Clock::now();
-  coupling.launchForces(*solver_, dt);
+  coupling.launchForces(solver, dt);
   const auto t1 = Clock::now();
   // A solver on a device runs its step while the host waits for the block sums and moves the
   // blocks: the step reads the particle forces the contacts leave on the device (queued after
-  // them) and nothing the blocks' update changes. A failure of either host part abandons it, so
-  // that the flow stays at the step's start as it does on the CPU.
-  const bool queued = solver_->queuesSteps() && solver_->numParticles() > 0;
+  // them) and nothing the blocks' update changes.
+  const bool queued = solver.queuesSteps() && solver.numParticles() > 0;
   if (queued) {
     try {
-      solver_->launchStep(dt);
+      solver.launchStep(dt);
     } catch (...) {
       coupling.collectForces();  // the contacts' step is over; its own failure, if any, comes first
       throw;
@@ -41,30 +56,21 @@ void CoupledWorld::step(double dt) {
   auto t3 = t2, t4 = t2;
   try {
     coupling.collectForces();
-    const int n = world.engine.numBodies();
-    blockForce_.resize(n);
-    blockTorque_.resize(n);
-    for (int i = 0; i < n; ++i) {
-      blockForce_[i] = coupling.force(i);
-      blockTorque_[i] = coupling.torque(i);
-    }
     t3 = Clock::now();
-    world.step(dt, &blockForce_, &blockTorque_);
+    blocks();
     t4 = Clock::now();
   } catch (...) {
-    if (queued) solver_->abandonStep();
+    if (queued) solver.abandonStep();
     throw;
   }
   if (queued)
-    solver_->finishStep();
+    solver.finishStep();
   else
-    advanceFlow(*solver_, dt);
+    advanceFlow(solver, dt);
   const auto t5 = Clock::now();
-  stageSeconds_.coupling += seconds(t0, t1) + seconds(t2, t3);
-  stageSeconds_.blocks += seconds(t3, t4);
-  stageSeconds_.mpm += seconds(t1, t2) + seconds(t4, t5);
-  contactStep_ = coupledContactStep(world.engine, coupling);
-  if (contactStep_ < contactStepLow_.step) contactStepLow_ = {contactStep_, solver_->time()};
+  stages.coupling += seconds(t0, t1) + seconds(t2, t3);
+  stages.blocks += seconds(t3, t4);
+  stages.mpm += seconds(t1, t2) + seconds(t4, t5);
 }
 
 void advanceFlow(mpm::MpmSolver& solver, double dt) {

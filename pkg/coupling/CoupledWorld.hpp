@@ -7,9 +7,10 @@
 //   3. the MPM step, which spreads the particle forces to the grid (Eq 14).
 // Steps 2 and 3 do not read each other's results: a solver on a device (MpmSolver::queuesSteps)
 // runs step 3 while the host waits for step 1's block sums and does step 2.
-// Inside YADE the same order is kept by mpmsdem.CoupledEngine, with NewtonIntegrator in place
-// of step 2's integration.
+// Inside YADE mpmsdem.CoupledEngine takes the same step (coupledStep), with NewtonIntegrator
+// moving the blocks after it.
 #pragma once
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -21,6 +22,24 @@
 
 namespace mpmsdem {
 namespace coupling {
+
+// Wall time of each stage of coupled steps [s], for benchmarks: the MP–block contacts, the
+// blocks (block–block contacts and the rigid-body update, or the YADE bridge's hand-over of the
+// forces), the MPM step. On the CPU each is its own work. On CUDA, coupling is the contacts' host
+// part and the wait for their block sums, mpm the queuing of the MPM step and the wait for it
+// after the blocks: the device's MPM time that the blocks hide is in neither.
+struct CoupledStageSeconds {
+  double coupling = 0, blocks = 0, mpm = 0;
+};
+
+// One coupled step around its blocks' part, in the order above, for CoupledWorld and the YADE
+// bridge alike: the MP–block contacts at the blocks' states of time t, the flow's step queued
+// behind them where the solver queues steps, the contacts' block sums (coupling.force/torque),
+// blocks(), which takes them, then the flow's step or the wait for it. A failure in the contacts
+// or in blocks() abandons a queued flow step, so that the flow stays at the step's start as it
+// does on the CPU. Their wall time is added to `stages`.
+void coupledStep(mpm::MpmSolver& solver, MpSdemCoupling& coupling, double dt, const std::function<void()>& blocks,
+                 CoupledStageSeconds& stages);
 
 class CoupledWorld {
  public:
@@ -42,15 +61,8 @@ class CoupledWorld {
   // The contact part of criticalTimeStep() (coupledContactStep) at the start of the last step [s].
   double contactStep() const { return contactStep_; }
 
-  // Wall time spent in each stage of step() since construction [s], for benchmarks: the
-  // MP–block contacts, the blocks (block–block contacts and the rigid-body update), the MPM
-  // step. On the CPU each is its own work. On CUDA, contacts is their host part and the wait for
-  // their block sums, mpm the queuing of the MPM step and the wait for it after the blocks'
-  // update: the device's MPM time that the blocks' update hides is in neither.
-  struct StageSeconds {
-    double coupling = 0, blocks = 0, mpm = 0;
-  };
-  const StageSeconds& stageSeconds() const { return stageSeconds_; }
+  // Wall time spent in each stage of step() since construction [s] (CoupledStageSeconds).
+  const CoupledStageSeconds& stageSeconds() const { return stageSeconds_; }
 
   // The smallest contact step (coupledContactStep) after any step since construction [s], and
   // the time it was reached [s]: how close a run came to its contact limit, which a fixed step
@@ -67,7 +79,7 @@ class CoupledWorld {
  private:
   std::unique_ptr<mpm::MpmSolver> solver_;
   std::vector<Vec3> blockForce_, blockTorque_;
-  StageSeconds stageSeconds_;
+  CoupledStageSeconds stageSeconds_;
   double contactStep_ = std::numeric_limits<double>::infinity();  // coupledContactStep after the last step
   ContactStepLow contactStepLow_;
 };
