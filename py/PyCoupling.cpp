@@ -47,13 +47,7 @@ class PyCoupling {
     sdem_.readStates(bodies);
     coupling::coupledStep(mpm_.solver(), coupling_, dt, [&] {
       sdem_.computeForces(dt);
-      const int n = coupling_.numBlocks();
-      force_.resize(n);
-      torque_.resize(n);
-      for (int i = 0; i < n; ++i) {
-        force_[i] = coupling_.force(i);
-        torque_[i] = coupling_.torque(i);
-      }
+      coupling_.blockForces(force_, torque_);
       sdem_.writeForces(forces, &force_, &torque_);
       sdem_.countStep();
     }, stages_);

@@ -22,13 +22,7 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 
 void CoupledWorld::step(double dt) {
   coupledStep(*solver_, coupling, dt, [this, dt] {
-    const int n = world.engine.numBodies();
-    blockForce_.resize(n);
-    blockTorque_.resize(n);
-    for (int i = 0; i < n; ++i) {
-      blockForce_[i] = coupling.force(i);
-      blockTorque_[i] = coupling.torque(i);
-    }
+    coupling.blockForces(blockForce_, blockTorque_);
     world.step(dt, &blockForce_, &blockTorque_);
   }, stageSeconds_);
   contactStep_ = coupledContactStep(world.engine, coupling);

@@ -491,6 +491,15 @@ Vec3 MpSdemCoupling::torque(int i) const {
   const double* s = sums(i, kSumTorque);
   return Vec3(s[0], s[1], s[2]);
 }
+void MpSdemCoupling::blockForces(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
+  const int n = numBlocks();
+  force.resize(n);
+  torque.resize(n);
+  for (int i = 0; i < n; ++i) {
+    force[i] = this->force(i);
+    torque[i] = this->torque(i);
+  }
+}
 Vec3 MpSdemCoupling::faceForce(int i) const {
   const double* s = sums(i, kSumFace);
   return Vec3(s[0], s[1], s[2]);

@@ -87,6 +87,9 @@ class MpSdemCoupling {
   // ---- results of the last computeForces, per SDEM body index (world frame)
   Vec3 force(int block) const;        // force of the flow on the block [N]
   Vec3 torque(int block) const;       // its torque about the block centroid [N m]
+  // force(i) and torque(i) of every block of the last step, numBlocks() of each (the SDEM
+  // engine's bodies at that step), as the rigid-body update takes them.
+  void blockForces(std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
   Vec3 faceForce(int block) const;    // share through face interiors, F_f [N]
   Vec3 edgeForce(int block) const;    // share through edges and vertices, F_e [N]
   int contactCount(int block) const;  // number of MP contacts
