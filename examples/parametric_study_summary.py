@@ -10,8 +10,9 @@ Figs 14, 16b and 19:
 - Fig 19a, 19b: S_b/L0 against Fr and against Fr1 = v_f/√(g L0), with a line and Pearson's
   r for each submersion group (paper: r = 0.02 and −0.11 against Fr; 0.91 and 0.83 against Fr1).
   A cube still carried at the end of its run (faster than 0.05 m/s) has a lower bound for its
-  travel: an arrow up from its point, and a note in the table (fits.json: still_moving). A
-  travel the flume's end wall cut short (cube_at_end) is a grey triangle with an arrow, in no fit.
+  travel: an arrow up from its point (a fixed share of the panel's height), and a note in the
+  table (fits.json: still_moving). A travel the flume's end wall cut short (cube_at_end) is a
+  grey triangle with an arrow, in no fit.
 - Fig 18: the cube's largest kinetic energy over the flow's initial potential energy,
   E_k,max^b / E_p,0^f, against L0/h_b for each AR (paper: below 0.4 % in every case; our E_p,0^f
   is zero at the bed under the column's upstream end), and beside it the time of the flow's
@@ -307,6 +308,10 @@ def plot(runs, fits, path):
     a.set_title("Impact force (Fig 16b, Eq 21)")
     a.legend(fontsize=8)
 
+    # A lower bound's arrow rises by a share of the panel's height, not of its own travel: a short
+    # travel's arrow would be too small to see beside a long one.
+    highest = max([r["travel_L0"] for r in runs if finite(r.get("travel_L0", float("nan")))] + [1e-9])
+    rise = 0.08 * highest
     for a, xname, title in ((ax[1, 0], "Fr", "Fig 19a"), (ax[1, 1], "Fr1", "Fig 19b")):
         for (group, marker, face, label), color in zip(GROUPS, ("C1", "C2")):
             sel = [r for r in runs if r["submersion"] == group and travelled(r)]
@@ -314,7 +319,7 @@ def plot(runs, fits, path):
             a.plot(x, [r["travel_L0"] for r in sel], marker, mfc=face or color, color=color, ls="none")
             for r in sel:
                 if moving(r):  # a lower bound: the cube was still carried when the run ended
-                    a.annotate("", xy=(r["free_flow"][xname], r["travel_L0"] * 1.12),
+                    a.annotate("", xy=(r["free_flow"][xname], r["travel_L0"] + rise),
                                xytext=(r["free_flow"][xname], r["travel_L0"]),
                                arrowprops=dict(arrowstyle="->", color=color))
             f = fits[xname][group]
@@ -325,8 +330,9 @@ def plot(runs, fits, path):
         # travels the end wall cut short: shown as lower bounds, in no fit
         cut = [r for r in runs if r.get("reached", True) and not travelled(r)]
         for r in cut:
-            a.annotate("", xy=(r["free_flow"][xname], r["travel_L0"] * 1.12), xytext=(r["free_flow"][xname], r["travel_L0"]),
+            a.annotate("", xy=(r["free_flow"][xname], r["travel_L0"] + rise), xytext=(r["free_flow"][xname], r["travel_L0"]),
                        arrowprops=dict(arrowstyle="->", color="0.6"))
+        a.set_ylim(top=max(a.get_ylim()[1], highest + 1.5 * rise))  # the highest arrow in view
         if cut:
             a.plot([r["free_flow"][xname] for r in cut], [r["travel_L0"] for r in cut], "^", color="0.6", mfc="none",
                    ls="none", label="cut short by the end wall (not fitted)")
