@@ -5,7 +5,8 @@
         [--sizes 20,40] [--ratios 1/200,1/100,1/50,1/20,1/10,1/8] [--duration 1.2] [--window 0.4 0.7]
         [--engine yade|driver] [--exe PATH] [--jobs 1] [--threads 1] [--out results/tradeoff_sweep_radius]
         [--markdown docs/tradeoffs.md] [--plot docs/img/tradeoff_sweep_radius.png] [--report-only]
-        [--dx 0.02] [--backend cpu|cuda] [--precision double|float] [--prepare | --collect]
+        [--dx 0.02] [--settings table1|joint] [--backend cpu|cuda] [--precision double|float]
+        [--prepare | --collect]
 
 The scene is examples/flume_block.py's coarse one (dx 0.02 m, 12,000 material points, the copper
 cube's upstream face at the column front + L0, elastic barrier, α 0.99 per step at the flume's
@@ -44,7 +45,10 @@ markers, ``--plot PNG`` draws travel and peak force against R/h_b (log x, one li
 the cost ratio. ``--report-only`` redoes table, markdown and plot from ``--out``.
 
 ``--dx 0.01`` is the paper's resolution (96,000 material points; its own generated section of
-``--markdown``). The driver runs the MPM on ``--backend`` in ``--precision``. Where the
+``--markdown``). ``--settings`` names the flow and friction set of mpmsdem.flume.FLUME_SETTINGS:
+``table1`` (default: Table 1 as we read it, the flume's default blend) or ``joint`` (the set
+``examples/flume_block.py --full`` runs by default: basal and side-wall friction, μ₂, flow–cube
+friction and the PIC viscosity of our joint design at dx 0.01 m; its own generated section). The driver runs the MPM on ``--backend`` in ``--precision``. Where the
 driver is to run on another machine (a GPU machine without YADE), ``--prepare`` writes each run's
 scene (``--out``/h<mm>_r<ratio>/scene.json, with prepared.json) and ``--out``/run_driver.sh, which
 runs them all there (``MPMSDEM_RUN``: the driver, ``JOBS``: runs at a time) and leaves each run's
@@ -76,9 +80,10 @@ SIZE_RANGE = (0.0, 100.0)   # mm: a cube wider than half the 0.2 m flume would b
 RATIO_RANGE = (0.0, 0.5)    # R must stay below half the side (a box core of positive size)
 
 
-def markers(dx):
-    """The generated section of one resolution in --markdown: the coarse one's, or tagged by dx."""
-    tag = "" if dx == DX else " --dx %g" % dx
+def markers(dx, settings="table1"):
+    """The generated section of one resolution and set in --markdown: the coarse one's, or tagged
+    by dx and by a set other than table1."""
+    tag = ("" if dx == DX else " --dx %g" % dx) + ("" if settings == "table1" else " --settings %s" % settings)
     return ("<!-- tradeoff_sweep_radius.py%s: begin generated section -->" % tag,
             "<!-- tradeoff_sweep_radius.py%s: end generated section -->" % tag)
 
@@ -138,6 +143,9 @@ def parse(argv):
                          "201 /s of PIC damping; 5e-6: the paper's blend, 2010 /s), or 'step' (alpha per step, Eq 4)")
     ap.add_argument("--dx", type=float, default=DX,
                     help="grid spacing [m] (default 0.02, the coarse scene; 0.01: the paper's), in [0.005, 0.02]")
+    ap.add_argument("--settings", default="table1", choices=("table1", "joint"),
+                    help="flow and friction set (mpmsdem.flume.FLUME_SETTINGS): table1 (default) or joint (the "
+                         "set of examples/flume_block.py --full, with its PIC viscosity)")
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"), help="MPM backend of --engine driver")
     ap.add_argument("--precision", default="double", choices=("double", "float"),
                     help="MPM precision of --engine driver")
@@ -170,6 +178,9 @@ def parse(argv):
             raise ValueError("--threads = %d: must be >= 1" % a.threads)
         if not (math.isfinite(a.dx) and DX_RANGE[0] <= a.dx <= DX_RANGE[1]):
             raise ValueError("--dx = %g m: must be in [%g, %g]" % (a.dx, DX_RANGE[0], DX_RANGE[1]))
+        if a.settings == "joint" and a.flip_reference_dt is not None:
+            raise ValueError("--flip-reference-dt is for --settings table1: the joint set fixes the flow's PIC "
+                             "viscosity")
         if (a.prepare or a.collect) and a.engine != "driver":
             raise ValueError("--prepare and --collect are for --engine driver")
         if (a.backend, a.precision) != ("cpu", "double") and a.engine != "driver":
@@ -204,11 +215,18 @@ def loadExample():
     return mod
 
 
-def buildScene(ex, h, ratio, flipReferenceDt, dx):
-    from mpmsdem.flume import Block, Flume
+def buildScene(ex, h, ratio, flipReferenceDt, dx, settings):
+    from mpmsdem.flume import FLUME_SETTINGS, GLASS_BEADS, Block, Flume
+    kw = {"flipReferenceDt": flipReferenceDt}
+    flowFriction = 0.21
+    if settings != "table1":  # table1 is the flume's own default, as the coarse sections ran it
+        st = FLUME_SETTINGS[settings]
+        kw = {"granular": dict(GLASS_BEADS, mu_2=st["mu_2"]), "basalFriction": st["basal_friction"],
+              "sideWallFriction": st["side_wall_friction"], "flipViscosity": st["flip_viscosity"]}
+        flowFriction = st["flow_friction"]
     cube = Block(half=(h / 2,) * 3, x=ex.COLUMN + ex.L0, sweepRadius=ratio * h, density=8900, friction=0.67,
-                 flowFriction=0.21)
-    return Flume(dx=dx, blocks=[cube], verbose=False, flipReferenceDt=flipReferenceDt)
+                 flowFriction=flowFriction)
+    return Flume(dx=dx, blocks=[cube], verbose=False, **kw)
 
 
 def runYade(a, h, ratio, folder):
@@ -216,7 +234,7 @@ def runYade(a, h, ratio, folder):
     from yade import O
     from yade.wrapper import PyRunner
     ex = loadExample()
-    sc = buildScene(ex, h, ratio, a.flip_reference_dt, a.dx)
+    sc = buildScene(ex, h, ratio, a.flip_reference_dt, a.dx, a.settings)
     base = O.dt  # the flume's step
     coupled = sc.coupled
     # "warn" lets a step that outgrows the contact step finish and be counted.
@@ -294,11 +312,11 @@ def prepareDriver(a, h, ratio, folder):
     import mpmsdem.driver  # before yade: it finds YADE's folder in a plain python3
     from yade import O
     ex = loadExample()
-    sc = buildScene(ex, h, ratio, a.flip_reference_dt, a.dx)
+    sc = buildScene(ex, h, ratio, a.flip_reference_dt, a.dx, a.settings)
     base = O.dt
     prepared = {"flip_blend": sc.flipBlend(), "cube_index": sc.sdem.ids.index(sc.blockIds[0]), "cube_mass": float(O.bodies[sc.blockIds[0]].state.mass),
                 "dt": base, "particles": int(sc.mpm.numParticles), "backend": a.backend, "precision": a.precision,
-                "dx": a.dx, "duration": a.duration}
+                "dx": a.dx, "duration": a.duration, "settings": a.settings}
     mpmsdem.driver.writeScene(os.path.join(folder, "scene.json"), sc.coupled, duration=a.duration, dt=base,
                               outputDir="driver", outputEvery=a.duration, seriesEvery=SAMPLE, vtk="none",
                               backend=a.backend, precision=a.precision)
@@ -414,7 +432,7 @@ def child(a):
 def writeResult(a, hmm, ratio, folder, series, run, loadBefore, loadAfter):
     """folder/result.json and series.json of a finished run (loads: None where not known)."""
     result = {"h_mm": hmm, "ratio": ratio, "ratio_label": ratioLabel(ratio), "sweep_radius": ratio * hmm / 1000.0,
-              "duration": a.duration, "window": list(a.window), "threads": a.threads, "dx": a.dx,
+              "duration": a.duration, "window": list(a.window), "threads": a.threads, "dx": a.dx, "settings": a.settings,
               "load_before": loadBefore, "load_after": loadAfter}
     result.update(run)
     result.update(summarise(series, a.window))
@@ -437,7 +455,8 @@ def commit():
 def childCommand(a, hmm, ratio):
     cmd = [sys.executable, os.path.abspath(__file__), "--one", repr(hmm), repr(ratio), "--duration", repr(a.duration),
            "--window", repr(a.window[0]), repr(a.window[1]), "--engine", a.engine, "--threads", str(a.threads),
-           "--out", a.out, "--dx", repr(a.dx), "--backend", a.backend, "--precision", a.precision,
+           "--out", a.out, "--dx", repr(a.dx), "--settings", a.settings, "--backend", a.backend,
+           "--precision", a.precision,
            ] + ([] if a.flip_reference_dt is None else ["--flip-reference-dt", str(a.flip_reference_dt)])
     if a.prepare:
         cmd += ["--prepare"]
@@ -560,7 +579,7 @@ def table(results):
 
 
 def section(results, meta):
-    begin, end = markers(results[0].get("dx", DX))
+    begin, end = markers(results[0].get("dx", DX), results[0].get("settings", "table1"))
     loads = [x for r in results for x in (r["load_before"], r["load_after"]) if x]
     load = ("1-minute load average %.2f–%.2f at the starts and ends of the runs" % (
         min(x[0] for x in loads), max(x[0] for x in loads)) if loads else "load average not recorded")
@@ -570,10 +589,10 @@ def section(results, meta):
         where += " (MPM %s-%s)" % (r0.get("backend", "cpu"), r0.get("precision", "double"))
     lines = [begin, "",
              "Command: `%s`" % meta["command"], "",
-             "Commit %s; machine: %s; %d thread(s) per run, %d run(s) at a time; %s; dx %g m; %g s simulated per "
-             "run; %s%s." % (
+             "Commit %s; machine: %s; %d thread(s) per run, %d run(s) at a time; %s; dx %g m; flow and friction "
+             "set %s, the flow's blend %s; %g s simulated per run; %s%s." % (
                  meta["commit"], meta["machine"], r0["threads"], meta["jobs"], where, r0.get("dx", DX),
-                 r0["duration"], load,
+                 r0.get("settings", "table1"), r0.get("flip_blend", "not recorded"), r0["duration"], load,
                  "; whole sweep %.1f min" % (meta["wall_total"] / 60) if meta.get("wall_total") else ""),
              "", table(results), ""]
     for hmm, ratio, why in meta.get("failed", []):
@@ -584,8 +603,8 @@ def section(results, meta):
     return "\n".join(lines)
 
 
-def writeMarkdown(path, text, dx):
-    begin, end = markers(dx)
+def writeMarkdown(path, text, dx, settings):
+    begin, end = markers(dx, settings)
     old = open(path).read() if os.path.exists(path) else ""
     if begin in old and end in old:
         i, j = old.index(begin), old.index(end) + len(end)
@@ -676,6 +695,9 @@ def collectDriverRuns(a, metaPath):
                     if prepared[name] != value:  # the results would be labelled with the wrong run's settings
                         raise SystemExit("--collect: --%s = %g, but %s was prepared with %g: give the value of "
                                          "--prepare" % (name, value, folder, prepared[name]))
+                if prepared.get("settings", "table1") != a.settings:
+                    raise SystemExit("--collect: --settings %s, but %s was prepared with %s: give the value of "
+                                     "--prepare" % (a.settings, folder, prepared.get("settings", "table1")))
                 series, run = readDriver(folder, prepared)
             except (OSError, RuntimeError, KeyError) as e:
                 meta["failed"].append((hmm, ratio, str(e)))
@@ -726,7 +748,7 @@ def main(argv):
     if meta.get("wall_total"):
         print("whole sweep: %.1f min wall" % (meta["wall_total"] / 60))
     if a.markdown:
-        writeMarkdown(a.markdown, section(results, meta), a.dx)
+        writeMarkdown(a.markdown, section(results, meta), a.dx, a.settings)
         print("generated section written to %s" % a.markdown)
     if a.plot:
         plot(results, a.plot)

@@ -10,6 +10,7 @@ import pytest
 
 import mpmsdem
 import mpmsdem.driver
+import mpmsdem.flume
 
 import children
 
@@ -84,3 +85,31 @@ def test_prepare_refuses_the_yade_engine_and_a_grid_out_of_range(tmp_path):
     assert rc == 2 and "--prepare and --collect are for --engine driver" in log
     rc, log = script("--engine", "driver", "--prepare", "--dx", "0.04", "--out", str(tmp_path))
     assert rc == 2 and "--dx = 0.04 m: must be in [0.005, 0.02]" in log
+
+
+def test_joint_settings_reach_the_scene_and_are_not_mixed_with_others(tmp_path):
+    """--settings joint: the set examples/flume_block.py --full runs (mpmsdem.flume.FLUME_SETTINGS)
+    is what the prepared scene holds; the sweep's other flags cannot contradict it, and a
+    collect with another set is refused rather than labelled with the wrong one."""
+    out = str(tmp_path / "joint")
+    rc, log = script(*COMMON, "--settings", "joint", "--ratios", "1/20", "--prepare", "--out", out)
+    assert rc == 0, log
+    with open(os.path.join(out, "h20_r1-20", "scene.json")) as f:
+        scene = json.load(f)
+    with open(os.path.join(out, "h20_r1-20", "prepared.json")) as f:
+        prepared = json.load(f)
+    joint = mpmsdem.flume.FLUME_SETTINGS["joint"]
+    assert scene["flip_viscosity"] == joint["flip_viscosity"] == 0.0360141
+    assert scene["material"]["mu_2"] == joint["mu_2"]
+    assert scene["walls"]["-y"] == scene["walls"]["+y"] == joint["side_wall_friction"]
+    bed, cube = (scene["block_materials"][scene["blocks"][i]["material"]] for i in (0, 1))
+    assert bed["flow"]["friction"] == joint["basal_friction"] and cube["flow"]["friction"] == joint["flow_friction"]
+    assert scene["blocks"][1]["sweep_radius"] == pytest.approx(0.001, rel=1e-12)  # R = h_b / 20 of the 20 mm cube
+    # nu / dx^2 scaled as at dx 0.01 m (1441 /s): a quarter at the coarse dx 0.02 m
+    assert prepared["flip_blend"] == "PIC viscosity 0.0360141 m^2/s (PIC damping 360 /s at dx 0.02 m)"
+    subprocess.run([os.path.join(out, "run_driver.sh")], capture_output=True, text=True,
+                   env=dict(os.environ, MPMSDEM_RUN=driverExe(), OMP_NUM_THREADS="1"), check=True)
+    rc, log = script(*COMMON, "--ratios", "1/20", "--collect", "--out", out)
+    assert rc == 1 and "--collect: --settings table1, but" in log and "prepared with joint" in log, log
+    rc, log = script(*COMMON, "--settings", "joint", "--flip-reference-dt", "5e-6", "--prepare", "--out", out)
+    assert rc == 2 and "--flip-reference-dt is for --settings table1" in log, log
