@@ -645,8 +645,10 @@ def plot(results, path):
         a_.legend(fontsize=7)
     ax[2].axhline(1.0, color="0.5", lw=0.6)
     r0 = results[0]
-    fig.suptitle("Block sweep radius, %s §3.2 flume (dx %g m, %g s)" % (
-        "coarse" if r0.get("dx", DX) == DX else "paper-resolution", r0.get("dx", DX), r0["duration"]), fontsize=10)
+    st = r0.get("settings", "table1")
+    fig.suptitle("Block sweep radius, %s §3.2 flume (dx %g m, %g s%s)" % (
+        "coarse" if r0.get("dx", DX) == DX else "paper-resolution", r0.get("dx", DX), r0["duration"],
+        "" if st == "table1" else ", %s set" % st), fontsize=10)
     fig.tight_layout()
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig.savefig(path, dpi=72)
