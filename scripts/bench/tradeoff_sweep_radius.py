@@ -48,8 +48,9 @@ the cost ratio. ``--report-only`` redoes table, markdown and plot from ``--out``
 ``--markdown``). ``--settings`` names the flow and friction set of mpmsdem.flume.FLUME_SETTINGS:
 ``table1`` (default: Table 1 as we read it, the flume's default blend) or ``joint`` (the set
 ``examples/flume_block.py --full`` runs by default: basal and side-wall friction, μ₂, flow–cube
-friction and the PIC viscosity of our joint design at dx 0.01 m; its own generated section). The driver runs the MPM on ``--backend`` in ``--precision``. Where the
-driver is to run on another machine (a GPU machine without YADE), ``--prepare`` writes each run's
+friction and the PIC viscosity of our joint design at dx 0.01 m; its own generated section).
+The driver runs the MPM on ``--backend`` in ``--precision``. Where the driver is to run on
+another machine (a GPU machine without YADE), ``--prepare`` writes each run's
 scene (``--out``/h<mm>_r<ratio>/scene.json, with prepared.json) and ``--out``/run_driver.sh, which
 runs them all there (``MPMSDEM_RUN``: the driver, ``JOBS``: runs at a time) and leaves each run's
 coupled.h5 and driver.log in its folder; with that folder back, ``--collect`` reads them into
