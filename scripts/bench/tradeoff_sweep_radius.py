@@ -68,6 +68,7 @@ import shutil
 import subprocess
 import sys
 import time
+import types
 
 from bench_mpm import machine  # same folder: shared with the other benchmarks
 
@@ -87,6 +88,11 @@ def markers(dx, settings="table1"):
     tag = ("" if dx == DX else " --dx %g" % dx) + ("" if settings == "table1" else " --settings %s" % settings)
     return ("<!-- tradeoff_sweep_radius.py%s: begin generated section -->" % tag,
             "<!-- tradeoff_sweep_radius.py%s: end generated section -->" % tag)
+
+
+def resultMarkers(results):
+    """markers() of the runs the results come from, whatever flags read them back."""
+    return markers(results[0].get("dx", DX), results[0].get("settings", "table1"))
 
 
 # ---------------------------------------------------------------------------------------- input
@@ -217,17 +223,13 @@ def loadExample():
 
 
 def buildScene(ex, h, ratio, flipReferenceDt, dx, settings):
-    from mpmsdem.flume import FLUME_SETTINGS, GLASS_BEADS, Block, Flume
-    kw = {"flipReferenceDt": flipReferenceDt}
-    flowFriction = 0.21
-    if settings != "table1":  # table1 is the flume's own default, as the coarse sections ran it
-        st = FLUME_SETTINGS[settings]
-        kw = {"granular": dict(GLASS_BEADS, mu_2=st["mu_2"]), "basalFriction": st["basal_friction"],
-              "sideWallFriction": st["side_wall_friction"], "flipViscosity": st["flip_viscosity"]}
-        flowFriction = st["flow_friction"]
+    from mpmsdem.flume import FLUME_SETTINGS, Block, Flume
+    st = FLUME_SETTINGS[settings]
+    # the example's own mapping of a set to the flume's keywords (its coarse scene: full=False)
+    kw = ex.flumeKeywords(types.SimpleNamespace(full=False, **st))
     cube = Block(half=(h / 2,) * 3, x=ex.COLUMN + ex.L0, sweepRadius=ratio * h, density=8900, friction=0.67,
-                 flowFriction=flowFriction)
-    return Flume(dx=dx, blocks=[cube], verbose=False, **kw)
+                 flowFriction=st["flow_friction"])
+    return Flume(dx=dx, blocks=[cube], verbose=False, flipReferenceDt=flipReferenceDt, **kw)
 
 
 def runYade(a, h, ratio, folder):
@@ -580,7 +582,7 @@ def table(results):
 
 
 def section(results, meta):
-    begin, end = markers(results[0].get("dx", DX), results[0].get("settings", "table1"))
+    begin, end = resultMarkers(results)
     loads = [x for r in results for x in (r["load_before"], r["load_after"]) if x]
     load = ("1-minute load average %.2f–%.2f at the starts and ends of the runs" % (
         min(x[0] for x in loads), max(x[0] for x in loads)) if loads else "load average not recorded")
@@ -604,8 +606,7 @@ def section(results, meta):
     return "\n".join(lines)
 
 
-def writeMarkdown(path, text, dx, settings):
-    begin, end = markers(dx, settings)
+def writeMarkdown(path, text, begin, end):
     old = open(path).read() if os.path.exists(path) else ""
     if begin in old and end in old:
         i, j = old.index(begin), old.index(end) + len(end)
@@ -751,7 +752,7 @@ def main(argv):
     if meta.get("wall_total"):
         print("whole sweep: %.1f min wall" % (meta["wall_total"] / 60))
     if a.markdown:
-        writeMarkdown(a.markdown, section(results, meta), a.dx, a.settings)
+        writeMarkdown(a.markdown, section(results, meta), *resultMarkers(results))
         print("generated section written to %s" % a.markdown)
     if a.plot:
         plot(results, a.plot)
