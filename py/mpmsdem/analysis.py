@@ -231,6 +231,29 @@ def flowAtStation(particles, x, halfWidth, bedZ=0.0, minPoints=4):
     return h, v
 
 
+def frontProfile(particles, cell, bedZ=0.0, behind=(0.02, 0.05), minPoints=4):
+    """The shape of a flow's front from an MPM particle snapshot (flume coordinates: x
+    downstream, z normal to the bed): ``tip``, the x of the ``minPoints``-th most downstream
+    point (a few points thrown ahead do not move it) [m]; ``nose``, the height above ``bedZ``
+    of the lowest point within one ``cell`` behind the tip [m] (a point resting on the bed sits
+    its contact radius above it, so a front that rolls on the bed has a nose of about that);
+    ``depth``, the height of the highest point within half a cell of each distance in
+    ``behind`` upstream of the tip [m] (0 where there is none). ValueError with fewer than
+    ``minPoints`` points."""
+    import numpy as np
+    x = np.asarray(particles["x"], dtype=float)
+    if not (cell > 0 and len(x) >= minPoints):
+        raise ValueError("frontProfile: needs cell > 0 (got %r) and at least %d points (got %d)"
+                         % (cell, minPoints, len(x)))
+    tip = float(np.sort(x[:, 0])[-minPoints])
+    nose = float(x[x[:, 0] >= tip - cell, 2].min() - bedZ)
+    depth = []
+    for d in behind:
+        sel = np.abs(x[:, 0] - (tip - d)) <= cell / 2
+        depth.append(float(x[sel, 2].max() - bedZ) if sel.any() else 0.0)
+    return {"tip": tip, "nose": nose, "depth": depth}
+
+
 class FlowProbe:
     """Free-flow calibration (paper §3.2.3, §5): records h_f and v_f at a station of a flume
     every call while the scene runs without the block, and reports them at the front's

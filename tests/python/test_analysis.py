@@ -70,3 +70,31 @@ def test_box_face_loads_follow_the_block():
     assert up[0] > 0.49  # tilted: the world's x would have taken the top's load
     empty = {"normal": np.zeros((0, 3)), "normalForce": np.zeros(0), "feature": []}
     assert set(boxFaceLoads(empty, rotation).values()) == {0.0}
+
+
+def test_front_profile_of_a_hand_built_wedge():
+    """A wedge-shaped front on a 1 mm lattice: its top rising 0.5 per unit length from 9 mm at a
+    tip at x = 0.3 m, its underside lifted 6 mm off the bed; two points thrown 5 cm ahead. The tip is the
+    fourth most downstream point, the nose the lowest point within a cell of it, and each depth
+    the top of the column half a cell around its station: all read off the construction."""
+    import numpy as np
+    from mpmsdem.analysis import frontProfile
+    pts = []
+    for i in range(0, 101):                      # x = 0.3 - i mm
+        x = 0.3 - 1e-3 * i
+        top = 0.009 + 0.5 * (0.3 - x)
+        pts += [(x, 0.0, z) for z in np.arange(0.006, top + 1e-12, 1e-3)]
+    pts += [(0.35, 0.0, 0.02), (0.351, 0.0, 0.03)]  # spray ahead of the front
+    p = {"x": np.array(pts)}
+    r = frontProfile(p, cell=0.005, bedZ=0.0, behind=(0.02, 0.05))
+    assert r["tip"] == pytest.approx(0.3, abs=1e-12)          # the spray (2 points) left out
+    assert r["nose"] == pytest.approx(0.006, abs=1e-12)
+    # highest point within 2.5 mm of x = 0.28 / 0.25 m: the columns down to 0.278 / 0.248 m,
+    # 22 / 52 mm behind the tip, topped at 9 + 0.5 * 22 = 20 mm and 9 + 0.5 * 52 = 35 mm
+    assert r["depth"] == pytest.approx([0.020, 0.035], abs=1e-9)
+    # a nose on the bed reads 0; no points behind the tip read 0 depth
+    q = {"x": np.array([(0.1, 0, 0.0), (0.1, 0, 0.01), (0.1, 0, 0.02), (0.1, 0, 0.03)])}
+    r = frontProfile(q, cell=0.01, behind=(0.05,))
+    assert (r["tip"], r["nose"], r["depth"]) == (0.1, 0.0, [0.0])
+    with pytest.raises(ValueError, match="at least 4 points"):
+        frontProfile({"x": np.zeros((3, 3))}, cell=0.01)

@@ -1,0 +1,318 @@
+#!/usr/bin/env python3
+"""Validation (opt-in, minutes to an hour a spacing on two cores): the §3.2 flume under grid
+refinement. For each grid spacing the coupled scene of examples/flume_block.py (the copper cube
+of Table 1, h_b 0.02 m, on the centre line; a chosen flow and friction set) runs through the C++
+driver mpmsdem-run in two legs (the scenes are built with YADE, then only the driver runs):
+
+- the free flow without the cube, to 50 ms past the front's arrival at the cube's station: the
+  arrival, h_f and v_f (the driver's flow probe: means over those 50 ms, over a fixed 2 cm window
+  along the flume at every Δx), Fr and Eq 20 of that flow (α_f = 10.8 Fr^−1.3 on the cube's face
+  below h_f); and the front's profile when it reaches the station (its saved state): the nose
+  (the lowest material point within one cell of the tip; beside it the height of a point resting
+  on the bed, its contact radius R_p0 of Eq 13) and the depth 2 and 5 cm behind the tip;
+- the coupled run with the cube, started from the free flow's state saved when its front was
+  3 cm and two cells short of the cube (mpmsdem-run --flow-from: the same run, bit for bit,
+  without the flow's way there): first touch, the first blow (the largest 10 ms mean of the
+  flow's downstream force within 50 ms of the touch), the plateau (mean force over 0.4–0.5 s),
+  the cube's tilt and travel at 0.5 s.
+
+The damping of the FLIP/PIC blend is a model quantity, so refinement must say which one it
+holds (``--hold``): ``viscosity`` keeps the PIC viscosity ν [m²/s] (damping rate 4ν/Δx² grows
+as Δx shrinks: the flow converges to a viscous one), ``rate`` keeps the damping rate per
+second of the set at Δx 0.01 m (ν scales with Δx²: towards the inviscid μ(I) flow).
+
+    OMP_NUM_THREADS=2 /usr/bin/python3 scripts/validation/flume_convergence.py \\
+        --dx 0.01,0.0071428571,0.005 --hold viscosity --out results/convergence [--settings joint]
+    /usr/bin/python3 scripts/validation/flume_convergence.py --out results/convergence --report-only --extrapolate
+
+Each spacing's numbers go to OUT/<run>.json when it ends (its scenes, logs and outputs to
+OUT/<run>/), and finished spacings are not run again: an interrupted sequence continues. The
+table of every finished run in OUT is printed (markdown) and written to OUT/convergence.md;
+with --extrapolate, each three spacings of one set, damping and width in a near-constant ratio
+also get, per quantity, the observed order and Richardson estimate where the differences keep
+their sign and shrink, and say so where they do not.
+"""
+import argparse
+import glob
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+REFERENCE_DX = 0.01          # the spacing where the sets were calibrated [m]
+STATION_HALF = 0.01          # half the window along the flume that h_f and v_f are read over [m]
+BLOW_WINDOW = 0.05           # the first blow is looked for within this time after the touch [s]
+PLATEAU = (0.4, 0.5)         # [s]
+SERIES_EVERY = 0.001         # records of the probe and the cube [s]
+AHEAD = 0.03                 # the coupled run starts from the free flow with its front this far (and two cells,
+                             # the grid's reach) short of the cube [m]: no point within its bounding sphere yet
+CUBE = 0.02                  # the cube's side h_b [m] (examples/flume_block.py)
+AT = 0.5                     # tilt and travel read at this time [s]
+
+
+def parse(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0], epilog=__doc__.split("\n", 1)[1],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--dx", default="0.01,0.0071428571,0.005",
+                    help="grid spacings [m], comma-separated, each > 0 and dividing the width into whole cells "
+                         "(0.01, 0.2/28, 0.005: a ratio of 1.40 and 1.43)")
+    ap.add_argument("--hold", choices=("viscosity", "rate"), default="viscosity",
+                    help="what of the set's FLIP/PIC damping stays fixed under refinement (viscosity)")
+    ap.add_argument("--settings", choices=("joint", "table1"), default="joint",
+                    help="flow and friction set of mpmsdem.flume.FLUME_SETTINGS (joint)")
+    ap.add_argument("--width", type=float, default=0.2, help="flume width [m] (0.2, the experiment's)")
+    ap.add_argument("--duration", type=float, default=0.5, help="coupled run [s], >= %g (0.5)" % AT)
+    ap.add_argument("--out", default="results/convergence", help="folder of the runs' JSON files")
+    ap.add_argument("--report-only", action="store_true", help="only print and write the table of finished runs")
+    ap.add_argument("--extrapolate", action="store_true", help="Richardson estimates where the sequence allows")
+    ap.add_argument("--child", nargs=2, metavar=("prepare", "DX"), help=argparse.SUPPRESS)
+    a = ap.parse_args(argv)
+    try:
+        a.dx = [float(v) for v in a.dx.split(",")]
+    except ValueError:
+        ap.error("--dx = %r: comma-separated grid spacings in m" % a.dx)
+    if not all(0 < d < float("inf") for d in a.dx):
+        ap.error("--dx = %r: each spacing must be > 0 and finite" % a.dx)
+    if not a.duration >= AT:
+        ap.error("--duration = %r s: must be >= %g (tilt and travel are read at %g s)" % (a.duration, AT, AT))
+    if not 0 < a.width < float("inf"):
+        ap.error("--width = %r m: must be > 0" % a.width)
+    return a
+
+
+def viscosity(a, dx):
+    """PIC viscosity [m²/s] of the run at ``dx``: the set's, or scaled to keep its damping rate."""
+    from mpmsdem.flume import FLUME_SETTINGS
+    from mpmsdem.mpm import PAPER_VISCOSITY
+    nu = FLUME_SETTINGS[a.settings]["flip_viscosity"] or PAPER_VISCOSITY
+    return nu if a.hold == "viscosity" else nu * (dx / REFERENCE_DX) ** 2
+
+
+def runName(a, dx):
+    return "%s_%s_w%g_dx%.6g" % (a.settings, a.hold, a.width, dx)
+
+
+def example(a, dx):
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    import flume_block
+    args = flume_block.parse(["--full", "--settings", a.settings, "--dx", str(dx), "--width", str(a.width),
+                              "--flip-viscosity", repr(viscosity(a, dx)), "--duration", str(a.duration)])
+    return flume_block, args
+
+
+def prepare(a, dx, folder):
+    """Write the run's two driver scenes (YADE builds them): free.json, the flume without the
+    cube, with a flow probe at the cube's station and the flow's state saved when its front is
+    AHEAD short of the cube and when it reaches the station; coupled.json, with the cube, at the
+    same step. Returns the facts the report needs."""
+    import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
+    from mpmsdem import driver
+    from mpmsdem.flume import Flume
+    from yade import O
+    fb, args = example(a, dx)
+    station = fb.COLUMN + fb.L0
+    common = dict(dx=dx, width=a.width, verbose=False, **fb.flumeKeywords(args))
+    scene = Flume(blocks=[fb.copperCube(flowFriction=args.flow_friction)], **common)
+    dt = O.dt
+    every = max(1, round(SERIES_EVERY / dt)) * dt
+    driver.writeScene(os.path.join(folder, "coupled.json"), scene.coupled, duration=a.duration, dt=dt,
+                      seriesEvery=every, outputEvery=a.duration, vtk="none")
+    meta = {"points": scene.mpm.numParticles, "dt": dt, "flip_blend": scene.flipBlend(), "station": station,
+            "duration": a.duration}
+    O.reset()
+    scene = Flume(**common)  # the cube's step for the free flow too: --flow-from continues it
+    driver.writeScene(os.path.join(folder, "free.json"), scene.coupled, duration=2.0, dt=dt,
+                      flowProbes=[{"x": station, "halfWidth": STATION_HALF, "bedZ": 0.0, "window": 0.05}],
+                      seriesEvery=every, outputEvery=2.0, vtk="none", stopWhenProbed=True,
+                      snapshotWhenFrontAt=[station - AHEAD - 2 * dx, station])
+    with open(os.path.join(folder, "meta.json"), "w") as f:
+        json.dump(meta, f, indent=1)
+
+
+def drive(exe, folder, scene, out, extra=()):
+    """mpmsdem-run on one of the run's scenes; its wall seconds."""
+    t0 = time.time()
+    with open(os.path.join(folder, out + ".log"), "w") as log:
+        subprocess.run([exe, os.path.join(folder, scene), "--out", os.path.join(folder, out)] + list(extra),
+                       stdout=log, stderr=subprocess.STDOUT, check=True)
+    return time.time() - t0
+
+
+def freeFlow(folder, dx):
+    """The free flow's numbers at the cube's station (see the module's docstring)."""
+    import h5py
+    from mpmsdem import analysis
+    with open(os.path.join(folder, "free", "flow_probes.json")) as f:
+        probe = json.load(f)["probes"][0]
+    if probe["arrival"] is None:
+        raise RuntimeError("%s: the free flow's front never reached the cube's station" % folder)
+    with open(os.path.join(folder, "free", "front_snapshot_1.json")) as f:
+        front = json.load(f)
+    with h5py.File(os.path.join(folder, "free", "mpm.h5"), "r") as h:
+        p = {"x": h["snapshots/%06d/x" % front["snapshot"]][()]}
+    r = {k: probe[k] for k in ("arrival", "h_f", "v_f", "Fr")}
+    r["front"] = dict(analysis.frontProfile(p, cell=dx, behind=(0.02, 0.05)), time=front["time"])
+    r["resting_point_height"] = (3.0 * dx ** 3 / 8 / (4.0 * math.pi)) ** (1.0 / 3.0)  # Eq 13, 8 points per cell
+    r["eq20"] = analysis.hydrodynamicForce(1600.0, r["v_f"], r["h_f"], min(r["h_f"], CUBE) * CUBE)
+    return r
+
+
+def coupled(folder, duration):
+    """The coupled run's numbers (see the module's docstring)."""
+    import numpy as np
+    from mpmsdem import analysis
+    s, _ = analysis.driverBlockSeries(os.path.join(folder, "coupled"))
+    t, ft = s["t"], s["Ft"]
+    touched = np.nonzero(np.abs(ft) > 0)[0]
+    if not len(touched):
+        return {"first_touch": None}
+    t0 = float(t[touched[0]])
+    smooth = analysis.runningMean(t, ft, 0.01)
+    w = (t >= t0) & (t <= t0 + BLOW_WINDOW)
+    j = int(np.argmax(np.where(w, smooth, -np.inf)))
+    plateau = (t >= PLATEAU[0]) & (t <= PLATEAU[1])
+    return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]), "plateau": float(ft[plateau].mean()),
+            "tilt_at": float(np.interp(AT, t, s["tilt"])), "travel_at": float(np.interp(AT, t, s["travel"])),
+            "rotation_end": float(s["rotation"][-1]), "travel_end": float(s["travel"][-1]), "time_end": float(t[-1])}
+
+
+def runOne(a, dx, exe):
+    """Prepare, run and read one spacing; writes OUT/<run>.json."""
+    folder = os.path.join(a.out, runName(a, dx))
+    os.makedirs(folder, exist_ok=True)
+    if not os.path.exists(os.path.join(folder, "meta.json")):
+        subprocess.run([sys.executable, os.path.abspath(__file__), "--child", "prepare", repr(dx)] + a.argv, check=True)
+    with open(os.path.join(folder, "meta.json")) as f:
+        meta = json.load(f)
+    free = drive(exe, folder, "free.json", "free")
+    with open(os.path.join(folder, "free", "front_snapshot_0.json")) as f:
+        start = json.load(f)["step"]
+    steps = int(round(meta["duration"] / meta["dt"])) - start
+    wall = drive(exe, folder, "coupled.json", "coupled",
+                 ["--flow-from", os.path.join(folder, "free", "front_snapshot_0.json"), "--steps", str(steps)])
+    r = dict(meta, free=freeFlow(folder, dx), coupled=coupled(folder, meta["duration"]), dx=dx, hold=a.hold,
+             settings=a.settings, width=a.width, viscosity=viscosity(a, dx), damping_rate=4 * viscosity(a, dx) / dx ** 2,
+             cells_per_block=CUBE / dx, wall_seconds={"free": free, "coupled": wall}, coupled_from_step=start,
+             threads=os.environ.get("OMP_NUM_THREADS", "all"), commit=commit())
+    path = os.path.join(a.out, runName(a, dx) + ".json")
+    with open(path + ".tmp", "w") as f:
+        json.dump(r, f, indent=1)
+    os.replace(path + ".tmp", path)
+    return r
+
+
+def commit():
+    try:
+        return subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                              check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def load(out):
+    runs = []
+    for path in sorted(glob.glob(os.path.join(out, "*.json"))):
+        with open(path) as f:
+            runs.append(json.load(f))
+    return sorted(runs, key=lambda r: (r["settings"], r["hold"], r["width"], -r["dx"]))
+
+
+def fmt(v, spec):
+    return "–" if v is None else spec % v
+
+
+COLUMNS = ("set, damping held", "width [m]", "Δx [m]", "cells per h_b", "O.dt [s]", "PIC damping [1/s]",
+           "front at station [s]", "h_f [mm]", "v_f [m/s]", "Fr", "Eq 20 [N]", "nose above bed [mm] (resting point)",
+           "depth 2 / 5 cm behind tip [mm]", "first touch [s]", "first blow, 10 ms [N]", "blow / Eq 20",
+           "plateau 0.4–0.5 s [N]", "tilt at 0.5 s [°]", "travel at 0.5 s [m]", "wall free + coupled [s]")
+
+
+def table(runs):
+    lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
+    for r in runs:
+        ff, cp, fr = r["free"], r["coupled"], r["free"]["front"]
+        blow = cp.get("blow")
+        row = ["%s, %s" % (r["settings"], r["hold"]), "%g" % r["width"], "%.4g" % r["dx"], "%.1f" % r["cells_per_block"],
+               "%.3g" % r["dt"], "%.0f" % r["damping_rate"], "%.3f" % ff["arrival"], "%.1f" % (1e3 * ff["h_f"]),
+               "%.3f" % ff["v_f"], "%.2f" % ff["Fr"], "%.2f" % ff["eq20"],
+               "%.1f (%.1f)" % (1e3 * fr["nose"], 1e3 * ff["resting_point_height"]),
+               "%.0f / %.0f" % (1e3 * fr["depth"][0], 1e3 * fr["depth"][1]),
+               fmt(cp.get("first_touch"), "%.3f"), fmt(blow, "%.2f"),
+               fmt(blow / ff["eq20"] if blow is not None else None, "%.2f"), fmt(cp.get("plateau"), "%.2f"),
+               fmt(cp.get("tilt_at"), "%.1f"), fmt(cp.get("travel_at"), "%.3f"),
+               "%.0f + %.0f" % (r["wall_seconds"]["free"], r["wall_seconds"]["coupled"])]
+        lines.append("| " + " | ".join(row) + " |")
+    return "\n".join(lines)
+
+
+def richardson(f1, f2, f3, r):
+    """Observed order and extrapolated value of f at spacings h, h/r, h/r² (f1 coarsest); None
+    when the differences do not keep their sign and shrink."""
+    d1, d2 = f2 - f1, f3 - f2
+    if d1 == 0 or d2 == 0 or (d1 > 0) != (d2 > 0) or abs(d2) >= abs(d1):
+        return None
+    p = math.log(d1 / d2) / math.log(r)
+    return p, f3 + d2 / (r ** p - 1)
+
+
+QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("coupled", "first_touch"), ("coupled", "blow"),
+              ("coupled", "plateau"), ("coupled", "tilt_at"), ("coupled", "travel_at"))
+
+
+def extrapolations(runs):
+    """Richardson estimates of each quantity over every group of three spacings of one set,
+    damping and width in a near-constant ratio."""
+    lines, groups = [], {}
+    for r in runs:
+        groups.setdefault((r["settings"], r["hold"], r["width"]), []).append(r)
+    for g, rs in sorted(groups.items()):
+        if len(rs) != 3:
+            continue
+        ratios = (rs[0]["dx"] / rs[1]["dx"], rs[1]["dx"] / rs[2]["dx"])
+        if abs(ratios[0] / ratios[1] - 1) > 0.05:
+            lines.append("%s: spacings %s not in a constant ratio, no extrapolation" % (g, [r["dx"] for r in rs]))
+            continue
+        for part, key in QUANTITIES:
+            vals = [r[part].get(key) for r in rs]
+            if None in vals:
+                continue
+            e = richardson(*vals, r=sum(ratios) / 2)
+            lines.append("- %s, %s, width %g m, %s: %s -> %s" % (
+                g[0], g[1], g[2], key, ", ".join("%.4g" % v for v in vals),
+                "not monotone and contracting: no estimate" if e is None else "order %.2f, extrapolated %.4g" % e))
+    return "\n".join(lines)
+
+
+def main(argv):
+    a = parse(argv)
+    a.argv = argv
+    os.makedirs(a.out, exist_ok=True)
+    if a.child:
+        prepare(a, float(a.child[1]), os.path.join(a.out, runName(a, float(a.child[1]))))
+        return
+    if not a.report_only:
+        import mpmsdem.driver
+        exe = mpmsdem.driver.executable()
+        for dx in a.dx:
+            path = os.path.join(a.out, runName(a, dx) + ".json")
+            if os.path.exists(path):
+                print("%s: done before (%s)" % (runName(a, dx), path))
+                continue
+            t0 = time.time()
+            print("%s: running (PIC viscosity %.4g m²/s, %s) ..." % (runName(a, dx), viscosity(a, dx), exe), flush=True)
+            runOne(a, dx, exe)
+            print("%s: %.0f s" % (runName(a, dx), time.time() - t0), flush=True)
+    runs = load(a.out)
+    text = table(runs)
+    if a.extrapolate:
+        text += "\n\n" + extrapolations(runs)
+    print(text)
+    with open(os.path.join(a.out, "convergence.md"), "w") as f:
+        f.write(text + "\n")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
