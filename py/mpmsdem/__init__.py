@@ -95,11 +95,20 @@ def run(steps, *engines):
     when a script runs in short chunks to sample its scene (docs/benchmarks.md). An
     ``O.pause()`` from an engine therefore does not end this call early; use ``O.run`` for that."""
     from yade import O
+    from yade.wrapper import PyRunner
     for e in engines:  # a misplaced or missing runner, a block state no scene has: say so now
         if isinstance(e, (SdemEngine, MpmEngine)):
             e._checkEngines()
         elif isinstance(e, CoupledEngine) and not e._started:
             e._checkBlockSpeeds()
+    # Before each command of a PyRunner whose updateGlobals is on (YADE's default), YADE copies
+    # the local names of the Python function that called O.step() -- this one -- into the
+    # script's globals: a script's own `steps` or `engines` would be overwritten. Our runners
+    # have it off; a script's own runners are switched off for this call and back after (their
+    # commands still run in the script's globals, which is what they read).
+    userRunners = [r for r in O.engines if isinstance(r, PyRunner) and r.updateGlobals]
+    for r in userRunners:
+        r.updateGlobals = False
     try:
         for _ in range(int(steps)):
             O.step()
@@ -107,6 +116,9 @@ def run(steps, *engines):
         for e in engines:
             e.check()
         raise
+    finally:
+        for r in userRunners:
+            r.updateGlobals = True
     for e in engines:
         e.check()
     for e in engines:  # the series end with the state the run reached (files at their own cadence)

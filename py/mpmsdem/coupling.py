@@ -27,10 +27,10 @@ import warnings
 
 from yade import O
 from yade.minieigenHP import Quaternion, Vector3
-from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
+from yade.wrapper import ForceResetter, NewtonIntegrator
 
 from . import _mpmsdem
-from .sdem import _AutoStep, _bindStep, _nextOnGrid
+from .sdem import _AutoStep, _nextOnGrid, _stepRunner
 
 DT_CHECKS = ("raise", "warn")
 PAIR_KEYS = ("friction", "barrierStiffness", "poisson", "normalDamping", "tangentialDamping")
@@ -140,8 +140,7 @@ class CoupledEngine(_AutoStep):
         self._ori0 = {}
         self._appendOutput = False  # restore(): continue the files in `output`
         self._wall0 = self._lastReport = None
-        self.runner = PyRunner(command=_bindStep("coupled", id(self), self._step), iterPeriod=1, initRun=True,
-                               label=label)
+        self.runner = _stepRunner("coupled", id(self), self._step, label)
 
     def setPair(self, material, spec):
         """Set the flow–block contact physics for blocks of ``material`` (see ``pairs``)."""

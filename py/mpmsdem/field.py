@@ -19,10 +19,9 @@ import os
 import numpy as np
 from yade import O
 from yade.minieigenHP import Quaternion, Vector3
-from yade.wrapper import PyRunner
 
 from . import _mpmsdem
-from .sdem import _bindStep
+from .sdem import _stepRunner
 
 WALL_LAYER = _mpmsdem.wallLayer  # cells inside each face of the grid box where its walls act
 
@@ -151,7 +150,7 @@ class BlockTracker:
         self._impulse = np.zeros(n)
         self._elapsed = 0.0
         self.firstContact = np.full(n, np.nan)
-        self.runner = PyRunner(command=_bindStep("field", id(self), self._step), iterPeriod=1, label=label)
+        self.runner = _stepRunner("field", id(self), self._step, label, initRun=False)
         g = json.loads(coupled.mpm.solver.sceneJson)["grid"]
         self.gridLo = np.array(g["origin"], dtype=float)
         self.gridHi = self.gridLo + g["dx"] * np.array(g["cells"], dtype=float)

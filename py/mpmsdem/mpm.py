@@ -22,11 +22,10 @@ import sys
 import time as _time
 
 from yade import O
-from yade.wrapper import PyRunner
 
 from . import _mpmsdem
 
-from .sdem import _bindStep
+from .sdem import _stepRunner
 
 
 # The step of the paper's coupled runs (§3.1, Appendix D) [s]: with flipReferenceDt=PAPER_STEP the
@@ -143,8 +142,7 @@ class MpmEngine:
         self.error = None
         if output is not None:
             self._openOutput(output, outputEvery, append=False)
-        self.runner = PyRunner(command=_bindStep("mpm", id(self), self._yadeStep), iterPeriod=1, initRun=True,
-                               label=label)
+        self.runner = _stepRunner("mpm", id(self), self._yadeStep, label)
         self._wall0 = _time.time()
         self._lastReport = self._wall0
 

@@ -37,14 +37,18 @@ DT_CHECKS = ("raise", "warn")
 _REGISTRY = {}
 
 
-def _bindStep(kind, key, step):
-    """Register ``step`` and return the PyRunner command that calls it. The command goes
-    through :func:`_dispatch` rather than naming a function in ``__main__``: a scene saved with
-    ``O.save`` and loaded in another process keeps the command but not the function, and YADE
-    would then report only a ``NameError`` on a generated name."""
+def _stepRunner(kind, key, step, label, initRun=True):
+    """Register ``step`` and return the PyRunner (every step) that calls it, for ``O.engines``.
+    The command goes through :func:`_dispatch` rather than naming a function in ``__main__``: a
+    scene saved with ``O.save`` and loaded in another process keeps the command but not the
+    function, and YADE would then report only a ``NameError`` on a generated name. The runner's
+    ``updateGlobals`` is off: YADE's default copies the local names of the Python function that
+    called ``O.step()`` into the script's globals before each command (``mpmsdem.run``'s
+    ``steps`` would overwrite a script's own ``steps``), and the command needs none of them."""
     name = "%s_%d" % (kind, key)
     _REGISTRY[name] = step
-    return "__import__('mpmsdem')._dispatch(%r)" % name
+    return PyRunner(command="__import__('mpmsdem')._dispatch(%r)" % name, iterPeriod=1, initRun=initRun, label=label,
+                    updateGlobals=False)
 
 
 def _dispatch(name):
@@ -170,8 +174,7 @@ class SdemEngine(_AutoStep):
         self._appendOutput = False  # restore(): continue the files in `output`
         self._rolledBackAt = None   # O.iter of a failure whose bodies were put back (save() time)
         self.error = None
-        self.runner = PyRunner(command=_bindStep("sdem", id(self), self._step), iterPeriod=1, initRun=True,
-                               label=label)
+        self.runner = _stepRunner("sdem", id(self), self._step, label)
 
     # ------------------------------------------------------------------ bodies
     def box(self, halfExtents, sweepRadius, material, pos=(0, 0, 0), ori=None, fixed=False, color=None):
