@@ -48,7 +48,7 @@ def run(duration=0.77):
     turned = t[rot >= 45.0]
     return dict(common, first_touch=float(touched[0]) if len(touched) else duration,
                 force_04=float(np.interp(0.4, t, smooth)), rotation_07=float(np.interp(0.7, t, rot)),
-                t45=float(turned[0]) if len(turned) else duration, max_rotation=float(rot.max()))
+                t45=float(turned[0]) if len(turned) else float("inf"), max_rotation=float(rot.max()))
 
 
 def main():

@@ -6,7 +6,7 @@ reference numbers.
 Coarse scene (under a minute on one core): the full geometry of examples/liu2018_blocks.py
 (flume 0.6 × 0.2 m, column 0.1 × 0.2 m, blocks 20 × 198 × 18 mm at x = 0.2 m, the bottom one
 glued) at dx 0.02 m with 1 point per cell (500 material points), 0.5 s: the impact and the
-loose blocks pushed downstream (the middle one by about its length, the top one by ~0.14 m).
+loose blocks pushed downstream (the middle one by 0.12 m, the top one by 0.09 m).
 
 Asserts (physics that cannot drift):
 - the glued block never moves: its position is exactly the initial one at every sample;
@@ -15,10 +15,11 @@ Asserts (physics that cannot drift):
 - the flow reaches the stack and pushes the loose blocks downstream (travel > 0).
 
 Against the stored reference (scripts/checks/reference/liu2018_blocks.json), two-sided
-relative tolerances: peak downstream force on the bottom block (10 ms mean) 25 %, final x of
-the middle block 10 %, of the top block 15 %. The impact of a 500-point flow on thin blocks is
-chaotic: compiler flags or thread counts move these by a few per cent; a change of the method
-moves them by more.
+relative tolerances: peak downstream force on the bottom block (10 ms mean) 25 %, the travel
+of the middle block 25 % (±31 mm), of the top block 35 % (±30 mm): the push itself, not the
+position (0.21 m at the start), so a stack that is not pushed fails. The impact of a 500-point
+flow on thin blocks is chaotic: compiler flags or thread counts move these by a few per cent
+of the position (about 10 mm); a change of the method moves them by more.
 
     /usr/bin/python3 scripts/checks/check_liu2018_blocks.py [--regenerate]
 
@@ -35,7 +36,7 @@ from yade import O
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REF = os.path.join(HERE, "reference", "liu2018_blocks.json")
-TOL = {"peak_force_bottom": 0.25, "x_middle": 0.10, "x_top": 0.15}
+TOL = {"peak_force_bottom": 0.25, "travel_middle": 0.25, "travel_top": 0.35}
 HALF, SWEEP, KC, RHO = (0.010, 0.099, 0.009), 0.0009, 1e4, 500.0
 GRANULAR = {"density": 1300, "young_modulus": 5e4, "poisson_ratio": 0.40, "mu_s": math.tan(math.radians(22.0)),
             "mu_2": 0.60}
@@ -80,7 +81,6 @@ def run():
     peak, tPeak = scene.peakForce(0, smooth=0.01)
     p = scene.mpm.particles()
     return {"peak_force_bottom": peak, "peak_time": tPeak,
-            "x_middle": O.bodies[scene.blockIds[1]].state.pos[0], "x_top": O.bodies[scene.blockIds[2]].state.pos[0],
             "travel_middle": scene.travel(1), "travel_top": scene.travel(2), "glued_moved": moved,
             "mass_error": abs(float(p["mass"].sum()) - m0), "finite": allFinite, "particles": scene.mpm.numParticles,
             "steps": O.iter}
@@ -90,8 +90,8 @@ def main():
     args = analysis.referenceCheckArguments(__doc__)
     r = run()
     print("liu2018 blocks (coarse §3.3): %d material points, %d steps; bottom block peak force %.3f N at %.3f s; "
-          "final x middle %.4f m, top %.4f m" % (r["particles"], r["steps"], r["peak_force_bottom"], r["peak_time"],
-                                                  r["x_middle"], r["x_top"]))
+          "travel middle %.4f m, top %.4f m" % (r["particles"], r["steps"], r["peak_force_bottom"], r["peak_time"],
+                                                 r["travel_middle"], r["travel_top"]))
     failures = []
     if r["glued_moved"]:
         failures.append("the glued block moved (%d samples off its initial position/orientation)" % r["glued_moved"])
@@ -103,7 +103,8 @@ def main():
         failures.append("the flow did not push the stack (travel middle %g m, top %g m, peak %g N)"
                         % (r["travel_middle"], r["travel_top"], r["peak_force_bottom"]))
     failures += analysis.checkAgainstReference(r, REF, TOL, args.regenerate,
-                                               stored=("peak_force_bottom", "peak_time", "x_middle", "x_top", "particles"))
+                                               stored=("peak_force_bottom", "peak_time", "travel_middle", "travel_top",
+                                                       "particles"))
     analysis.finishCheck(failures)
 
 
