@@ -943,6 +943,9 @@ class OutputRun {
 }  // namespace
 
 int main(int argc, char** argv) {
+#ifdef MPMSDEM_WITH_HDF5
+  io::skipHdf5CleanupAtExit();  // a failed write (a full disk) must end with its message, not a crash at exit
+#endif
   std::string sceneSize;  // for an out-of-memory message
   try {
     const Options opt = parseArgs(argc, argv);

@@ -9,6 +9,7 @@ PKGS=(
   python3-scipy python3-dask python3-distributed python3-gdal
   libboost-python-dev libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev
   libhdf5-dev nlohmann-json3-dev googletest libgtest-dev
+  strace   # scripts/checks/check_fault_injection.py: kills and failed writes at a chosen write call
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -24,8 +25,28 @@ const char* const kIncomplete = "incomplete";
 // Silence HDF5's own error-stack printing: every failure is turned into an exception here.
 void quietHdf5() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
+// The operating system's reason for a failed read or write, from HDF5's error stack (its POSIX
+// file driver records errno's message as "error message = '...'"), or "" when it holds none.
+std::string systemReason() {
+  std::string reason;
+  const H5E_walk2_t visit = [](unsigned, const H5E_error2_t* e, void* out) -> herr_t {
+    const char* m = e->desc ? std::strstr(e->desc, "error message = '") : nullptr;
+    if (!m) return 0;
+    m += std::strlen("error message = '");
+    const char* end = std::strchr(m, '\'');
+    *static_cast<std::string*>(out) = end ? std::string(m, end) : std::string(m);
+    return 1;  // the first (innermost) one
+  };
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, visit, &reason);
+  return reason;
+}
+
+// A full disk, a removed folder or a file that cannot be opened: the file, what failed and the
+// system's reason where HDF5 recorded one.
 [[noreturn]] void fail(const std::string& path, const std::string& what) {
-  throw RuntimeFailure("HDF5 file '" + path + "': " + what);
+  const std::string reason = systemReason();
+  H5Eclear2(H5E_DEFAULT);
+  throw RuntimeFailure("HDF5 file '" + path + "': " + what + (reason.empty() ? "" : " (" + reason + ")"));
 }
 
 template <typename T>
@@ -133,6 +154,8 @@ std::vector<T> readArray(hid_t loc, const std::string& name, hid_t memType, std:
 }
 
 }  // namespace
+
+void skipHdf5CleanupAtExit() { H5dont_atexit(); }
 
 // ------------------------------------------------------------------------------ writer
 

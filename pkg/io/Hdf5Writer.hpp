@@ -40,6 +40,13 @@
 namespace mpmsdem {
 namespace io {
 
+// For a program that owns every HDF5 file it opens (the driver): call before any other HDF5
+// call. HDF5's own clean-up at exit closes the files left open, and crashes (SIGSEGV) on a file
+// whose close failed because its last write did (a full disk); the writers here close their
+// files themselves, so that clean-up has nothing to do and is turned off. Not for a process
+// whose HDF5 library other code shares (h5py in YADE's Python).
+void skipHdf5CleanupAtExit();
+
 class Hdf5Writer {
  public:
   // Truncate: create the file (replacing an existing one, its restart copy and its snapshot

@@ -15,21 +15,31 @@ Each run is a child process forked from this one (YADE imported once), killed by
 with SIGKILL once it reports the randomly drawn step; kills land anywhere, also while an
 output record or a checkpoint is being written.
 
-The "driver" kind does the same to the C++ driver on a coupled scene (the coupled scene below,
-written with ``mpmsdem.driver.writeScene``): ``mpmsdem-run`` killed after a random wall time,
-then ``mpmsdem-run --restart`` (from the snapshot its coupled.checkpoint.json names), as a
-user would; a run killed before its first checkpoint is started again. Its mpm.h5 and
-coupled.h5 (series and snapshots) must equal those of an unbroken driver run to the last bit.
+The "driver-writes" kind does the same to the C++ driver on a coupled scene (the coupled scene
+below, written with ``mpmsdem.driver.writeScene``): ``mpmsdem-run`` is killed (SIGKILL, through
+strace's fault injection) at write calls drawn from all those of an unbroken run (its n-th
+pwrite64), so that kills land inside HDF5's own flushes too, then continued with ``mpmsdem-run
+--restart`` (from the snapshot its coupled.checkpoint.json names), as a user would; a run killed
+before its first checkpoint is started again. Its mpm.h5 and coupled.h5 (series and snapshots)
+must equal those of an unbroken driver run to the last bit. A kill between two writes leaves
+the files as a kill at the next write does, so these kills cover every instant of the run.
 
-The opt-in kinds sdem-writes, mpm-writes, coupled-writes and driver-writes (need strace) kill
-the same runs at write calls drawn from all those of the run (strace's fault injection: SIGKILL
-at the n-th pwrite64), so that kills land inside HDF5's own flushes, where the random instants
-rarely fall; each killed run is continued to its end and compared with the unbroken one.
+Every kill point is drawn from ``--seed`` (printed; by default from the clock), so a failing
+run is replayed exactly with the seed it printed. The opt-in kinds sdem-writes, mpm-writes and
+coupled-writes kill the YADE runs at write calls the same way; the opt-in "driver" kind kills
+the driver after random wall times instead (not replayable: where a time lands depends on the
+machine's speed).
+
+The "driver-full" kind fills the disk instead of killing: from a drawn write call on, every
+pwrite64 of the driver fails with ENOSPC (strace's fault injection). The driver must stop by
+itself with a failure (exit status 3) whose message names the file and the reason; every file
+it wrote before must then be whole: ``mpmsdem-run --restart`` (with room again) continues the
+run to the unbroken run's end, bit for bit.
 
 Exit status 0 when every check holds, 1 with the failures listed otherwise.
 
-    python3 scripts/checks/check_fault_injection.py [--seed S] [--kills N] [--kinds sdem,mpm,coupled,driver]
-    python3 scripts/checks/check_fault_injection.py --kinds sdem-writes,mpm-writes,coupled-writes,driver-writes --kills 60
+    python3 scripts/checks/check_fault_injection.py [--seed S] [--kills N] [--kinds sdem,mpm,coupled,driver-writes,driver-full]
+    python3 scripts/checks/check_fault_injection.py --kinds sdem-writes,mpm-writes,coupled-writes,driver --kills 60
 """
 import argparse
 import os
@@ -118,11 +128,15 @@ def driverExe():
 
 def driverScene(root):
     """The coupled scene as a driver JSON scene: 4,000 steps of 1e-5 s, a series row every
-    2e-4 s, a snapshot, a ParaView entry and a checkpoint every 5e-4 s."""
+    2e-4 s, a snapshot, a ParaView entry and a checkpoint every 5e-4 s. Written once: the driver
+    kinds of one call share it (a second engine could not create the first one's open files)."""
+    path = os.path.join(root, "driver_scene.json")
+    if os.path.exists(path):
+        return path
     O.reset()
     coupled = buildCoupled(os.path.join(root, "unused"))
     os.makedirs(root, exist_ok=True)
-    return mpmsdem.driver.writeScene(os.path.join(root, "driver_scene.json"), coupled, duration=PLAN["driver"][0] * O.dt,
+    return mpmsdem.driver.writeScene(path, coupled, duration=PLAN["driver"][0] * O.dt,
                                      dt=O.dt, seriesEvery=2e-4, outputEvery=5e-4, outputDir=os.path.join(root, "x"))
 
 
@@ -171,12 +185,14 @@ def driverKills(root, rng, kills):
     return ref, broken, done, fresh
 
 
-def writeKills(kind, root, rng, kills):
+def writeKills(kind, root, rng, kills, full=False):
     """Kill a run of `kind` at `kills` write calls drawn from all those of an unbroken run
     (strace's fault injection sends SIGKILL at the n-th pwrite64, so kills land inside HDF5
     flushes too), then continue it to its end as a user would (the driver with --restart, a
-    YADE script from its last checkpoint). Returns (unbroken folder, [(write number, folder,
-    error or None)], fresh starts)."""
+    YADE script from its last checkpoint). With ``full`` (the driver only) the disk is full
+    instead: the n-th pwrite64 and every one after it fail with ENOSPC, and the run must stop by
+    itself with a failure that names the file, before it is continued with room again. Returns
+    (unbroken folder, [(write number, folder, error or None)], fresh starts)."""
     if not shutil.which("strace"):
         sys.exit("check_fault_injection: the *-writes kinds need strace (apt install strace)")
     if kind == "driver":
@@ -202,13 +218,33 @@ def writeKills(kind, root, rng, kills):
     runs, fresh = [], 0
     for n in sorted(rng.sample(range(1, writes), min(kills, writes - 1))):
         work = os.path.join(root, "%s_write_%d" % (kind, n))
-        subprocess.run(["strace", "-f", "-o", "/dev/null", "-e", "trace=pwrite64", "-e",
-                        "inject=pwrite64:signal=KILL:when=%d" % n] + command(work),
-                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        fault = "error=ENOSPC:when=%d+" % n if full else "signal=KILL:when=%d" % n
+        p = subprocess.run(["strace", "-f", "-o", "/dev/null", "-e", "trace=pwrite64", "-e",
+                            "inject=pwrite64:" + fault] + command(work),
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if full:
+            stopped = fullDiskStop(p, os.path.join(work, "out"))
+            if stopped:
+                runs.append((n, work, stopped))
+                continue
         error, again = finish(work)
         fresh += again
         runs.append((n, work, error))
     return ref, runs, fresh
+
+
+def fullDiskStop(p, out):
+    """None when the driver, its writes failing with ENOSPC, stopped as a failure (exit 3)
+    whose message names a file in its output folder ``out`` and the system's reason; otherwise
+    what was wrong."""
+    err = p.stderr.strip()
+    if p.returncode != 3:
+        return "with a full disk the driver ended with exit status %d, not 3 (a failure): %s" % (p.returncode, err[-600:])
+    if "mpmsdem-run: failure:" not in err or out not in err:
+        return "with a full disk the driver's message names no file in %s: %s" % (out, err[-600:])
+    if "No space left on device" not in err:
+        return "with a full disk the driver's message does not give the reason (No space left on device): %s" % err[-600:]
+    return None
 
 
 def restoreKw(kind, out):
@@ -357,11 +393,15 @@ def compare(kind, ref, broken, failures):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seed", type=int, default=None, help="seed of the kill steps (default: from the clock)")
+    ap.add_argument("--seed", type=int, default=None,
+                    help="seed of the kill points (default: from the clock); the run prints it, and the same seed "
+                         "replays the same kills")
     ap.add_argument("--kills", type=int, default=20, help="kills per kind of run (>= 1, default 20)")
-    ap.add_argument("--kinds", default="sdem,mpm,coupled,driver",
-                    help="comma-separated subset of sdem,mpm,coupled,driver; opt-in, needing strace: the same "
-                         "with -writes (e.g. driver-writes), killed at --kills write calls drawn from the whole run")
+    ap.add_argument("--kinds", default="sdem,mpm,coupled,driver-writes,driver-full",
+                    help="comma-separated, of sdem, mpm, coupled (YADE runs killed at drawn steps), any of them with "
+                         "-writes (killed at drawn write calls, through strace), driver-writes (the C++ driver, so), "
+                         "driver-full (the driver's disk full from a drawn write call on), driver (the driver killed "
+                         "after random wall times: not replayable); default sdem,mpm,coupled,driver-writes,driver-full")
     ap.add_argument("--child", nargs=2, metavar=("KIND", "FOLDER"), help=argparse.SUPPRESS)
     ap.add_argument("--keep", action="store_true", help="keep the work folder (printed)")
     a = ap.parse_args()
@@ -378,23 +418,25 @@ def main():
     failures = []
     try:
         for kind in a.kinds.split(","):
-            if kind not in PLAN and kind[:-len("-writes")] not in PLAN:
-                ap.error("--kinds: %r is not one of %s or one of them with -writes" % (kind, ", ".join(PLAN)))
+            if kind not in PLAN and kind[:-len("-writes")] not in PLAN and kind != "driver-full":
+                ap.error("--kinds: %r is not one of %s, one of them with -writes, or driver-full"
+                         % (kind, ", ".join(PLAN)))
             t0 = time.time()
-            if kind.endswith("-writes"):
-                base = kind[:-len("-writes")]
-                ref, runs, fresh = writeKills(base, root, rng, a.kills)
+            if kind.endswith("-writes") or kind == "driver-full":
+                base, full = kind.rsplit("-", 1)[0], kind == "driver-full"
+                ref, runs, fresh = writeKills(base, root, rng, a.kills, full=full)
                 for n, work, error in runs:
                     before = len(failures)
                     if error:
                         failures.append(error)
                     else:
                         compare(base, ref, work, failures)
-                    failures[before:] = ["%s killed at write %d: %s" % (base, n, f) for f in failures[before:]]
+                    failures[before:] = ["%s %s at write %d: %s" % (base, "full from" if full else "killed", n, f)
+                                         for f in failures[before:]]
                     if len(failures) == before:
                         shutil.rmtree(work)
-                print("  %-8s %d kills at write calls %s%s; %.1f s" % (
-                    kind, len(runs), [n for n, _, _ in runs],
+                print("  %-8s %d %s at write calls %s%s; %.1f s" % (
+                    kind, len(runs), "full disks from" if full else "kills", [n for n, _, _ in runs],
                     " (%d before a first snapshot: started again)" % fresh if base == "driver" else "",
                     time.time() - t0))
                 continue
