@@ -51,9 +51,11 @@ def parse(argv):
     ap.add_argument("--dx", type=float, default=None, help="grid spacing [m] (default 0.02, --full 0.01)")
     ap.add_argument("--duration", type=float, default=None, help="coupled run [s] (default 1.2, --full 2.0)")
     ap.add_argument("--width", type=float, default=0.2,
-                    help="flume width [m] (0.2, the experiment's); the cube stays on the centre line between the "
-                         "smooth side walls, so a narrower flume is a slice of the wide one (0.1 m gives the same cube "
-                         "motion at half the cost: docs/coupled-results.md)")
+                    help="flume width [m] (0.2, the experiment's); the cube stays on the centre line. Between smooth "
+                         "side walls (--side-wall-friction 0, table1) a narrower flume is a slice of the wide one (0.1 m "
+                         "gives the same cube motion at half the cost); with side-wall friction (joint: 0.111) it is a "
+                         "different flume, the walls slow a narrow flow more (first touch 0.342 s at 0.1 m against "
+                         "0.319 s at 0.2 m, dx 0.01 m): docs/coupled-results.md")
     ap.add_argument("--no-free-flow", action="store_true",
                     help="skip the run without the cube (the front's arrival, h_f, v_f, Fr and the Eq 20 line)")
     ap.add_argument("--out", default="results/flume_block", help="output folder")

@@ -28,8 +28,9 @@ class Proposal:
     """A measured setting: ``settings`` (dict), ``error`` (signed relative error of ``output``
     against the study's reference), ``cost`` (work relative to the study's default setting;
     ``cpuCost``: CPU time relative to it), ``reference`` / ``sensitivity`` flags, and where it
-    was measured (``study``: name, scene, commit, machine, command, reference settings, the
-    FLIP/PIC blend the flow ran with)."""
+    was measured (``study``: name, scene, commit, machine, command, reference settings). The
+    FLIP/PIC blend each row's flow ran with is one of its settings: ``settings["flip_viscosity"]``,
+    a PIC viscosity [m²/s] (docs/physics.md, "The blend as a viscosity")."""
 
     def __init__(self, output, row, study):
         self.output = output
@@ -40,7 +41,6 @@ class Proposal:
         self.reference = bool(row.get("reference", False))
         self.sensitivity = bool(row.get("sensitivity", False))
         self.study = {k: study[k] for k in ("name", "scene", "commit", "machine", "command", "reference")}
-        self.study["flip_blend"] = study.get("flip_blend", "not recorded")
 
     def __repr__(self):
         return "Proposal(%s: %s, error %+.2f %%, cost %.3g x default; measured on %s, commit %s)" % (

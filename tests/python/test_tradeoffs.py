@@ -72,6 +72,8 @@ def test_shipped_studies_are_consistent():
         assert all(e == 0 for e in refs[0]["errors"].values()), s["name"]
         assert refs[0]["settings"] == s["reference"], s["name"]
         assert any(r["cost"] == pytest.approx(1.0, rel=1e-12) for r in s["rows"]), s["name"]
+        # the blend each row's flow ran with, as the Proposal docstring promises (a PIC viscosity)
+        assert all(r["settings"]["flip_viscosity"] > 0 for r in s["rows"]), s["name"]
     for out in tradeoffs.outputs():
         rows = [p for p in tradeoffs.table(out) if not (p.reference or p.sensitivity)]
         for target in sorted({abs(p.error) for p in rows}):
