@@ -27,10 +27,9 @@ import warnings
 
 from yade import O
 from yade.minieigenHP import Quaternion, Vector3
-from yade.wrapper import ForceResetter, NewtonIntegrator
 
 from . import _mpmsdem
-from .sdem import _AutoStep, _nextOnGrid, _stepRunner
+from .sdem import _AutoStep, _nextOnGrid, _requireBetweenResetAndNewton, _stepRunner
 
 DT_CHECKS = ("raise", "warn")
 PAIR_KEYS = ("friction", "barrierStiffness", "poisson", "normalDamping", "tangentialDamping")
@@ -210,14 +209,9 @@ class CoupledEngine(_AutoStep):
         if self.sdem.runner in engines or self.mpm.runner in engines:
             raise ValueError("O.engines holds sdem.runner or mpm.runner besides coupled.runner: the coupled runner "
                              "steps both; use O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(...)]")
-        me = engines.index(self.runner) if self.runner in engines else -1
-        resetters = [i for i, e in enumerate(engines) if isinstance(e, ForceResetter)]
-        newtons = [i for i, e in enumerate(engines) if isinstance(e, NewtonIntegrator)]
-        if me < 0 or not resetters or not newtons or not (resetters[0] < me < newtons[0]):
-            raise ValueError("O.engines must be [ForceResetter(), coupled.runner, NewtonIntegrator(...)] (in this "
-                             "order): the coupled runner adds the block forces after they are reset and before "
-                             "YADE moves the blocks")
-        g = Vector3(engines[newtons[0]].gravity)
+        newton = _requireBetweenResetAndNewton(self.runner, "coupled.runner", "the coupled runner adds the block "
+                                               "forces after they are reset and before YADE moves the blocks")
+        g = Vector3(newton.gravity)
         gm = self.mpm.gravity
         if (g - Vector3(*gm)).norm() > 1e-9 * max(g.norm(), 1.0):
             raise ValueError("NewtonIntegrator.gravity = %s differs from the MPM gravity %s: blocks and flow must "

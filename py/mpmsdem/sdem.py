@@ -51,6 +51,22 @@ def _stepRunner(kind, key, step, label, initRun=True):
                     updateGlobals=False)
 
 
+def _requireBetweenResetAndNewton(runner, name, why):
+    """ValueError unless O.engines runs ForceResetter, ``runner``, NewtonIntegrator in this order
+    (other engines may come before or after); ``name`` is the runner as a script names it
+    (``sdem.runner``), ``why`` what it does between the two. Returns the NewtonIntegrator."""
+    from yade.wrapper import ForceResetter, NewtonIntegrator
+    engines = list(O.engines)
+    me = engines.index(runner) if runner in engines else -1
+    resetters = [i for i, e in enumerate(engines) if isinstance(e, ForceResetter)]
+    newtons = [i for i, e in enumerate(engines) if isinstance(e, NewtonIntegrator)]
+    if me < 0 or not resetters or not newtons or not (resetters[0] < me < newtons[0]):
+        raise ValueError("O.engines = [%s]: must be [ForceResetter(), %s, NewtonIntegrator(...)] (in this order; other "
+                         "engines may come before or after): %s" % (", ".join(type(e).__name__ for e in engines),
+                                                                    name, why))
+    return engines[newtons[0]]
+
+
 def _dispatch(name):
     """Run the step registered as ``name`` (the PyRunner commands of mpmsdem engines)."""
     try:
@@ -305,16 +321,8 @@ class SdemEngine(_AutoStep):
         order: forces reset before the contacts add theirs, bodies moved after. Any other order
         fails later with a misleading time-step error (forces added twice or lost), and without
         the runner blocks fall through each other silently."""
-        from yade.wrapper import ForceResetter, NewtonIntegrator
-        engines = list(O.engines)
-        me = engines.index(self.runner) if self.runner in engines else -1
-        resetters = [i for i, e in enumerate(engines) if isinstance(e, ForceResetter)]
-        newtons = [i for i, e in enumerate(engines) if isinstance(e, NewtonIntegrator)]
-        if me < 0 or not resetters or not newtons or not (resetters[0] < me < newtons[0]):
-            raise ValueError("O.engines = [%s]: must be [ForceResetter(), sdem.runner, NewtonIntegrator(...)] (in this "
-                             "order; other engines may come before or after): the SDEM runner adds the contact forces "
-                             "after ForceResetter clears them and before NewtonIntegrator moves the bodies"
-                             % ", ".join(type(e).__name__ for e in engines))
+        _requireBetweenResetAndNewton(self.runner, "sdem.runner", "the SDEM runner adds the contact forces after "
+                                      "ForceResetter clears them and before NewtonIntegrator moves the bodies")
 
     def _step(self):
         if not self._checkedOrder:
