@@ -6,6 +6,7 @@ scale, MPM–SDEM).
                                         [--backend cpu|cuda] [--precision double|float]
                                         [--blocks N | --block-table CSV]
                                         [--terrain FILE --origin X Y Z]
+                                        [--min-thickness M] [--rescue-distance D]
     /usr/bin/python3 examples/field_valley.py ...          (same, without YADE's GUI shell)
 
 The valley (``mpmsdem.terrain.Terrain.valley``) is 60 m long and 16 m wide: its floor, 4 m wide,
@@ -23,13 +24,20 @@ or GeoTIFF, moved by ``--origin``, the world point that becomes the grid's zero)
 then at ``--source X0 Y0 X1 Y1`` in the grid frame.
 
 Outputs (``--out``, default ``results/field_valley``): ``blocks.csv`` and ``blocks.h5`` (per block:
-final position, travel, rotation, peak flow force and its time, first contact, its cover of debris
-and whether it is buried), ``blocks_input.csv`` (the table placed), ``coupled.h5``, ``scene.pvd``
-(ParaView: flow and blocks), ``mpm.h5`` (h5py) and ``particles.pvd`` (ParaView) of the flow, ``terrain.vtk`` (the ground, for ParaView), ``maps/`` (deposit thickness,
-largest thickness and largest depth-averaged speed as ESRI ASCII grids and GeoTIFF on the
-terrain's own georeference, and ``flow_maps.png``), ``field_valley.png`` (the flow's front and
-kinetic energy against time) and ``summary.json``. Default: dx 0.5 m, about 12,000 material
-points, a minute or two on 2 cores; ``--dx 0.25`` has eight times the points.
+final position in the grid frame and in the map's own coordinates (the raster's: the grid frame
+moved back by ``--origin``), travel, rotation, peak flow force and its time, first contact, the
+depth of debris above its top at its centre, the fraction of its plan covered, buried or partly
+buried; ``blocks.h5`` also each block's 10 ms mean flow force against time), ``rescue.csv`` (the
+blocks a search must find: buried, partly buried or moved more than ``--rescue-distance``, default
+1 m; where they are in map coordinates and how deep, deepest first; also printed),
+``blocks_input.csv`` (the table placed), ``coupled.h5``, ``scene.pvd`` (ParaView: flow and
+blocks), ``mpm.h5`` (h5py) and ``particles.pvd`` (ParaView) of the flow, ``terrain.vtk`` (the
+ground, for ParaView), ``maps/`` (deposit thickness, largest thickness, largest depth-averaged
+speed, largest momentum flux ρhv², largest dynamic pressure ρv² and first arrival time, the last
+two where the flow is at least ``--min-thickness`` thick, default 0.1 m: ESRI ASCII grids and
+GeoTIFF on the terrain's own georeference, and ``flow_maps.png``), ``field_valley.png`` (the
+flow's front and kinetic energy against time) and ``summary.json``. Default: dx 0.5 m, about
+12,000 material points, a minute or two on 2 cores; ``--dx 0.25`` has eight times the points.
 """
 import argparse
 import json
@@ -43,7 +51,7 @@ import numpy as np
 import mpmsdem
 import mpmsdem.driver
 from mpmsdem import field
-from mpmsdem.terrain import FlowMaps, Terrain
+from mpmsdem.terrain import FlowMaps, Terrain, mapOffset
 
 DEBRIS = {"density": 1800, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.38, "mu_2": 0.64, "I0": 0.279,
           "grain_diameter": 0.005, "solid_density": 2650}
@@ -86,6 +94,11 @@ def parse(argv):
                     help="1 m blocks on the valley's plain (default 200; 0: the flow alone; with --terrain only 0)")
     ap.add_argument("--block-table", default=None, help="CSV of the blocks to place instead (mpmsdem.field)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the blocks' headings")
+    ap.add_argument("--min-thickness", type=float, default=0.1,
+                    help="the flow's thickness [m] at which a map node counts as reached, for the dynamic pressure "
+                         "and arrival time maps (default 0.1)")
+    ap.add_argument("--rescue-distance", type=float, default=1.0,
+                    help="rescue.csv lists the blocks buried, partly buried or moved more than this [m] (default 1)")
     ap.add_argument("--driver-scene", metavar="JSON", default=None,
                     help="write the scene (flow, terrain, blocks) for the C++ driver mpmsdem-run to JSON and exit: "
                          "e.g. to run it on a GPU machine without YADE (mpmsdem-run JSON --backend cuda)")
@@ -112,6 +125,10 @@ def parse(argv):
     if a.terrain and a.blocks:
         raise ValueError("--blocks = %d: the generated blocks stand on the valley's plain; on your own --terrain "
                          "place them with --block-table" % a.blocks)
+    if not (0 <= a.min_thickness < math.inf):
+        raise ValueError("--min-thickness = %r m: must be >= 0 and finite" % (a.min_thickness,))
+    if not (0 <= a.rescue_distance < math.inf):
+        raise ValueError("--rescue-distance = %r m: must be >= 0 and finite" % (a.rescue_distance,))
     if not (a.source_depth > 0):
         raise ValueError("--source-depth = %r m: must be > 0" % (a.source_depth,))
     return a
@@ -208,7 +225,7 @@ def main(argv):
         pairs = {m: {"friction": BASAL_FRICTION, "barrierStiffness": FIELD_STIFFNESS} for m in materials.values()}
         coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs=pairs, dtAuto=0.5, verbose=False,
                                         **dict(outputs, vtkEvery=1.0) if outputs else {})
-        tracker = field.BlockTracker(coupled, ids)
+        tracker = field.BlockTracker(coupled, ids, terrain=ground)
         O.engines = [ForceResetter(), coupled.runner, tracker.runner, NewtonIntegrator(gravity=(0, 0, -9.81), damping=0)]
         O.dt = 0.5 * mpm.stableTimeStep()
     else:
@@ -230,10 +247,10 @@ def main(argv):
                                   a.driver_scene, a.driver_scene))
         return None
     ground.writeVtk(os.path.join(out, "terrain.vtk"))
-    maps = FlowMaps(ground)
+    maps = FlowMaps(ground, minThickness=a.min_thickness)
     p0 = mpm.particles()
     mass0 = float(p0["mass"].sum())
-    maps.sample(p0)
+    maps.sample(p0, O.time)
     print("field valley: %d material points (%.0f m³ of debris, %.0f t), %d blocks, grid %s cells of %g m, terrain "
           "%d x %d nodes of %g m, %s, %s" % (len(p0["mass"]), (p0["volume0"]).sum(), mass0 / 1000.0, len(rows),
                                              "x".join(map(str, grid["cells"])), a.dx, ground.shape[0],
@@ -254,7 +271,7 @@ def main(argv):
             mpmsdem.run(n, mpm)
             steps += n
         p = mpm.particles()
-        maps.sample(p)
+        maps.sample(p, O.time)
         speed = (p["v"] ** 2).sum(axis=1) ** 0.5
         series.append((O.time, float(p["x"][:, 0].max()), mpm.kineticEnergy(), float(speed.max())))
         if len(series) % 20 == 0 or O.time >= a.duration - 1e-9:
@@ -270,8 +287,12 @@ def main(argv):
     blocks = tracker.report(p) if tracker else []
     written = maps.write(os.path.join(out, "maps"), blocks=[(b["x"], b["y"]) for b in blocks],
                          title="Debris in the valley after %g s, dx %g m" % (O.time, a.dx))
+    offset = mapOffset(ground)
+    rescue = field.rescueList(blocks, a.rescue_distance)
     if blocks:
-        written += list(field.writeReport(out, blocks))
+        written += list(field.writeReport(out, blocks, series=tracker.series(), attrs={
+            "map_offset": offset, "crs": (ground.georeference or {}).get("crs")}))
+        written.append(field.writeRescue(os.path.join(out, "rescue.csv"), rescue))
     deposited = maps.deposit_thickness > 0.05
     wallPoints, wallMass = field.pointsAtGridWalls(p, json.loads(mpm.solver.sceneJson)["grid"])
     summary = {"dx": a.dx, "duration": O.time, "steps": steps, "points": int(len(p["mass"])),
@@ -281,9 +302,16 @@ def main(argv):
                "below_ground": int((p["x"][:, 2] < ground.height(p["x"][:, 0], p["x"][:, 1]) - 1e-9).sum()),
                "deposit_area": float(deposited.sum() * ground.spacing ** 2),
                "max_deposit_thickness": float(maps.deposit_thickness.max()),
-               "max_speed": float(maps.max_speed.max()), "unmapped_points": maps.outside,
+               "max_speed": float(maps.max_speed.max()), "max_momentum_flux": float(maps.max_momentum_flux.max()),
+               "max_dynamic_pressure": float(np.nanmax(maps.max_dynamic_pressure, initial=0.0)),
+               "map_min_thickness": maps.minThickness,
+               "reached_area": float(np.isfinite(maps.arrival_time).sum() * ground.spacing ** 2),
+               "last_arrival": float(np.nanmax(maps.arrival_time, initial=0.0)),
+               "map_offset": list(offset), "unmapped_points": maps.outside,
                "blocks": len(blocks), "blocks_reached": sum(1 for b in blocks if b["first_contact"] == b["first_contact"]),
                "blocks_buried": sum(1 for b in blocks if b["buried"]),
+               "blocks_partly_buried": sum(1 for b in blocks if b["partly_buried"]),
+               "blocks_to_find": len(rescue), "rescue_distance": a.rescue_distance,
                "blocks_below_ground": sum(1 for b in blocks if b["z"] < float(ground.height(b["x"], b["y"]))),
                "blocks_outside_grid": sum(1 for b in blocks if b["outside_grid"]),
                "points_at_grid_walls": wallPoints, "mass_at_grid_walls": wallMass,
@@ -296,10 +324,12 @@ def main(argv):
     if not a.no_plots:
         plotSeries(series, os.path.join(out, "field_valley.png"), a.dx)
     print("after %.1f s: front at x %.1f m, kinetic energy %.3g J (at rest below ~1e3 J); deposit over %.0f m² (>5 cm), "
-          "%.2f m thick at most; fastest depth-averaged flow %.1f m/s; mass %s; %d points below the ground; "
+          "%.2f m thick at most; fastest depth-averaged flow %.1f m/s; largest momentum flux %.3g N/m, dynamic "
+          "pressure %.3g Pa (where >= %g m thick); mass %s; %d points below the ground; "
           "wall time %.0f s; outputs in %s" % (O.time, summary["front_x"], summary["kinetic_energy"],
                                                summary["deposit_area"], summary["max_deposit_thickness"],
-                                               summary["max_speed"],
+                                               summary["max_speed"], summary["max_momentum_flux"],
+                                               summary["max_dynamic_pressure"], maps.minThickness,
                                                "conserved" if summary["mass"] == mass0 else "CHANGED",
                                                summary["below_ground"], wall, out))
     if wallPoints:
@@ -307,15 +337,34 @@ def main(argv):
               "is too small for this flow, which would have gone on (a larger terrain or grid)"
               % (wallPoints, wallMass / 1000.0))
     if blocks:
-        print("blocks: %d reached by the flow, %d buried, %d below the ground, %d outside the grid; the most displaced "
-              "(blocks.csv):" % (summary["blocks_reached"], summary["blocks_buried"], summary["blocks_below_ground"],
-                                 summary["blocks_outside_grid"]))
+        print("blocks: %d reached by the flow, %d buried, %d partly buried, %d below the ground, %d outside the grid; "
+              "the most displaced (blocks.csv):" % (summary["blocks_reached"], summary["blocks_buried"],
+                                                    summary["blocks_partly_buried"], summary["blocks_below_ground"],
+                                                    summary["blocks_outside_grid"]))
         for b in sorted(blocks, key=lambda b: -b["travel"])[:5]:
             print("  block %3d: from (%.1f, %.1f) to (%.1f, %.1f) m, %.1f m, turned %.0f deg, peak force %.3g N (10 ms "
-                  "mean) at %.2f s, cover %.2f m" % (b["id"], b["x0"], b["y0"], b["x"], b["y"], b["travel"],
-                                                    b["rotation_deg"], b["peak_force_mean"], b["peak_force_mean_time"],
-                                                    b["cover"]))
+                  "mean) at %.2f s, debris %.2f m deep over it" % (b["id"], b["x0"], b["y0"], b["x"], b["y"],
+                                                                  b["travel"], b["rotation_deg"], b["peak_force_mean"],
+                                                                  b["peak_force_mean_time"], b["cover_depth"]))
+        printRescue(rescue, a.rescue_distance)
     return summary
+
+
+def printRescue(rescue, distance, shown=20):
+    """The search's table (rescue.csv): the blocks buried, partly buried or moved more than
+    ``distance`` [m], deepest first, the first ``shown`` of them."""
+    print("search and rescue (rescue.csv): %d blocks buried, partly buried or moved more than %g m, deepest first; "
+          "positions in the map's coordinates" % (len(rescue), distance))
+    if not rescue:
+        return
+    print("  %5s  %-13s  %14s  %14s  %9s  %9s  %8s  %8s" % ("id", "status", "x_map [m]", "y_map [m]", "z_map [m]",
+                                                            "depth [m]", "covered", "moved [m]"))
+    for r in rescue[:shown]:
+        print("  %5d  %-13s  %14.2f  %14.2f  %9.2f  %9.2f  %7.0f%%  %8.2f" % (
+            r["id"], r["status"], r["x_map"], r["y_map"], r["z_map"], r["cover_depth"], 100 * r["cover_fraction"],
+            r["travel"]))
+    if len(rescue) > shown:
+        print("  ... %d more in rescue.csv" % (len(rescue) - shown))
 
 
 def plotSeries(series, path, dx):

@@ -101,10 +101,113 @@ def test_the_report_gives_each_block_its_travel_force_contact_and_cover():
     inside = np.hypot(x[:, 0] - 0.1, x[:, 1] - 0.1) <= 0.02 * math.sqrt(2) + 1e-12
     expected = mpm.particles()["volume0"][inside & (x[:, 2] > ra["top"])].sum() / (math.pi * 2 * 0.02 ** 2)
     assert ra["top"] == pytest.approx(0.0405 + 0.02, abs=1e-9)
-    assert ra["cover"] == pytest.approx(expected, rel=1e-12) and ra["cover"] > 0.02 and ra["buried"]
-    assert rb["cover"] == 0 and not rb["buried"]
+    assert ra["cover"] == pytest.approx(expected, rel=1e-12) and ra["cover"] > 0.02
+    # the column (x, y 0.07-0.13) spans a's whole plan (0.08-0.12): buried; at its centre, the
+    # points above the top within dx (0.01 m) of it, over that disc
+    centre = np.hypot(x[:, 0] - 0.1, x[:, 1] - 0.1) <= 0.01
+    depth = mpm.particles()["volume0"][centre & (x[:, 2] > ra["top"])].sum() / (math.pi * 0.01 ** 2)
+    assert ra["cover_depth"] == pytest.approx(depth, rel=1e-12) and 0.02 < ra["cover_depth"] < 0.04
+    assert ra["cover_fraction"] == 1 and ra["buried"] and not ra["partly_buried"]
+    assert rb["cover"] == 0 and rb["cover_depth"] == 0 and rb["cover_fraction"] == 0
+    assert not rb["buried"] and not rb["partly_buried"]
+    assert ra["x_map"] == ra["x"] and ra["z0_map"] == ra["z0"]  # a made terrain: the map is the grid frame
     assert rb["travel"] == pytest.approx(0.05, rel=1e-9) and ra["travel"] == 0
     assert math.isnan(ra["first_contact"]) and ra["peak_force"] == 0  # no step taken yet
+
+
+def test_the_report_tells_each_block_how_deep_and_how_much_of_its_plan_is_under_debris(tmp_path):
+    # Three 4 cm blocks (outer plan 0.04 m square, top 0.0605 m) on a raster read from a file far
+    # from the origin; points of debris placed by hand, some above the tops, some below. The flow
+    # grid's dx 0.01 m gives the defaults: the centre's disc of radius 0.01 m (its area
+    # pi 1e-4 m²), a sample covered by a point above the top within 0.005 m, 10 x 10 samples at
+    # the plan's cell centres x, y = centre +- 0.002, 0.006, ..., 0.018 m.
+    dem = str(tmp_path / "ground.asc")
+    flat = Terrain.plane((0.0, 0.0), (0.4, 0.2), 0.01, z0=250.02)
+    flat.x0, flat.y0 = 500000.0, 4100000.0
+    flat.writeAsc(dem)
+    ground = Terrain.read(dem, origin=(500000.0, 4100000.0, 250.0))
+    O.reset()
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=700, friction=0.5)
+    a, b, c = [sdem.box((0.02, 0.02, 0.02), 0.002, mat, pos=(x, 0.1, 0.0405)) for x in (0.1, 0.2, 0.3)]
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [44, 24, 20], "origin": [-0.02, -0.02, 0.0]},
+                            material=MATERIAL, particles=[], verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: {"friction": 0.3}}, verbose=False)
+    tracker = field.BlockTracker(coupled, [a, b, c], terrain=ground)
+    O.bodies[c].state.pos = O.bodies[c].state.pos + mpmsdem.sdem.Vector3(0.03, 0.04, 0.0)  # c moved 5 cm
+    # a: two points above its top within 0.01 m of its centre (1e-6 and 3e-6 m³), one above it
+    # 0.0113 m away on the diagonal (4e-6 m³), one below its top (5e-6 m³), one above it beyond its
+    # plan (8e-6 m³, 0.022 m from the nearest sample). Samples covered: 4 by (0.1, 0.1), 4 by
+    # (0.104, 0.1), two of them the first's, 4 by (0.108, 0.108): 10 of 100.
+    pa = [((0.1, 0.1, 0.07), 1e-6), ((0.104, 0.1, 0.08), 3e-6), ((0.108, 0.108, 0.07), 4e-6),
+          ((0.1, 0.1, 0.05), 5e-6), ((0.14, 0.1, 0.07), 8e-6)]
+    # b: a layer of points 5 mm apart over x 0.1775-0.2225, y 0.0775-0.1225 (2.5e-7 m³ each, a
+    # 1 cm layer) above its top, and as many below it: every sample lies within 0.0036 m of a
+    # point above; the disc holds the 12 at (+-0.0025, +-0.0025), (+-0.0025, +-0.0075),
+    # (+-0.0075, +-0.0025) from the centre
+    g = np.arange(10) * 0.005
+    layer = [((0.1775 + u, 0.0775 + w), 2.5e-7) for u in g for w in g]
+    pb = [((x, y, 0.07), v) for (x, y), v in layer] + [((x, y, 0.05), 1e-6) for (x, y), _ in layer]
+    # c (now at 0.33, 0.14): points below its top, one above it 0.03 m from its old centre, 0.022 m
+    # beyond its plan's samples
+    pc = [((0.33, 0.14, 0.05), 1e-6), ((0.32, 0.13, 0.03), 1e-6), ((0.33, 0.1, 0.07), 1e-6)]
+    pts = pa + pb + pc
+    particles = {"x": np.array([p for p, _ in pts]), "volume0": np.array([v for _, v in pts])}
+    ra, rb, rc = tracker.report(particles)
+    assert ra["top"] == pytest.approx(0.0605, abs=1e-12)
+    assert ra["cover_depth"] == pytest.approx(4e-6 / (math.pi * 1e-4), rel=1e-12)
+    assert ra["cover_fraction"] == 0.1 and ra["partly_buried"] and not ra["buried"]
+    assert ra["cover"] == pytest.approx(8e-6 / (math.pi * 2 * 0.02 ** 2), rel=1e-12)  # the circle's, as before
+    assert rb["cover_depth"] == pytest.approx(12 * 2.5e-7 / (math.pi * 1e-4), rel=1e-12)
+    assert rb["cover_fraction"] == 1 and rb["buried"] and not rb["partly_buried"]
+    assert rc["cover_depth"] == 0 and rc["cover_fraction"] == 0 and rc["cover"] == 0
+    assert not rc["buried"] and not rc["partly_buried"] and rc["travel"] == pytest.approx(0.05, rel=1e-9)
+    # positions in the map's own coordinates: the grid frame moved back by the origin
+    for r in (ra, rb, rc):
+        assert (r["x_map"], r["y_map"], r["z_map"]) == (r["x"] + 500000.0, r["y"] + 4100000.0, r["z"] + 250.0)
+        assert (r["x0_map"], r["y0_map"], r["z0_map"]) == (r["x0"] + 500000.0, r["y0"] + 4100000.0,
+                                                           r["z0"] + 250.0)
+    assert rc["x_map"] == pytest.approx(500000.33, abs=1e-9) and rc["y0_map"] == pytest.approx(4100000.1, abs=1e-9)
+    # radii and samples of one's own: a disc of 3 mm holds the first point only; 2 x 2 samples
+    # (x, y = 0.09, 0.11) each within 0.015 m of (0.1, 0.1): a covered whole
+    own = field.BlockTracker(coupled, [a], depthRadius=0.003, coverRadius=0.015, planSamples=2).report(particles)[0]
+    assert own["cover_depth"] == pytest.approx(1e-6 / (math.pi * 0.003 ** 2), rel=1e-12)
+    assert own["cover_fraction"] == 1 and own["buried"]
+    # samples out of reach of every point (0.1 mm): none covered, but debris at its centre: partly buried
+    far = field.BlockTracker(coupled, [a], coverRadius=1e-4, planSamples=2).report(particles)[0]
+    assert far["cover_fraction"] == 0 and far["cover_depth"] > 0 and far["partly_buried"] and not far["buried"]
+    for kw, words in (({"depthRadius": 0}, "depthRadius = 0 m: must be > 0"),
+                      ({"coverRadius": float("nan")}, "coverRadius = nan m"),
+                      ({"planSamples": 0}, "planSamples = 0: must be an integer >= 1")):
+        with pytest.raises(ValueError, match=words):
+            field.BlockTracker(coupled, [a], **kw)
+    # the search's list: buried, partly buried or moved more than minTravel; deepest first
+    rescue = field.rescueList([ra, rb, rc], minTravel=0.01)
+    assert [(r["id"], r["status"]) for r in rescue] == [(a, "partly buried"), (b, "buried"), (c, "moved")]
+    assert [r["id"] for r in field.rescueList([rc, rb, ra], minTravel=0.1)] == [a, b]
+    with pytest.raises(ValueError, match="minTravel = -1 m"):
+        field.rescueList([ra], minTravel=-1)
+    lines = open(field.writeRescue(str(tmp_path / "rescue.csv"), rescue)).read().splitlines()
+    assert lines[0] == ("id,status,x_map [m],y_map [m],z_map [m],cover_depth [m],cover_fraction [1],travel [m],"
+                        "x [m],y [m]")
+    assert lines[1].startswith("%d,partly buried,500000.1000,4100000.1000,250.0405,0.0127324,0.1,0," % a)
+    assert len(lines) == 4
+    # blocks.csv and blocks.h5 with the new columns, the map's coordinates to 0.1 mm, the series
+    csvPath, h5Path = field.writeReport(str(tmp_path), [ra, rb, rc], series=tracker.series(),
+                                        attrs={"map_offset": mpmsdem.terrain.mapOffset(ground), "crs": None})
+    head, first = open(csvPath).read().splitlines()[:2]
+    assert head.startswith("id,x0 [m],y0 [m],z0 [m],x [m],y [m],z [m],x0_map [m],y0_map [m],z0_map [m],x_map [m]")
+    assert "cover_depth [m],cover_fraction [1],buried,partly_buried,outside_grid" in head
+    cells = dict(zip(head.split(","), first.split(",")))
+    assert cells["x_map [m]"] == "500000.1000" and cells["partly_buried"] == "1" and cells["buried"] == "0"
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(h5Path, "r") as f:
+        assert f["cover_depth"].attrs["unit"] == "m" and f["cover_fraction"].attrs["unit"] == "1"
+        assert f["partly_buried"][:].tolist() == [True, False, False]
+        assert f.attrs["map_offset"].tolist() == [500000.0, 4100000.0, 250.0] and "crs" not in f.attrs
+        assert f["force_series"]["mean_force"].shape == (3, 0) and f["force_series"]["time"].attrs["unit"] == "s"
+    with pytest.raises(ValueError, match="series: its blocks"):
+        field.writeReport(str(tmp_path), [rb, ra, rc], series=tracker.series())
 
 
 def test_a_mesh_block_from_the_table_rests_on_its_base(tmp_path):
@@ -158,6 +261,11 @@ def test_the_tracker_takes_the_peak_and_its_window_mean_of_a_known_force():
     assert tracker.peak[0] == 101.0 and tracker.peakTime[0] == pytest.approx(0.025)
     assert tracker.peakMean[0] == pytest.approx(11.0, rel=1e-12) and tracker.peakMeanTime[0] == pytest.approx(0.03)
     assert tracker.firstContact[0] == pytest.approx(0.001)
+    # the window means as a time series: 1, 1, 11, 1 N at the windows' ends
+    series = tracker.series()
+    assert series["id"].tolist() == [a] and series["window"] == 0.01
+    np.testing.assert_allclose(series["time"], [0.01, 0.02, 0.03, 0.04], rtol=1e-12)
+    np.testing.assert_allclose(series["mean_force"], [[1.0, 1.0, 11.0, 1.0]], rtol=1e-12)
     with pytest.raises(ValueError, match="window = 0"):
         field.BlockTracker(coupled, [a], window=0)
 

@@ -176,9 +176,91 @@ def test_flow_maps_of_a_block_at_rest_are_its_height_and_speed(tmp_path):
     tif = gdal.Open(str(tmp_path / "maps" / "max_speed.tif"))
     assert tif.GetGeoTransform() == pytest.approx((0.0, dx, 0.0, 0.2, 0.0, -dx))
     assert np.allclose(tif.GetRasterBand(1).ReadAsArray().T[:, ::-1], maps.max_speed)
-    assert os.path.getsize(str(tmp_path / "maps" / "flow_maps.png")) > 10000 and len(paths) == 7
+    assert os.path.getsize(str(tmp_path / "maps" / "flow_maps.png")) > 10000 and len(paths) == 13
     vtk = ground.writeVtk(str(tmp_path / "terrain.vtk"))
     assert "DIMENSIONS 20 20 1" in open(vtk).read()
+
+
+def test_flow_maps_of_momentum_flux_pressure_and_arrival_from_points_placed_by_hand(tmp_path):
+    # A 3 x 3 raster of 1 m spacing, read from a file far from the origin and moved to the grid's
+    # zero. Points sit on nodes (all their weight there) or halfway between two (half to each),
+    # with masses, initial volumes and velocities chosen by hand; at a node h = sum V0 / 1 m²,
+    # rho = sum m / sum V0, v = |sum m v| / sum m, flux = rho h v², pressure = rho v² where
+    # h >= 0.1 m (the default threshold).
+    dem = str(tmp_path / "flat.asc")
+    flat = Terrain.plane((0.0, 0.0), (2.0, 2.0), 1.0)
+    flat.x0, flat.y0 = 500000.0, 4100000.0
+    flat.writeAsc(dem)
+    ground = Terrain.read(dem, origin=(500000.0, 4100000.0, 0.0))
+    assert (ground.x0, ground.y0) == (0.0, 0.0)
+    assert mpmsdem.terrain.mapOffset(ground) == (500000.0, 4100000.0, 0.0)
+    assert mpmsdem.terrain.mapOffset(flat) == (0.0, 0.0, 0.0) and mpmsdem.terrain.mapOffset(None) == (0.0, 0.0, 0.0)
+    maps = mpmsdem.terrain.FlowMaps(ground)
+    assert maps.minThickness == 0.1
+
+    def points(rows):  # (x, y, mass, volume0, v)
+        return {"x": np.array([[r[0], r[1], 0.5] for r in rows]), "mass": np.array([r[2] for r in rows]),
+                "volume0": np.array([r[3] for r in rows]), "v": np.array([r[4] for r in rows], dtype=float)}
+    # t = 0: node (1,1) 1 m at 5 m/s; node (0,0) 0.05 m (below 0.1 m); a point at (0, 1.5) halved
+    # onto nodes (0,1) and (0,2): 0.2 m each at 1 m/s; two points on node (2,2), one at rest: the
+    # column's speed is their momentum over their mass, 1 m/s; node (2,0) denser (3000 kg/m³)
+    maps.sample(points([(1, 1, 2000.0, 1.0, (3, 4, 0)), (0, 0, 100.0, 0.05, (0, 0, 2)),
+                        (0, 1.5, 800.0, 0.4, (1, 0, 0)), (2, 2, 1000.0, 0.5, (2, 0, 0)),
+                        (2, 2, 1000.0, 0.5, (0, 0, 0)), (2, 0, 3000.0, 1.0, (1, 1, 0))]), 0.0)
+    # t = 0.5 s: node (0,0) grows to 0.2 m at 3 m/s (it arrives now); (1,1) slows; (2,2) empties;
+    # a stray fast point on (1,0), 5 mm at 10 m/s: its flux counts, its 2e5 Pa do not
+    maps.sample(points([(1, 1, 2000.0, 1.0, (0, 1, 0)), (0, 0, 400.0, 0.2, (0, 0, 3)),
+                        (0, 1.5, 800.0, 0.4, (0, 0, 0)), (2, 0, 3000.0, 1.0, (0, 0, 0)),
+                        (1, 0, 10.0, 0.005, (10, 0, 0))]), 0.5)
+    # a sample without its time (a caller from before): every map but the arrival's
+    maps.sample(points([(1, 2, 400.0, 0.2, (0, 0, 0))]))
+    nan = np.nan
+    # rows: i (x) 0..2, columns: j (y) 0..2
+    np.testing.assert_allclose(maps.deposit_thickness, [[0, 0, 0], [0, 0, 0.2], [0, 0, 0]], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(maps.max_thickness, [[0.2, 0.2, 0.2], [0.005, 1, 0.2], [1, 0, 1]], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(maps.max_speed, [[3, 1, 1], [10, 5, 0], [math.sqrt(2), 0, 1]], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(maps.max_momentum_flux, [[2000 * 0.2 * 9, 400, 400], [2000 * 0.005 * 100, 50000, 0],
+                                                        [6000, 0, 2000]], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(maps.max_dynamic_pressure, [[18000, 2000, 2000], [nan, 50000, 0], [6000, nan, 2000]],
+                               rtol=1e-12, atol=0)
+    np.testing.assert_allclose(maps.arrival_time, [[0.5, 0, 0], [nan, 0, nan], [0, nan, 0]], rtol=0, atol=0)
+    assert maps.samples == 3 and maps.time == 0.5 and maps.outside == 0
+    # "reaches" the threshold: at least as thick (0.2 m on node (1,2) counts at 0.2 m, 0.19 m on (0,0) does not)
+    edge = mpmsdem.terrain.FlowMaps(ground, minThickness=0.2)
+    edge.sample(points([(1, 2, 400.0, 0.2, (0, 0, 1)), (0, 0, 380.0, 0.19, (0, 0, 1))]), 1.0)
+    assert edge.arrival_time[1, 2] == 1.0 and edge.max_dynamic_pressure[1, 2] == pytest.approx(2000, rel=1e-12)
+    assert np.isnan(edge.arrival_time[0, 0]) and np.isnan(edge.max_dynamic_pressure[0, 0])
+    assert np.sum(np.isfinite(edge.arrival_time)) == 1
+    # written on the file's own place, NaN as no data
+    paths = maps.write(str(tmp_path / "maps"))
+    for name, unit in (("max_momentum_flux", "N/m"), ("max_dynamic_pressure", "Pa"), ("arrival_time", "s")):
+        assert maps.UNITS[name] == unit
+        lines = open(str(tmp_path / "maps" / (name + ".asc"))).read().splitlines()
+        header = dict(line.split() for line in lines[:6])
+        assert float(header["xllcenter"]) == 500000.0 and float(header["yllcenter"]) == 4100000.0
+        back = np.loadtxt(lines[6:])[::-1].T  # north row first in the file
+        values = getattr(maps, name)
+        assert np.array_equal(back == -9999.0, np.isnan(values))
+        np.testing.assert_allclose(back[np.isfinite(values)], values[np.isfinite(values)], rtol=1e-8)
+    try:
+        from osgeo import gdal
+    except ImportError:
+        assert len(paths) == 7
+    else:
+        assert len(paths) == 13
+        tif = gdal.Open(str(tmp_path / "maps" / "arrival_time.tif"))  # kept: its band needs it
+        band = tif.GetRasterBand(1)
+        assert band.GetNoDataValue() == -9999.0
+        assert np.array_equal(band.ReadAsArray().T[:, ::-1], np.where(np.isnan(maps.arrival_time), -9999.0,
+                                                                      maps.arrival_time))
+    # refused: samples out of time order, a time or a threshold not finite, a negative threshold
+    with pytest.raises(ValueError, match=r"time = 0.2 s: before the previous sample's 0.5 s"):
+        maps.sample(points([(1, 1, 1.0, 1.0, (0, 0, 0))]), 0.2)
+    with pytest.raises(ValueError, match="time = nan s: must be finite"):
+        maps.sample(points([(1, 1, 1.0, 1.0, (0, 0, 0))]), float("nan"))
+    for bad in (-0.1, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match=r"minThickness = %r m: must be a thickness >= 0" % bad):
+            mpmsdem.terrain.FlowMaps(ground, minThickness=bad)
 
 
 def _cube_on_terrain_slope(theta_deg, mu, spacing=0.03, yaw_deg=10.0, damping=(0.3, 0.5)):
