@@ -38,28 +38,44 @@ def readBlockTable(path):
     dicts; ValueError naming the file, the row and the column for a missing, malformed or
     out-of-range value (a mass not > 0, a repeated id, a box without three lengths > 0)."""
     rows, ids = [], set()
-    with open(path, newline="") as f:
-        reader = csv.DictReader(f)
-        missing = [c for c in COLUMNS if c not in (reader.fieldnames or [])]
-        if missing:
-            raise ValueError("block table %s: missing column(s) %s (header: %s)" % (path, ", ".join(missing),
-                                                                                   ",".join(COLUMNS)))
-        for n, r in enumerate(reader, start=2):
-            where = "block table %s, line %d" % (path, n)
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            text = f.read()
+    except UnicodeDecodeError as e:
+        raise ValueError("block table %s: not UTF-8 text (byte %d): %s" % (path, e.start, e.reason)) from None
+    try:
+        table = list(csv.reader(text.splitlines()))
+    except csv.Error as e:
+        raise ValueError("block table %s: not CSV: %s" % (path, e)) from None
+    header = [h.strip() for h in table[0]] if table else []
+    missing = [c for c in COLUMNS if c not in header]
+    if missing:
+        raise ValueError("block table %s: missing column(s) %s (header: %s)" % (path, ", ".join(missing),
+                                                                               ",".join(COLUMNS)))
+    column = {c: header.index(c) for c in COLUMNS}
+    for n, values in enumerate(table[1:], start=2):
+        where = "block table %s, line %d" % (path, n)
+        if not any(v.strip() for v in values):
+            continue  # a blank line
+        if len(values) != len(header):
+            raise ValueError("%s: %d values for the %d columns of the header" % (where, len(values), len(header)))
+        r = {c: values[column[c]] for c in COLUMNS}
+        row = {"shape": r["shape"].strip()}
+        for c, kind in (("id", int), ("x", float), ("y", float), ("heading_deg", float), ("mass", float)):
             try:
-                row = {"id": int(r["id"]), "shape": r["shape"].strip(), "x": float(r["x"]), "y": float(r["y"]),
-                       "heading_deg": float(r["heading_deg"]), "mass": float(r["mass"])}
-            except (TypeError, ValueError) as e:
-                raise ValueError("%s: %s" % (where, e)) from e
-            if not all(math.isfinite(row[k]) for k in ("x", "y", "heading_deg", "mass")):
-                raise ValueError("%s: x, y, heading_deg and mass must be finite" % where)
-            if not row["mass"] > 0:
-                raise ValueError("%s: mass = %r kg: must be > 0" % (where, row["mass"]))
-            if row["id"] in ids:
-                raise ValueError("%s: id %d given twice" % (where, row["id"]))
-            _shapeSpec(row["shape"], where)
-            ids.add(row["id"])
-            rows.append(row)
+                row[c] = kind(r[c])
+            except ValueError:
+                raise ValueError("%s: %s = %r: not %s" % (where, c, r[c], "an integer" if kind is int else "a number")
+                                 ) from None
+        if not all(math.isfinite(row[k]) for k in ("x", "y", "heading_deg", "mass")):
+            raise ValueError("%s: x, y, heading_deg and mass must be finite" % where)
+        if not row["mass"] > 0:
+            raise ValueError("%s: mass = %r kg: must be > 0" % (where, row["mass"]))
+        if row["id"] in ids:
+            raise ValueError("%s: id %d given twice" % (where, row["id"]))
+        _shapeSpec(row["shape"], where)
+        ids.add(row["id"])
+        rows.append(row)
     if not rows:
         raise ValueError("block table %s: no blocks" % path)
     return rows
@@ -84,11 +100,17 @@ def _shapeSpec(shape, where):
         if len(dims) != 3 or not all(d > 0 and math.isfinite(d) for d in dims):
             raise ValueError("%s: shape %r: a box is 'box:LxWxH' with three lengths > 0 [m]" % (where, shape))
         return ("box", dims)
-    path, _, scale = shape.partition("*")
+    path, star, scale = shape.partition("*")
     if not path.lower().endswith((".obj", ".stl")):
         raise ValueError("%s: shape %r: must be 'box:LxWxH' or a mesh file (.obj, .stl), optionally '*scale'"
                          % (where, shape))
-    return ("mesh", path, float(scale) if scale else 1.0)
+    try:
+        factor = float(scale) if star else 1.0
+    except ValueError:
+        factor = float("nan")
+    if not (factor > 0 and math.isfinite(factor)):
+        raise ValueError("%s: shape %r: the scale after '*' must be a number > 0" % (where, shape))
+    return ("mesh", path, factor)
 
 
 def placeBlocks(sdem, terrain, rows, material, sweepFraction=0.05, folder="."):

@@ -534,9 +534,28 @@ class SdemEngine(_AutoStep):
         any working folder. With ``output``, ``sdem.h5`` and ``bodies.pvd`` are continued
         (``appendOutput``): records later than the checkpoint, left by a run that went on past
         it, are dropped first. The friction and damping dissipations continue from their saved
-        values."""
-        with open(path) as f:
-            data = json.load(f)
+        values.
+
+        A file that is not such a checkpoint, or is damaged, gets a ValueError naming it and what
+        is wrong."""
+        try:
+            with open(path) as f:
+                data = json.load(f)
+            return cls._restoreFrom(path, data, appendOutput, engineKw)
+        except ValueError as e:
+            if repr(path) in str(e):
+                raise
+            raise ValueError("path = %r: %s" % (path, e)) from None
+        except (KeyError, TypeError, IndexError, AttributeError) as e:
+            # a key missing, a value of the wrong kind: a damaged or foreign file
+            raise ValueError("path = %r: not a whole mpmsdem SDEM checkpoint (%s: %s)"
+                             % (path, type(e).__name__, e)) from None
+
+    @classmethod
+    def _restoreFrom(cls, path, data, appendOutput, engineKw):
+        if not isinstance(data, dict):
+            raise ValueError("path = %r: not an mpmsdem SDEM checkpoint (a JSON %s, not an object)"
+                             % (path, type(data).__name__))
         if data.get("format") == "mpmsdem-sdem-1":
             # Format 1 stored the tangential history as a displacement [m]; it is now the elastic
             # tangential force [N], so the old values cannot be reinterpreted.
