@@ -234,9 +234,11 @@ def flowAtStation(particles, x, halfWidth, bedZ=0.0, minPoints=4):
 def frontProfile(particles, cell, bedZ=0.0, behind=(0.02, 0.05), minPoints=4):
     """The shape of a flow's front from an MPM particle snapshot (flume coordinates: x
     downstream, z normal to the bed): ``tip``, the x of the ``minPoints``-th most downstream
-    point (a few points thrown ahead do not move it) [m]; ``nose``, the height above ``bedZ``
-    of the lowest point within one ``cell`` behind the tip [m] (a point resting on the bed sits
-    its contact radius above it, so a front that rolls on the bed has a nose of about that);
+    point (a few points thrown ahead do not move it) [m]; ``tipHeight``, the mean height above
+    ``bedZ`` of those ``minPoints`` most downstream points [m] (where the front's leading edge
+    runs); ``nose``, the height above ``bedZ`` of the lowest point within one ``cell`` behind the
+    tip [m] (a point resting on the bed sits its contact radius above it, so a front whose bed
+    layer keeps up with its tip has a nose of about that);
     ``depth``, the height of the highest point within half a cell of each distance in
     ``behind`` upstream of the tip [m] (0 where there is none). ValueError with fewer than
     ``minPoints`` points."""
@@ -245,13 +247,14 @@ def frontProfile(particles, cell, bedZ=0.0, behind=(0.02, 0.05), minPoints=4):
     if not (cell > 0 and len(x) >= minPoints):
         raise ValueError("frontProfile: needs cell > 0 (got %r) and at least %d points (got %d)"
                          % (cell, minPoints, len(x)))
-    tip = float(np.sort(x[:, 0])[-minPoints])
+    lead = np.argsort(x[:, 0], kind="stable")[-minPoints:]  # ties: the later points, reproducibly
+    tip = float(x[lead, 0].min())
     nose = float(x[x[:, 0] >= tip - cell, 2].min() - bedZ)
     depth = []
     for d in behind:
         sel = np.abs(x[:, 0] - (tip - d)) <= cell / 2
         depth.append(float(x[sel, 2].max() - bedZ) if sel.any() else 0.0)
-    return {"tip": tip, "nose": nose, "depth": depth}
+    return {"tip": tip, "tipHeight": float(x[lead, 2].mean() - bedZ), "nose": nose, "depth": depth}
 
 
 class FlowProbe:

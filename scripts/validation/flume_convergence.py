@@ -7,9 +7,10 @@ driver mpmsdem-run in two legs (the scenes are built with YADE, then only the dr
 - the free flow without the cube, to 50 ms past the front's arrival at the cube's station: the
   arrival, h_f and v_f (the driver's flow probe: means over those 50 ms, over a fixed 2 cm window
   along the flume at every Δx), Fr and Eq 20 of that flow (α_f = 10.8 Fr^−1.3 on the cube's face
-  below h_f); and the front's profile when it reaches the station (its saved state): the nose
-  (the lowest material point within one cell of the tip; beside it the height of a point resting
-  on the bed, its contact radius R_p0 of Eq 13) and the depth 2 and 5 cm behind the tip;
+  below h_f); and the front's profile when it reaches the station (its saved state): the tip (the
+  20 most downstream points) and their mean height above the bed, the nose (the lowest material
+  point within one cell of the tip; beside it the height of a point resting on the bed, its
+  contact radius R_p0 of Eq 13) and the depth 2 and 5 cm behind the tip;
 - the coupled run with the cube, started from the free flow's state saved when its front was
   3 cm and two cells short of the cube (mpmsdem-run --flow-from: the same run, bit for bit,
   without the flow's way there): first touch, the first blow (the largest 10 ms mean of the
@@ -50,6 +51,7 @@ SERIES_EVERY = 0.001         # records of the probe and the cube [s]
 AHEAD = 0.03                 # the coupled run starts from the free flow with its front this far (and two cells,
                              # the grid's reach) short of the cube [m]: no point within its bounding sphere yet
 CUBE = 0.02                  # the cube's side h_b [m] (examples/flume_block.py)
+FOREMOST = 20                # the front's tip: the 20 most downstream points (their mean height: where its edge runs)
 AT = 0.5                     # tilt and travel read at this time [s]
 
 
@@ -155,7 +157,7 @@ def freeFlow(folder, dx):
     with h5py.File(os.path.join(folder, "free", "mpm.h5"), "r") as h:
         p = {"x": h["snapshots/%06d/x" % front["snapshot"]][()]}
     r = {k: probe[k] for k in ("arrival", "h_f", "v_f", "Fr")}
-    r["front"] = dict(analysis.frontProfile(p, cell=dx, behind=(0.02, 0.05)), time=front["time"])
+    r["front"] = dict(analysis.frontProfile(p, cell=dx, behind=(0.02, 0.05), minPoints=FOREMOST), time=front["time"])
     r["resting_point_height"] = (3.0 * dx ** 3 / 8 / (4.0 * math.pi)) ** (1.0 / 3.0)  # Eq 13, 8 points per cell
     r["eq20"] = analysis.hydrodynamicForce(1600.0, r["v_f"], r["h_f"], min(r["h_f"], CUBE) * CUBE)
     return r
@@ -175,7 +177,7 @@ def coupled(folder, duration):
     w = (t >= t0) & (t <= t0 + BLOW_WINDOW)
     j = int(np.argmax(np.where(w, smooth, -np.inf)))
     plateau = (t >= PLATEAU[0]) & (t <= PLATEAU[1])
-    late = t[-1] >= AT - 1e-9  # a short run (a check's) has no plateau, tilt or travel at 0.5 s
+    late = t[-1] >= AT - 2 * SERIES_EVERY  # the last record may fall just short of AT; a short run (a check's) has none
     return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]),
             "plateau": float(ft[plateau].mean()) if late else None,
             "tilt_at": float(np.interp(AT, t, s["tilt"])) if late else None,
@@ -229,7 +231,8 @@ def fmt(v, spec):
 
 
 COLUMNS = ("set, damping held", "width [m]", "Δx [m]", "cells per h_b", "O.dt [s]", "PIC damping [1/s]",
-           "front at station [s]", "h_f [mm]", "v_f [m/s]", "Fr", "Eq 20 [N]", "nose above bed [mm] (resting point)",
+           "front at station [s]", "h_f [mm]", "v_f [m/s]", "Fr", "Eq 20 [N]", "tip height [mm]",
+           "nose above bed [mm] (resting point)",
            "depth 2 / 5 cm behind tip [mm]", "first touch [s]", "first blow, 10 ms [N]", "blow / Eq 20",
            "plateau 0.4–0.5 s [N]", "tilt at 0.5 s [°]", "travel at 0.5 s [m]", "wall free + coupled [s]")
 
@@ -241,7 +244,7 @@ def table(runs):
         blow = cp.get("blow")
         row = ["%s, %s" % (r["settings"], r["hold"]), "%g" % r["width"], "%.4g" % r["dx"], "%.1f" % r["cells_per_block"],
                "%.3g" % r["dt"], "%.0f" % r["damping_rate"], "%.3f" % ff["arrival"], "%.1f" % (1e3 * ff["h_f"]),
-               "%.3f" % ff["v_f"], "%.2f" % ff["Fr"], "%.2f" % ff["eq20"],
+               "%.3f" % ff["v_f"], "%.2f" % ff["Fr"], "%.2f" % ff["eq20"], fmt(fr.get("tipHeight") and 1e3 * fr["tipHeight"], "%.1f"),
                "%.1f (%.1f)" % (1e3 * fr["nose"], 1e3 * ff["resting_point_height"]),
                "%.0f / %.0f" % (1e3 * fr["depth"][0], 1e3 * fr["depth"][1]),
                fmt(cp.get("first_touch"), "%.3f"), fmt(blow, "%.2f"),
@@ -271,7 +274,8 @@ def richardson(f, h):
     return p, f3 + d2 * h3 ** p / (h2 ** p - h3 ** p)
 
 
-QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("coupled", "first_touch"), ("coupled", "blow"),
+QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("front", "tipHeight"), ("coupled", "first_touch"),
+              ("coupled", "blow"),
               ("coupled", "plateau"), ("coupled", "tilt_at"), ("coupled", "travel_at"))
 
 
@@ -286,7 +290,7 @@ def extrapolations(runs):
         if len(rs) != 3:
             continue
         for part, key in QUANTITIES:
-            vals = [r[part].get(key) for r in rs]
+            vals = [(r["free"]["front"] if part == "front" else r[part]).get(key) for r in rs]
             if None in vals:
                 continue
             e = richardson(vals, [r["dx"] for r in rs])

@@ -88,6 +88,9 @@ def test_front_profile_of_a_hand_built_wedge():
     p = {"x": np.array(pts)}
     r = frontProfile(p, cell=0.005, bedZ=0.0, behind=(0.02, 0.05))
     assert r["tip"] == pytest.approx(0.3, abs=1e-12)          # the spray (2 points) left out
+    # the four foremost: the spray at 20 and 30 mm and, of the tip column (ties broken by order),
+    # its last two points, 8 and 9 mm
+    assert r["tipHeight"] == pytest.approx((0.02 + 0.03 + 0.009 + 0.008) / 4, abs=1e-12)
     assert r["nose"] == pytest.approx(0.006, abs=1e-12)
     # highest point within 2.5 mm of x = 0.28 / 0.25 m: the columns down to 0.278 / 0.248 m,
     # 22 / 52 mm behind the tip, topped at 9 + 0.5 * 22 = 20 mm and 9 + 0.5 * 52 = 35 mm
@@ -95,6 +98,6 @@ def test_front_profile_of_a_hand_built_wedge():
     # a nose on the bed reads 0; no points behind the tip read 0 depth
     q = {"x": np.array([(0.1, 0, 0.0), (0.1, 0, 0.01), (0.1, 0, 0.02), (0.1, 0, 0.03)])}
     r = frontProfile(q, cell=0.01, behind=(0.05,))
-    assert (r["tip"], r["nose"], r["depth"]) == (0.1, 0.0, [0.0])
+    assert (r["tip"], r["nose"], r["depth"]) == (0.1, 0.0, [0.0]) and r["tipHeight"] == pytest.approx(0.015)
     with pytest.raises(ValueError, match="at least 4 points"):
         frontProfile({"x": np.zeros((3, 3))}, cell=0.01)
