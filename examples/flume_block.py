@@ -54,8 +54,8 @@ def parse(argv):
                     help="flume width [m] (0.2, the experiment's); the cube stays on the centre line. Between smooth "
                          "side walls (--side-wall-friction 0, table1) a narrower flume is a slice of the wide one (0.1 m "
                          "gives the same cube motion at half the cost); with side-wall friction (joint: 0.111) it is a "
-                         "different flume, the walls slow a narrow flow more (first touch 0.342 s at 0.1 m against "
-                         "0.319 s at 0.2 m, dx 0.01 m): docs/coupled-results.md")
+                         "different flume, the walls slow a narrow flow more (first touch 0.341 s at 0.1 m against "
+                         "0.317 s at 0.2 m, dx 0.01 m): docs/coupled-results.md")
     ap.add_argument("--no-free-flow", action="store_true",
                     help="skip the run without the cube (the front's arrival, h_f, v_f, Fr and the Eq 20 line)")
     ap.add_argument("--out", default="results/flume_block", help="output folder")
