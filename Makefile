@@ -9,7 +9,7 @@ JOBS     ?= $(shell nproc)
 export PYTHONPATH := $(CURDIR)/$(BUILD)/python$(if $(PYTHONPATH),:$(PYTHONPATH))
 export OMP_NUM_THREADS ?= $(JOBS)
 
-.PHONY: all deps configure build install demo test test-cpp test-py checks bench bench-peers bench-scene-needs bench-coupling bench-memory clean
+.PHONY: all deps configure build install demo test test-cpp test-sanitize test-py checks bench bench-peers bench-scene-needs bench-coupling bench-memory clean
 
 all: build
 
@@ -37,6 +37,19 @@ demo: install
 # waiting sleeps instead. Results do not depend on it.
 test-cpp: build
 	cd $(BUILD) && OMP_WAIT_POLICY=PASSIVE ctest --output-on-failure -j $(JOBS)
+
+# Opt-in (not part of `make test`): the C++ tests again under AddressSanitizer (with
+# LeakSanitizer) and UndefinedBehaviorSanitizer, in a build folder of their own (-O1 -g); any
+# report fails the test that made it.
+SANBUILD ?= build-sanitize
+test-sanitize: deps
+	cmake -S . -B $(SANBUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DMPMSDEM_SANITIZE=ON \
+	  -DPython3_EXECUTABLE=$(PY) -DMPMSDEM_PYTHON=$(PY) > /dev/null
+	cmake --build $(SANBUILD) -j $(JOBS) --target test_sdem test_mpm test_coupling
+	cd $(SANBUILD) && OMP_WAIT_POLICY=PASSIVE \
+	  ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1 \
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  ctest --output-on-failure -j $(JOBS)
 
 # YADE scenes of a few bodies run fastest on one OpenMP thread (YADE's parallel loops cost
 # more than they save there); the C++ driver in check_column_collapse uses all cores itself.
