@@ -285,6 +285,23 @@ def fromDriver(a):
     return summary
 
 
+def resolutionNote(dx):
+    """What refinement measured of the cube's force at this run's cells per block height (the
+    study of docs/coupled-results.md, "The impact under grid refinement", through
+    mpmsdem.tradeoffs): the plateau's error there, and that the peak is not converged."""
+    from mpmsdem import tradeoffs
+    cells = HB / dx
+    p = tradeoffs.nearest("plateau_force", cells_per_block_height=cells)
+    note = ("resolution: the cube is %.1f cells tall (dx %g m). Refinement of this scene (%s) measured the plateau "
+            "force %+.0f %% off its extrapolated limit at %.1f cells per block height" % (
+                cells, dx, p.study["scene"].split("), ", 1)[-1], 100 * p.error, p.settings["cells_per_block_height"]))
+    try:
+        tradeoffs.table("peak_force")
+    except ValueError:  # not converged over the measured resolutions: say so rather than give an error
+        note += "; the peak (first blow) did not converge over 1 to 2.8 cells per block height"
+    return note + " (docs/coupled-results.md)"
+
+
 def main(argv):
     a = parse(argv)
     if a.from_driver:
@@ -333,6 +350,7 @@ def main(argv):
           "impact force %.3f N (10 ms mean) at %.3f s%s" % (
               duration, summary["travel"], summary["rotation_deg"], summary["tilt_deg"], summary["yaw_deg"], peak, tPeak,
               "; Eq 20: %.3f N" % summary["eq20_force"] if ff else ""))
+    print(resolutionNote(dx))
     print("outputs in %s (coupled.h5, scene.pvd, flume_block.png, flume_block_faces.png, summary.json); wall time "
           "%.0f s + %.0f s"
           % (out, tFree, tCoupled))

@@ -5,6 +5,7 @@
     print(p)                                        # its settings, measured error and cost
     for row in tradeoffs.table("runout"):           # every measured setting for that output
         print(row)
+    tradeoffs.nearest("plateau_force", cells_per_block_height=2)   # the error measured nearest a setting
 
 The numbers are measurements, shipped with the package in ``tradeoffs.json`` and written by the
 benchmark scripts that made them (``scripts/bench/tradeoff_mpm.py`` and
@@ -12,7 +13,12 @@ benchmark scripts that made them (``scripts/bench/tradeoff_mpm.py`` and
 ran one scene at many settings, took the finest setting as the converged reference and
 recorded every output's relative error against it and the run's cost relative to the default
 setting (the work, points x steps, and the CPU time of one thread, all runs in one command).
-Proposals come from the resolution settings (grid spacing, points per cell, precision); rows
+A study refined towards a limit it could not run (``scripts/validation/flume_convergence.py``:
+the §3.2 cube's impact at 1, 2 and 2.8 cells per block height) takes the limit extrapolated
+through its three spacings as the reference (``extrapolated``: how) and lists the outputs
+whose sequence gave no limit under ``unconverged``; asking for one of those raises a
+ValueError that says what was measured. Proposals come from the resolution settings (grid
+spacing, points per cell, precision); rows
 that change a model choice such as the FLIP/PIC alpha are listed by :func:`table` with
 ``sensitivity`` set, and not proposed. A proposal is therefore an empirical
 guide for scenes like the measured one (their scene, commit and command come with it), not a
@@ -27,7 +33,8 @@ _DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "tradeoffs.json
 class Proposal:
     """A measured setting: ``settings`` (dict), ``error`` (signed relative error of ``output``
     against the study's reference), ``cost`` (work relative to the study's default setting;
-    ``cpuCost``: CPU time relative to it), ``reference`` / ``sensitivity`` flags, and where it
+    ``cpuCost``: CPU time relative to it, None where the runs shared the machine), ``reference`` /
+    ``sensitivity`` flags, and where it
     was measured (``study``: name, scene, commit, machine, command, reference settings). The
     FLIP/PIC blend each row's flow ran with is one of its settings: ``settings["flip_viscosity"]``,
     a PIC viscosity [m²/s] (docs/physics.md, "The blend as a viscosity")."""
@@ -63,11 +70,23 @@ def outputs(path=None):
     return _outputsOf(_studies(path))
 
 
+def _unconverged(studies, output):
+    """What the studies that measured ``output`` without a converged value say of it."""
+    return ["%s (study %s, commit %s)" % (s["unconverged"][output], s["name"], s["commit"])
+            for s in studies if output in s.get("unconverged", {})]
+
+
 def table(output, path=None):
-    """Every measured setting for ``output``, cheapest first: a list of :class:`Proposal`."""
+    """Every measured setting for ``output``, cheapest first: a list of :class:`Proposal`.
+    An output a study refined without reaching a converged value (its sequence not monotone)
+    has no errors to offer: a ValueError says what was measured."""
     studies = _studies(path)
     known = _outputsOf(studies)
     if output not in known:
+        why = _unconverged(studies, output)
+        if why:
+            raise ValueError("output = %r: measured under refinement but not converged, so no setting's error is "
+                             "known: %s" % (output, "; ".join(why)))
         raise ValueError("output = %r: not measured; one of %s" % (output, ", ".join(known)))
     rows = [Proposal(output, r, s) for s in studies for r in s["rows"] if output in r["errors"]]
     return sorted(rows, key=lambda p: (p.cost, p.cpuCost if p.cpuCost is not None else p.cost, abs(p.error)))
@@ -105,3 +124,17 @@ def propose(error, output="runout", maxCost=None, path=None):
             "study's reference (%s) is left, whose own error was not measured") % (
         100 * best.error, best.cost, best.settings, best.study["reference"])
     raise ValueError(msg)
+
+
+def nearest(output, path=None, **settings):
+    """The measured row of ``output`` whose settings are nearest to ``settings`` (e.g.
+    ``cells_per_block_height=2``; each compared by its ratio, rows without one of them left
+    out): a :class:`Proposal`, whose ``error`` is the error measured there. Raises ValueError as
+    :func:`table` does, and when no row has the settings named."""
+    import math
+    if not settings or not all(isinstance(v, (int, float)) and 0 < v < math.inf for v in settings.values()):
+        raise ValueError("settings = %r: name one or more measured settings, each a number > 0" % (settings,))
+    rows = [p for p in table(output, path) if not p.reference and all(k in p.settings for k in settings)]
+    if not rows:
+        raise ValueError("settings %s: no measured row of %s has them" % (", ".join(sorted(settings)), output))
+    return min(rows, key=lambda p: sum(abs(math.log(p.settings[k] / v)) for k, v in settings.items()))

@@ -71,6 +71,9 @@ def parse(argv):
     ap.add_argument("--out", default="results/convergence", help="folder of the runs' JSON files")
     ap.add_argument("--report-only", action="store_true", help="only print and write the table of finished runs")
     ap.add_argument("--extrapolate", action="store_true", help="Richardson estimates where the sequence allows")
+    ap.add_argument("--package-data", action="store_true",
+                    help="store the three finest spacings of --settings/--hold/--width as a study in "
+                         "py/mpmsdem/tradeoffs.json (mpmsdem.tradeoffs: errors against the extrapolated limit)")
     ap.add_argument("--child", nargs=2, metavar=("prepare", "DX"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     try:
@@ -185,29 +188,55 @@ def coupled(folder, duration):
             "rotation_end": float(s["rotation"][-1]), "travel_end": float(s["travel"][-1]), "time_end": float(t[-1])}
 
 
+def sameRunAtReference(a, dx):
+    """The finished viscosity-held run that a rate-held one at the reference spacing would repeat
+    (the two holds give the same viscosity there, hence the same scenes): its JSON path, or None."""
+    if a.hold != "rate" or abs(dx - REFERENCE_DX) > 1e-12 * REFERENCE_DX:
+        return None
+    path = os.path.join(a.out, runName(argparse.Namespace(**dict(vars(a), hold="viscosity")), dx) + ".json")
+    return path if os.path.exists(path) else None
+
+
+def writeResult(a, dx, r):
+    path = os.path.join(a.out, runName(a, dx) + ".json")
+    with open(path + ".tmp", "w") as f:
+        json.dump(r, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
 def runOne(a, dx, exe):
-    """Prepare, run and read one spacing; writes OUT/<run>.json."""
+    """Prepare, run and read one spacing; writes OUT/<run>.json. A coupled leg that was
+    interrupted continues (--restart); the free flow, whose probe records a restart would lose,
+    runs again from its start."""
+    same = sameRunAtReference(a, dx)
+    if same:
+        with open(same) as f:
+            r = json.load(f)
+        writeResult(a, dx, dict(r, hold=a.hold, same_run_as=os.path.basename(same)))
+        return
     folder = os.path.join(a.out, runName(a, dx))
     os.makedirs(folder, exist_ok=True)
     if not os.path.exists(os.path.join(folder, "meta.json")):
         subprocess.run([sys.executable, os.path.abspath(__file__), "--child", "prepare", repr(dx)] + a.argv, check=True)
     with open(os.path.join(folder, "meta.json")) as f:
         meta = json.load(f)
-    free = drive(exe, folder, "free.json", "free")
+    resume = os.path.exists(os.path.join(folder, "coupled", "coupled.checkpoint.json"))
+    free = meta.get("free_wall") if resume else None
+    if free is None:
+        resume = False
+        free = drive(exe, folder, "free.json", "free")
+        with open(os.path.join(folder, "meta.json"), "w") as f:
+            json.dump(dict(meta, free_wall=free), f, indent=1)
     with open(os.path.join(folder, "free", "front_snapshot_0.json")) as f:
         start = json.load(f)["step"]
     steps = int(round(meta["duration"] / meta["dt"])) - start
-    wall = drive(exe, folder, "coupled.json", "coupled",
-                 ["--flow-from", os.path.join(folder, "free", "front_snapshot_0.json"), "--steps", str(steps)])
+    flowFrom = ["--restart"] if resume else ["--flow-from", os.path.join(folder, "free", "front_snapshot_0.json")]
+    wall = drive(exe, folder, "coupled.json", "coupled", flowFrom + ["--steps", str(steps)])
     r = dict(meta, free=freeFlow(folder, dx), coupled=coupled(folder, meta["duration"]), dx=dx, hold=a.hold,
              settings=a.settings, width=a.width, viscosity=viscosity(a, dx), damping_rate=4 * viscosity(a, dx) / dx ** 2,
              cells_per_block=CUBE / dx, wall_seconds={"free": free, "coupled": wall}, coupled_from_step=start,
-             threads=os.environ.get("OMP_NUM_THREADS", "all"), commit=commit())
-    path = os.path.join(a.out, runName(a, dx) + ".json")
-    with open(path + ".tmp", "w") as f:
-        json.dump(r, f, indent=1)
-    os.replace(path + ".tmp", path)
-    return r
+             threads=os.environ.get("OMP_NUM_THREADS", "all"), commit=commit(), resumed=resume)
+    writeResult(a, dx, r)
 
 
 def commit():
@@ -301,6 +330,71 @@ def extrapolations(runs):
     return "\n".join(lines)
 
 
+# The outputs mpmsdem.tradeoffs offers from this study, by the quantity each one is.
+OUTPUTS = {("free", "arrival"): "front_arrival", ("free", "h_f"): "flow_depth", ("free", "v_f"): "flow_speed",
+           ("coupled", "first_touch"): "first_touch", ("coupled", "blow"): "peak_force",
+           ("coupled", "plateau"): "plateau_force", ("coupled", "tilt_at"): "tilt", ("coupled", "travel_at"): "travel"}
+
+
+def packageStudy(runs, settings, hold, width, command):
+    """The study of the three finest spacings of one set, damping and width for
+    py/mpmsdem/tradeoffs.json: each run's relative error against the value extrapolated to
+    Δx 0 (:func:`richardson`) where the sequence gives one, the outputs where it does not under
+    ``unconverged``, and the work of each run (points x steps of the coupled run) relative to
+    the run at the reference spacing. None when those runs are not all there."""
+    rs = sorted([r for r in runs if (r["settings"], r["hold"], r["width"]) == (settings, hold, width)],
+                key=lambda r: -r["dx"])[-3:]
+    default = [r for r in rs if abs(r["dx"] - REFERENCE_DX) <= 1e-12 * REFERENCE_DX]
+    if len(rs) != 3 or not default:
+        return None
+    h = [r["dx"] for r in rs]
+    work = lambda r: r["points"] * r["duration"] / r["dt"]  # noqa: E731
+    limits, unconverged = {}, {}
+    for (part, key), out in OUTPUTS.items():
+        vals = [r[part].get(key) for r in rs]
+        if None in vals:
+            continue
+        e = richardson(vals, h)
+        if e is None:
+            unconverged[out] = "%s at %s cells per block height (Δx %s m): %s, not monotone with shrinking steps" % (
+                out, " / ".join("%.1f" % r["cells_per_block"] for r in rs), " / ".join("%.4g" % d for d in h),
+                " / ".join("%.4g" % v for v in vals))
+        else:
+            limits[(part, key)] = e[1]
+    rows = [{"settings": {"dx": r["dx"], "cells_per_block_height": r["cells_per_block"], "ppc": 8,
+                          "flip_viscosity": r["viscosity"], "precision": "double"},
+             "errors": {OUTPUTS[q]: (r[q[0]][q[1]] - f0) / f0 for q, f0 in limits.items()},
+             "cost": work(r) / work(default[0]), "cpu_cost": None, "reference": False, "sensitivity": False}
+            for r in rs]
+    return {"name": "coupled_cube_impact_%s_held" % hold,
+            "scene": "examples/flume_block.py --full (paper §3.2, the copper cube h_b 0.02 m), %s set, %g m wide, "
+                     "0.5 s, PIC %s held" % (settings, width, hold),
+            "commit": ", ".join(sorted({r["commit"] for r in rs})),
+            "machine": "2-core x86_64 VM, two threads, shared (cpu_cost not measured)",
+            "command": command,
+            "reference": {"dx": 0.0},
+            "extrapolated": "f0 of f = f0 + C dx^p through Δx %s m (Richardson, observed order p)" % (
+                " / ".join("%.4g" % d for d in h)),
+            "rows": rows, "unconverged": unconverged}
+
+
+def packageData(runs, settings, hold, width, command):
+    """Replace this study in py/mpmsdem/tradeoffs.json (the other studies stay)."""
+    study = packageStudy(runs, settings, hold, width, command)
+    if study is None:
+        raise SystemExit("--package-data: the %s set held by %s at width %g m needs three finished spacings, one "
+                         "of them %g m" % (settings, hold, width, REFERENCE_DX))
+    path = os.path.join(ROOT, "py", "mpmsdem", "tradeoffs.json")
+    with open(path) as f:
+        data = json.load(f)
+    data["studies"] = [s for s in data["studies"] if s["name"] != study["name"]] + [study]
+    with open(path + ".tmp", "w") as f:
+        json.dump(data, f, indent=1)
+        f.write("\n")
+    os.replace(path + ".tmp", path)
+    print("stored the study %s in %s" % (study["name"], path))
+
+
 def main(argv):
     a = parse(argv)
     a.argv = argv
@@ -327,6 +421,11 @@ def main(argv):
     print(text)
     with open(os.path.join(a.out, "convergence.md"), "w") as f:
         f.write(text + "\n")
+    if a.package_data:
+        packageData(runs, a.settings, a.hold, a.width,
+                    "OMP_NUM_THREADS=2 python3 scripts/validation/flume_convergence.py --dx %s --hold %s --out OUT, "
+                    "then --report-only --package-data" % (",".join("%.10g" % d for d in sorted(a.dx, reverse=True)),
+                                                           a.hold))
 
 
 if __name__ == "__main__":

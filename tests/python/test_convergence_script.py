@@ -21,3 +21,20 @@ def test_richardson_refuses_what_no_power_law_fits():
     assert fc.richardson([1.0, 2.0, 1.0], h) is None      # the differences change sign
     assert fc.richardson([1.0, 1.0, 2.0], h) is None      # a zero difference
     assert fc.richardson([1.0, 1.1, 1.3], h) is None      # growing steps: not converging
+
+
+def test_package_study_errors_against_the_extrapolated_limit():
+    # three runs of a quantity on an exact power law (f0 0.5, order 2) and one that zigzags
+    h = [0.02, 0.01, 0.2 / 28]
+
+    def run(dx, blow):
+        return {"settings": "joint", "hold": "viscosity", "width": 0.2, "dx": dx, "cells_per_block": 0.02 / dx,
+                "viscosity": 0.036, "points": 1000 * (0.01 / dx) ** 3, "duration": 0.5, "dt": 5e-5 * dx / 0.01,
+                "commit": "abc", "free": {}, "coupled": {"plateau": 0.5 - 100 * dx ** 2, "blow": blow}}
+    runs = [run(d, b) for d, b in zip(h, (7.0, 5.8, 6.0))] + [dict(run(0.01, 1.0), hold="rate")]
+    s = fc.packageStudy(runs, "joint", "viscosity", 0.2, "cmd")
+    assert [r["settings"]["cells_per_block_height"] for r in s["rows"]] == pytest.approx([1.0, 2.0, 2.8])
+    assert [r["errors"]["plateau_force"] for r in s["rows"]] == pytest.approx([-100 * d ** 2 / 0.5 for d in h], rel=1e-6)
+    assert [r["cost"] for r in s["rows"]] == pytest.approx([1 / 16, 1.0, 1.4 ** 4], rel=1e-9)
+    assert list(s["unconverged"]) == ["peak_force"] and "7 / 5.8 / 6, not monotone" in s["unconverged"]["peak_force"]
+    assert fc.packageStudy(runs[:2], "joint", "viscosity", 0.2, "cmd") is None   # two spacings: no study
