@@ -9,7 +9,7 @@ JOBS     ?= $(shell nproc)
 export PYTHONPATH := $(CURDIR)/$(BUILD)/python$(if $(PYTHONPATH),:$(PYTHONPATH))
 export OMP_NUM_THREADS ?= $(JOBS)
 
-.PHONY: all deps configure build install demo test test-cpp test-sanitize test-py checks bench bench-peers bench-scene-needs bench-coupling bench-memory clean
+.PHONY: all deps configure build install demo test test-cpp test-sanitize fuzz test-py checks bench bench-peers bench-scene-needs bench-coupling bench-memory clean
 
 all: build
 
@@ -38,18 +38,38 @@ demo: install
 test-cpp: build
 	cd $(BUILD) && OMP_WAIT_POLICY=PASSIVE ctest --output-on-failure -j $(JOBS)
 
-# Opt-in (not part of `make test`): the C++ tests again under AddressSanitizer (with
-# LeakSanitizer) and UndefinedBehaviorSanitizer, in a build folder of their own (-O1 -g); any
-# report fails the test that made it.
-SANBUILD ?= build-sanitize
+# The C++ tests again under AddressSanitizer (with LeakSanitizer) and UndefinedBehaviorSanitizer,
+# in a build folder of their own (-O1 -g, NDEBUG as in the release build: the code under test is
+# the release build's); any report fails the test that made it. The long tests of tools/sanitizers/long-tests.txt are left
+# out unless SANITIZE_ALL=1 (why: that file; ctest names a parameterised test "NAME  # GetParam() = …").
+SANBUILD     ?= build-sanitize
+SANITIZE_ALL ?= 0
+SANITIZE_SKIP = $(if $(filter 1,$(SANITIZE_ALL)),,-E '^($(shell grep -v '^\#' tools/sanitizers/long-tests.txt | paste -sd'|'))( |$$)')
 test-sanitize: deps
-	cmake -S . -B $(SANBUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DMPMSDEM_SANITIZE=ON \
+	cmake -S . -B $(SANBUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g -DNDEBUG" -DMPMSDEM_SANITIZE=ON \
 	  -DPython3_EXECUTABLE=$(PY) -DMPMSDEM_PYTHON=$(PY) > /dev/null
 	cmake --build $(SANBUILD) -j $(JOBS) --target test_sdem test_mpm test_coupling
 	cd $(SANBUILD) && OMP_WAIT_POLICY=PASSIVE \
 	  ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1 \
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-	  ctest --output-on-failure -j $(JOBS)
+	  ctest --output-on-failure -j $(JOBS) $(SANITIZE_SKIP)
+
+# Every reader of files from elsewhere (the scene JSON with its blocks, OBJ, STL, ESRI ASCII
+# rasters, the coupled checkpoint and the front snapshot record) under libFuzzer with
+# AddressSanitizer and UndefinedBehaviorSanitizer, in a build folder of its own (clang, -O1):
+# every file of tests/fuzz/corpus/ replayed, then each target fuzzed for FUZZ_SECONDS, JOBS at
+# a time. Any crash, leak, undefined behaviour, hang or exception other than the documented
+# ParameterError / RuntimeFailure fails it (docs/extremes.md, "Fuzzing"). FUZZ_SECONDS=0: replay only.
+FUZZBUILD    ?= build-fuzz
+FUZZ_SECONDS ?= 20
+FUZZ_CC      ?= clang-14
+FUZZ_CXX     ?= clang++-14
+fuzz: deps
+	cmake -S . -B $(FUZZBUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -gline-tables-only" \
+	  -DCMAKE_C_COMPILER=$(FUZZ_CC) -DCMAKE_CXX_COMPILER=$(FUZZ_CXX) \
+	  -DMPMSDEM_DRIVER_ONLY=ON -DMPMSDEM_CUDA=OFF -DMPMSDEM_FUZZ=ON > /dev/null
+	cmake --build $(FUZZBUILD) -j $(JOBS) --target fuzz_targets
+	tests/fuzz/run.sh $(FUZZBUILD) $(FUZZ_SECONDS) $(JOBS)
 
 # YADE scenes of a few bodies run fastest on one OpenMP thread (YADE's parallel loops cost
 # more than they save there); the C++ driver in check_column_collapse uses all cores itself.
@@ -59,7 +79,7 @@ test-py: install
 checks: install
 	@set -e; for s in scripts/checks/*.py; do echo "== $$s"; OMP_NUM_THREADS=1 $(PY) $$s; done
 
-test: test-cpp test-py checks
+test: test-cpp test-sanitize fuzz test-py checks
 
 bench: install
 	OMP_NUM_THREADS=1 $(PY) scripts/bench/bench_sdem.py

@@ -15,7 +15,7 @@
 //                            they were at that snapshot (mpm.h5.restart, coupled.h5.restart);
 //                            --steps then counts the steps of this run. The scene must be
 //                            the one the run was started with (the file's "parameters"),
-//                            except for kRestartFree below (exit 2 naming what changed).
+//                            except for kRestartFree (pkg/io/StoredScene.cpp; exit 2 naming what changed).
 //                            With blocks, from the snapshot that coupled.checkpoint.json
 //                            names (pkg/coupling/CoupledCheckpoint.hpp): the same run, bit
 //                            for bit, on the CPU and on CUDA (whose sums have a fixed order)
@@ -122,6 +122,7 @@
 #ifdef MPMSDEM_WITH_HDF5
 #include "coupling/CoupledOutput.hpp"
 #include "io/Hdf5Writer.hpp"
+#include "io/StoredScene.hpp"
 #endif
 #include "io/VtkWriter.hpp"
 #include "mpm/Diagnostics.hpp"
@@ -453,120 +454,6 @@ int runBench(Stepper& st, const MpmScene& scene, long maxSteps) {
 }
 
 #ifdef MPMSDEM_WITH_HDF5
-// Scene keys a restart may change: how long to run and what to write, where, and on which
-// backend. Everything else (grid, material, particles, gravity, walls, the FLIP/PIC blend, cfl,
-// run.dt, run.dt_factor) defines the run being continued: changing it would silently glue
-// two different simulations into one output.
-const char* const kRestartFree[] = {"description", "run.duration", "run.output_every", "run.series_every",
-                                    "run.output_dir", "run.vtk", "run.backend", "run.precision"};
-
-// Scene keys a run started from another's flow (--flow-from) may have changed besides those:
-// the stop rules, probes and snapshots of the run it starts from, its blocks (checked apart:
-// that run's blocks come first), and grid cells (checked apart: added on free sides only).
-const char* const kFlowFromFree[] = {"run.stop_when_probed", "run.stop_when_front_still", "run.snapshot_when_front_at",
-                                     "run.max_block_speed",  "run.progress_every",          "flow_probes",
-                                     "blocks",               "block_materials",             "grid.cells"};
-
-// Key paths where two scenes differ (objects compared key by key, anything else as a whole),
-// but for the paths in `free`.
-void sceneDifferences(const nlohmann::json& a, const nlohmann::json& b, const std::string& path,
-                      const std::vector<std::string>& free, std::vector<std::string>& out) {
-  if (std::find(free.begin(), free.end(), path) != free.end()) return;
-  if (a.is_object() && b.is_object()) {
-    std::vector<std::string> keys;
-    for (auto it = a.begin(); it != a.end(); ++it) keys.push_back(it.key());
-    for (auto it = b.begin(); it != b.end(); ++it)
-      if (!a.contains(it.key())) keys.push_back(it.key());
-    for (const std::string& k : keys) {
-      const std::string sub = path.empty() ? k : path + "." + k;
-      static const nlohmann::json absent;  // null: key missing on one side
-      sceneDifferences(a.contains(k) ? a.at(k) : absent, b.contains(k) ? b.at(k) : absent, sub, free, out);
-    }
-    return;
-  }
-  if (a != b) out.push_back(path);
-}
-
-std::string joined(const std::vector<std::string>& items) {
-  std::string out;
-  for (const auto& i : items) out += (out.empty() ? "" : ", ") + i;
-  return out;
-}
-
-// The scene stored in the mpm.h5 of an earlier run (its "parameters"), for `option`.
-nlohmann::json storedScene(const std::string& option, const std::string& h5) {
-  try {
-    return nlohmann::json::parse(io::readStringAttribute(h5, "parameters"));
-  } catch (const RuntimeFailure&) {
-    throwParameter(option, h5, "", "an mpm.h5 written by mpmsdem-run (it has no \"parameters\" attribute)");
-  }
-  return {};
-}
-
-// The same scene text means the same blend only if the defaults are the same: a file from
-// before the blend was recorded ran the per-step default when its scene named none.
-void checkSameBlend(const std::string& option, const MpmScene& scene, const std::string& h5) {
-  std::string blend;
-  try {
-    blend = io::readStringAttribute(h5, "flip_blend");
-  } catch (const RuntimeFailure&) {
-    blend = "(not recorded: written before the FLIP/PIC blend became per unit time)";
-  }
-  const std::string ours = mpm::describeFlipBlend(scene.params);
-  if (blend != ours)
-    throw ParameterError(option + ": the run in " + h5 + " blended FLIP/PIC as " + blend + ", this scene as " + ours +
-                         ": going on from it would glue two different flows into one. Start a new run.");
-}
-
-// --restart with a scene that is not the one stored in the output's mpm.h5: a ParameterError.
-void checkRestartScene(const MpmScene& scene, const std::string& h5) {
-  const std::vector<std::string> free(std::begin(kRestartFree), std::end(kRestartFree));
-  std::vector<std::string> diff;
-  sceneDifferences(storedScene("--restart", h5), nlohmann::json::parse(scene.sourceJson), "", free, diff);
-  if (diff.empty()) return checkSameBlend("--restart", scene, h5);
-  throw ParameterError("--restart: the scene differs from the one the run in " + h5 + " was started with (changed: " +
-                       joined(diff) + "). A restart continues that run: only " + joined(free) +
-                       " may change. Undo the change, or start a new run in another output folder (--out).");
-}
-
-// --flow-from: this scene must run the flow of the one stored in `h5` (every key a restart
-// keeps but grid cells, which may differ only on a side whose wall is "free": the grid's origin
-// and spacing stay, so a point sees the same nodes), and begin with its blocks, in its order,
-// with the same materials.
-void checkFlowFromScene(const MpmScene& scene, const std::string& h5) {
-  const nlohmann::json stored = storedScene("--flow-from", h5), ours = nlohmann::json::parse(scene.sourceJson);
-  std::vector<std::string> free(std::begin(kRestartFree), std::end(kRestartFree));
-  free.insert(free.end(), std::begin(kFlowFromFree), std::end(kFlowFromFree));
-  std::vector<std::string> diff;
-  sceneDifferences(stored, ours, "", free, diff);
-  const auto walls = [](const nlohmann::json& j, const std::string& side) {
-    return j.contains("walls") && j["walls"].contains(side) ? j["walls"][side] : nlohmann::json();
-  };
-  for (int d = 0; d < 3; ++d) {
-    const std::string side = std::string("+") + "xyz"[d];
-    if (stored["grid"]["cells"][d] != ours["grid"]["cells"][d] &&
-        (walls(stored, side) != "free" || walls(ours, side) != "free"))
-      diff.push_back("grid.cells[" + std::to_string(d) + "] (the " + side + " wall is not \"free\" in both)");
-  }
-  const nlohmann::json none = nlohmann::json::array();
-  const nlohmann::json& theirs = stored.contains("blocks") ? stored["blocks"] : none;
-  const nlohmann::json& mine = ours.contains("blocks") ? ours["blocks"] : none;
-  for (std::size_t i = 0; i < theirs.size(); ++i) {
-    if (i >= mine.size() || theirs[i] != mine[i]) {
-      diff.push_back("blocks[" + std::to_string(i) + "] (the run started from had it as this scene's block " +
-                     std::to_string(i) + ")");
-      continue;
-    }
-    const std::string m = theirs[i].value("material", "");
-    if (stored["block_materials"][m] != ours.value("block_materials", nlohmann::json::object()).value(m, nlohmann::json()))
-      diff.push_back("block_materials." + m);
-  }
-  if (diff.empty()) return checkSameBlend("--flow-from", scene, h5);
-  throw ParameterError("--flow-from: this scene's flow is not the one of the run in " + h5 + " (changed: " + joined(diff) +
-                       "). It must differ only by " + joined(free) +
-                       ", grid cells added on free sides, and blocks after that run's own.");
-}
-
 class OutputRun {
  public:
   // restart: append to the outputs already in the folder instead of starting them anew;
@@ -984,7 +871,7 @@ int main(int argc, char** argv) {
                        "none: the run was stopped before its first snapshot was complete, or it was written by a "
                        "version without restart points. Run the scene again without --restart");
       if (!blocks.empty()) io::resumeFromCommit((dir / "coupled.h5").string());
-      checkRestartScene(scene, h5);
+      io::checkRestartScene(scene, h5);
       long last = io::readNumSnapshots(h5) - 1;
       if (last < 0) throwParameter("--restart", h5, "", "a file holding at least one snapshot");
       if (!blocks.empty()) {
@@ -1020,7 +907,7 @@ int main(int argc, char** argv) {
       if (!scene.probes.empty())
         throw ParameterError("--flow-from: this scene has flow_probes, which would miss the flow before the state "
                              "it starts from; probe the run started from instead");
-      checkFlowFromScene(scene, h5);
+      io::checkFlowFromScene(scene, h5);
       const long count = io::readNumSnapshots(h5);
       if (flowFront->snapshot < 0 || flowFront->snapshot >= count)
         throwParameter("--flow-from: front_snapshot.json snapshot", flowFront->snapshot, "",

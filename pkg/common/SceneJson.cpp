@@ -9,6 +9,26 @@
 namespace mpmsdem {
 namespace scenejson {
 
+json parse(const std::string& text, const std::string& source) {
+  // The callback sees every value as it is read, with its depth (the root is 0): refusing there
+  // keeps the parser from building the deep value at all.
+  const json::parser_callback_t depth = [&source](int level, json::parse_event_t, json&) {
+    if (level > kMaxJsonDepth)
+      throw ParameterError(source + ": arrays and objects nested more than " + std::to_string(kMaxJsonDepth) +
+                           " levels deep: no scene has them (a scene's deepest keys, a block's core faces, are 5 "
+                           "levels down)");
+    return true;
+  };
+  try {
+    return json::parse(text, depth);
+  } catch (const json::parse_error& e) {
+    throw ParameterError(source + ": not valid JSON: " + e.what());
+  } catch (const json::exception& e) {  // e.g. 1e999: a number beyond the double range
+    throw ParameterError(source + ": a number is out of range (every number must be a finite double, "
+                         "|x| < 1.8e308): " + e.what());
+  }
+}
+
 std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
 
 void checkKeys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) {

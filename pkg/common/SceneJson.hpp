@@ -13,6 +13,14 @@ namespace scenejson {
 
 using nlohmann::json;
 
+// The deepest nesting of arrays and objects a scene may have (the deepest real one, a block's
+// core faces, is 5 levels). Deeper text is refused while it is parsed: reading, copying and
+// printing a JSON value recurse once per level, and text nested 10^5 levels deep (a 200 kB
+// file) overflowed the stack of the driver.
+constexpr int kMaxJsonDepth = 64;
+// Parse a scene's JSON text; ParameterError naming `source` for text that is not JSON, a number
+// beyond the range of a double, or nesting deeper than kMaxJsonDepth.
+json parse(const std::string& text, const std::string& source);
 // "path.key", or "key" at the root.
 std::string join(const std::string& path, const std::string& key);
 // Every key of `obj` must be in `allowed` (else names the unknown key and the allowed ones).

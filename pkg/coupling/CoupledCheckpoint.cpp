@@ -25,11 +25,52 @@ json quat(const Quat& q) { return json::array({q.w(), q.x(), q.y(), q.z()}); }
 // JSON has no infinity: a step without a limit is null.
 json step(double s) { return std::isfinite(s) ? json(s) : json(); }
 
-Vec3 toVec(const json& j) { return Vec3(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()); }
-Quat toQuat(const json& j) {
-  return Quat(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>(), j.at(3).get<double>());
+// The fields of a record as they are read: a value of another JSON type, or a number beyond the
+// range of the C++ field it goes to (whose conversion would be undefined), is a ParameterError
+// naming the field; the callers add the file.
+std::string shown(const json& v) { return v.is_number() ? v.dump() : std::string("a JSON ") + v.type_name(); }
+
+const json& member(const json& obj, const std::string& path, const char* key) {
+  if (!obj.is_object()) throwParameter(path.empty() ? "the record" : path, shown(obj), "", "a JSON object");
+  if (!obj.contains(key)) throw ParameterError("missing key '" + (path.empty() ? key : path + "." + key) + "'");
+  return obj.at(key);
 }
-double toStep(const json& j, double none) { return j.is_null() ? none : j.get<double>(); }
+
+const json& list(const json& v, const std::string& name, std::size_t size = 0) {
+  if (!v.is_array() || (size && v.size() != size))
+    throwParameter(name, v.is_array() ? std::to_string(v.size()) + " values" : shown(v), "",
+                   size ? "an array of " + std::to_string(size) + " values" : std::string("an array"));
+  return v;
+}
+
+double real(const json& v, const std::string& name) {
+  if (!v.is_number()) throwParameter(name, shown(v), "", "a number");
+  return v.get<double>();
+}
+
+long long integer(const json& v, const std::string& name, long long lo, long long hi) {
+  bool ok = v.is_number_integer();
+  long long x = 0;
+  if (v.is_number_unsigned())
+    ok = v.get<unsigned long long>() <= static_cast<unsigned long long>(std::numeric_limits<long long>::max());
+  if (ok) x = v.get<long long>();
+  if (!ok || x < lo || x > hi)
+    throwParameter(name, shown(v), "", "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return x;
+}
+
+constexpr long long kIntMax = std::numeric_limits<int>::max(), kIntMin = std::numeric_limits<int>::min();
+constexpr long long kLongMax = std::numeric_limits<long>::max();
+
+Vec3 toVec(const json& j, const std::string& name) {
+  list(j, name, 3);
+  return Vec3(real(j[0], name + "[0]"), real(j[1], name + "[1]"), real(j[2], name + "[2]"));
+}
+Quat toQuat(const json& j, const std::string& name) {
+  list(j, name, 4);
+  return Quat(real(j[0], name + "[0]"), real(j[1], name + "[1]"), real(j[2], name + "[2]"), real(j[3], name + "[3]"));
+}
+double toStep(const json& j, double none, const std::string& name) { return j.is_null() ? none : real(j, name); }
 
 // Through a temporary file renamed over `path`: a run killed while writing leaves the old file.
 void writeAtomically(const std::string& path, const json& j, const char* what) {
@@ -146,49 +187,65 @@ CoupledCheckpoint readCheckpoint(const std::string& path, const std::string& opt
   CoupledCheckpoint c;
   try {
     const json j = json::parse(f);
-    if (j.value("format", "") != kFormat)
+    if (!j.is_object() || j.value("format", "") != kFormat)
       throw ParameterError("format: not \"" + std::string(kFormat) + "\"");
-    c.snapshot = j.at("snapshot").get<long>();
-    c.step = j.at("step").get<long>();
-    c.time = j.at("time").get<double>();
-    c.worldTime = j.at("world_time").get<double>();
-    c.lastDt = j.at("last_dt").get<double>();
+    c.snapshot = integer(member(j, "", "snapshot"), "snapshot", 0, kLongMax);
+    c.step = integer(member(j, "", "step"), "step", 0, kLongMax);
+    c.time = real(member(j, "", "time"), "time");
+    c.worldTime = real(member(j, "", "world_time"), "world_time");
+    c.lastDt = real(member(j, "", "last_dt"), "last_dt");
     const double inf = std::numeric_limits<double>::infinity();
-    c.contactStep = toStep(j.at("contact_step"), inf);
-    c.contactStepLow.step = toStep(j.at("contact_step_low").at(0), inf);
-    c.contactStepLow.time = toStep(j.at("contact_step_low").at(1), std::nan(""));
-    c.particleApproachStep = toStep(j.at("particle_approach_step"), inf);
-    for (const json& b : j.at("bodies")) {
-      c.pos.push_back(toVec(b.at("pos")));
-      c.ori.push_back(toQuat(b.at("ori")));
-      c.vel.push_back(toVec(b.at("vel")));
-      c.angVel.push_back(toVec(b.at("ang_vel")));
-      c.hasAngMom.push_back(b.at("ang_mom").is_null() ? 0 : 1);
-      c.angMom.push_back(b.at("ang_mom").is_null() ? Vec3::Zero() : toVec(b.at("ang_mom")));
+    c.contactStep = toStep(member(j, "", "contact_step"), inf, "contact_step");
+    const json& low = list(member(j, "", "contact_step_low"), "contact_step_low", 2);
+    c.contactStepLow.step = toStep(low[0], inf, "contact_step_low[0]");
+    c.contactStepLow.time = toStep(low[1], std::nan(""), "contact_step_low[1]");
+    c.particleApproachStep = toStep(member(j, "", "particle_approach_step"), inf, "particle_approach_step");
+    const json& bodies = list(member(j, "", "bodies"), "bodies");
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+      const json& b = bodies[i];
+      const std::string at = "bodies[" + std::to_string(i) + "]";
+      c.pos.push_back(toVec(member(b, at, "pos"), at + ".pos"));
+      c.ori.push_back(toQuat(member(b, at, "ori"), at + ".ori"));
+      c.vel.push_back(toVec(member(b, at, "vel"), at + ".vel"));
+      c.angVel.push_back(toVec(member(b, at, "ang_vel"), at + ".ang_vel"));
+      const json& L = member(b, at, "ang_mom");
+      c.hasAngMom.push_back(L.is_null() ? 0 : 1);
+      c.angMom.push_back(L.is_null() ? Vec3::Zero() : toVec(L, at + ".ang_mom"));
     }
-    for (const json& h : j.at("sdem_histories")) {
+    const json& sh = list(member(j, "", "sdem_histories"), "sdem_histories");
+    for (std::size_t k = 0; k < sh.size(); ++k) {
+      const std::string at = "sdem_histories[" + std::to_string(k) + "]";
+      const json& h = list(sh[k], at, 9);
+      auto field = [&](int i) { return at + "[" + std::to_string(i) + "]"; };
       sdem::ContactHistoryEntry e;
-      e.key.bodyA = h.at(0).get<int>();
-      e.key.bodyB = h.at(1).get<int>();
-      e.key.kindA = static_cast<sdem::FeatureKind>(h.at(2).get<int>());
-      e.key.kindB = static_cast<sdem::FeatureKind>(h.at(3).get<int>());
-      e.key.indexA = h.at(4).get<int>();
-      e.key.indexB = h.at(5).get<int>();
-      e.xi = Vec3(h.at(6).get<double>(), h.at(7).get<double>(), h.at(8).get<double>());
+      e.key.bodyA = static_cast<int>(integer(h[0], field(0), kIntMin, kIntMax));
+      e.key.bodyB = static_cast<int>(integer(h[1], field(1), kIntMin, kIntMax));
+      e.key.kindA = static_cast<sdem::FeatureKind>(integer(h[2], field(2), 0, 2));  // face, edge, vertex
+      e.key.kindB = static_cast<sdem::FeatureKind>(integer(h[3], field(3), 0, 2));
+      e.key.indexA = static_cast<int>(integer(h[4], field(4), kIntMin, kIntMax));
+      e.key.indexB = static_cast<int>(integer(h[5], field(5), kIntMin, kIntMax));
+      e.xi = Vec3(real(h[6], field(6)), real(h[7], field(7)), real(h[8], field(8)));
       c.sdemHistories.push_back(e);
     }
-    c.sdemFriction = j.at("sdem_dissipation").at(0).get<double>();
-    c.sdemDamping = j.at("sdem_dissipation").at(1).get<double>();
-    c.historySlots = j.at("history_slots").get<int>();
-    c.historyParticles = j.at("history_particles").get<long>();
-    for (const json& h : j.at("coupling_histories")) {
-      c.historyIndex.push_back(h.at(0).get<long long>());
-      c.historyKey.push_back(h.at(1).get<long long>());
-      for (int d = 0; d < 3; ++d) c.historyXi.push_back(h.at(2 + d).get<double>());
+    const json& sd = list(member(j, "", "sdem_dissipation"), "sdem_dissipation", 2);
+    c.sdemFriction = real(sd[0], "sdem_dissipation[0]");
+    c.sdemDamping = real(sd[1], "sdem_dissipation[1]");
+    c.historySlots = static_cast<int>(integer(member(j, "", "history_slots"), "history_slots", 0, kIntMax));
+    c.historyParticles = integer(member(j, "", "history_particles"), "history_particles", 0, kLongMax);
+    const json& ch = list(member(j, "", "coupling_histories"), "coupling_histories");
+    for (std::size_t k = 0; k < ch.size(); ++k) {
+      const std::string at = "coupling_histories[" + std::to_string(k) + "]";
+      const json& h = list(ch[k], at, 5);
+      c.historyIndex.push_back(integer(h[0], at + "[0]", 0, std::numeric_limits<long long>::max()));
+      c.historyKey.push_back(integer(h[1], at + "[1]", 0, std::numeric_limits<long long>::max()));
+      for (int d = 0; d < 3; ++d) c.historyXi.push_back(real(h[2 + d], at + "[" + std::to_string(2 + d) + "]"));
     }
-    c.couplingFriction = j.at("coupling_dissipation").at(0).get<double>();
-    c.couplingDamping = j.at("coupling_dissipation").at(1).get<double>();
-    for (const json& q : j.at("reference_orientations")) c.referenceOrientations.push_back(toQuat(q));
+    const json& cd = list(member(j, "", "coupling_dissipation"), "coupling_dissipation", 2);
+    c.couplingFriction = real(cd[0], "coupling_dissipation[0]");
+    c.couplingDamping = real(cd[1], "coupling_dissipation[1]");
+    const json& ro = list(member(j, "", "reference_orientations"), "reference_orientations");
+    for (std::size_t k = 0; k < ro.size(); ++k)
+      c.referenceOrientations.push_back(toQuat(ro[k], "reference_orientations[" + std::to_string(k) + "]"));
   } catch (const json::exception& e) {
     throw ParameterError(option + ": " + path + " is not a readable coupled checkpoint: " + e.what());
   } catch (const ParameterError& e) {
@@ -246,13 +303,17 @@ FrontSnapshot readFrontSnapshot(const std::string& path) {
   FrontSnapshot f;
   try {
     const json j = json::parse(in);
-    if (j.value("format", "") != kFrontFormat) throw ParameterError("format: not \"" + std::string(kFrontFormat) + "\"");
-    f.x = j.at("x").get<double>();
-    f.frontX = j.at("front_x").get<double>();
-    f.snapshot = j.at("snapshot").get<long>();
-    f.time = j.at("time").get<double>();
-    f.step = j.at("step").get<long>();
-    if (!j.at("checkpoint").is_null()) f.checkpoint = j.at("checkpoint").get<std::string>();
+    if (!j.is_object() || j.value("format", "") != kFrontFormat)
+      throw ParameterError("format: not \"" + std::string(kFrontFormat) + "\"");
+    f.x = real(member(j, "", "x"), "x");
+    f.frontX = real(member(j, "", "front_x"), "front_x");
+    f.snapshot = integer(member(j, "", "snapshot"), "snapshot", 0, kLongMax);
+    f.time = real(member(j, "", "time"), "time");
+    f.step = integer(member(j, "", "step"), "step", 0, kLongMax);
+    const json& ck = member(j, "", "checkpoint");
+    if (!ck.is_null() && (!ck.is_string() || ck.get<std::string>().empty()))
+      throwParameter("checkpoint", shown(ck), "", "null or the name of a checkpoint file beside the record");
+    if (!ck.is_null()) f.checkpoint = ck.get<std::string>();
   } catch (const json::exception& e) {
     throw ParameterError("--flow-from: " + path + " is not a readable front snapshot record: " + e.what());
   } catch (const ParameterError& e) {

@@ -78,7 +78,12 @@ std::vector<int> indices(const json& v, const std::string& name) {
   std::vector<int> out;
   for (std::size_t i = 0; i < v.size(); ++i) {
     const std::string n = name + "[" + std::to_string(i) + "]";
-    if (!v[i].is_number_integer()) throwParameter(n, v[i].dump(), "", "an integer vertex index");
+    // An index beyond int would wrap into another vertex (2^32 + 1 is vertex 1): refused here,
+    // the shape factories check the rest of the range.
+    const bool inRange = v[i].is_number_unsigned() ? v[i].get<unsigned long long>() <= 2147483647ull
+                                                   : v[i].is_number_integer() && v[i].get<long long>() >= -2147483648LL &&
+                                                         v[i].get<long long>() <= 2147483647LL;
+    if (!inRange) throwParameter(n, v[i].dump(), "", "an integer vertex index");
     out.push_back(v[i].get<int>());
   }
   return out;
@@ -145,7 +150,7 @@ void gridBox(const mpm::MpmParams& p, Vec3& lo, Vec3& hi) {
 }  // namespace
 
 SceneBlocks parseBlocks(const std::string& sceneJson) {
-  const json root = json::parse(sceneJson);
+  const json root = scenejson::parse(sceneJson, "scene");
   SceneBlocks out;
   if (!root.contains("blocks")) {
     if (root.contains("block_materials"))

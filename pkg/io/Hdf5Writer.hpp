@@ -32,6 +32,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -103,6 +104,7 @@ class Hdf5Writer {
  private:
   void appendRow(const std::string& name, const double* values, hsize_t width, bool isVector);
   void flush();
+  void close();  // what is open (the destructor's work, and a constructor's that throws)
   std::string snapshotFile(long index) const;  // relative to the file's directory
 
   std::string path_;
@@ -146,8 +148,11 @@ long readNumSnapshots(const std::string& path);
 // below reads the same a slice at a time.
 void readSnapshot(const std::string& path, long index, mpm::ParticleSet& out, double* time = nullptr,
                   long* step = nullptr);
-// Root string attribute `name`.
+// Root string attribute `name` (variable or fixed length, ASCII or UTF-8).
 std::string readStringAttribute(const std::string& path, const std::string& name);
+// The same, or nothing when the file has no attribute `name`; one there that is not a single
+// string (a number, an array of strings) is a RuntimeFailure naming it.
+std::optional<std::string> readOptionalStringAttribute(const std::string& path, const std::string& name);
 
 // Snapshot `index` read slice by slice (what readSnapshot reads, a slice at a time on the
 // host): MpmSolver::setParticles(ParticleSlices&) loads a restart this way. The file stays
@@ -171,6 +176,7 @@ class SnapshotSlices : public mpm::ParticleSlices {
   double time_ = 0;
   long step_ = 0;
   mpm::ParticleSet buffer_;
+  std::vector<long long> phase_;  // a slice's phases as read, before their range is checked
 };
 
 }  // namespace io

@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -50,6 +52,8 @@ TriangleMesh readStl(const std::string& path) {
       for (int c = 0; c < 3; ++c) {
         float xyz[3];
         std::memcpy(xyz, rec + 12 + 12 * c, 12);
+        if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2]))
+          badFile(path, "a non-finite coordinate (NaN or infinity) in triangle " + std::to_string(t) + " of the binary STL");
         tri[c] = merger.add(Vec3(xyz[0], xyz[1], xyz[2]));
       }
       mesh.triangles.push_back(tri);
@@ -73,6 +77,7 @@ TriangleMesh readStl(const std::string& path) {
       corner = 0;
     }
   }
+  if (corner != 0) badFile(path, "a facet without 'endloop' at the end of the file (a truncated file?)");
   if (mesh.triangles.empty()) badFile(path, "no facets");
   return mesh;
 }
@@ -98,12 +103,18 @@ TriangleMesh readObj(const std::string& path) {
       std::vector<int> corners;
       std::string tok;
       while (ls >> tok) {
-        const int idx = std::atoi(tok.substr(0, tok.find('/')).c_str());
-        const int n = static_cast<int>(merged.size());
-        const int zeroBased = idx > 0 ? idx - 1 : n + idx;  // negative: relative to the end
-        if (idx == 0 || zeroBased < 0 || zeroBased >= n)
-          badFile(path, "face index out of range on line " + std::to_string(lineNo));
-        corners.push_back(merged[zeroBased]);
+        // The vertex number before any '/' (v/vt/vn): a whole integer, 1 to n or -n to -1
+        // (relative to the end). atoi took "1x" as 1 and wrapped 4294967297 into 1.
+        const std::string number = tok.substr(0, tok.find('/'));
+        char* end = nullptr;
+        errno = 0;
+        const long long idx = std::strtoll(number.c_str(), &end, 10);
+        const long long n = static_cast<long long>(merged.size());
+        if (number.empty() || *end != '\0' || errno == ERANGE || idx == 0 || idx > n || idx < -n)
+          badFile(path, "face corner '" + tok.substr(0, 40) + "' on line " + std::to_string(lineNo) +
+                            " is not a vertex number in [1, " + std::to_string(n) + "] or [-" + std::to_string(n) +
+                            ", -1]");
+        corners.push_back(merged[static_cast<std::size_t>(idx > 0 ? idx - 1 : n + idx)]);
       }
       if (corners.size() < 3) badFile(path, "face with fewer than 3 corners on line " + std::to_string(lineNo));
       for (size_t i = 1; i + 1 < corners.size(); ++i) mesh.triangles.push_back({corners[0], corners[i], corners[i + 1]});
@@ -127,7 +138,10 @@ TriangleMesh readMesh(const std::string& path, Real scale) {
   } else {
     badFile(path, "unknown extension, expected .stl or .obj");
   }
-  for (Vec3& v : mesh.vertices) v *= scale;
+  for (Vec3& v : mesh.vertices) {
+    v *= scale;
+    if (!v.allFinite()) throwParameter("scale", scale, "", "such that the scaled coordinates of '" + path + "' stay finite");
+  }
   return mesh;
 }
 

@@ -72,30 +72,39 @@ TerrainRaster readEsriAscii(const std::string& path) {
   r.spacing = cell;
   r.x0 = xCorner ? header["xllcorner"] + 0.5 * cell : header["xllcenter"];
   r.y0 = yCorner ? header["yllcorner"] + 0.5 * cell : header["yllcenter"];
+  if (!std::isfinite(r.x0) || !std::isfinite(r.y0) || !std::isfinite(r.x0 + (r.nx - 1) * cell) ||
+      !std::isfinite(r.y0 + (r.ny - 1) * cell))
+    badRaster(path, "the grid's extent from its corner and cellsize lies beyond the range of a double");
   const bool hasNoData = header.count("nodata_value") > 0;
   const double noData = hasNoData ? header["nodata_value"] : 0;
-  r.heights.assign(static_cast<std::size_t>(r.nx) * r.ny, 0.0);
-  std::size_t count = 0, missing = 0, firstMissing = 0;
-  const std::size_t total = r.heights.size();
+  // The values in file order, kept as they are read: the header alone never makes the reader
+  // hold more than the file does (ncols x nrows may be up to 2^31 in a file of a few bytes).
+  const std::size_t total = static_cast<std::size_t>(r.nx) * r.ny;
+  std::vector<double> values;
+  std::size_t missing = 0, firstMissing = 0;
   while (!token.empty() || in >> token) {
     double v;
-    if (!number(token, v)) badRaster(path, "'" + token + "' is not a number (value " + std::to_string(count + 1) + ")");
+    if (!number(token, v))
+      badRaster(path, "'" + token + "' is not a number (value " + std::to_string(values.size() + 1) + ")");
     token.clear();
-    if (count == total) badRaster(path, "more than ncols x nrows = " + std::to_string(total) + " values");
-    const std::size_t row = count / r.nx, col = count % r.nx;  // row 0 is the north one
-    const std::size_t j = static_cast<std::size_t>(r.ny) - 1 - row;
+    if (values.size() == total) badRaster(path, "more than ncols x nrows = " + std::to_string(total) + " values");
     if (hasNoData && v == noData) {
-      if (missing++ == 0) firstMissing = count;
+      if (missing++ == 0) firstMissing = values.size();
     }
-    r.heights[col * r.ny + j] = v;
-    ++count;
+    values.push_back(v);
   }
+  const std::size_t count = values.size();
   if (count < total)
     badRaster(path, "ncols x nrows = " + std::to_string(total) + " values expected, " + std::to_string(count) + " found");
   if (missing)
     badRaster(path, std::to_string(missing) + " no-data values, the first at column " +
                         std::to_string(firstMissing % r.nx) + ", row " + std::to_string(firstMissing / r.nx) +
                         " from the north: fill them before using the raster as a terrain");
+  r.heights.resize(total);
+  for (std::size_t k = 0; k < total; ++k) {
+    const std::size_t row = k / r.nx, col = k % r.nx;  // row 0 is the north one
+    r.heights[col * r.ny + (static_cast<std::size_t>(r.ny) - 1 - row)] = values[k];
+  }
   return r;
 }
 

@@ -472,15 +472,7 @@ std::array<double, 3> materialRegionHi(const MpmParams& p) {
 }
 
 MpmScene parseScene(const std::string& jsonText, const std::string& source, const std::string& baseDir) {
-  json root;
-  try {
-    root = json::parse(jsonText);
-  } catch (const json::parse_error& e) {
-    throw ParameterError(source + ": not valid JSON: " + e.what());
-  } catch (const json::exception& e) {  // e.g. 1e999: a number beyond the double range
-    throw ParameterError(source + ": a number is out of range (every number must be a finite double, "
-                         "|x| < 1.8e308): " + e.what());
-  }
+  const json root = scenejson::parse(jsonText, source);
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
   // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
   checkKeys(root, "", {"description", "grid", "gravity", "flip_viscosity", "flip_alpha", "flip_reference_dt", "cfl", "keep_last_good_state", "walls", "gate", "terrain", "material", "particles",
