@@ -198,22 +198,23 @@ def sameRunAtReference(a, dx):
 
 
 def writeResult(a, dx, r):
+    """OUT/<run>.json, whole or not at all; returns ``r``."""
     path = os.path.join(a.out, runName(a, dx) + ".json")
     with open(path + ".tmp", "w") as f:
         json.dump(r, f, indent=1)
     os.replace(path + ".tmp", path)
+    return r
 
 
 def runOne(a, dx, exe):
-    """Prepare, run and read one spacing; writes OUT/<run>.json. A coupled leg that was
+    """Prepare, run and read one spacing; writes OUT/<run>.json and returns its numbers. A coupled leg that was
     interrupted continues (--restart); the free flow, whose probe records a restart would lose,
     runs again from its start."""
     same = sameRunAtReference(a, dx)
     if same:
         with open(same) as f:
             r = json.load(f)
-        writeResult(a, dx, dict(r, hold=a.hold, same_run_as=os.path.basename(same)))
-        return
+        return writeResult(a, dx, dict(r, hold=a.hold, same_run_as=os.path.basename(same)))
     folder = os.path.join(a.out, runName(a, dx))
     os.makedirs(folder, exist_ok=True)
     if not os.path.exists(os.path.join(folder, "meta.json")):
@@ -236,7 +237,7 @@ def runOne(a, dx, exe):
              settings=a.settings, width=a.width, viscosity=viscosity(a, dx), damping_rate=4 * viscosity(a, dx) / dx ** 2,
              cells_per_block=CUBE / dx, wall_seconds={"free": free, "coupled": wall}, coupled_from_step=start,
              threads=os.environ.get("OMP_NUM_THREADS", "all"), commit=commit(), resumed=resume)
-    writeResult(a, dx, r)
+    return writeResult(a, dx, r)
 
 
 def commit():
