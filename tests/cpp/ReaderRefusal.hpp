@@ -25,13 +25,14 @@ inline std::string writeFile(const std::string& name, const std::string& bytes) 
   return path;
 }
 
-// `read` must throw a ParameterError whose message holds every one of `words`.
-template <typename F>
+// `read` must throw an `Error` (a ParameterError unless named, e.g. the RuntimeFailure the HDF5
+// readers refuse a file with) whose message holds every one of `words`.
+template <typename Error = ParameterError, typename F>
 void expectRefused(F&& read, std::initializer_list<std::string> words) {
   try {
     read();
     ADD_FAILURE() << "accepted";
-  } catch (const ParameterError& e) {
+  } catch (const Error& e) {
     for (const std::string& w : words) EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << e.what();
   }
 }
