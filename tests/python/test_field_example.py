@@ -27,12 +27,16 @@ def test_field_example_runs_and_its_maps_hold_the_debris(tmp_path):
     s = json.load(open(os.path.join(out, "summary.json")))
     assert s["mass"] == s["mass_seeded"] and s["below_ground"] == 0 and s["unmapped_points"] == 0
     h5py = pytest.importorskip("h5py")
-    assert s["flip_damping_rate"] == pytest.approx(4 * 1.25 / 1.0 ** 2, rel=1e-12)
+    assert s["flip_damping_rate"] == pytest.approx(4 * 0.3125 / 1.0 ** 2, rel=1e-12)  # the default ν at dx 1 m
     assert s["front_x"] > 15.0  # the debris left its source (x 2-8 m) and ran down the valley
     assert s["blocks"] == 12 and s["blocks_below_ground"] == 0
     with h5py.File(os.path.join(out, "blocks.h5"), "r") as f:
         assert len(f["id"]) == 12 and f["cover"].attrs["unit"] == "m"
-        assert np.all(f["travel"][:] < 0.05)  # out of the flow's reach in 3 s: standing where placed
+        # the blocks the flow never touched stand where placed (settling on their corners: 2.2 cm of
+        # "travel"); the one the front reached in 3 s (at 5 /s of damping, the example's default)
+        # is pushed down the plain by more than its settling
+        untouched, travel = f["peak_force"][:] == 0, f["travel"][:]
+        assert untouched.sum() >= 6 and np.all(travel[untouched] < 0.05) and np.all(travel[~untouched] > 0.05)
     lines = open(os.path.join(out, "blocks.csv")).read().splitlines()
     assert lines[0].startswith("id,x0 [m]") and len(lines) == 13
     assert "about" in proc.stdout and "s left" in proc.stdout  # progress with the time left
