@@ -162,6 +162,43 @@ def staticImpactForce(rho, h, area, k=1.0, g=G):
     return 0.5 * k * rho * g * h * area
 
 
+def wallSuperposedForce(rho, v, h, width, thetaDeg, k=1.0, alpha=1.0, g=G):
+    """Force on a wall across the whole width of a flow of depth ``h`` [m] and depth-averaged
+    speed ``v`` [m/s] on a slope of ``thetaDeg`` [deg], as design guides superpose it: the
+    momentum flux brought to rest, α ρ v² h w, on top of the earth-pressure load of the
+    arriving depth, ½ k ρ g cosθ h² w [N]. α = 1: all the incoming momentum destroyed."""
+    return (alpha * rho * v * v * h + 0.5 * k * rho * g * math.cos(math.radians(thetaDeg)) * h * h) * width
+
+
+def reflectedBoreDepth(Fr):
+    """Depth ratio r = h₂/h of the bore that a wall across the whole width sends upstream into a
+    steady flow of Froude number ``Fr`` = v/√(g′ h), the material behind the bore at rest. Mass,
+    h (v + c) = h₂ c, and momentum, h (v + c)² + ½ g′ h² = h₂ c² + ½ g′ h₂², across the bore
+    moving upstream at c give Fr² = (r − 1)² (r + 1) / (2 r), whose root r > 1 this returns
+    (bisection; the right side grows monotonically from 0 at r = 1). Fr > 0."""
+    if not (Fr > 0 and math.isfinite(Fr)):
+        raise ValueError("Fr = %r: must be > 0 and finite" % (Fr,))
+    f = lambda r: (r - 1.0) ** 2 * (r + 1.0) / (2.0 * r) - Fr * Fr  # noqa: E731
+    lo, hi = 1.0, 2.0
+    while f(hi) < 0:
+        hi *= 2.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if f(mid) < 0 else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def reflectedBoreForce(rho, v, h, width, thetaDeg, k=1.0, g=G):
+    """Force on a wall across the whole width once the reflected bore of
+    :func:`reflectedBoreDepth` has formed [N]: the earth-pressure load of the material at rest
+    behind it, ½ ρ g′ h₂² w, with g′ = k g cosθ (``k``: the lateral pressure coefficient, 1 for
+    a fluid) and Fr = v/√(g′ h). A frictionless shallow-water balance, no overflow: the skeleton
+    that granular jump and dead-zone models refine, not a granular result by itself."""
+    gp = k * g * math.cos(math.radians(thetaDeg))
+    r = reflectedBoreDepth(v / math.sqrt(gp * h))
+    return 0.5 * rho * gp * (r * h) ** 2 * width
+
+
 def impactForceRatio(Fr, k=1.6, alphaF=0.18):
     """F_peak / F_static = 1 + 2 α_f Fr² / k, paper Eq 21 (Ng et al. 2021): the peak as the
     hydrodynamic force of Eq 20 on top of the static one, the static force 0.5 k ρ g h_f A.

@@ -3,6 +3,7 @@ import math
 
 import pytest
 
+from mpmsdem import analysis
 from mpmsdem.analysis import tiltAndYaw
 
 
@@ -101,3 +102,38 @@ def test_front_profile_of_a_hand_built_wedge():
     assert (r["tip"], r["nose"], r["depth"]) == (0.1, 0.0, [0.0]) and r["tipHeight"] == pytest.approx(0.015)
     with pytest.raises(ValueError, match="at least 4 points"):
         frontProfile({"x": np.zeros((3, 3))}, cell=0.01)
+
+
+@pytest.mark.parametrize("Fr", [0.3, 1.0, 2.5, 6.0])
+def test_reflected_bore_conserves_mass_and_momentum(Fr):
+    # the bore's depth from its cubic, then mass and momentum across it checked directly, in the
+    # frame of the bore (speed c upstream): h (v + c) = h2 c, h (v + c)² + g h²/2 = h2 c² + g h2²/2
+    g, h = 9.81, 0.03
+    v = Fr * math.sqrt(g * h)
+    r = analysis.reflectedBoreDepth(Fr)
+    h2 = r * h
+    c = h * v / (h2 - h)  # from mass
+    assert h * (v + c) ** 2 + 0.5 * g * h * h == pytest.approx(h2 * c * c + 0.5 * g * h2 * h2, rel=1e-12)
+    # on flat ground with k = 1 the wall carries the hydrostatic load of the depth at rest
+    assert analysis.reflectedBoreForce(1600.0, v, h, 0.2, 0.0) == pytest.approx(0.5 * 1600.0 * g * h2 * h2 * 0.2,
+                                                                                 rel=1e-12)
+
+
+def test_reflected_bore_at_its_hand_numbers():
+    # Fr = 1: r solves r³ − r² − 3r + 1 = 0, whose root above 1 is 2.1700864866...; large Fr:
+    # r² → 2 Fr², so the force over ρ v² h w tends to 1 (all the momentum flux, nothing more)
+    r = analysis.reflectedBoreDepth(1.0)
+    assert r ** 3 - r * r - 3 * r + 1 == pytest.approx(0.0, abs=1e-12)
+    assert r == pytest.approx(2.1700864866260, rel=1e-10)
+    rho, g, h, w = 1600.0, 9.81, 0.01, 0.04
+    v = 100.0 * math.sqrt(g * h)
+    ratio = analysis.reflectedBoreForce(rho, v, h, w, 0.0) / (rho * v * v * h * w)
+    assert 1.0 < ratio < 1.0 + 1.0 / (math.sqrt(2) * 100.0) + 1e-4  # α_eff ≈ 1 + 1/(√2 Fr) from above
+    with pytest.raises(ValueError, match="Fr"):
+        analysis.reflectedBoreDepth(0.0)
+
+
+def test_wall_superposed_force_by_hand():
+    # 1600 kg/m³, 2 m/s, 2 cm deep, 4 cm wide, 30°: 1600·4·0.02·0.04 + ½·1600·9.81·cos30°·0.02²·0.04
+    f = analysis.wallSuperposedForce(1600.0, 2.0, 0.02, 0.04, 30.0)
+    assert f == pytest.approx(5.12 + 0.5 * 1600 * 9.81 * math.cos(math.radians(30)) * 4e-4 * 0.04, rel=1e-12)

@@ -1,0 +1,319 @@
+#!/usr/bin/env python3
+"""Validation (opt-in, a few minutes a case on two cores): dry granular flows down the flume
+striking a rigid wall across the whole width and a glued block, over a range of Froude numbers,
+against the models of the impact force that do not come from a simulation.
+
+Each case is the flume of §3.2 (the column of glass beads 0.3 m long and 0.2 m tall, the joint
+set's flow and basal friction and PIC viscosity) at an incline θ, in a slice of the width with
+frictionless side walls (a flow that is two-dimensional, as the wall spans it), with the
+obstacle's upstream face L0 from the column front. Three driver runs (mpmsdem-run; the scenes are
+built with YADE):
+
+- **free**: no obstacle; the driver's flow probe at the station gives the arriving flow's h_f and
+  v_f (means over the 50 ms after the front's arrival, over a 2 cm window) and Fr = v_f/√(g h_f)
+  (the paper's definition), Fr′ = v_f/√(g cosθ h_f) (the theories');
+- **wall**: a glued box across the whole width, 0.15 m tall, 2 cm thick: the flow's downstream
+  force on it (10 ms running mean) and its peak F_peak; at the end (the run lasts until 1 s after
+  the free flow's arrival, the deposit then at rest: the flow's kinetic energy is given) the mean
+  force F_end over the last 0.1 s, the deposit's depth h_d against the wall (its highest point
+  within 2 cm upstream) and the coefficient k_end = F_end / (½ ρ g cosθ h_d² w);
+- **block** (not by default): the §3.2 copper cube (h_b 0.02 m) glued at the same station on the
+  centre line of a lane five cubes wide (frictionless sides: a row of cubes 0.1 m apart): its F_peak.
+
+The numbers set beside them: α = F_peak/(ρ v_f² h_f w) for the wall, against the reflected
+bore that a wall sends into a steady flow (mass and momentum across a jump, material at rest
+behind it; analysis.reflectedBoreForce, k 1) and against the design guides' superposition α ρ v²
+h w + ½ k ρ g cosθ h² w with α = k = 1 (analysis.wallSuperposedForce); for the block, α_f =
+F_peak/(ρ v_f² A) with A its face below h_f, against Eq 20 (α_f = 10.8 Fr^−1.3); and F_peak/F_static
+for both with F_static = ½ ρ g h_f A (Eq 21's, k 1).
+
+    OMP_NUM_THREADS=2 /usr/bin/python3 scripts/validation/impact_walls.py --out results/impact_walls \\
+        [--incline 10,20,25,30,35] [--L0 0.5] [--dx 0.01] [--width 0.04] [--young E] [--cases free,wall,block]
+    /usr/bin/python3 scripts/validation/impact_walls.py --out results/impact_walls --report-only
+
+Each case's numbers go to OUT/<case>.json when it ends and finished cases are not run again;
+the table of all finished cases is printed and written to OUT/impact_walls.md.
+"""
+import argparse
+import glob
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from flume_convergence import CUBE, SERIES_EVERY, STATION_HALF, drive  # noqa: E402
+
+COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
+WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
+BLOW = 0.01               # running mean of the force for its peak [s]
+LATER = (0.03, 0.07)      # after the first blow: the mean force over this window after the first touch [s], for
+                          # the reflected bore's quasi-steady load
+REST = 1.0                # the wall's run lasts this long after the free flow's arrival [s]
+END = 0.1                 # F_end: mean over the run's last END seconds [s]
+DEPOSIT = 0.02            # h_d: the highest point within this distance upstream of the wall [m]
+FLUME_BEYOND = 0.3        # the flume goes on this far past the station [m]: its end wall sends nothing back
+                          # into the probe's 50 ms
+RHO = 1600.0              # the flow's bulk density [kg/m³] (the glass beads' of Table 1)
+G = 9.81
+
+
+def parse(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0], epilog=__doc__.split("\n", 1)[1],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--incline", default="10,20,25,30,35", help="flume inclines θ [deg], comma-separated, in (0, 60)")
+    ap.add_argument("--L0", type=float, default=0.5, help="the obstacle's upstream face from the column front [m] > 0")
+    ap.add_argument("--dx", type=float, default=0.01, help="grid spacing [m] > 0 (must divide --width)")
+    ap.add_argument("--width", type=float, default=0.04, help="the wall's flume: width [m] > 0 (frictionless sides)")
+    ap.add_argument("--young", type=float, default=None,
+                    help="the flow's Young's modulus E [Pa] > 0 (default: the glass beads' of Table 1, 1e6): the "
+                         "elastic wave speed √(E/ρ) sets how hard a front strikes")
+    ap.add_argument("--cases", default="free,wall", help="which runs: free, wall, block (comma-separated; "
+                    "the block needs Δx 0.01 m or finer: at 0.02 m it is one cell)")
+    ap.add_argument("--out", default="results/impact_walls", help="folder of the runs")
+    ap.add_argument("--report-only", action="store_true",
+                    help="only print and write the table of finished runs (read again from their outputs)")
+    ap.add_argument("--child", nargs=3, metavar=("prepare", "KIND", "THETA"), help=argparse.SUPPRESS)
+    ap.add_argument("--arrival", type=float, help=argparse.SUPPRESS)  # the free flow's, for an obstacle's duration
+    a = ap.parse_args(argv)
+    try:
+        a.incline = [float(v) for v in a.incline.split(",")]
+    except ValueError:
+        ap.error("--incline = %r: comma-separated angles in degrees" % a.incline)
+    if not all(0 < t < 60 for t in a.incline):
+        ap.error("--incline = %r: each must be in (0, 60) deg" % a.incline)
+    for name in ("L0", "dx", "width") + (("young",) if a.young is not None else ()):
+        if not 0 < getattr(a, name) < float("inf"):
+            ap.error("--%s = %r: must be > 0 and finite" % (name, getattr(a, name)))
+    a.cases = a.cases.split(",")
+    if not a.cases or not set(a.cases) <= {"free", "wall", "block"}:
+        ap.error("--cases = %r: a comma-separated subset of free, wall, block" % ",".join(a.cases))
+    return a
+
+
+def runName(a, kind, theta):
+    return "%s_t%g_L%g_dx%g%s" % (kind, theta, a.L0, a.dx, "" if a.young is None else "_E%g" % a.young)
+
+
+def laneWidth(a, kind):
+    """The flume's width for a run: the wall's slice, or for the block a lane five cubes wide
+    (the flow passes two cubes' width either side of it: in a lane of three, at Δx 0.02 m, the
+    flow jammed beside the cube and loaded it as a wall), rounded up to whole cells."""
+    if kind == "block":
+        return math.ceil(5 * CUBE / a.dx - 1e-9) * a.dx
+    return a.width
+
+
+def prepare(a, kind, theta, folder):
+    """Write the run's driver scene (YADE builds it) and its meta.json."""
+    import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
+    from mpmsdem import driver
+    from mpmsdem.flume import FLUME_SETTINGS, GLASS_BEADS, Block, Flume
+    from yade import O
+    joint = FLUME_SETTINGS["joint"]
+    granular = dict(GLASS_BEADS, mu_2=joint["mu_2"])
+    if a.young is not None:
+        granular["young_modulus"] = a.young
+    station = COLUMN + a.L0
+    width = laneWidth(a, kind)
+    blocks = []
+    if kind == "wall":
+        blocks = [Block(half=(WALL[0], width / 2, WALL[1]), x=station, density=2500, friction=0.0,
+                        flowFriction=joint["flow_friction"], blockedDOFs="xyzXYZ")]
+    elif kind == "block":
+        blocks = [Block(half=(CUBE / 2,) * 3, x=station, density=8900, friction=0.67,
+                        flowFriction=joint["flow_friction"], blockedDOFs="xyzXYZ")]
+    scene = Flume(blocks=blocks, dx=a.dx, width=width, inclineDeg=theta, length=station + FLUME_BEYOND,
+                  columnLength=COLUMN, columnHeight=0.2, granular=granular,
+                  basalFriction=joint["basal_friction"], sideWallFriction=0.0, flipViscosity=joint["flip_viscosity"],
+                  verbose=False)
+    dt = O.dt
+    every = max(1, round(SERIES_EVERY / dt)) * dt
+    meta = {"kind": kind, "theta": theta, "young": granular["young_modulus"], "L0": a.L0, "dx": a.dx, "width": width,
+            "station": station, "dt": dt,
+            "points": scene.mpm.numParticles, "flip_blend": scene.flipBlend()}
+    if kind == "free":
+        driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=3.0, dt=dt, seriesEvery=every,
+                          outputEvery=3.0, vtk="none", stopWhenProbed=True,
+                          flowProbes=[{"x": station, "halfWidth": STATION_HALF, "bedZ": 0.0, "window": 0.05}])
+    else:
+        meta["duration"] = a.arrival + REST
+        driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=meta["duration"], dt=dt,
+                          seriesEvery=every, outputEvery=meta["duration"], vtk="none")
+    with open(os.path.join(folder, "meta.json"), "w") as f:
+        json.dump(meta, f, indent=1)
+
+
+def readFree(folder):
+    with open(os.path.join(folder, "out", "flow_probes.json")) as f:
+        probe = json.load(f)["probes"][0]
+    if probe["arrival"] is None:
+        raise RuntimeError("%s: the free flow's front never reached the station" % folder)
+    return {k: probe[k] for k in ("arrival", "h_f", "v_f", "Fr")}
+
+
+def readObstacle(folder, meta, free):
+    """The obstacle's force numbers (see the module's docstring) against the models."""
+    import h5py
+    import numpy as np
+    from mpmsdem import analysis
+    s, _ = analysis.driverBlockSeries(os.path.join(folder, "out"), block=1)  # block 0: the flume's bed
+    t, f = s["t"], s["Ft"]
+    smooth = analysis.runningMean(t, f, BLOW)
+    j = int(np.argmax(smooth))
+    end = t >= t[-1] - END
+    theta, h, v = meta["theta"], free["h_f"], free["v_f"]
+    cos = math.cos(math.radians(theta))
+    touch = float(t[np.nonzero(np.abs(f) > 0)[0][0]])
+    later = (t >= touch + LATER[0]) & (t <= touch + LATER[1])
+    r = {"F_peak": float(smooth[j]), "t_peak": float(t[j]), "F_end": float(f[end].mean()), "t_end": float(t[-1]),
+         "first_touch": touch, "F_later": float(f[later].mean()),
+         "kinetic_end": float(s["flow_kinetic"][-1]), "kinetic_peak": float(s["flow_kinetic"].max()),
+         "Fr_cos": v / math.sqrt(G * cos * h)}
+    if meta["kind"] == "wall":
+        w = meta["width"]
+        with h5py.File(os.path.join(folder, "out", "mpm.h5"), "r") as hf:
+            last = sorted(hf["snapshots"].keys())[-1]
+            x = hf["snapshots"][last]["x"][:]
+        near = (x[:, 0] >= meta["station"] - DEPOSIT) & (x[:, 0] < meta["station"])
+        hd = float(x[near, 2].max()) if near.any() else 0.0
+        momentum = RHO * v * v * h * w
+        r.update(h_d=hd, alpha=r["F_peak"] / momentum, alpha_later=r["F_later"] / momentum,
+                 bore=analysis.reflectedBoreForce(RHO, v, h, w, theta) / momentum,
+                 superposed=analysis.wallSuperposedForce(RHO, v, h, w, theta) / momentum,
+                 k_end=r["F_end"] / (0.5 * RHO * G * cos * hd * hd * w) if hd > 0 else None,
+                 ratio=r["F_peak"] / analysis.staticImpactForce(RHO, h, h * w))
+    else:
+        area = min(h, CUBE) * CUBE
+        r.update(alpha_f=r["F_peak"] / (RHO * v * v * area), eq20=analysis.dynamicPressureCoefficient(free["Fr"]),
+                 ratio=r["F_peak"] / analysis.staticImpactForce(RHO, h, area))
+    return r
+
+
+def runCase(a, kind, theta, exe):
+    name = runName(a, kind, theta)
+    folder = os.path.join(a.out, name)
+    os.makedirs(folder, exist_ok=True)
+    free = None
+    if kind != "free":
+        path = os.path.join(a.out, runName(a, "free", theta) + ".json")
+        if not os.path.exists(path):
+            raise RuntimeError("%s: needs the free flow at %g deg first (--cases free,...)" % (name, theta))
+        with open(path) as f:
+            free = json.load(f)["free"]
+    child = ["--child", "prepare", kind, repr(theta)] + a.argv
+    if free:
+        child += ["--arrival", repr(free["arrival"])]
+    subprocess.run([sys.executable, os.path.abspath(__file__)] + child, check=True)
+    with open(os.path.join(folder, "meta.json")) as f:
+        meta = json.load(f)
+    wall = drive(exe, folder, "scene.json", "out")
+    r = dict(meta, wall_seconds=wall, commit=commit(), threads=os.environ.get("OMP_NUM_THREADS", "all"))
+    if kind == "free":
+        r["free"] = readFree(folder)
+    else:
+        r.update(free=free, obstacle=readObstacle(folder, meta, free))
+    path = os.path.join(a.out, name + ".json")
+    with open(path + ".tmp", "w") as f:
+        json.dump(r, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
+def reread(out):
+    """The obstacles' numbers read again from their runs' outputs (this script's reading of them)."""
+    for path in glob.glob(os.path.join(out, "*.json")):
+        with open(path) as f:
+            r = json.load(f)
+        folder = path[:-len(".json")]
+        if r["kind"] != "free" and os.path.exists(os.path.join(folder, "out", "coupled.h5")):
+            r["obstacle"] = readObstacle(folder, r, r["free"])
+            with open(path + ".tmp", "w") as f:
+                json.dump(r, f, indent=1)
+            os.replace(path + ".tmp", path)
+
+
+def commit():
+    try:
+        return subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                              check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def fmt(v, spec):
+    return "–" if v is None else spec % v
+
+
+COLUMNS = [  # (heading, value of a run); "–" where a run has none
+    ("θ [°]", lambda r, f, o: "%g" % r["theta"]),
+    ("L0 [m]", lambda r, f, o: "%g" % r["L0"]),
+    ("Δx [m]", lambda r, f, o: "%g" % r["dx"]),
+    ("E [MPa]", lambda r, f, o: "%g" % (r["young"] / 1e6)),
+    ("cells in h_f", lambda r, f, o: "%.1f" % (f["h_f"] / r["dx"])),
+    ("h_f [mm]", lambda r, f, o: "%.1f" % (1e3 * f["h_f"])),
+    ("v_f [m/s]", lambda r, f, o: "%.2f" % f["v_f"]),
+    ("Fr", lambda r, f, o: "%.2f" % f["Fr"]),
+    ("Fr′", lambda r, f, o: "%.2f" % o["Fr_cos"]),
+    ("obstacle", lambda r, f, o: ("wall %g m wide" if r["kind"] == "wall" else "cube in a %g m lane") % r["width"]),
+    ("F_peak [N]", lambda r, f, o: "%.3g" % o["F_peak"]),
+    ("α peak", lambda r, f, o: "%.2f" % o.get("alpha", o.get("alpha_f"))),
+    ("α 30–70 ms", lambda r, f, o: fmt(o.get("alpha_later"), "%.2f")),
+    ("α bore", lambda r, f, o: fmt(o.get("bore"), "%.2f") if "bore" in o else "Eq 20: %.2f" % o["eq20"]),
+    ("α superposed", lambda r, f, o: fmt(o.get("superposed"), "%.2f")),
+    ("F_peak/F_static", lambda r, f, o: "%.1f" % o["ratio"]),
+    ("F_end [N]", lambda r, f, o: fmt(o["F_end"], "%.3g") if r["kind"] == "wall" else "–"),
+    ("h_d [mm]", lambda r, f, o: fmt(o.get("h_d") and 1e3 * o["h_d"], "%.0f")),
+    ("k_end", lambda r, f, o: fmt(o.get("k_end"), "%.2f")),
+    ("KE end/peak", lambda r, f, o: "%.1e" % (o["kinetic_end"] / o["kinetic_peak"])),
+    ("commit", lambda r, f, o: r["commit"]),
+]
+
+
+def table(out):
+    """The markdown table of every obstacle run in ``out``."""
+    runs = []
+    for path in sorted(glob.glob(os.path.join(out, "*.json"))):
+        with open(path) as f:
+            runs.append(json.load(f))
+    lines = ["| " + " | ".join(h for h, _ in COLUMNS) + " |", "|" + "---:|" * (len(COLUMNS) - 1) + "---|"]
+    for r in sorted(runs, key=lambda r: (r["kind"], r["theta"], r["L0"], -r["dx"], r["young"])):
+        if r["kind"] != "free":
+            lines.append("| " + " | ".join(v(r, r["free"], r["obstacle"]) for _, v in COLUMNS) + " |")
+    return "\n".join(lines)
+
+
+def main(argv):
+    a = parse(argv)
+    a.argv = argv
+    if a.child:
+        kind, theta = a.child[1], float(a.child[2])
+        prepare(a, kind, theta, os.path.join(a.out, runName(a, kind, theta)))
+        return
+    os.makedirs(a.out, exist_ok=True)
+    if not a.report_only:
+        import mpmsdem.driver
+        exe = mpmsdem.driver.executable()
+        for theta in a.incline:
+            for kind in ("free", "wall", "block"):
+                if kind not in a.cases:
+                    continue
+                if os.path.exists(os.path.join(a.out, runName(a, kind, theta) + ".json")):
+                    print("%s: done before" % runName(a, kind, theta))
+                    continue
+                t0 = time.time()
+                print("%s: running ..." % runName(a, kind, theta), flush=True)
+                runCase(a, kind, theta, exe)
+                print("%s: %.0f s" % (runName(a, kind, theta), time.time() - t0), flush=True)
+    else:
+        reread(a.out)
+    text = table(a.out)
+    print(text)
+    with open(os.path.join(a.out, "impact_walls.md"), "w") as f:
+        f.write(text + "\n")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
