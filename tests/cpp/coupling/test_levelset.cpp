@@ -3,6 +3,7 @@
 // values, the Eq 10 force they give, the grid's linear continuation, the impulse balance of
 // a flow on a body (Eqs 17–18), float against double, the too-coarse refusal, bad input.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -256,6 +257,56 @@ TEST(LevelSetCoupling, ImpulseBalanceWithSolver) {
     EXPECT_LT(f[2], -0.9 * f.norm());  // pressed down, the slab lying on it
     solver->step(dt);
   }
+}
+
+// Contacts are summed per body in particle order, chunk by chunk: 1 and 2 OpenMP threads give the
+// same forces, torques and particle positions to the bit (4,704 points: two chunks of the loop).
+TEST(LevelSetCoupling, ThreadCountIndependent) {
+  mpm::MpmParams prm;
+  prm.dx = kDx;
+  prm.cells = {20, 20, 20};
+  prm.gravity = {0, 0, 0};
+  prm.material.density = 1600;
+  prm.material.youngModulus = 1e6;
+  prm.material.poissonRatio = 0.3;
+  prm.material.muS = 0.24;
+  prm.material.mu2 = 0.65;
+  mpm::ParticleSet ps;
+  mpm::seedBox(prm, {0.03, 0.03, 0.1}, {0.17, 0.17, 0.13}, {2, 2, 2}, ps);
+  ASSERT_GT(ps.size(), 4096u);
+  for (std::size_t p = 0; p < ps.size(); ++p) {
+    ps.x[3 * p + 2] -= 0.0025 + 0.001 - kRp;  // the lowest layer 1 mm into the sphere's barrier
+    ps.v[3 * p + 0] = 0.3;
+  }
+  const LevelSetGrid g =
+      analyticGrid(Vec3::Constant(-0.06), 0.0025, 49, [](const Vec3& x) { return sphereDistance(x, 0.05); });
+  Vec3 f[2], t[2];
+  std::vector<double> x[2];
+  const int before = omp_get_max_threads();
+  for (int run = 0; run < 2; ++run) {
+    omp_set_num_threads(run + 1);
+    auto solver = mpm::makeSolver(prm);
+    solver->setParticles(ps);
+    MpLevelSetCoupling c;
+    c.addBody(3, g, physics(1e4, 0.4));
+    c.setState(0, Vec3(0.1, 0.1, 0.05), Quat::Identity(), Vec3::Zero(), Vec3(0, 0, 1), 1.0, 1e-3, false);
+    for (int step = 0; step < 3; ++step) {
+      c.computeForces(solver->openForceBuffer(), 1e-5, 0.5, kDx);
+      solver->step(1e-5);
+    }
+    ASSERT_GT(c.contactCount(0), 5);
+    f[run] = c.force(0);
+    t[run] = c.torque(0);
+    mpm::ParticleSet out;
+    solver->getParticles(out);
+    x[run] = out.x;
+  }
+  omp_set_num_threads(before);
+  for (int d = 0; d < 3; ++d) {
+    EXPECT_EQ(f[0][d], f[1][d]);
+    EXPECT_EQ(t[0][d], t[1][d]);
+  }
+  EXPECT_EQ(x[0], x[1]);  // the particles after three steps
 }
 
 // A float solver meets float copies of the grid and state: the same forces to float round-off.
