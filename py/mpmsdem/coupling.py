@@ -87,8 +87,8 @@ class CoupledEngine(_AutoStep):
         :attr:`recordContacts`). The SDEM and MPM engines keep their own outputs if given.
     :param plot: also feed ``yade.plot.addData`` every ``outputEvery`` s (``t``, and per
         block id ``Ft_<id>``, ``Ff_<id>``, ``Fe_<id>`` [N], ``x_<id>`` [m], ``vx_<id>``
-        [m/s], ``rot_<id>`` [deg]), so ``plot.plots``/``plot.saveDataTxt`` work as with any
-        YADE engine. Needs ``outputEvery``.
+        [m/s], ``rot_<id>`` [deg]; per LevelSet body the same without ``Ff``/``Fe``), so
+        ``plot.plots``/``plot.saveDataTxt`` work as with any YADE engine. Needs ``outputEvery``.
     :param verbose: progress line on stderr every 10 s of wall time: time, step, contacts, the
         critical step and ``O.dt`` with what sets it.
     :param levelSets: YADE ``LevelSet`` bodies in the flow, beside the SDEM blocks (CPU backend
@@ -410,6 +410,13 @@ class CoupledEngine(_AutoStep):
                 row["vx_%d" % i] = b.state.vel[0]
                 q0 = self._ori0.setdefault(i, Quaternion(b.state.ori))
                 row["rot_%d" % i] = math.degrees((b.state.ori * q0.conjugate()).toAngleAxis()[0])
+            for i in self._levelSets:  # no F_f / F_e: a level set has no faces and edges to tell apart
+                b = O.bodies[i]
+                row["Ft_%d" % i] = self.force(i).norm()
+                row["x_%d" % i] = b.state.pos[0]
+                row["vx_%d" % i] = b.state.vel[0]
+                q0 = self._ori0.setdefault(i, Quaternion(b.state.ori))
+                row["rot_%d" % i] = math.degrees((b.state.ori * q0.conjugate()).toAngleAxis()[0])
             plot.addData(**row)
 
     def blockKineticEnergy(self):
@@ -550,14 +557,14 @@ class CoupledEngine(_AutoStep):
     def force(self, yadeId):
         """Force of the flow on a block or LevelSet body in the last step, F_t [N] (world frame)."""
         if yadeId in self._levelSets:
-            return self._bridge.levelSetForce(self._levelSets[yadeId]) if self._started else Vector3.Zero
+            return self._bridge.levelSetForce(self._levelSets[yadeId]) if self._contactsKnown else Vector3.Zero
         return self._bridge.force(self._index(yadeId))
 
     def torque(self, yadeId):
         """Torque of the flow on a block about its centroid, or on a LevelSet body about its
         ``state.pos`` [N m]."""
         if yadeId in self._levelSets:
-            return self._bridge.levelSetTorque(self._levelSets[yadeId]) if self._started else Vector3.Zero
+            return self._bridge.levelSetTorque(self._levelSets[yadeId]) if self._contactsKnown else Vector3.Zero
         return self._bridge.torque(self._index(yadeId))
 
     def faceForce(self, yadeId):
@@ -571,7 +578,7 @@ class CoupledEngine(_AutoStep):
     def contactCount(self, yadeId):
         """Number of material points touching the block or LevelSet body."""
         if yadeId in self._levelSets:
-            return self._bridge.levelSetContactCount(self._levelSets[yadeId]) if self._started else 0
+            return self._bridge.levelSetContactCount(self._levelSets[yadeId]) if self._contactsKnown else 0
         return self._bridge.contactCount(self._index(yadeId))
 
     def contacts(self, yadeId=None):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import mpmsdem
-from yade import O
+from yade import O, plot
 from yade.minieigenHP import Quaternion, Vector3
 from yade.utils import levelSetBody
 from yade.wrapper import ForceResetter, NewtonIntegrator
@@ -76,11 +76,16 @@ def momentum(mpm, body):
 def test_flow_pushes_a_free_levelset_box_and_momentum_is_conserved():
     """256 points at 1 m/s hit a free LevelSet box (no gravity, walls out of reach): YADE's
     NewtonIntegrator moves the box with the flow's force, and the momentum of points and box
-    together stays what it was (Eqs 17-18: the grid takes minus what the body takes)."""
+    together stays what it was (Eqs 17-18: the grid takes minus what the body takes). The box's
+    force and travel reach yade.plot."""
     bid = O.bodies.append(levelSetBody("box", center=(0.125, 0.07, 0.07), extents=(0.02, 0.02, 0.02),
                                        spacing=0.0025))
     mpm = flow([0.04, 0.05, 0.05], [0.08, 0.09, 0.09], velocity=(1, 0, 0))
-    coupled = coupledScene(bid, mpm)
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={}, levelSets={bid: 0.3}, verbose=False, plot=True,
+                                    outputEvery=0.002)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    plot.reset()
     O.dt = 1e-5
     p0 = momentum(mpm, bid)
     hit = 0
@@ -91,6 +96,8 @@ def test_flow_pushes_a_free_levelset_box_and_momentum_is_conserved():
     assert hit > 4, "the flow never touched the body"
     assert O.bodies[bid].state.vel[0] > 0.1  # pushed downstream
     assert np.linalg.norm(p1 - p0) == pytest.approx(0, abs=1e-9 * np.linalg.norm(p0))
+    assert len(plot.data["t"]) >= 16 and max(plot.data["Ft_%d" % bid]) > 1  # every 2 ms and at each run's end
+    assert plot.data["x_%d" % bid][-1] > plot.data["x_%d" % bid][0] and "Ff_%d" % bid not in plot.data
 
 
 def test_levelset_contacts_bound_the_automatic_step():
