@@ -17,6 +17,7 @@
 #include "coupling/CoupledScene.hpp"
 #include "mpm/MpmKernelsCommon.hpp"
 #include "coupling/CoupledWorld.hpp"
+#include "coupling/MpLevelSetCoupling.hpp"
 #include "coupling/MpSdemCoupling.hpp"
 
 namespace mpmsdem {
@@ -41,15 +42,58 @@ class PyCoupling {
   int historySlots() const { return coupling_.historySlots(); }
   bool recordContacts() const { return coupling_.recordContacts(); }
   void setRecordContacts(bool on) { coupling_.setRecordContacts(on); }
-  void setHistorySlots(int s) { coupling_.setHistorySlots(s); }
+  void setHistorySlots(int s) {
+    coupling_.setHistorySlots(s);
+    levelSets_.setHistorySlots(s);
+  }
+
+  // A YADE LevelSet body (id) coupled with the flow: its grid (local frame: min [m], spacing [m],
+  // grid points per axis, phi as float64 bytes in distField[i][j][k] order) and the pair's
+  // contact physics. ValueError for a CUDA flow, a bad grid or physics, or a grid coarser than
+  // the flow's points allow (MpLevelSetCoupling::checkResolution).
+  void addLevelSet(int id, const Vec3& min, double spacing, int nx, int ny, int nz, const bp::object& dist,
+                   double kc, double friction, double poisson, double normalDamping, double tangentialDamping) {
+    if (mpm_.solver().queuesSteps())
+      throw ParameterError("LevelSet body " + std::to_string(id) +
+                           ": LevelSet bodies are coupled with the CPU backend of the flow only");
+    coupling::LevelSetGrid g;
+    g.min = min;
+    g.spacing = spacing;
+    g.nGP = {nx, ny, nz};
+    char* p = nullptr;
+    Py_ssize_t n = 0;
+    if (PyBytes_AsStringAndSize(dist.ptr(), &p, &n) < 0) bp::throw_error_already_set();
+    if (n % sizeof(double)) throw ParameterError("LevelSet distField: byte length is not a whole float64 array");
+    g.dist.resize(n / sizeof(double));
+    if (n) std::memcpy(g.dist.data(), p, n);
+    sdem::BarrierPhys phys;
+    phys.barrierStiffness = kc;
+    phys.friction = friction;
+    phys.poisson = poisson;
+    phys.normalDamping = normalDamping;
+    phys.tangentialDamping = tangentialDamping;
+    levelSets_.addBody(id, std::move(g), phys);
+    lsStates_.push_back(bp::object());
+    lsBodies_.push_back(bp::object());
+    if (mpm_.solver().numParticles() > 0) {
+      mpm::ParticleSet all;
+      mpm_.solver().getParticles(all);
+      double v0 = std::numeric_limits<double>::infinity();
+      for (double v : all.volume0) v0 = std::min(v0, v);
+      levelSets_.checkResolution(std::cbrt(3 * v0 / (4 * 3.14159265358979323846)));
+    }
+  }
+  int numLevelSets() const { return levelSets_.numBodies(); }
 
   void step(const bp::object& bodies, const bp::object& forces, double dt) {
     sdem_.readStates(bodies);
+    readLevelSets(bodies);
     coupling::coupledStep(mpm_.solver(), coupling_, dt, [&] {
       sdem_.computeForces(dt);
       coupling_.blockForces(force_, torque_);
       sdem_.writeForces(forces, &force_, &torque_);
       sdem_.countStep();
+      if (levelSets_.numBodies() > 0) levelSetForces(forces, dt);
     }, stages_);
     restoredApproach_ = std::numeric_limits<double>::quiet_NaN();
     ++steps_;
@@ -67,7 +111,13 @@ class PyCoupling {
     }
   }
 
-  double contactStep() const { return coupling::coupledContactStep(sdem_.engine(), coupling_); }
+  // The SDEM part (coupledContactStep) and the LevelSet bodies' flow contacts, with the same
+  // safety factor.
+  double contactStep() const {
+    const double safety = sdem_.engine().timeStepSafety();
+    return std::min({coupling::coupledContactStep(sdem_.engine(), coupling_),
+                     safety * levelSets_.particleCriticalStep(), levelSets_.bodyContactStep(safety)});
+  }
   double criticalTimeStep() { return std::min(mpm_.solver().stableTimeStep(), contactStep()); }
 
   // A block of the SDEM engine that no coupling step has seen yet (before the first step, the
@@ -77,13 +127,30 @@ class PyCoupling {
   Vec3 faceForce(int i) const { return seen(i) ? coupling_.faceForce(i) : Vec3::Zero(); }
   Vec3 edgeForce(int i) const { return seen(i) ? coupling_.edgeForce(i) : Vec3::Zero(); }
   int contactCount(int i) const { return seen(i) ? coupling_.contactCount(i) : 0; }
-  long totalContacts() const { return coupling_.totalContacts(); }
-  long historyOverflow() const { return coupling_.historyOverflow(); }
+  long totalContacts() const { return coupling_.totalContacts() + levelSets_.totalContacts(); }
+  long historyOverflow() const { return coupling_.historyOverflow() + levelSets_.historyOverflow(); }
+
+  // ---- LevelSet bodies, by their index in the order added (results of the last step)
+  Vec3 levelSetForce(int i) const { return levelSets_.force(i); }
+  Vec3 levelSetTorque(int i) const { return levelSets_.torque(i); }
+  int levelSetContactCount(int i) const { return levelSets_.contactCount(i); }
+  bp::dict levelSetContacts(int only) const {
+    const std::vector<coupling::MpContactRecord> rec = levelSets_.contacts(only);
+    return contactArrays(rec, [this](int b) { return levelSets_.externalId(b); }, false);
+  }
 
   // The last step's MP–block contacts as numpy arrays, one row per contact (CPU backends):
   // those of SDEM body index `only`, or all of them for only < 0.
   bp::dict contacts(int only) const {
     const std::vector<coupling::MpContactRecord> rec = coupling_.contacts(only);
+    return contactArrays(rec, [this](int b) { return sdem_.engine().externalId(b); }, true);
+  }
+
+  // Contact records as numpy arrays, block ids through yadeId; `features`: a block's core
+  // feature per row (a LevelSet body has none).
+  template <typename Id>
+  static bp::dict contactArrays(const std::vector<coupling::MpContactRecord>& rec, const Id& yadeId,
+                                bool features) {
     const npy_intp n = static_cast<npy_intp>(rec.size());
     std::vector<double> point(3 * n), normal(3 * n), force(3 * n), fn(n), overlap(n);
     std::vector<long> particle(n), block(n);
@@ -98,8 +165,8 @@ class PyCoupling {
       fn[c] = r.normalForce;
       overlap[c] = r.overlap;
       particle[c] = r.particle;
-      block[c] = sdem_.engine().externalId(r.block);
-      feature.append(featureName(static_cast<sdem::FeatureKind>(r.featureKind)));
+      block[c] = yadeId(r.block);
+      if (features) feature.append(featureName(static_cast<sdem::FeatureKind>(r.featureKind)));
     }
     bp::dict d;
     d["particle"] = numpyArrayInt(particle);
@@ -109,16 +176,16 @@ class PyCoupling {
     d["force"] = numpyArray(force.data(), n, 3);
     d["normalForce"] = numpyArray(fn.data(), n, 0);
     d["overlap"] = numpyArray(overlap.data(), n, 0);
-    d["feature"] = feature;
+    if (features) d["feature"] = feature;
     return d;
   }
 
   bp::dict energies() const {
     bp::dict d;
-    d["barrier"] = coupling_.barrierEnergy();
-    d["tangential"] = coupling_.springEnergy();
-    d["friction"] = coupling_.frictionDissipation();
-    d["damping"] = coupling_.dampingDissipation();
+    d["barrier"] = coupling_.barrierEnergy() + levelSets_.barrierEnergy();
+    d["tangential"] = coupling_.springEnergy() + levelSets_.springEnergy();
+    d["friction"] = coupling_.frictionDissipation() + levelSets_.frictionDissipation();
+    d["damping"] = coupling_.dampingDissipation() + levelSets_.dampingDissipation();
     return d;
   }
   bp::dict timings() const {
@@ -254,7 +321,9 @@ class PyCoupling {
   // MpSdemCoupling::particleApproachStep of the last step, or the value a checkpoint restored
   // until the next step computes its own.
   double particleApproachStep() const {
-    return std::isnan(restoredApproach_) ? coupling_.particleApproachStep() : restoredApproach_;
+    return std::isnan(restoredApproach_)
+               ? std::min(coupling_.particleApproachStep(), levelSets_.particleApproachStep())
+               : restoredApproach_;
   }
   void setParticleApproachStep(double s) {
     if (!(s > 0)) throwParameter("particleApproachStep", s, "s", "> 0 (inf: no particle closing on a block)");
@@ -262,6 +331,35 @@ class PyCoupling {
   }
 
  private:
+  // Pose and motion of the LevelSet bodies from YADE, at the state the step starts from. Torques
+  // act about state.pos, the grid frame's origin, which YADE integrates about.
+  void readLevelSets(const bp::object& bodies) {
+    for (int i = 0; i < levelSets_.numBodies(); ++i) {
+      if (lsStates_[i].is_none()) {
+        lsBodies_[i] = bodies[levelSets_.externalId(i)];
+        lsStates_[i] = lsBodies_[i].attr("state");
+      }
+      const bp::object& st = lsStates_[i];
+      const Vec3 inertia = bp::extract<Vec3>(st.attr("inertia"));
+      levelSets_.setState(i, bp::extract<Vec3>(st.attr("pos")), bp::extract<Quat>(st.attr("ori")),
+                          bp::extract<Vec3>(st.attr("vel")), bp::extract<Vec3>(st.attr("angVel")),
+                          bp::extract<double>(st.attr("mass")), inertia.minCoeff(),
+                          !bp::extract<bool>(lsBodies_[i].attr("dynamic")));
+    }
+  }
+  // The LevelSet bodies' contacts, after the SDEM coupling's (their particle forces add to its),
+  // and their forces and torques to O.forces.
+  void levelSetForces(const bp::object& forces, double dt) {
+    mpm::MpmSolver& solver = mpm_.solver();
+    levelSets_.computeForces(solver.numParticles() > 0 ? solver.extendForceBuffer() : mpm::ParticleView{}, dt,
+                             sdem_.engine().timeStepSafety(), solver.params().dx);
+    bp::object addF = forces.attr("addF"), addT = forces.attr("addT");
+    for (int i = 0; i < levelSets_.numBodies(); ++i) {
+      if (levelSets_.contactCount(i) == 0) continue;
+      addF(levelSets_.externalId(i), levelSets_.force(i));
+      addT(levelSets_.externalId(i), levelSets_.torque(i));
+    }
+  }
   bool seen(int i) const { return !(i >= coupling_.numBlocks() && i < sdem_.engine().numBodies()); }
   void requireOutput() const {
     if (!output_) throw ParameterError("output: call openOutput(dir) before writing outputs");
@@ -273,6 +371,8 @@ class PyCoupling {
   YadeSdemBridge& sdem_;
   PyMpm& mpm_;
   coupling::MpSdemCoupling coupling_;
+  coupling::MpLevelSetCoupling levelSets_;
+  std::vector<bp::object> lsStates_, lsBodies_;  // YADE's State and Body of each LevelSet body
   std::vector<Vec3> force_, torque_;
   std::vector<Quat> ori0_;  // reference orientations set by a restore before the output opens
   bool strict_ = true;
@@ -297,6 +397,15 @@ void exportCoupling() {
            (bp::arg("material"), bp::arg("barrierStiffness"), bp::arg("friction"), bp::arg("poisson"),
             bp::arg("normalDamping"), bp::arg("tangentialDamping")))
       .def("step", &PyCoupling::step)
+      .def("addLevelSet", &PyCoupling::addLevelSet,
+           (bp::arg("id"), bp::arg("min"), bp::arg("spacing"), bp::arg("nx"), bp::arg("ny"), bp::arg("nz"),
+            bp::arg("distField"), bp::arg("barrierStiffness"), bp::arg("friction"), bp::arg("poisson"),
+            bp::arg("normalDamping"), bp::arg("tangentialDamping")))
+      .add_property("numLevelSets", &PyCoupling::numLevelSets)
+      .def("levelSetForce", &PyCoupling::levelSetForce)
+      .def("levelSetTorque", &PyCoupling::levelSetTorque)
+      .def("levelSetContactCount", &PyCoupling::levelSetContactCount)
+      .def("levelSetContacts", &PyCoupling::levelSetContacts)
       .def("force", &PyCoupling::force)
       .def("torque", &PyCoupling::torque)
       .def("faceForce", &PyCoupling::faceForce)

@@ -41,6 +41,11 @@ MpSdemCoupling::~MpSdemCoupling() = default;
 
 void MpSdemCoupling::setPair(int material, const sdem::BarrierPhys& p) {
   sdem_.material(material);  // throws for an unknown index
+  checkPairPhys(p);
+  pairs_[material] = p;
+}
+
+void checkPairPhys(const sdem::BarrierPhys& p) {
   if (!(p.barrierStiffness > 0) || !std::isfinite(p.barrierStiffness))
     throwParameter("coupling barrierStiffness", p.barrierStiffness, "N/m", "> 0");
   if (!(p.friction >= 0) || !std::isfinite(p.friction)) throwParameter("coupling friction", p.friction, "", ">= 0");
@@ -49,7 +54,6 @@ void MpSdemCoupling::setPair(int material, const sdem::BarrierPhys& p) {
     throwParameter("coupling normalDamping", p.normalDamping, "", ">= 0 (fraction of critical)");
   if (!(p.tangentialDamping >= 0) || !std::isfinite(p.tangentialDamping))
     throwParameter("coupling tangentialDamping", p.tangentialDamping, "", ">= 0 (fraction of critical)");
-  pairs_[material] = p;
 }
 
 void MpSdemCoupling::setHistorySlots(int slots) {
@@ -511,7 +515,6 @@ Vec3 MpSdemCoupling::edgeForce(int i) const {
 int MpSdemCoupling::contactCount(int i) const { return static_cast<int>(*sums(i, kSumCount)); }
 double MpSdemCoupling::stiffnessSum(int i) const { return *sums(i, kSumK); }
 double MpSdemCoupling::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }
-namespace {
 MpContactRecord recordOf(const double* r) {
   MpContactRecord c;
   c.particle = static_cast<int>(r[kRecParticle]);
@@ -526,7 +529,6 @@ MpContactRecord recordOf(const double* r) {
   c.overlap = r[kRecOverlap];
   return c;
 }
-}  // namespace
 
 template <typename T>
 void MpSdemCoupling::appendContacts(const HostSide<T>& side, int block, std::vector<MpContactRecord>& out) {

@@ -50,6 +50,13 @@ struct MpContactRecord {
   double overlap = 0;     // delta (Eq 12) [m]
 };
 
+// ParameterError naming the first parameter of flow-body contact physics out of its range
+// (MpSdemCoupling::setPair lists them).
+void checkPairPhys(const sdem::BarrierPhys& phys);
+
+// The record of a contact written by contactRecord (kContactValues doubles).
+MpContactRecord recordOf(const double* r);
+
 class MpSdemCoupling {
  public:
   explicit MpSdemCoupling(const sdem::SdemEngine& sdem);

@@ -240,15 +240,29 @@ void MpmCpu<T>::setExternalForces(const std::vector<double>& f) {
 template <typename T>
 ParticleView MpmCpu<T>::openForceBuffer() {
   requireLastGoodState("openForceBuffer");
+  forcesIncomplete_ = true;
+  for (int d = 0; d < 3; ++d) fext_[d].assign(n_, T(0));
+  hasFext_ = true;
+  forcesIncomplete_ = false;
+  return forceView();
+}
+
+template <typename T>
+ParticleView MpmCpu<T>::extendForceBuffer() {
+  requireLastGoodState("extendForceBuffer");
+  if (!hasFext_) return openForceBuffer();
+  return forceView();
+}
+
+template <typename T>
+ParticleView MpmCpu<T>::forceView() {
   ParticleView v;
   v.precision = kPrecision;
   v.device = false;
   v.n = n_;
   const State& s = state_[cur_];
   v.id = s.id.data();
-  forcesIncomplete_ = true;
   for (int d = 0; d < 3; ++d) {
-    fext_[d].assign(n_, T(0));
     v.x[d] = s.x[d].data();
     v.v[d] = s.v[d].data();
     v.force[d] = fext_[d].data();
@@ -256,8 +270,6 @@ ParticleView MpmCpu<T>::openForceBuffer() {
   v.mass = s.mass.data();
   v.volume0 = s.vol0.data();
   v.J = s.J.data();
-  hasFext_ = true;
-  forcesIncomplete_ = false;
   return v;
 }
 

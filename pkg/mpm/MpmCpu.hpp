@@ -75,6 +75,7 @@ class MpmCpu : public MpmSolver {
   std::size_t numParticles() const override { return n_; }
   void setExternalForces(const std::vector<double>& f) override;
   ParticleView openForceBuffer() override;
+  ParticleView extendForceBuffer() override;
   void step(double dt) override;
   double stableTimeStep() override;
   std::size_t memoryBytes() const override;
@@ -112,6 +113,7 @@ class MpmCpu : public MpmSolver {
   int stepsSinceReorder_ = 0;
   std::vector<T> fext_[3];
   bool hasFext_ = false;
+  ParticleView forceView();  // the particles with fext_ as their force buffer
   // The grid's node records, column by column (GridConst::column): a column of nodes[2] records
   // is added when the particles first reach it (an active tile covers it), and kept.
   std::vector<T> nodes_;

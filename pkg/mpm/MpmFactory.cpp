@@ -98,6 +98,11 @@ void MpmSolver::getParticles(ParticleSet& out, std::size_t first, std::size_t co
   copyParticleRange(all, first, count, out);
 }
 
+ParticleView MpmSolver::extendForceBuffer() {
+  throw RuntimeFailure(name() + ": extendForceBuffer: this solver cannot add a second coupling's forces to the "
+                       "next step's (the CPU backend can)");
+}
+
 void MpmSolver::launchStep(double) {
   throw RuntimeFailure(name() + ": launchStep: this solver does not queue steps (queuesSteps() is false); call step()");
 }

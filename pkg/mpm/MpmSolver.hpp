@@ -115,6 +115,11 @@ class MpmSolver {
   // coupling calls this once per step and adds its forces into view.force; nothing crosses
   // between host and device.
   virtual ParticleView openForceBuffer() = 0;
+  // The external-force buffer of the next step with the forces already in it, for a second
+  // coupling that adds to what the first put there (LevelSet bodies beside SDEM blocks); the
+  // zeroed buffer of openForceBuffer() when the next step has none yet. The CPU backend has it;
+  // elsewhere it throws RuntimeFailure.
+  virtual ParticleView extendForceBuffer();
 
   // One explicit step: P2G, grid update (gravity, external forces, grid hooks, walls), G2P,
   // constitutive update. Throws RuntimeFailure on a NaN / blow-up (names the particle).

@@ -87,15 +87,26 @@ class CoupledEngine(_AutoStep):
         :attr:`recordContacts`). The SDEM and MPM engines keep their own outputs if given.
     :param plot: also feed ``yade.plot.addData`` every ``outputEvery`` s (``t``, and per
         block id ``Ft_<id>``, ``Ff_<id>``, ``Fe_<id>`` [N], ``x_<id>`` [m], ``vx_<id>``
-        [m/s], ``rot_<id>`` [deg]), so ``plot.plots``/``plot.saveDataTxt`` work as with any
-        YADE engine. Needs ``outputEvery``.
+        [m/s], ``rot_<id>`` [deg]; per LevelSet body the same without ``Ff``/``Fe``), so
+        ``plot.plots``/``plot.saveDataTxt`` work as with any YADE engine. Needs ``outputEvery``.
     :param verbose: progress line on stderr every 10 s of wall time: time, step, contacts, the
         critical step and ``O.dt`` with what sets it.
+    :param levelSets: YADE ``LevelSet`` bodies in the flow, beside the SDEM blocks (CPU backend
+        of the flow only): a dict ``{body id: {"friction": μ, "barrierStiffness": k_c [N/m],
+        "poisson": ν, "normalDamping": ζ_n, "tangentialDamping": ζ_t}}`` of the flow–body contact
+        physics (a bare number is taken as μ; missing keys default to those of
+        :func:`mpmsdem.material`). A material point meets such a body through the body's own
+        distance grid (``shape.lsGrid``, ``shape.distField``, trilinear; docs/coupling.md), with
+        the barrier and Coulomb laws of the blocks; YADE moves the body (its NewtonIntegrator)
+        and keeps its contacts with other bodies (``Ig2_LevelSet_LevelSet_ScGeom`` and a law in
+        ``O.engines``). A body whose grid spacing exceeds the material points' contact radius
+        R_p0 is refused with a ValueError. With LevelSet bodies ``pairs`` may be empty when the
+        SDEM engine has no block.
     """
 
     def __init__(self, sdem, mpm, pairs, dtCheck="raise", historySlots=2, output=None, outputEvery=None,
                  vtkEvery=None, plot=False, label="coupled", verbose=True, dtAuto=None, dtMax=None,
-                 minStepFraction=1e-4, maxBlockSpeed=None):
+                 minStepFraction=1e-4, maxBlockSpeed=None, levelSets=None):
         from .mpm import MpmEngine
         from .sdem import SdemEngine
         if not isinstance(sdem, SdemEngine):
@@ -122,11 +133,17 @@ class CoupledEngine(_AutoStep):
                              % (maxBlockSpeed,))
         self.maxBlockSpeed = maxBlockSpeed
         self._pairs = {}
-        if not isinstance(pairs, dict) or not pairs:
+        if levelSets is not None and not (isinstance(levelSets, dict) and levelSets):
+            raise ValueError("levelSets = %r: must be a non-empty dict {LevelSet body id: {...}} of flow-body "
+                             "contact physics, or None" % (levelSets,))
+        if not isinstance(pairs, dict) or not (pairs or levelSets):
             raise ValueError("pairs = %r: must be a non-empty dict {SdemMat: {...}} of flow-block contact "
                              "physics" % (pairs,))
         for mat, spec in pairs.items():
             self.setPair(mat, spec)
+        self._levelSets = {}  # YADE id -> index in the bridge
+        for bid, spec in (levelSets or {}).items():
+            self._addLevelSet(bid, spec)
         self.output, self.outputEvery, self.vtkEvery, self.plot = output, outputEvery, vtkEvery, plot
         self.verbose = verbose
         self.error = None
@@ -156,6 +173,45 @@ class CoupledEngine(_AutoStep):
         self._bridge.setPair(k, p["barrierStiffness"], p["friction"], p["poisson"], p["normalDamping"],
                              p["tangentialDamping"])
         self._pairs[k] = p
+
+    def _addLevelSet(self, bid, spec):
+        import numpy as np
+        from yade.wrapper import LevelSet
+        if isinstance(spec, (int, float)):
+            spec = {"friction": float(spec)}
+        if not isinstance(spec, dict):
+            raise ValueError("levelSets[%r] = %r: must be a dict with keys among %s, or a friction number"
+                             % (bid, spec, ", ".join(PAIR_KEYS)))
+        unknown = set(spec) - set(PAIR_KEYS)
+        if unknown:
+            raise ValueError("levelSets[%r]: unknown key(s) %s: allowed %s"
+                             % (bid, ", ".join(sorted(unknown)), ", ".join(PAIR_KEYS)))
+        if not isinstance(bid, int) or not 0 <= bid < len(O.bodies) or O.bodies[bid] is None:
+            raise ValueError("levelSets: body id %r: must be the id of a body in O.bodies" % (bid,))
+        shape = O.bodies[bid].shape
+        if not isinstance(shape, LevelSet):
+            raise ValueError("levelSets: body %d has a %s shape: must be a LevelSet" % (bid, type(shape).__name__))
+        if bid in self.sdem._index:
+            raise ValueError("levelSets: body %d is an SDEM block" % bid)
+        if bid in self._levelSets:
+            raise ValueError("levelSets: body %d given twice" % bid)
+        defaults = {"friction": 0.5, "barrierStiffness": 1e4, "poisson": 0.3, "normalDamping": 0.0,
+                    "tangentialDamping": 0.1}  # mpmsdem.material's
+        p = {key: float(spec.get(key, defaults[key])) for key in PAIR_KEYS}
+        g = shape.lsGrid
+        dist = np.ascontiguousarray(np.asarray(shape.distField, dtype=np.float64))
+        n = tuple(int(k) for k in g.nGP)
+        if dist.shape != n:
+            raise ValueError("levelSets: body %d: distField has shape %s, its grid %s points" % (bid, dist.shape, n))
+        self._bridge.addLevelSet(bid, Vector3(g.min), float(g.spacing), n[0], n[1], n[2], dist.tobytes(),
+                                 p["barrierStiffness"], p["friction"], p["poisson"], p["normalDamping"],
+                                 p["tangentialDamping"])
+        self._levelSets[bid] = len(self._levelSets)
+
+    @property
+    def levelSetIds(self):
+        """The YADE ids of the coupled LevelSet bodies, in the order given."""
+        return list(self._levelSets)
 
     @property
     def dtCheck(self):
@@ -354,6 +410,13 @@ class CoupledEngine(_AutoStep):
                 row["vx_%d" % i] = b.state.vel[0]
                 q0 = self._ori0.setdefault(i, Quaternion(b.state.ori))
                 row["rot_%d" % i] = math.degrees((b.state.ori * q0.conjugate()).toAngleAxis()[0])
+            for i in self._levelSets:  # no F_f / F_e: a level set has no faces and edges to tell apart
+                b = O.bodies[i]
+                row["Ft_%d" % i] = self.force(i).norm()
+                row["x_%d" % i] = b.state.pos[0]
+                row["vx_%d" % i] = b.state.vel[0]
+                q0 = self._ori0.setdefault(i, Quaternion(b.state.ori))
+                row["rot_%d" % i] = math.degrees((b.state.ori * q0.conjugate()).toAngleAxis()[0])
             plot.addData(**row)
 
     def blockKineticEnergy(self):
@@ -385,6 +448,9 @@ class CoupledEngine(_AutoStep):
         import base64
         import json
         import os
+        if self._levelSets:
+            raise ValueError("save(%r): checkpoints of a coupled scene with LevelSet bodies (%s) are not supported"
+                             % (prefix, ", ".join(str(i) for i in self._levelSets)))
         keys, xi, slots = self._bridge.histories()
         self.sdem.save(prefix + ".sdem.json")
         self.mpm.save(prefix + ".mpm.h5")
@@ -489,11 +555,16 @@ class CoupledEngine(_AutoStep):
         return self.sdem._index[yadeId]
 
     def force(self, yadeId):
-        """Force of the flow on a block in the last step, F_t [N] (world frame)."""
+        """Force of the flow on a block or LevelSet body in the last step, F_t [N] (world frame)."""
+        if yadeId in self._levelSets:
+            return self._bridge.levelSetForce(self._levelSets[yadeId]) if self._contactsKnown else Vector3.Zero
         return self._bridge.force(self._index(yadeId))
 
     def torque(self, yadeId):
-        """Torque of the flow on a block about its centroid [N m]."""
+        """Torque of the flow on a block about its centroid, or on a LevelSet body about its
+        ``state.pos`` [N m]."""
+        if yadeId in self._levelSets:
+            return self._bridge.levelSetTorque(self._levelSets[yadeId]) if self._contactsKnown else Vector3.Zero
         return self._bridge.torque(self._index(yadeId))
 
     def faceForce(self, yadeId):
@@ -505,7 +576,9 @@ class CoupledEngine(_AutoStep):
         return self._bridge.edgeForce(self._index(yadeId))
 
     def contactCount(self, yadeId):
-        """Number of material points touching the block."""
+        """Number of material points touching the block or LevelSet body."""
+        if yadeId in self._levelSets:
+            return self._bridge.levelSetContactCount(self._levelSets[yadeId]) if self._contactsKnown else 0
         return self._bridge.contactCount(self._index(yadeId))
 
     def contacts(self, yadeId=None):
@@ -520,7 +593,11 @@ class CoupledEngine(_AutoStep):
         per block they give :meth:`force` and :meth:`torque`; where on a block the flow pressed
         is their ``point`` (paper §3.2.3). On CUDA a step's contacts stay on the device unless
         :attr:`recordContacts` was set before it (RuntimeError otherwise). Empty before the
-        first step."""
+        first step. For a LevelSet body's id: its contacts, without ``feature`` (``point`` midway
+        between the body's surface and the point's sphere, ``normal`` the normalised gradient of
+        the body's interpolated distance field)."""
+        if yadeId in self._levelSets:
+            return self._bridge.levelSetContacts(self._levelSets[yadeId])
         return self._bridge.contacts(-1 if yadeId is None else self._index(yadeId))
 
     @property

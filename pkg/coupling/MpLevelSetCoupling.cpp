@@ -1,0 +1,276 @@
+#include "coupling/MpLevelSetCoupling.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "common/Error.hpp"
+#include "coupling/CouplingBackend.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+// Particles per chunk of the loop; contacts are reduced chunk by chunk in particle order.
+constexpr long kChunk = 4096;
+
+template <typename T>
+double smallest(const void* values, std::size_t n) {
+  const T* a = static_cast<const T*>(values);
+  double m = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) m = std::min(m, static_cast<double>(a[i]));
+  return m;
+}
+}  // namespace
+
+int MpLevelSetCoupling::addBody(int externalId, LevelSetGrid grid, const sdem::BarrierPhys& phys) {
+  const std::string what = "LevelSet body " + std::to_string(externalId) + ": ";
+  if (!(grid.spacing > 0) || !std::isfinite(grid.spacing))
+    throwParameter(what + "grid spacing", grid.spacing, "m", "> 0");
+  if (!grid.min.allFinite()) throw ParameterError(what + "grid min: must be finite");
+  long long n = 1;
+  for (int d = 0; d < 3; ++d) {
+    if (grid.nGP[d] < 2) throwParameter(what + "grid nGP[" + std::to_string(d) + "]", grid.nGP[d], "", ">= 2");
+    n *= grid.nGP[d];
+  }
+  if (static_cast<long long>(grid.dist.size()) != n)
+    throwParameter(what + "distField size", grid.dist.size(), "",
+                   "nGP[0] x nGP[1] x nGP[2] = " + std::to_string(n) + " grid values");
+  for (double v : grid.dist)
+    if (!std::isfinite(v)) throw ParameterError(what + "distField: every value must be finite");
+  checkPairPhys(phys);
+  ids_.push_back(externalId);
+  distF_.emplace_back(grid.dist.begin(), grid.dist.end());
+  grids_.push_back(std::move(grid));
+  phys_.push_back({phys.barrierStiffness, phys.friction, phys.poisson, phys.normalDamping, phys.tangentialDamping});
+  bodies_.emplace_back();
+  minInertia_.push_back(0);
+  stateSet_.push_back(0);
+  return numBodies() - 1;
+}
+
+void MpLevelSetCoupling::setState(int i, const Vec3& pos, const Quat& ori, const Vec3& vel, const Vec3& angVel,
+                                  double mass, double minInertia, bool fixed) {
+  if (i < 0 || i >= numBodies()) throwParameter("LevelSet body index", i, "", "in [0, " + std::to_string(numBodies()) + ")");
+  const std::string what = "LevelSet body " + std::to_string(ids_[i]) + ": ";
+  if (!pos.allFinite() || !ori.coeffs().allFinite() || !vel.allFinite() || !angVel.allFinite())
+    throw RuntimeFailure(what + "non-finite position, orientation or velocity (the run blew up?)");
+  if (!fixed && !(mass > 0)) throwParameter(what + "mass", mass, "kg", "> 0 for a body that moves");
+  BlockState<double>& b = bodies_[i];
+  const Mat3 R = ori.normalized().toRotationMatrix();
+  for (int d = 0; d < 3; ++d) {
+    b.pos[d] = pos[d];
+    b.vel[d] = vel[d];
+    b.angVel[d] = angVel[d];
+    for (int e = 0; e < 3; ++e) b.rot[3 * d + e] = R(d, e);
+  }
+  const LevelSetGrid& g = grids_[i];
+  double reach = 0;  // farthest corner of the grid box from the grid origin
+  for (int c = 0; c < 8; ++c) {
+    Vec3 corner;
+    for (int d = 0; d < 3; ++d) corner[d] = g.min[d] + ((c >> d) & 1 ? (g.nGP[d] - 1) * g.spacing : 0.0);
+    reach = std::max(reach, corner.norm());
+  }
+  b.reach = reach;
+  b.mass = mass;
+  b.shape = i;
+  b.phys = i;
+  b.fixed = fixed ? 1 : 0;
+  minInertia_[i] = minInertia;
+  stateSet_[i] = 1;
+}
+
+void MpLevelSetCoupling::checkResolution(double particleRadius) const {
+  for (int i = 0; i < numBodies(); ++i) {
+    if (grids_[i].spacing <= levelSetSpacingLimit(particleRadius)) continue;
+    std::ostringstream os;
+    os << "LevelSet body " << ids_[i] << ": grid spacing " << grids_[i].spacing
+       << " m is coarser than the material point contact radius R_p0 = " << particleRadius
+       << " m: the spacing must be <= R_p0 (near the body's edges and corners the interpolated distance is "
+          "off by up to a quarter of the spacing, and the barrier acts only over overlaps up to R_p0); "
+          "build the body with a finer spacing";
+    throw ParameterError(os.str());
+  }
+}
+
+void MpLevelSetCoupling::setHistorySlots(int slots) {
+  if (slots < 1 || slots > 4) throwParameter("historySlots", slots, "", "in [1, 4]");
+  if (slots != slots_) {
+    slots_ = slots;
+    particleCount_ = 0;  // the histories restart at the next step
+  }
+}
+
+void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt, double safety, double watch) {
+  if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
+  if (view.device)
+    throw RuntimeFailure("MP-LevelSet coupling: the solver's particles are on a CUDA device; LevelSet bodies "
+                         "are coupled with the CPU backends only");
+  for (int i = 0; i < numBodies(); ++i)
+    if (!stateSet_[i]) throw RuntimeFailure("LevelSet body " + std::to_string(ids_[i]) + ": no state set before the step");
+  const bool isFloat = view.precision == mpm::Precision::Float;
+  sums_.assign(static_cast<std::size_t>(kBlockSums) * numBodies(), 0.0);
+  minParticleStep_ = minApproachStep_ = std::numeric_limits<double>::infinity();
+  contacts_.clear();
+  contactsF_.clear();
+  barrierEnergy_ = springEnergy_ = 0;
+  if (numBodies() == 0 || view.n == 0) return;
+  if (view.n != particleCount_ || (isFloat ? xiF_.size() : xi_.size()) != 3 * slots_ * view.n) {
+    // a new particle set: no history yet, and its smallest radius may be below the grids'
+    const double v0 = isFloat ? smallest<float>(view.volume0, view.n) : smallest<double>(view.volume0, view.n);
+    checkResolution(std::cbrt(3 * v0 / (4 * kPi)));
+    particleCount_ = view.n;
+    key_.assign(slots_ * view.n, -1);
+    written_.assign(view.n, historyStep_);
+    xi_.assign(isFloat ? 0 : 3 * slots_ * view.n, 0.0);
+    xiF_.assign(isFloat ? 3 * slots_ * view.n : 0, 0.0f);
+  }
+  floatRun_ = isFloat;
+  if (isFloat) {
+    std::vector<BlockState<float>> B(bodies_.size());
+    std::vector<sdem::BarrierCoulombPhys<float>> phys(phys_.size());
+    std::vector<LevelSetGridView<float>> G(grids_.size());
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      B[i] = convertBlock<float>(bodies_[i]);
+      phys[i] = convertPhys<float>(phys_[i]);
+      const LevelSetGrid& g = grids_[i];
+      G[i] = {{float(g.min[0]), float(g.min[1]), float(g.min[2])}, float(g.spacing),
+              {g.nGP[0], g.nGP[1], g.nGP[2]}, distF_[i].data()};
+    }
+    run(view, B.data(), G.data(), phys.data(), xiF_, contactsF_, dt, safety, watch);
+    reduce(contactsF_, B.data());
+  } else {
+    std::vector<LevelSetGridView<double>> G(grids_.size());
+    for (std::size_t i = 0; i < grids_.size(); ++i) {
+      const LevelSetGrid& g = grids_[i];
+      G[i] = {{g.min[0], g.min[1], g.min[2]}, g.spacing, {g.nGP[0], g.nGP[1], g.nGP[2]}, g.dist.data()};
+    }
+    run(view, bodies_.data(), G.data(), phys_.data(), xi_, contacts_, dt, safety, watch);
+    reduce(contacts_, bodies_.data());
+  }
+}
+
+template <typename T>
+void MpLevelSetCoupling::run(const mpm::ParticleView& view, const BlockState<T>* B, const LevelSetGridView<T>* G,
+                             const sdem::BarrierCoulombPhys<T>* phys, std::vector<T>& xi,
+                             std::vector<MpContact<T>>& contacts, double dt, double safety, double watch) {
+  const CouplingParticles<T> P = couplingParticles<T>(view);
+  const HistoryView<T> H{key_.data(), xi.data(), written_.data(), ++historyStep_, slots_};
+  const int nb = numBodies();
+  const long n = static_cast<long>(view.n);
+  const long nChunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::vector<MpContact<T>>> chunkContacts(nChunks);
+  long overflow = 0;
+  double approach = std::numeric_limits<double>::infinity();
+  long firstBad = n;
+  int badBody = -1;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : overflow) reduction(min : approach)
+  for (long c = 0; c < nChunks; ++c) {
+    std::vector<MpContact<T>>& list = chunkContacts[c];
+    auto sink = [&list](const MpContact<T>& ct) { list.push_back(ct); };
+    int over = 0;
+    T chunkApproach = std::numeric_limits<T>::infinity();
+    CouplingLoopMemo<T> memo;
+    for (long p = c * kChunk; p < std::min(n, (c + 1) * kChunk); ++p) {
+      int bad = -1;
+      if (coupleParticleLevelSets(static_cast<int>(p), P, B, nb, G, phys, H, T(dt), T(safety), T(watch), sink, &bad,
+                                  &over, &chunkApproach, memo) != kCoupleOk) {
+        const long number = particleNumber(P, static_cast<int>(p));
+#pragma omp critical(mplevelset_bad)
+        if (number < firstBad) {
+          firstBad = number;
+          badBody = bad;
+        }
+      }
+    }
+    overflow += over;
+    approach = std::min(approach, static_cast<double>(chunkApproach));
+  }
+  overflow_ += overflow;
+  minApproachStep_ = approach;
+  if (firstBad < n) {
+    std::ostringstream os;
+    os << "MP-LevelSet coupling: the centre of material point " << firstBad << " reached the surface of LevelSet body "
+       << ids_[badBody] << " (distance <= 0, overlap >= R_p0); at the first step the particles were seeded inside "
+       << "the body, later the time step was too long for the barrier stiffness";
+    throw RuntimeFailure(os.str());
+  }
+  for (const auto& list : chunkContacts) contacts.insert(contacts.end(), list.begin(), list.end());
+  // by particle number, not storage slot: sums that do not depend on the solver's particle order
+  std::stable_sort(contacts.begin(), contacts.end(),
+                   [](const MpContact<T>& a, const MpContact<T>& b) { return a.particle < b.particle; });
+}
+
+template <typename T>
+void MpLevelSetCoupling::reduce(const std::vector<MpContact<T>>& contacts, const BlockState<T>* B) {
+  auto add = [](double* slot, double value) { *slot += value; };
+  for (const MpContact<T>& ct : contacts) {
+    addBlockShare(ct, B[ct.block], sums_.data(), add);
+    minParticleStep_ = std::min(minParticleStep_, static_cast<double>(particleStepBound(ct)));
+  }
+  for (int b = 0; b < numBodies(); ++b) {
+    const double* s = sums_.data() + kBlockSums * b;
+    barrierEnergy_ += s[kSumBarrier];
+    springEnergy_ += s[kSumSpring];
+    frictionWork_ += s[kSumFriction];
+    dampingWork_ += s[kSumDamping];
+  }
+}
+
+const double* MpLevelSetCoupling::sums(int i, int offset) const {
+  if (i < 0 || i >= numBodies() || sums_.size() < static_cast<std::size_t>(kBlockSums) * numBodies())
+    throwParameter("LevelSet body index", i, "", "a body index in [0, " + std::to_string(numBodies()) +
+                                                     ") of the last coupling step");
+  return sums_.data() + kBlockSums * i + offset;
+}
+
+Vec3 MpLevelSetCoupling::force(int i) const {
+  const double* s = sums(i, kSumForce);
+  return Vec3(s[0], s[1], s[2]);
+}
+Vec3 MpLevelSetCoupling::torque(int i) const {
+  const double* s = sums(i, kSumTorque);
+  return Vec3(s[0], s[1], s[2]);
+}
+int MpLevelSetCoupling::contactCount(int i) const { return static_cast<int>(*sums(i, kSumCount)); }
+double MpLevelSetCoupling::stiffnessSum(int i) const { return *sums(i, kSumK); }
+double MpLevelSetCoupling::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }
+
+long MpLevelSetCoupling::totalContacts() const {
+  long n = 0;
+  for (int i = 0; i < numBodies() && !sums_.empty(); ++i) n += contactCount(i);
+  return n;
+}
+
+double MpLevelSetCoupling::bodyContactStep(double safety) const {
+  double dt = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < numBodies() && !sums_.empty(); ++i) {
+    if (bodies_[i].fixed) continue;
+    const double k = stiffnessSum(i), kr = rotationalStiffnessSum(i);
+    if (k > 0) dt = std::min(dt, std::sqrt(bodies_[i].mass / k));
+    if (kr > 0 && minInertia_[i] > 0) dt = std::min(dt, std::sqrt(minInertia_[i] / kr));
+  }
+  return safety * dt;
+}
+
+std::vector<MpContactRecord> MpLevelSetCoupling::contacts(int body) const {
+  std::vector<MpContactRecord> out;
+  double r[kContactValues];
+  auto append = [&](const auto& list) {
+    for (const auto& ct : list) {
+      if (body >= 0 && ct.block != body) continue;
+      contactRecord(ct, r);
+      out.push_back(recordOf(r));
+    }
+  };
+  if (floatRun_)
+    append(contactsF_);
+  else
+    append(contacts_);
+  return out;
+}
+
+}  // namespace coupling
+}  // namespace mpmsdem

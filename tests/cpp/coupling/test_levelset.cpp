@@ -1,0 +1,405 @@
+// Material point against a LevelSet body (LevelSetKernelsCommon.hpp, MpLevelSetCoupling): the
+// interpolated distance and normal of analytic sphere and cube grids against hand-derived
+// values, the Eq 10 force they give, the grid's linear continuation, the impulse balance of
+// a flow on a body (Eqs 17–18), float against double, the too-coarse refusal, bad input.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/Error.hpp"
+#include "coupling/MpLevelSetCoupling.hpp"
+#include "mpm/Seeding.hpp"
+
+using namespace mpmsdem;
+using namespace mpmsdem::coupling;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A grid of phi(x) at nodes min + (i, j, k) h.
+LevelSetGrid analyticGrid(const Vec3& min, double h, int n, const std::function<double(const Vec3&)>& phi) {
+  LevelSetGrid g;
+  g.min = min;
+  g.spacing = h;
+  g.nGP = {n, n, n};
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k) g.dist.push_back(phi(min + h * Vec3(i, j, k)));
+  return g;
+}
+
+double sphereDistance(const Vec3& x, double r) { return x.norm() - r; }
+
+// Signed distance to the cube [-a, a]^3.
+double cubeDistance(const Vec3& x, double a) {
+  const Vec3 q = x.cwiseAbs() - Vec3::Constant(a);
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+sdem::BarrierPhys physics(double kc = 1e4, double mu = 0.3) {
+  sdem::BarrierPhys p;
+  p.barrierStiffness = kc;
+  p.friction = mu;
+  p.poisson = 0.3;
+  p.normalDamping = 0;
+  p.tangentialDamping = 0;
+  return p;
+}
+
+// Eq 10 as a force, written out: F_n = -k_c delta [2 ln((R - delta)/R) - R/(R - delta) + 1].
+double eq10(double kc, double R, double delta) {
+  return -kc * delta * (2 * std::log((R - delta) / R) - R / (R - delta) + 1);
+}
+
+// One material point at rest, as a solver's particle view.
+struct OnePoint {
+  double x[3], v[3] = {0, 0, 0}, mass, vol0, f[3] = {0, 0, 0};
+  OnePoint(const Vec3& pos, double volume0) : mass(1600 * volume0), vol0(volume0) {
+    for (int d = 0; d < 3; ++d) x[d] = pos[d];
+  }
+  mpm::ParticleView view() {
+    mpm::ParticleView w;
+    w.n = 1;
+    for (int d = 0; d < 3; ++d) {
+      w.x[d] = &x[d];
+      w.v[d] = &v[d];
+      w.force[d] = &f[d];
+    }
+    w.mass = &mass;
+    w.volume0 = &vol0;
+    return w;
+  }
+};
+
+// Eight points per cell of a 0.01 m grid (Eq 13): R_p0 = (3 V0 / 4 pi)^(1/3) = 3.1018 mm.
+constexpr double kDx = 0.01;
+const double kV0 = kDx * kDx * kDx / 8;
+const double kRp = std::cbrt(3 * kV0 / (4 * kPi));
+
+// A fixed body at the origin (or pos/ori), one point at x; the contact it makes.
+MpContactRecord touch(const LevelSetGrid& g, const Vec3& x, const Vec3& pos = Vec3::Zero(),
+                      const Quat& ori = Quat::Identity(), double* particleForce = nullptr) {
+  MpLevelSetCoupling c;
+  c.addBody(7, g, physics());
+  c.setState(0, pos, ori, Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
+  OnePoint p(x, kV0);
+  c.computeForces(p.view(), 1e-5, 0.5, kDx);
+  const std::vector<MpContactRecord> r = c.contacts();
+  EXPECT_EQ(r.size(), 1u);
+  if (particleForce)
+    for (int d = 0; d < 3; ++d) particleForce[d] = p.f[d];
+  return r.empty() ? MpContactRecord() : r[0];
+}
+
+}  // namespace
+
+TEST(LevelSetCoupling, ParticleRadiusIsEq13) { EXPECT_NEAR(kRp, 3.1018e-3, 1e-7); }
+
+// Sphere r = 0.05 m on a grid whose nodes sit at +-h/2, +-3h/2, ...: a point on the x axis is
+// at the centre of its cell's y-z square, so the four corners of each x-plane share
+// y^2 + z^2 = h^2 / 2: the gradient has no y or z part (normal exactly +x) and along x phi is
+// interpolated linearly between sqrt(x_i^2 + h^2/2) - r at the two planes x_0, x_1.
+TEST(LevelSetCoupling, SphereOverlapForceAndNormal) {
+  const double r = 0.05, h = 0.0025;
+  const LevelSetGrid g =
+      analyticGrid(Vec3::Constant(-24.5 * h), h, 50, [r](const Vec3& x) { return sphereDistance(x, r); });
+  const Vec3 x(0.052, 0, 0);  // 2 mm outside the sphere
+  // cell planes x_0 = 0.05125, x_1 = 0.05375 (node i = 45, 46), fraction u = 0.3
+  const double x0 = -24.5 * h + 45 * h, x1 = x0 + h, u = (x[0] - x0) / h;
+  EXPECT_NEAR(u, 0.3, 1e-12);
+  const double d = (1 - u) * std::sqrt(x0 * x0 + h * h / 2) + u * std::sqrt(x1 * x1 + h * h / 2) - r;
+  // the interpolant sees the sphere h^2 / (4 x) = 30 um farther than it is, to 1 %
+  EXPECT_GT(d - 0.002, 0.99 * h * h / (4 * 0.052));
+  EXPECT_LT(d - 0.002, 1.01 * h * h / (4 * 0.052));
+  double fp[3];
+  const MpContactRecord c = touch(g, x, Vec3::Zero(), Quat::Identity(), fp);
+  const double delta = kRp - d;  // 1.072 mm
+  EXPECT_NEAR(c.overlap, delta, 1e-15);
+  const double fn = eq10(1e4, kRp, delta);
+  EXPECT_NEAR(fn, 14.744, 0.001);
+  // a third above its leading term 3 k_c delta^2 / R (11.11 N) at delta = 0.35 R_p0
+  EXPECT_NEAR(fn / (3 * 1e4 * delta * delta / kRp), 1.327, 0.002);
+  EXPECT_NEAR(c.normalForce, fn, 1e-12 * fn);
+  // (the nodes at +-h/2 are min + j h, equal in magnitude to round-off only)
+  EXPECT_NEAR(c.normal[0], 1.0, 1e-14);
+  EXPECT_NEAR(c.normal[1], 0.0, 1e-12);
+  EXPECT_NEAR(c.normal[2], 0.0, 1e-12);
+  // the body takes -F at the point midway between its surface and the point's sphere
+  EXPECT_NEAR(c.force[0], -fn, 1e-12 * fn);
+  EXPECT_NEAR(fp[0], fn, 1e-12 * fn);
+  EXPECT_NEAR(c.point[0], x[0] - 0.5 * (d + kRp), 1e-15);
+}
+
+// Cube of half-size a = 0.05 m with its faces on grid planes. Before a face (all eight
+// corners of the cell in the face's region, where phi = x - a is linear) the interpolation is
+// exact; in the cell beyond a corner, phi = |x - corner| sampled at the cell's corners
+// (0, h, h sqrt 2, h sqrt 3) gives at fraction 0.4 along the diagonal
+// h (3 0.4 0.6^2 + 3 sqrt2 0.4^2 0.6 + sqrt3 0.4^3) = 0.95014 h instead of 0.69282 h: the
+// corner looks rounded by 0.2573 h, the error the spacing rule bounds (levelSetSpacingLimit).
+TEST(LevelSetCoupling, CubeFaceExactCornerRounded) {
+  const double a = 0.05, h = 0.0025;
+  const LevelSetGrid g = analyticGrid(Vec3::Constant(-0.06), h, 49, [a](const Vec3& x) { return cubeDistance(x, a); });
+  {
+    const Vec3 x(a + 0.0015, 0.0123, -0.0311);  // 1.5 mm before the +x face, off the grid nodes
+    const MpContactRecord c = touch(g, x);
+    const double delta = kRp - 0.0015;
+    EXPECT_NEAR(c.overlap, delta, 1e-15);
+    EXPECT_NEAR(c.normalForce, eq10(1e4, kRp, delta), 1e-11 * eq10(1e4, kRp, delta));
+    EXPECT_NEAR(c.normal[0], 1.0, 1e-14);
+    EXPECT_NEAR(c.normal[1], 0.0, 1e-12);
+    EXPECT_NEAR(c.normal[2], 0.0, 1e-12);
+  }
+  {
+    const double s = 0.4 * h;
+    const Vec3 x = Vec3::Constant(a + s);
+    const double d = h * (3 * 0.4 * 0.36 + 3 * std::sqrt(2.0) * 0.16 * 0.6 + std::sqrt(3.0) * 0.064);
+    EXPECT_NEAR(d / h, 0.95014, 1e-5);
+    EXPECT_NEAR((d - std::sqrt(3.0) * s) / h, 0.25732, 1e-5);
+    const MpContactRecord c = touch(g, x);
+    EXPECT_NEAR(c.overlap, kRp - d, 1e-15);
+    EXPECT_NEAR(c.normalForce, eq10(1e4, kRp, kRp - d), 1e-11 * eq10(1e4, kRp, kRp - d));
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(c.normal[k], 1 / std::sqrt(3.0), 1e-12);
+  }
+}
+
+// The body frame: phi is read at ori^-1 (x - pos), the normal turned back to the world.
+TEST(LevelSetCoupling, MovedAndTurnedBody) {
+  const double a = 0.05, h = 0.0025;
+  const LevelSetGrid g = analyticGrid(Vec3::Constant(-0.06), h, 49, [a](const Vec3& x) { return cubeDistance(x, a); });
+  const Vec3 pos(1.0, -2.0, 0.5);
+  const Quat ori(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()));
+  const Vec3 local(a + 0.0015, 0.0123, -0.0311);
+  const MpContactRecord c = touch(g, pos + ori * local, pos, ori);
+  EXPECT_NEAR(c.overlap, kRp - 0.0015, 1e-14);
+  EXPECT_LT((c.normal - ori * Vec3::UnitX()).norm(), 1e-12);
+}
+
+// Beyond the grid's box phi continues as phi(c) + |x - c| from the nearest point c of the box:
+// YADE's grids end about a cell past the surface, closer than the barrier's reach. Grid to
+// 0.051 m around a cube of half-size 0.05 m (0.32 R_p0 of margin): a point 2.5 mm before the
+// face, 1.5 mm outside the box, touches with phi = 1 mm + 1.5 mm; beyond the box's edge, where
+// YADE's box grids are flat along the side (max(|x_i| - a) there: no gradient to carry out),
+// the continuation still grows with the distance from the box, and a point at 2.9 mm along x
+// and 2.9 mm along y from the edge (phi = 1 mm + 1.9 sqrt2 mm = 3.69 mm > R_p0) does not touch.
+TEST(LevelSetCoupling, ContinuationBeyondTheGrid) {
+  const double a = 0.05, h = 0.001;
+  const LevelSetGrid g = analyticGrid(Vec3::Constant(-0.051), h, 103, [a](const Vec3& x) { return cubeDistance(x, a); });
+  const MpContactRecord c = touch(g, Vec3(a + 0.0025, 0.01, 0.0));
+  EXPECT_NEAR(c.overlap, kRp - 0.0025, 1e-14);
+  EXPECT_NEAR(c.normal[0], 1.0, 1e-12);
+  auto chebyshev = [a](const Vec3& x) { return (x.cwiseAbs() - Vec3::Constant(a)).maxCoeff(); };
+  const LevelSetGrid flat = analyticGrid(Vec3::Constant(-0.051), h, 103, chebyshev);
+  MpLevelSetCoupling cl;
+  cl.addBody(4, flat, physics());
+  cl.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
+  OnePoint far(Vec3(a + 0.0029, a + 0.0029, 0.0), kV0);
+  cl.computeForces(far.view(), 1e-5, 0.5, kDx);
+  EXPECT_EQ(cl.contactCount(0), 0);
+  // nearer, the same point touches along the diagonal: phi = 1 mm + 1.1 sqrt2 mm = 2.556 mm
+  OnePoint near(Vec3(a + 0.0021, a + 0.0021, 0.0), kV0);
+  cl.computeForces(near.view(), 1e-5, 0.5, kDx);
+  const std::vector<MpContactRecord> r = cl.contacts();
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_NEAR(r[0].overlap, kRp - (0.001 + 0.0011 * std::sqrt(2.0)), 1e-14);
+  EXPECT_NEAR(r[0].normal[0], std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(r[0].normal[1], std::sqrt(0.5), 1e-12);
+}
+
+// A block of points pressed into a sphere: the force on the body is minus the sum of the
+// forces the particles take (Eqs 17–18), per step, to round-off; the particle forces reach the
+// solver's buffer on top of what was there (extendForceBuffer).
+TEST(LevelSetCoupling, ImpulseBalanceWithSolver) {
+  mpm::MpmParams prm;
+  prm.dx = kDx;
+  prm.cells = {20, 20, 20};
+  prm.gravity = {0, 0, 0};
+  prm.material.density = 1600;
+  prm.material.youngModulus = 1e6;
+  prm.material.poissonRatio = 0.3;
+  prm.material.muS = 0.24;
+  prm.material.mu2 = 0.65;
+  mpm::ParticleSet ps;
+  // a slab whose lowest points sit 1 mm into the barrier of a sphere of radius 0.05 at (0.1, 0.1, 0.05)
+  mpm::seedBox(prm, {0.07, 0.07, 0.1}, {0.13, 0.13, 0.13}, {2, 2, 2}, ps);
+  double zmin = 1;
+  for (std::size_t p = 0; p < ps.size(); ++p) zmin = std::min(zmin, ps.x[3 * p + 2]);
+  for (std::size_t p = 0; p < ps.size(); ++p) {
+    ps.x[3 * p + 2] += 0.1 + kRp - 0.001 - zmin;
+    ps.v[3 * p + 0] = 0.3;  // sliding along x: friction too
+  }
+  auto solver = mpm::makeSolver(prm);
+  solver->setParticles(ps);
+  MpLevelSetCoupling c;
+  c.addBody(3, analyticGrid(Vec3::Constant(-0.06), 0.0025, 49, [](const Vec3& x) { return sphereDistance(x, 0.05); }),
+            physics(1e4, 0.4));
+  const Vec3 pos(0.1, 0.1, 0.05);
+  const double dt = 1e-5;
+  for (int step = 0; step < 3; ++step) {
+    c.setState(0, pos, Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, false);
+    mpm::ParticleView v = solver->openForceBuffer();
+    for (std::size_t p = 0; p < v.n; ++p) static_cast<double*>(v.force[2])[p] = -1e-3;  // a first coupling's
+    c.computeForces(solver->extendForceBuffer(), dt, 0.5, kDx);
+    ASSERT_GE(c.contactCount(0), 5);
+    mpm::ParticleSet out;
+    solver->getParticles(out);
+    Vec3 sum = Vec3::Zero();
+    for (std::size_t p = 0; p < out.size(); ++p)
+      for (int d = 0; d < 3; ++d) sum[d] += out.fext[3 * p + d] + (d == 2 ? 1e-3 : 0.0);
+    const Vec3 f = c.force(0);
+    EXPECT_GT(f.norm(), 0.01);
+    EXPECT_LT((sum + f).norm(), 1e-13 * f.norm());
+    EXPECT_LT(f[2], -0.9 * f.norm());  // pressed down, the slab lying on it
+    solver->step(dt);
+  }
+}
+
+// Contacts are summed per body in particle order, chunk by chunk: 1 and 2 OpenMP threads give the
+// same forces, torques and particle positions to the bit (4,704 points: two chunks of the loop).
+TEST(LevelSetCoupling, ThreadCountIndependent) {
+  mpm::MpmParams prm;
+  prm.dx = kDx;
+  prm.cells = {20, 20, 20};
+  prm.gravity = {0, 0, 0};
+  prm.material.density = 1600;
+  prm.material.youngModulus = 1e6;
+  prm.material.poissonRatio = 0.3;
+  prm.material.muS = 0.24;
+  prm.material.mu2 = 0.65;
+  mpm::ParticleSet ps;
+  mpm::seedBox(prm, {0.03, 0.03, 0.1}, {0.17, 0.17, 0.13}, {2, 2, 2}, ps);
+  ASSERT_GT(ps.size(), 4096u);
+  for (std::size_t p = 0; p < ps.size(); ++p) {
+    ps.x[3 * p + 2] -= 0.0025 + 0.001 - kRp;  // the lowest layer 1 mm into the sphere's barrier
+    ps.v[3 * p + 0] = 0.3;
+  }
+  const LevelSetGrid g =
+      analyticGrid(Vec3::Constant(-0.06), 0.0025, 49, [](const Vec3& x) { return sphereDistance(x, 0.05); });
+  Vec3 f[2], t[2];
+  std::vector<double> x[2];
+  const int before = omp_get_max_threads();
+  for (int run = 0; run < 2; ++run) {
+    omp_set_num_threads(run + 1);
+    auto solver = mpm::makeSolver(prm);
+    solver->setParticles(ps);
+    MpLevelSetCoupling c;
+    c.addBody(3, g, physics(1e4, 0.4));
+    c.setState(0, Vec3(0.1, 0.1, 0.05), Quat::Identity(), Vec3::Zero(), Vec3(0, 0, 1), 1.0, 1e-3, false);
+    for (int step = 0; step < 3; ++step) {
+      c.computeForces(solver->openForceBuffer(), 1e-5, 0.5, kDx);
+      solver->step(1e-5);
+    }
+    ASSERT_GT(c.contactCount(0), 5);
+    f[run] = c.force(0);
+    t[run] = c.torque(0);
+    mpm::ParticleSet out;
+    solver->getParticles(out);
+    x[run] = out.x;
+  }
+  omp_set_num_threads(before);
+  for (int d = 0; d < 3; ++d) {
+    EXPECT_EQ(f[0][d], f[1][d]);
+    EXPECT_EQ(t[0][d], t[1][d]);
+  }
+  EXPECT_EQ(x[0], x[1]);  // the particles after three steps
+}
+
+// A float solver meets float copies of the grid and state: the same forces to float round-off.
+TEST(LevelSetCoupling, FloatAgreesWithDouble) {
+  const LevelSetGrid g =
+      analyticGrid(Vec3::Constant(-0.06), 0.0025, 49, [](const Vec3& x) { return cubeDistance(x, 0.05); });
+  const Vec3 xs[] = {Vec3(0.0515, 0.0123, -0.0311), Vec3(0.051, 0.051, 0.051), Vec3(0.0, -0.052, 0.02)};
+  for (const Vec3& x : xs) {
+    MpLevelSetCoupling cd, cf;
+    cd.addBody(1, g, physics());
+    cf.addBody(1, g, physics());
+    cd.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
+    cf.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
+    OnePoint p(x, kV0);
+    cd.computeForces(p.view(), 1e-5, 0.5, kDx);
+    float xf[3] = {float(x[0]), float(x[1]), float(x[2])}, vf[3] = {0, 0, 0}, mf = float(p.mass),
+          v0f = float(kV0), ff[3] = {0, 0, 0};
+    mpm::ParticleView w;
+    w.precision = mpm::Precision::Float;
+    w.n = 1;
+    for (int d = 0; d < 3; ++d) {
+      w.x[d] = &xf[d];
+      w.v[d] = &vf[d];
+      w.force[d] = &ff[d];
+    }
+    w.mass = &mf;
+    w.volume0 = &v0f;
+    cf.computeForces(w, 1e-5, 0.5, kDx);
+    ASSERT_EQ(cd.contactCount(0), 1);
+    ASSERT_EQ(cf.contactCount(0), 1);
+    // delta ~ 1 mm from distances ~ 0.05 m in float (eps 6e-8): 3e-9 m, a relative 1e-5 of F ~ delta^2
+    EXPECT_LT((cf.force(0) - cd.force(0)).norm(), 2e-4 * cd.force(0).norm());
+  }
+}
+
+TEST(LevelSetCoupling, CoarseGridRefused) {
+  MpLevelSetCoupling c;
+  const LevelSetGrid g =
+      analyticGrid(Vec3::Constant(-0.06), 0.004, 31, [](const Vec3& x) { return sphereDistance(x, 0.05); });
+  c.addBody(12, g, physics());
+  c.checkResolution(0.004);  // spacing == R_p0: allowed
+  try {
+    c.checkResolution(kRp);
+    FAIL() << "a 4 mm grid against R_p0 = 3.1 mm was accepted";
+  } catch (const ParameterError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("LevelSet body 12"), std::string::npos) << m;
+    EXPECT_NE(m.find("spacing 0.004 m"), std::string::npos) << m;
+    EXPECT_NE(m.find("R_p0 = 0.0031"), std::string::npos) << m;
+  }
+  // and at the step, from the particles' own volumes
+  c.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
+  OnePoint p(Vec3(0.3, 0, 0), kV0);
+  EXPECT_THROW(c.computeForces(p.view(), 1e-5, 0.5, kDx), ParameterError);
+}
+
+TEST(LevelSetCoupling, BadInput) {
+  MpLevelSetCoupling c;
+  LevelSetGrid g = analyticGrid(Vec3::Zero(), 0.001, 3, [](const Vec3& x) { return x.norm() - 0.001; });
+  LevelSetGrid bad = g;
+  bad.spacing = 0;
+  EXPECT_THROW(c.addBody(1, bad, physics()), ParameterError);
+  bad = g;
+  bad.nGP[1] = 1;
+  EXPECT_THROW(c.addBody(1, bad, physics()), ParameterError);
+  bad = g;
+  bad.dist.pop_back();
+  EXPECT_THROW(c.addBody(1, bad, physics()), ParameterError);
+  bad = g;
+  bad.dist[4] = NAN;
+  EXPECT_THROW(c.addBody(1, bad, physics()), ParameterError);
+  EXPECT_THROW(c.addBody(1, g, physics(-1.0)), ParameterError);
+  EXPECT_EQ(c.numBodies(), 0);
+  c.addBody(1, g, physics());
+  OnePoint p(Vec3(0.3, 0, 0), kV0);
+  EXPECT_THROW(c.computeForces(p.view(), 1e-5, 0.5, kDx), RuntimeFailure);  // no state set
+  EXPECT_THROW(c.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 0.0, 0.0, false),
+               ParameterError);
+  EXPECT_THROW(c.setHistorySlots(5), ParameterError);
+}
+
+// A point whose centre reached the surface (phi <= 0) stops the step, naming point and body.
+TEST(LevelSetCoupling, CentreInsideFails) {
+  MpLevelSetCoupling c;
+  c.addBody(9, analyticGrid(Vec3::Constant(-0.06), 0.0025, 49, [](const Vec3& x) { return sphereDistance(x, 0.05); }),
+            physics());
+  c.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
+  OnePoint p(Vec3(0.049, 0, 0), kV0);
+  try {
+    c.computeForces(p.view(), 1e-5, 0.5, kDx);
+    FAIL();
+  } catch (const RuntimeFailure& e) {
+    EXPECT_NE(std::string(e.what()).find("material point 0 reached the surface of LevelSet body 9"), std::string::npos)
+        << e.what();
+  }
+}
