@@ -72,12 +72,16 @@ fuzz: deps
 	tests/fuzz/run.sh $(FUZZBUILD) $(FUZZ_SECONDS) $(JOBS)
 
 # YADE scenes of a few bodies run fastest on one OpenMP thread (YADE's parallel loops cost
-# more than they save there); the C++ driver in check_column_collapse uses all cores itself.
+# more than they save there): JOBS test processes (pytest-xdist) of one thread each.
 test-py: install
-	OMP_NUM_THREADS=1 $(PY) -m pytest -q tests/python
+	OMP_NUM_THREADS=1 $(PY) -m pytest -q -n $(JOBS) tests/python
 
+# The checks are independent single-threaded runs of a few minutes: JOBS at a time
+# (tools/run_checks.py keeps each one's output whole and ends with a table of their times). The
+# C++ driver in check_column_collapse uses all cores itself, beside another check: passive
+# waiting at its barriers (see test-cpp).
 checks: install
-	@set -e; for s in scripts/checks/*.py; do echo "== $$s"; OMP_NUM_THREADS=1 $(PY) $$s; done
+	OMP_NUM_THREADS=1 OMP_WAIT_POLICY=PASSIVE $(PY) tools/run_checks.py --jobs $(JOBS)
 
 test: test-cpp test-sanitize fuzz test-py checks
 

@@ -8,6 +8,7 @@ PKGS=(
   yade python3-yade libyade
   python3-dev python3-numpy python3-h5py python3-matplotlib python3-pytest
   python3-scipy python3-dask python3-distributed python3-gdal python3-hypothesis
+  python3-pytest-xdist   # make test-py: the YADE-level tests JOBS at a time
   libboost-python-dev libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev
   libhdf5-dev nlohmann-json3-dev googletest libgtest-dev
   strace   # scripts/checks/check_fault_injection.py: kills and failed writes at a chosen write call
