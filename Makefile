@@ -48,7 +48,7 @@ SANITIZE_SKIP = $(if $(filter 1,$(SANITIZE_ALL)),,-E '^($(shell grep -v '^\#' to
 test-sanitize: deps
 	cmake -S . -B $(SANBUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g -DNDEBUG" -DMPMSDEM_SANITIZE=ON \
 	  -DPython3_EXECUTABLE=$(PY) -DMPMSDEM_PYTHON=$(PY) > /dev/null
-	cmake --build $(SANBUILD) -j $(JOBS) --target test_sdem test_mpm test_coupling
+	cmake --build $(SANBUILD) -j $(JOBS) --target test_sdem test_mpm test_coupling test_run
 	cd $(SANBUILD) && OMP_WAIT_POLICY=PASSIVE \
 	  ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1 \
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \

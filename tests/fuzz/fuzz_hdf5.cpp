@@ -1,5 +1,5 @@
 // libFuzzer target: the mpm.h5 of an earlier run as mpmsdem-run --restart or --flow-from reads it
-// (apps/mpmsdem-run.cpp; the input chooses which): the stored scene and blend checked against
+// (pkg/run/RunScene.cpp; the input chooses which): the stored scene and blend checked against
 // this run's scene (io::checkRestartScene, io::checkFlowFromScene: root attributes "parameters",
 // parsed as JSON, and "flip_blend"), the number of snapshots, a snapshot read slice by slice into
 // a solver with its time and step (io::SnapshotSlices), then for a restart what its output reads

@@ -15,7 +15,7 @@ from scenes import cubeOnSlab, run
 h5py = pytest.importorskip("h5py")
 
 DRIVER_SERIES = {"time", "step", "dt", "kinetic_energy", "front_x", "height_z", "centre_of_mass", "max_speed",
-                 "flowing_fraction", "gasified_fraction"}  # apps/mpmsdem-run.cpp, recordSeries
+                 "flowing_fraction", "gasified_fraction"}  # pkg/run/OutputRun.cpp, recordSeries
 GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
 
 

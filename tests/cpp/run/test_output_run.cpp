@@ -1,0 +1,124 @@
+// Runs with outputs through the run layer's entry point: the outputs of a run by steps, a
+// restart that continues it bit for bit, a front snapshot, and a restart refused.
+#include <gtest/gtest.h>
+
+#ifdef MPMSDEM_WITH_HDF5  // runs with outputs need HDF5 (CMakeLists.txt)
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "common/Error.hpp"
+#include "coupling/CoupledCheckpoint.hpp"
+#include "coupling/CoupledScene.hpp"
+#include "io/Hdf5Writer.hpp"
+#include "mpm/MpmScene.hpp"
+#include "run/RunScene.hpp"
+
+namespace fs = std::filesystem;
+using namespace mpmsdem;
+using namespace mpmsdem::run;
+
+namespace {
+
+fs::path scratchDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("mpmsdem_test_run_" + std::to_string(::getpid()) + "_" + name);
+  fs::remove_all(dir);
+  return dir;
+}
+
+// A block of sand collapsing in a box of 12 x 6 x 10 cells of 0.01 m, a fixed step of 5e-5 s:
+// a snapshot every 5 steps, a series record every step.
+mpm::MpmScene collapse(const fs::path& out, const std::string& extraRun = "") {
+  return mpm::parseScene(R"({
+    "grid": {"dx": 0.01, "cells": [12, 6, 10], "origin": [0, 0, 0]},
+    "gravity": {"g": 9.81},
+    "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65,
+                 "grain_diameter": 0.001, "critical_density": 1500},
+    "particles": [{"lo": [0.02, 0.02, 0.02], "hi": [0.06, 0.04, 0.06], "ppc": 8}],
+    "run": {"duration": 1.0, "dt": 5e-5, "output_every": 2.5e-4, "series_every": 5e-5, "vtk": "raw",
+            "output_dir": ")" + out.string() + "\"" + extraRun + "}}");
+}
+
+RunEnd runSteps(const mpm::MpmScene& scene, long steps, bool restart = false) {
+  RunRequest request;
+  request.steps = steps;
+  request.restart = restart;
+  return runScene(scene, coupling::SceneBlocks{}, request);
+}
+
+// The last snapshot of the run in dir: its particles, time and step.
+struct LastSnapshot {
+  explicit LastSnapshot(const fs::path& dir) {
+    const std::string h5 = (dir / "mpm.h5").string();
+    io::readSnapshot(h5, io::readNumSnapshots(h5) - 1, particles, &time, &step);
+  }
+  mpm::ParticleSet particles;
+  double time = 0;
+  long step = 0;
+};
+
+}  // namespace
+
+TEST(OutputRun, RunsByStepsWithItsOutputs) {
+  const fs::path dir = scratchDir("steps");
+  EXPECT_EQ(runSteps(collapse(dir), 12), RunEnd::Done);
+  const std::string h5 = (dir / "mpm.h5").string();
+  EXPECT_EQ(io::readNumSnapshots(h5), 4);  // the start, steps 5 and 10, and the end at step 12
+  EXPECT_EQ(io::readSeries(h5, "time").size(), 13u);
+  const LastSnapshot last(dir);
+  EXPECT_EQ(last.step, 12);
+  EXPECT_TRUE(fs::exists(dir / "particles.pvd"));
+  EXPECT_TRUE(fs::exists(dir / "vtk" / "particles_000003.vtp"));
+  EXPECT_TRUE(fs::exists(dir / "mpm.h5.restart"));
+  EXPECT_FALSE(fs::exists(dir / "flow_probes.json"));  // no probes
+  fs::remove_all(dir);
+}
+
+TEST(OutputRun, ARestartContinuesTheRunBitForBit) {
+  const fs::path whole = scratchDir("whole"), parts = scratchDir("parts");
+  ASSERT_EQ(runSteps(collapse(whole), 20), RunEnd::Done);
+  ASSERT_EQ(runSteps(collapse(parts), 12), RunEnd::Done);
+  ASSERT_EQ(runSteps(collapse(parts), 8, true), RunEnd::Done);  // from step 12's snapshot
+  const LastSnapshot a(whole), b(parts);
+  EXPECT_EQ(a.step, 20);
+  EXPECT_EQ(b.step, 20);
+  EXPECT_EQ(a.time, b.time);
+  EXPECT_EQ(a.particles.x, b.particles.x);
+  EXPECT_EQ(a.particles.v, b.particles.v);
+  EXPECT_EQ(a.particles.stress, b.particles.stress);
+  for (const char* name : {"time", "step", "dt", "kinetic_energy", "front_x"})
+    EXPECT_EQ(io::readSeries((whole / "mpm.h5").string(), name), io::readSeries((parts / "mpm.h5").string(), name))
+        << name;
+  EXPECT_EQ(io::readNumSnapshots((whole / "mpm.h5").string()), io::readNumSnapshots((parts / "mpm.h5").string()) - 1)
+      << "the restarted run has the snapshot at step 12 besides those at multiples of 5 steps";
+  fs::remove_all(whole);
+  fs::remove_all(parts);
+}
+
+TEST(OutputRun, TheFrontReachingAnXIsSaved) {
+  const fs::path dir = scratchDir("front");
+  ASSERT_EQ(runSteps(collapse(dir, R"(, "snapshot_when_front_at": 0.01)"), 3), RunEnd::Done);
+  ASSERT_TRUE(fs::exists(dir / "front_snapshot.json"));
+  const coupling::FrontSnapshot f = coupling::readFrontSnapshot((dir / "front_snapshot.json").string());
+  EXPECT_EQ(f.snapshot, 0);  // the front is past x = 0.01 m from the start
+  EXPECT_EQ(f.step, 0);
+  EXPECT_EQ(f.x, 0.01);
+  fs::remove_all(dir);
+}
+
+TEST(OutputRun, ARestartWithoutARestartPointIsRefused) {
+  const fs::path dir = scratchDir("empty");
+  fs::create_directories(dir);
+  try {
+    runSteps(collapse(dir), 5, true);
+    ADD_FAILURE() << "expected ParameterError";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("--restart"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("restart point"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+#endif  // MPMSDEM_WITH_HDF5
