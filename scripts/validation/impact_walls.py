@@ -45,7 +45,7 @@ import time
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from flume_convergence import CUBE, SERIES_EVERY, STATION_HALF, drive  # noqa: E402
+from flume_convergence import CUBE, SERIES_EVERY, STATION_HALF, commit, drive, fmt  # noqa: E402
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
@@ -233,18 +233,6 @@ def reread(out):
             with open(path + ".tmp", "w") as f:
                 json.dump(r, f, indent=1)
             os.replace(path + ".tmp", path)
-
-
-def commit():
-    try:
-        return subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                              check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
-def fmt(v, spec):
-    return "–" if v is None else spec % v
 
 
 COLUMNS = [  # (heading, value of a run); "–" where a run has none
