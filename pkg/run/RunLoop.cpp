@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <sstream>
+#include <string>
 
 #include "common/Error.hpp"
 
@@ -66,6 +68,14 @@ double nextStep(Stepper& st, const mpm::RunSettings& run, bool byTime) {
 bool finished(const mpm::MpmSolver& solver, const mpm::RunSettings& run, long maxSteps) {
   if (maxSteps > 0) return solver.steps() >= maxSteps;
   return solver.time() >= run.duration * (1 - 1e-12);
+}
+
+long endStep(long start, long steps, const std::string& from) {
+  if (start < 0 || steps < 0 || start > std::numeric_limits<long>::max() - steps)
+    throw ParameterError(from + " is at step " + std::to_string(start) + ": with --steps " + std::to_string(steps) +
+                         " the run would end past step " + std::to_string(std::numeric_limits<long>::max()) +
+                         " (a step count no run of this driver reaches)");
+  return start + steps;
 }
 
 double progressFraction(const mpm::MpmSolver& solver, const mpm::RunSettings& run, long maxSteps, long firstStep) {

@@ -59,6 +59,12 @@ double nextStep(Stepper& st, const mpm::RunSettings& run, bool byTime);
 // maxSteps: the step count at which to stop (0: stop at run.duration).
 bool finished(const mpm::MpmSolver& solver, const mpm::RunSettings& run, long maxSteps);
 
+// The step count at which a run of `steps` more steps (--steps N counts this run's steps) stops,
+// started from a state at step `start` (a restart point, another run's front). ParameterError
+// naming `from` and both counts when the sum does not fit a long: a state from a file that no
+// run of ours wrote.
+long endStep(long start, long steps, const std::string& from);
+
 // Fraction of the run done, by steps (maxSteps > 0, counted from firstStep) or by simulated time.
 double progressFraction(const mpm::MpmSolver& solver, const mpm::RunSettings& run, long maxSteps, long firstStep = 0);
 

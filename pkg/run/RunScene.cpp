@@ -66,7 +66,7 @@ RunEnd runScene(const mpm::MpmScene& scene, const coupling::SceneBlocks& blocks,
                            std::to_string(step) + ") are not of one time: the outputs were not written by one run");
     solver->setParticles(particles);
     solver->setClock(time, step);
-    if (maxSteps > 0) maxSteps += step;
+    if (maxSteps > 0) maxSteps = endStep(step, maxSteps, "--restart: snapshot " + std::to_string(last) + " of " + h5);
     std::printf("mpmsdem-run: restarting from snapshot %ld of %s (t = %.6g s, step %ld)\n", last, h5.c_str(), time,
                 step);
   } else if (request.flowFrom) {
@@ -103,7 +103,7 @@ RunEnd runScene(const mpm::MpmScene& scene, const coupling::SceneBlocks& blocks,
       solver->setParticles(*flowParticles);
       solver->setClock(flowFront->time, flowFront->step);
     }
-    if (maxSteps > 0) maxSteps += flowFront->step;
+    if (maxSteps > 0) maxSteps = endStep(flowFront->step, maxSteps, "--flow-from: the front state in " + src.string());
   } else
 #endif
   {

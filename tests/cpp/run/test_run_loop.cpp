@@ -5,6 +5,7 @@
 
 #include <csignal>
 #include <cstdlib>
+#include <limits>
 #include <string>
 
 #include "common/Error.hpp"
@@ -190,4 +191,23 @@ TEST(StopSignalDeathTest, ASecondInterruptEndsTheProcess) {
         std::exit(0);
       },
       testing::KilledBySignal(SIGINT), "");
+}
+
+// --steps N from a restart point or another run's front: the run stops N steps after the state's
+// own step; a state whose step leaves no room for N more (only a file no run wrote can hold one)
+// is refused by name, where the sum would have wrapped round to a negative count.
+TEST(RunLoop, EndStepCountsFromTheStateAndRefusesAnOverflow) {
+  EXPECT_EQ(endStep(1824, 500, "--restart: snapshot 2"), 2324);
+  EXPECT_EQ(endStep(0, 1, "x"), 1);
+  const long top = std::numeric_limits<long>::max();
+  EXPECT_EQ(endStep(top - 5, 5, "x"), top);
+  try {
+    endStep(top - 4, 5, "--restart: snapshot 3 of out/mpm.h5");
+    FAIL() << "an end step past LONG_MAX was accepted";
+  } catch (const ParameterError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("--restart: snapshot 3 of out/mpm.h5 is at step " + std::to_string(top - 4)), std::string::npos) << m;
+    EXPECT_NE(m.find("--steps 5"), std::string::npos) << m;
+  }
+  EXPECT_THROW(endStep(-1, 5, "x"), ParameterError);
 }
