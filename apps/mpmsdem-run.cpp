@@ -5,7 +5,7 @@
 //   mpmsdem-run scene.json [--backend cpu|cuda] [--precision float|double] [--out DIR]
 //                          [--steps N] [--restart | --flow-from DIR|FILE] [--bench]
 //
-// The scene schema is documented in pkg/mpm/MpmScene.hpp (flow), pkg/coupling/CoupledScene.hpp
+// The scene schema is documented in pkg/scene/MpmScene.hpp (flow), pkg/coupling/CoupledScene.hpp
 // (blocks) and examples/scenes/README.md.
 // Options override the scene's "run" settings:
 //   --backend, --precision   solver backend and precision (either precision on either backend)
@@ -56,7 +56,7 @@
 #ifdef MPMSDEM_WITH_HDF5
 #include "io/Hdf5Writer.hpp"
 #endif
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "run/RunScene.hpp"
 
 using namespace mpmsdem;

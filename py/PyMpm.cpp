@@ -1,7 +1,7 @@
 // Binding of the MPM solver (py/PyMpm.hpp).
 #include "PyMpm.hpp"
 
-#include "io/TerrainRaster.hpp"
+#include "input/TerrainRaster.hpp"
 
 namespace mpmsdem {
 namespace py {

@@ -15,7 +15,7 @@
 #include "io/VtkWriter.hpp"
 #include "mpm/Diagnostics.hpp"
 #include "mpm/Gate.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 
 namespace mpmsdem {

@@ -1,7 +1,7 @@
 // Binding of the SDEM engine and its YADE bridge (py/PySdem.hpp).
 #include "PySdem.hpp"
 
-#include "io/MeshReader.hpp"
+#include "input/MeshReader.hpp"
 
 namespace mpmsdem {
 namespace py {

@@ -49,7 +49,7 @@ class YadeSdemBridge {
   int addMaterial(const SdemMaterial& m) { return engine_.addMaterial(m); }
   // The terrain under the blocks: heights i-major (nx * ny), node (i, j) at (x0 + i s, y0 + j s).
   void setTerrain(const bp::object& heights, int nx, int ny, double x0, double y0, double spacing, int material) {
-    mpm::TerrainSpec t;
+    mpmsdem::TerrainSpec t;
     t.nx = nx;
     t.ny = ny;
     t.x0 = x0;

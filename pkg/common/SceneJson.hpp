@@ -1,4 +1,4 @@
-// Reading the driver's JSON scene files (MPM part: pkg/mpm/MpmScene, blocks:
+// Reading the driver's JSON scene files (MPM part: pkg/scene/MpmScene, blocks:
 // pkg/coupling/CoupledScene): each accessor names the key path and the allowed range in its
 // ParameterError, e.g. "material.poisson_ratio = 0.7: must be in [0, 0.5)".
 #pragma once

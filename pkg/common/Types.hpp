@@ -1,5 +1,5 @@
 // Common scalar/vector types of the host (CPU) code. Everything is SI.
-// GPU-shareable math lives in pkg/mpm/MathHD.hpp (no Eigen in device code).
+// GPU-shareable math lives in common/MathHD.hpp (no Eigen in device code).
 #pragma once
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -1,5 +1,5 @@
 // The blocks of a coupled driver scene: the "block_materials" and "blocks" keys of the JSON
-// scene that pkg/mpm/MpmScene.hpp describes for the flow. SI units; an unknown key is a
+// scene that pkg/scene/MpmScene.hpp describes for the flow. SI units; an unknown key is a
 // ParameterError naming it, as for the rest of the scene; "(req)" marks required keys.
 //
 //   "block_materials": {            (req with "blocks") materials by name

@@ -16,7 +16,7 @@
 namespace mpmsdem {
 namespace coupling {
 
-using mpm::Vec3T;
+using mpmsdem::Vec3T;
 
 // Pose and motion of one block for this step (world frame).
 template <typename T>
@@ -77,7 +77,7 @@ MPM_HD_INLINE int binOf(const BinGridView& bins, double x, double y, double z) {
   const double p[3] = {x, y, z};
   int bc[3];
   for (int d = 0; d < 3; ++d) {
-    const int c = static_cast<int>(mpm::hdFloor((p[d] - bins.origin[d]) * bins.invSize));
+    const int c = static_cast<int>(mpmsdem::hdFloor((p[d] - bins.origin[d]) * bins.invSize));
     bc[d] = c < 0 ? 0 : (c >= bins.dims[d] ? bins.dims[d] - 1 : c);
   }
   return (bc[0] * bins.dims[1] + bc[1]) * bins.dims[2] + bc[2];
@@ -106,7 +106,7 @@ MPM_HD_INLINE T approachStepBound(T gap, T vn, T dt, T mass, T reach, const sdem
                                   T safety) {
   const T delta = vn * dt - gap;
   if (!(delta > T(0))) return T(INFINITY);
-  return safety * mpm::hdSqrt(mass * reach / (T(6) * phys.kc * delta * barrierStiffnessFactor(phys)));
+  return safety * mpmsdem::hdSqrt(mass * reach / (T(6) * phys.kc * delta * barrierStiffnessFactor(phys)));
 }
 
 // Stable-step bound for a particle closing at normal speed vn > 0 on a barrier it has not
@@ -121,7 +121,7 @@ MPM_HD_INLINE T approachStepBound(T gap, T vn, T dt, T mass, T reach, const sdem
 // k_c 1e4 N/m it lies above the CFL step of the paper's scenes (0.25 ms at dx 0.01 m, 1 m/s).
 template <typename T>
 MPM_HD_INLINE T firstContactStepBound(T vn, T mass, T reach, const sdem::BarrierCoulombPhys<T>& phys, T safety) {
-  return mpm::hdCbrt(safety * safety * mass * reach / (T(6) * phys.kc * vn * barrierStiffnessFactor(phys)));
+  return mpmsdem::hdCbrt(safety * safety * mass * reach / (T(6) * phys.kc * vn * barrierStiffnessFactor(phys)));
 }
 
 // How many of the current step a non-touching pair is examined over: this step and the next,
@@ -134,8 +134,8 @@ constexpr double kFirstContactHorizon = 2.01;
 // above without a root: this runs for every pair near a block.
 template <typename T>
 MPM_HD_INLINE T closingDistance(const Vec3T<T>& vp, const BlockState<T>& blk, T reach, T dt, T limit) {
-  const T v = mpm::hdAbs(vp.x - blk.vel[0]) + mpm::hdAbs(vp.y - blk.vel[1]) + mpm::hdAbs(vp.z - blk.vel[2]);
-  const T w = mpm::hdAbs(blk.angVel[0]) + mpm::hdAbs(blk.angVel[1]) + mpm::hdAbs(blk.angVel[2]);
+  const T v = mpmsdem::hdAbs(vp.x - blk.vel[0]) + mpmsdem::hdAbs(vp.y - blk.vel[1]) + mpmsdem::hdAbs(vp.z - blk.vel[2]);
+  const T w = mpmsdem::hdAbs(blk.angVel[0]) + mpmsdem::hdAbs(blk.angVel[1]) + mpmsdem::hdAbs(blk.angVel[2]);
   const T d = dt * (v + w * reach);
   return d <= limit ? d : limit;
 }
@@ -174,6 +174,7 @@ struct MpContact {
   T particleMass;     // [kg]
   sdem::BarrierCoulombResult<T> law;  // forces, stiffnesses, energies of the law
 };
+
 
 // Status of one particle's coupling.
 constexpr int kCoupleOk = 0;
@@ -214,9 +215,117 @@ template <typename T>
 MPM_HD_INLINE T particleRadius(T volume0, CouplingLoopMemo<T>& memo) {
   if (!(volume0 == memo.volume)) {
     memo.volume = volume0;
-    memo.radius = mpm::hdCbrt(T(3) * volume0 / T(4 * 3.14159265358979323846));
+    memo.radius = mpmsdem::hdCbrt(T(3) * volume0 / T(4 * 3.14159265358979323846));
   }
   return memo.radius;
+}
+
+// One particle's contacts within a step, as the SDEM-block loop (coupleParticle) and the level-set
+// loop (coupleParticleLevelSets) keep them alike: its history slots, read at its first contact
+// (most points near a block touch nothing) and rewritten contact by contact, and the sum of the
+// forces on it.
+template <typename T>
+struct ParticleContacts {
+  static constexpr int kMaxSlots = 4;
+  HistoryView<T> H;
+  int h;             // the particle's number (CouplingParticles::id)
+  long long slot0;   // its first history slot; 64-bit, as 3 x slots x number passes 2^31 at a few 10^8 points
+  int slots;
+  bool oldRead = false;
+  int used = 0;
+  long long oldKey[kMaxSlots];
+  T oldXi[3 * kMaxSlots];
+  Vec3T<T> fsum{T(0), T(0), T(0)};
+
+  MPM_HD_INLINE ParticleContacts(const HistoryView<T>& history, int number)
+      : H(history), h(number), slot0(static_cast<long long>(history.slots) * number),
+        slots(history.slots < kMaxSlots ? history.slots : kMaxSlots) {}
+
+  // The elastic tangential force the pair `key` carried at the end of the previous step (zero
+  // for a pair that was not in contact then).
+  MPM_HD_INLINE void previous(long long key, T xi[3]) {
+    if (!oldRead) {
+      const bool current = historyCurrent(H, h);
+      for (int k = 0; k < slots; ++k) {
+        oldKey[k] = current ? H.key[slot0 + k] : -1;
+        if (oldKey[k] >= 0)
+          for (int d = 0; d < 3; ++d) oldXi[3 * k + d] = H.xi[3 * (slot0 + k) + d];
+      }
+      oldRead = true;
+    }
+    for (int d = 0; d < 3; ++d) xi[d] = T(0);
+    for (int k = 0; k < slots; ++k)
+      if (oldKey[k] == key)
+        for (int d = 0; d < 3; ++d) xi[d] = oldXi[3 * k + d];
+  }
+
+  // Keep this step's xi of the pair `key` for the next step; *overflow counts the pairs that
+  // found no free slot (their tangential force is not carried over).
+  MPM_HD_INLINE void keep(long long key, const T xi[3], int* overflow) {
+    if (used < slots) {
+      H.key[slot0 + used] = key;
+      for (int d = 0; d < 3; ++d) H.xi[3 * (slot0 + used) + d] = xi[d];
+      ++used;
+    } else {
+      ++*overflow;
+    }
+  }
+
+  // After the particle's last pair: the slots of contacts that ended are emptied and the step
+  // marked (without contact the slots go stale unwritten: HistoryView), and the forces added to
+  // the particle in slot p.
+  MPM_HD_INLINE void finish(const CouplingParticles<T>& P, int p) {
+    if (used > 0) {
+      for (int k = used; k < slots; ++k) H.key[slot0 + k] = -1;
+      H.written[h] = H.step;
+    }
+    for (int d = 0; d < 3; ++d) P.force[d][p] += fsum[d];
+  }
+};
+
+// A pair not yet in contact, `gap` [m] apart along the unit normal n (from the block towards the
+// particle), closing if the particle's velocity vp relative to the block's surface velocity vb has
+// a component against n: *approach is lowered to the smaller of approachStepBound and
+// firstContactStepBound (the particle's mass mp, the pair's barrier `cutoff` and physics).
+template <typename T>
+MPM_HD_INLINE void lowerApproachBound(T gap, const Vec3T<T>& vp, const Vec3T<T>& vb, const Vec3T<T>& n, T dt, T mp,
+                                      T cutoff, const sdem::BarrierCoulombPhys<T>& phys, T safety, T* approach) {
+  const T vn = -mpmsdem::dot(vp - vb, n);
+  if (vn > T(0)) {
+    const T arriving = approachStepBound(gap, vn, dt, mp, cutoff, phys, safety);
+    const T first = firstContactStepBound(vn, mp, cutoff, phys, safety);
+    const T bound = arriving < first ? arriving : first;
+    if (bound < *approach) *approach = bound;
+  }
+}
+
+// A pair in contact: overlap delta = cutoff - distance along the unit normal n at the point c, the
+// particle's velocity vp against the block's surface velocity vb there. The barrier and Coulomb
+// laws with the pair's tangential history (key), the contact handed to sink and its force added
+// to the particle's sum.
+template <typename T, typename Sink>
+MPM_HD_INLINE void actOnContact(ParticleContacts<T>& pc, long long key, int block, int featureKind, int featureIndex,
+                                const BlockState<T>& blk, const sdem::BarrierCoulombPhys<T>& phys, T cutoff,
+                                T distance, const Vec3T<T>& n, const Vec3T<T>& c, const Vec3T<T>& vp,
+                                const Vec3T<T>& vb, T mp, T dt, int* overflow, Sink& sink) {
+  const T delta = cutoff - distance;
+  const T meff = blk.fixed ? mp : mp * blk.mass / (mp + blk.mass);
+  T xi[3];
+  pc.previous(key, xi);
+  MpContact<T> ct;
+  ct.law = sdem::barrierCoulomb(phys, cutoff, delta, n, vp - vb, meff, dt, xi);
+  pc.keep(key, xi, overflow);
+  ct.particle = pc.h;
+  ct.block = block;
+  ct.featureKind = featureKind;
+  ct.featureIndex = featureIndex;
+  ct.force = ct.law.normalForce * n + ct.law.tangential;
+  ct.point = c;
+  ct.normal = n;
+  ct.overlap = delta;
+  ct.particleMass = mp;
+  pc.fsum = pc.fsum + ct.force;
+  sink(ct);
 }
 
 // Couple the particle in slot p with the blocks listed in its bin. Calls sink(const MpContact<T>&)
@@ -236,29 +345,20 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
                                  int* badBlock, int* overflow, T* approach, CouplingLoopMemo<T>& memo) {
   const Vec3T<T> x{P.x[0][p], P.x[1][p], P.x[2][p]};
   const int bin = binOf(bins, x[0], x[1], x[2]);
-  const int h = particleNumber(P, p);
-  // its first history slot; 64-bit, as 3 x slots x number passes 2^31 at a few 10^8 points
-  const long long slot0 = static_cast<long long>(H.slots) * h;
   const int s = bins.slot[bin];
   if (s < 0) return kCoupleOk;  // no block near; its history goes stale (HistoryView)
   const int b0 = bins.first[s], b1 = bins.first[s + 1];
-  constexpr int kMaxSlots = 4;
-  long long oldKey[kMaxSlots];
-  T oldXi[3 * kMaxSlots];
-  const int slots = H.slots < kMaxSlots ? H.slots : kMaxSlots;
-  bool oldRead = false;  // most points in a block's bins touch nothing: read the history at the first contact
-  int used = 0;
+  ParticleContacts<T> pc(H, particleNumber(P, p));
   const T rp = particleRadius(P.vol0[p], memo);
   const T mp = P.mass[p];
   const Vec3T<T> vp{P.v[0][p], P.v[1][p], P.v[2][p]};
-  Vec3T<T> fsum{T(0), T(0), T(0)};
   for (int i = b0; i < b1; ++i) {
     const int b = bins.blocks[i];
     const BlockState<T>& blk = B[b];
     const Vec3T<T> r{x.x - blk.pos[0], x.y - blk.pos[1], x.z - blk.pos[2]};
     const Vec3T<T> w{blk.angVel[0], blk.angVel[1], blk.angVel[2]};
     const T reach = blk.reach + rp;
-    if (mpm::dot(r, r) >= (reach + T(bins.watch)) * (reach + T(bins.watch))) continue;
+    if (mpmsdem::dot(r, r) >= (reach + T(bins.watch)) * (reach + T(bins.watch))) continue;
     const T* R = blk.rot;
     const Vec3T<T> xb{R[0] * r.x + R[3] * r.y + R[6] * r.z, R[1] * r.x + R[4] * r.y + R[7] * r.z,
                       R[2] * r.x + R[5] * r.y + R[8] * r.z};
@@ -292,58 +392,15 @@ MPM_HD_INLINE int coupleParticle(int p, const CouplingParticles<T>& P, const Blo
     const Vec3T<T> rc{c.x - blk.pos[0], c.y - blk.pos[1], c.z - blk.pos[2]};
     const Vec3T<T> vb = Vec3T<T>{blk.vel[0], blk.vel[1], blk.vel[2]} + sdem::cross(w, rc);
     if (q.distance >= cutoff) {  // not touching yet
-      const T vn = -mpm::dot(vp - vb, n);
-      if (vn > T(0)) {
-        const T arriving = approachStepBound(q.distance - cutoff, vn, dt, mp, cutoff, phys[blk.phys], safety);
-        const T first = firstContactStepBound(vn, mp, cutoff, phys[blk.phys], safety);
-        const T bound = arriving < first ? arriving : first;
-        if (bound < *approach) *approach = bound;
-      }
+      lowerApproachBound(q.distance - cutoff, vp, vb, n, dt, mp, cutoff, phys[blk.phys], safety, approach);
       continue;
     }
-    const T delta = cutoff - q.distance;
-    const T meff = blk.fixed ? mp : mp * blk.mass / (mp + blk.mass);
     const long long key = (static_cast<long long>(b) << 32) | (static_cast<long long>(q.featureKind) << 28) |
                           static_cast<long long>(q.featureIndex);
-    if (!oldRead) {
-      const bool current = historyCurrent(H, h);
-      for (int k = 0; k < slots; ++k) {
-        oldKey[k] = current ? H.key[slot0 + k] : -1;
-        if (oldKey[k] >= 0)
-          for (int d = 0; d < 3; ++d) oldXi[3 * k + d] = H.xi[3 * (slot0 + k) + d];
-      }
-      oldRead = true;
-    }
-    T xi[3] = {T(0), T(0), T(0)};
-    for (int k = 0; k < slots; ++k)
-      if (oldKey[k] == key)
-        for (int d = 0; d < 3; ++d) xi[d] = oldXi[3 * k + d];
-    MpContact<T> ct;
-    ct.law = sdem::barrierCoulomb(phys[blk.phys], cutoff, delta, n, vp - vb, meff, dt, xi);
-    if (used < slots) {
-      H.key[slot0 + used] = key;
-      for (int d = 0; d < 3; ++d) H.xi[3 * (slot0 + used) + d] = xi[d];
-      ++used;
-    } else {
-      ++*overflow;
-    }
-    ct.particle = h;
-    ct.block = b;
-    ct.featureKind = q.featureKind;
-    ct.featureIndex = q.featureIndex;
-    ct.force = ct.law.normalForce * n + ct.law.tangential;
-    ct.point = c;
-    ct.normal = n;
-    ct.overlap = delta;
-    ct.particleMass = mp;
-    fsum = fsum + ct.force;
-    sink(ct);
+    actOnContact(pc, key, b, q.featureKind, q.featureIndex, blk, phys[blk.phys], cutoff, q.distance, n, c, vp, vb, mp,
+                 dt, overflow, sink);
   }
-  if (used > 0) {  // without contact the slots go stale unwritten
-    for (int k = used; k < slots; ++k) H.key[slot0 + k] = -1;  // the contacts that ended
-    H.written[h] = H.step;
-  }
-  for (int d = 0; d < 3; ++d) P.force[d][p] += fsum[d];
+  pc.finish(P, p);
   return kCoupleOk;
 }
 
@@ -377,7 +434,7 @@ MPM_HD_INLINE void blockShare(const MpContact<T>& c, const BlockState<T>& b, dou
   }
   const Vec3T<T> rn = sdem::cross(rc, c.normal);
   share[kSumK] = static_cast<double>(c.law.kn > c.law.kt ? c.law.kn : c.law.kt);
-  share[kSumKr] = static_cast<double>(c.law.kn * mpm::dot(rn, rn) + c.law.kt * mpm::dot(rc, rc));
+  share[kSumKr] = static_cast<double>(c.law.kn * mpmsdem::dot(rn, rn) + c.law.kt * mpmsdem::dot(rc, rc));
   share[kSumCount] = 1.0;
   share[kSumBarrier] = static_cast<double>(c.law.barrierEnergy);
   share[kSumSpring] = static_cast<double>(c.law.springEnergy);
@@ -429,7 +486,7 @@ MPM_HD_INLINE void contactRecord(const MpContact<T>& c, double r[kContactValues]
 template <typename T>
 MPM_HD_INLINE T particleStepBound(const MpContact<T>& c) {
   const T k = c.law.kn > c.law.kt ? c.law.kn : c.law.kt;
-  return mpm::hdSqrt(c.particleMass / k);
+  return mpmsdem::hdSqrt(c.particleMass / k);
 }
 
 }  // namespace coupling

@@ -57,7 +57,7 @@ MPM_HD_INLINE LevelSetSample<T> sampleLevelSet(const LevelSetGridView<T>& g, con
       outside[d] = (t - last) * g.spacing;
       t = last;
     }
-    int i = static_cast<int>(mpm::hdFloor(t));
+    int i = static_cast<int>(mpmsdem::hdFloor(t));
     if (i > g.nGP[d] - 2) i = g.nGP[d] - 2;  // a point on the last grid plane is in the last cell
     c[d] = i;
     u[d] = t - T(i);
@@ -103,23 +103,15 @@ MPM_HD_INLINE int coupleParticleLevelSets(int p, const CouplingParticles<T>& P, 
                                           const HistoryView<T>& H, T dt, T safety, T watch, Sink& sink, int* badBody,
                                           int* overflow, T* approach, CouplingLoopMemo<T>& memo) {
   const Vec3T<T> x{P.x[0][p], P.x[1][p], P.x[2][p]};
-  const int h = particleNumber(P, p);
-  const long long slot0 = static_cast<long long>(H.slots) * h;
-  constexpr int kMaxSlots = 4;
-  long long oldKey[kMaxSlots];
-  T oldXi[3 * kMaxSlots];
-  const int slots = H.slots < kMaxSlots ? H.slots : kMaxSlots;
-  bool oldRead = false;
-  int used = 0;
+  ParticleContacts<T> pc(H, particleNumber(P, p));
   const T rp = particleRadius(P.vol0[p], memo);
   const T mp = P.mass[p];
   const Vec3T<T> vp{P.v[0][p], P.v[1][p], P.v[2][p]};
-  Vec3T<T> fsum{T(0), T(0), T(0)};
   for (int b = 0; b < nBodies; ++b) {
     const BlockState<T>& blk = B[b];
     const Vec3T<T> r{x.x - blk.pos[0], x.y - blk.pos[1], x.z - blk.pos[2]};
     const T reach = blk.reach + rp;
-    if (mpm::dot(r, r) >= (reach + watch) * (reach + watch)) continue;
+    if (mpmsdem::dot(r, r) >= (reach + watch) * (reach + watch)) continue;
     const T* R = blk.rot;
     const Vec3T<T> xb{R[0] * r.x + R[3] * r.y + R[6] * r.z, R[1] * r.x + R[4] * r.y + R[7] * r.z,
                       R[2] * r.x + R[5] * r.y + R[8] * r.z};
@@ -141,57 +133,13 @@ MPM_HD_INLINE int coupleParticleLevelSets(int p, const CouplingParticles<T>& P, 
     const Vec3T<T> w{blk.angVel[0], blk.angVel[1], blk.angVel[2]};
     const Vec3T<T> vb = Vec3T<T>{blk.vel[0], blk.vel[1], blk.vel[2]} + sdem::cross(w, rc);
     if (s.distance >= cutoff) {  // not touching yet
-      const T vn = -mpm::dot(vp - vb, n);
-      if (vn > T(0)) {
-        const T arriving = approachStepBound(s.distance - cutoff, vn, dt, mp, cutoff, phys[blk.phys], safety);
-        const T first = firstContactStepBound(vn, mp, cutoff, phys[blk.phys], safety);
-        const T bound = arriving < first ? arriving : first;
-        if (bound < *approach) *approach = bound;
-      }
+      lowerApproachBound(s.distance - cutoff, vp, vb, n, dt, mp, cutoff, phys[blk.phys], safety, approach);
       continue;
     }
-    const T delta = cutoff - s.distance;
-    const T meff = blk.fixed ? mp : mp * blk.mass / (mp + blk.mass);
-    const long long key = static_cast<long long>(b) << 32;
-    if (!oldRead) {
-      const bool current = historyCurrent(H, h);
-      for (int k = 0; k < slots; ++k) {
-        oldKey[k] = current ? H.key[slot0 + k] : -1;
-        if (oldKey[k] >= 0)
-          for (int d = 0; d < 3; ++d) oldXi[3 * k + d] = H.xi[3 * (slot0 + k) + d];
-      }
-      oldRead = true;
-    }
-    T xi[3] = {T(0), T(0), T(0)};
-    for (int k = 0; k < slots; ++k)
-      if (oldKey[k] == key)
-        for (int d = 0; d < 3; ++d) xi[d] = oldXi[3 * k + d];
-    MpContact<T> ct;
-    ct.law = sdem::barrierCoulomb(phys[blk.phys], cutoff, delta, n, vp - vb, meff, dt, xi);
-    if (used < slots) {
-      H.key[slot0 + used] = key;
-      for (int d = 0; d < 3; ++d) H.xi[3 * (slot0 + used) + d] = xi[d];
-      ++used;
-    } else {
-      ++*overflow;
-    }
-    ct.particle = h;
-    ct.block = b;
-    ct.featureKind = sdem::kFeatureFace;
-    ct.featureIndex = 0;
-    ct.force = ct.law.normalForce * n + ct.law.tangential;
-    ct.point = c;
-    ct.normal = n;
-    ct.overlap = delta;
-    ct.particleMass = mp;
-    fsum = fsum + ct.force;
-    sink(ct);
+    actOnContact(pc, static_cast<long long>(b) << 32, b, sdem::kFeatureFace, 0, blk, phys[blk.phys], cutoff,
+                 s.distance, n, c, vp, vb, mp, dt, overflow, sink);
   }
-  if (used > 0) {
-    for (int k = used; k < slots; ++k) H.key[slot0 + k] = -1;
-    H.written[h] = H.step;
-  }
-  for (int d = 0; d < 3; ++d) P.force[d][p] += fsum[d];
+  pc.finish(P, p);
   return kCoupleOk;
 }
 

@@ -13,7 +13,7 @@
 #include <utility>
 
 #include "common/Error.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 
 namespace mpmsdem {
 namespace io {

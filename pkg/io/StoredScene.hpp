@@ -9,7 +9,7 @@
 
 #include <string>
 
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 
 namespace mpmsdem {
 namespace io {

@@ -1,7 +1,7 @@
 // Quadratic B-spline shape functions of the paper's Eq 2 and their gradients, and the
 // 3x3x3 node stencil of one material point. Shared by CPU and CUDA code.
 #pragma once
-#include "mpm/MathHD.hpp"
+#include "common/MathHD.hpp"
 
 namespace mpmsdem {
 namespace mpm {

@@ -4,7 +4,7 @@
 #pragma once
 #include <cstdint>
 
-#include "mpm/MathHD.hpp"
+#include "common/MathHD.hpp"
 
 namespace mpmsdem {
 namespace mpm {

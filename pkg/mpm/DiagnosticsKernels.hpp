@@ -5,7 +5,7 @@
 #pragma once
 #include <cmath>
 
-#include "mpm/MathHD.hpp"
+#include "common/MathHD.hpp"
 
 namespace mpmsdem {
 namespace mpm {

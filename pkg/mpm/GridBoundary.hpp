@@ -4,7 +4,7 @@
 // cells - kWallLayer on the high side. Material points are kept at least kWallLayer cells
 // inside each face, so the walls effectively sit kWallLayer*dx inside the domain box.
 #pragma once
-#include "mpm/MathHD.hpp"
+#include "common/MathHD.hpp"
 
 namespace mpmsdem {
 namespace mpm {

@@ -23,9 +23,9 @@
 #include "mpm/BSpline.hpp"
 #include "mpm/Constitutive.hpp"
 #include "mpm/GridBoundary.hpp"
-#include "mpm/MathHD.hpp"
+#include "common/MathHD.hpp"
 #include "mpm/MpmTypes.hpp"
-#include "mpm/Terrain.hpp"
+#include "mpm/TerrainBoundary.hpp"
 
 namespace mpmsdem {
 namespace mpm {

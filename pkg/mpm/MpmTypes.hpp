@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/Error.hpp"
+#include "common/Terrain.hpp"
 
 namespace mpmsdem {
 namespace mpm {
@@ -47,41 +48,6 @@ struct GateSpec {
   double speed = 0;      // lift speed of the edge [m/s], >= 0 (0 or infinity: instant removal at openAt)
   double openAt = 0;     // t_open, when the lift starts [s], finite and >= 0
   double friction = 0;   // Coulomb coefficient between material and gate [-], finite and >= 0 (0 = smooth)
-};
-
-// A terrain under the flow (mpm/Terrain.hpp): heights z(x, y) in the grid frame on a raster of
-// nx x ny nodes, node (i, j) at (x0 + i spacing, y0 + j spacing) with height heights[i * ny + j],
-// linear on the two triangles of each raster cell and continued flat outside. The flow cannot enter it (grid nodes at or
-// below the surface lose their velocity into it, Coulomb friction on the rest) and points are kept
-// on or above it. Use it with gravity along -z (a real slope, not a rotated one). Range checks:
-// validate(), which the scene reader, makeSolver and the SDEM engine call.
-struct TerrainSpec {
-  std::vector<double> heights;  // [m], nx * ny finite values; empty: no terrain (the default)
-  int nx = 0, ny = 0;           // raster nodes along x and y, >= 2 each
-  double x0 = 0, y0 = 0;        // position of node (0, 0) in the grid frame [m], finite
-  double spacing = 0;           // raster spacing [m], > 0 and finite
-  double friction = 0;          // flow–terrain friction [-], finite: < 0 no-slip, 0 free slip, > 0 Coulomb
-  bool enabled() const { return !heights.empty(); }
-  // ParameterError naming "terrain.<field>" for a field out of its range (nothing to check
-  // without a terrain).
-  void validate() const {
-    if (!enabled()) return;
-    if (nx < 2) throwParameter("terrain.nx", nx, "", ">= 2 raster nodes along x");
-    if (ny < 2) throwParameter("terrain.ny", ny, "", ">= 2 raster nodes along y");
-    if (double(nx) * ny > 2147483647.0 || heights.size() != std::size_t(nx) * std::size_t(ny))
-      throwParameter("terrain.heights", std::to_string(heights.size()) + " values", "",
-                     "nx * ny = " + std::to_string(nx) + " x " + std::to_string(ny) + " values (< 2^31)");
-    if (!(spacing > 0) || !std::isfinite(spacing)) throwParameter("terrain.spacing", spacing, "m", "finite and > 0");
-    if (!std::isfinite(x0)) throwParameter("terrain.x0", x0, "m", "finite");
-    if (!std::isfinite(y0)) throwParameter("terrain.y0", y0, "m", "finite");
-    if (!std::isfinite(friction))
-      throwParameter("terrain.friction", friction, "", "finite (< 0 no-slip, 0 free slip, > 0 Coulomb)");
-    for (std::size_t k = 0; k < heights.size(); ++k)
-      if (!std::isfinite(heights[k]))
-        throwParameter("terrain.heights[" + std::to_string(k) + "] (node i " + std::to_string(k / ny) + ", j " +
-                           std::to_string(k % ny) + ")",
-                       heights[k], "m", "finite (fill the raster's no-data nodes first)");
-  }
 };
 
 struct MpmParams {

@@ -18,7 +18,7 @@
 
 #include "common/Types.hpp"
 #include "coupling/CoupledWorld.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "run/RunLoop.hpp"
 #include "sdem/SdemEngine.hpp"
 

@@ -46,7 +46,7 @@
 #include "io/Hdf5Writer.hpp"
 #include "io/VtkWriter.hpp"
 #include "mpm/Diagnostics.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "run/RunLoop.hpp"
 
 namespace mpmsdem {

@@ -12,7 +12,7 @@
 #include <string>
 
 #include "coupling/CoupledWorld.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 
 namespace mpmsdem {

@@ -31,7 +31,7 @@
 #include <string>
 
 #include "coupling/CoupledScene.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "run/RunLoop.hpp"
 
 namespace mpmsdem {

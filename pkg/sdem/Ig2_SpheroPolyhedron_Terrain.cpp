@@ -34,7 +34,7 @@ void nodeRange(Real lo, Real hi, Real reach, Real origin, Real spacing, int n, i
 
 }  // namespace
 
-void Ig2_SpheroPolyhedron_Terrain::setTerrain(const mpm::TerrainSpec& t) {
+void Ig2_SpheroPolyhedron_Terrain::setTerrain(const mpmsdem::TerrainSpec& t) {
   if (3.0 * t.nx * t.ny > 2147483647.0)
     throwParameter("terrain.heights", std::to_string(t.nx) + " x " + std::to_string(t.ny) + " nodes", "",
                    "fewer than 2^31 / 3 nodes under blocks (their terrain edges are named in 32 bits)");
@@ -138,12 +138,12 @@ bool Ig2_SpheroPolyhedron_Terrain::go(const PosedSpheroPolyhedron& P, std::vecto
     return os.str();
   };
 
-  const mpm::TerrainView<Real> view = mpm::terrainViewOf(spec_, spec_.heights.data());  // (a copy's own heights)
+  const mpmsdem::TerrainView<Real> view = mpmsdem::terrainViewOf(spec_, spec_.heights.data());  // (a copy's own heights)
   std::vector<char> touching(P.vertices.size(), 0);
   for (std::size_t v = 0; v < P.vertices.size(); ++v) {
     const Vec3& p = P.vertices[v];
     Real gx, gy;
-    const Real h = mpm::terrainHeight(view, p.x(), p.y(), gx, gy);
+    const Real h = mpmsdem::terrainHeight(view, p.x(), p.y(), gx, gy);
     const Real s = std::sqrt(1 + gx * gx + gy * gy);
     const Real d = (p.z() - h) / s;
     if (!(d > 0)) {

@@ -1,5 +1,5 @@
 // Ig2_SpheroPolyhedron_Terrain: contact geometry between a sphero-polyhedron and the terrain
-// (mpm/Terrain.hpp: a height field, linear on the two triangles of each raster cell, flat beyond
+// (common/Terrain.hpp: a height field, linear on the two triangles of each raster cell, flat beyond
 // the raster; its own sweep radius is 0, so a contact's barrier reaches the body's R from its
 // core). Four feature pairs, so that relief finer than a body's core is felt and each geometric
 // contact counts once:
@@ -40,8 +40,7 @@
 #include <string>
 #include <vector>
 
-#include "mpm/MpmTypes.hpp"
-#include "mpm/Terrain.hpp"
+#include "common/Terrain.hpp"
 #include "sdem/Ig2_SpheroPolyhedron_SpheroPolyhedron.hpp"
 
 namespace mpmsdem {
@@ -50,7 +49,7 @@ namespace sdem {
 class Ig2_SpheroPolyhedron_Terrain {
  public:
   // The terrain (validated by the caller) and its convex edges.
-  void setTerrain(const mpm::TerrainSpec& t);
+  void setTerrain(const mpmsdem::TerrainSpec& t);
 
   // Append the contacts of body P with the terrain to `out`. Returns false (and says in `what`
   // which feature) when the terrain reaches P's core: a core vertex at or below the surface, a
@@ -76,7 +75,7 @@ class Ig2_SpheroPolyhedron_Terrain {
   // Ends (a, b) of edge dir at node (i, j), and the third vertices of its two triangles.
   void edgePoints(int i, int j, int dir, Vec3& a, Vec3& b, Vec3& c1, Vec3& c2) const;
 
-  mpm::TerrainSpec spec_;
+  mpmsdem::TerrainSpec spec_;
   std::vector<std::uint8_t> convex_;  // per node, bit d: its edge d is convex
   std::vector<std::uint8_t> crest_;   // per node: an end of a convex edge
 };

@@ -41,7 +41,7 @@ Real Law2_SdemGeom_BarrierPhys_Coulomb::overlapForForce(Real kc, Real R, Real fo
 
 void Law2_SdemGeom_BarrierPhys_Coulomb::rotateHistory(Vec3& xi, const Vec3& n) {
   Real x[3] = {xi[0], xi[1], xi[2]};
-  rotateTangentialHistory(x, mpm::Vec3T<Real>{n[0], n[1], n[2]});
+  rotateTangentialHistory(x, mpmsdem::Vec3T<Real>{n[0], n[1], n[2]});
   xi = Vec3(x[0], x[1], x[2]);
 }
 
@@ -60,8 +60,8 @@ LawResult Law2_SdemGeom_BarrierPhys_Coulomb::go(const SdemGeom& g, Real R, const
                                     phys.tangentialDamping};
   Real xi[3] = {h.xi[0], h.xi[1], h.xi[2]};
   const BarrierCoulombResult<Real> b =
-      barrierCoulomb(ph, R, delta, mpm::Vec3T<Real>{g.normal[0], g.normal[1], g.normal[2]},
-                     mpm::Vec3T<Real>{relVel[0], relVel[1], relVel[2]}, meff, dt, xi);
+      barrierCoulomb(ph, R, delta, mpmsdem::Vec3T<Real>{g.normal[0], g.normal[1], g.normal[2]},
+                     mpmsdem::Vec3T<Real>{relVel[0], relVel[1], relVel[2]}, meff, dt, xi);
   h.xi = Vec3(xi[0], xi[1], xi[2]);
   LawResult r;
   r.normalForce = b.normalForce;

@@ -315,7 +315,7 @@ void SdemEngine::addContact(int a, int b, const SdemGeom& g, const BarrierPhys& 
   records_.push_back(rec);
 }
 
-void SdemEngine::setTerrain(const mpm::TerrainSpec& terrain, int material) {
+void SdemEngine::setTerrain(const mpmsdem::TerrainSpec& terrain, int material) {
   if (material < 0 || material >= numMaterials())
     throwParameter("terrain material", material, "",
                    "a registered material index in [0, " + std::to_string(numMaterials()) + ")");

@@ -15,8 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "mpm/MpmTypes.hpp"
-#include "mpm/Terrain.hpp"
+#include "common/Terrain.hpp"
 #include "sdem/Ig2_SpheroPolyhedron_SpheroPolyhedron.hpp"
 #include "sdem/Ig2_SpheroPolyhedron_Terrain.hpp"
 #include "sdem/Ip2_SdemMat_SdemMat_BarrierPhys.hpp"
@@ -124,7 +123,7 @@ class SdemEngine {
   void setFixed(int i, bool fixed);
   bool isFixed(int i) const;
 
-  // A terrain under the blocks (the flow's, mpm/Terrain.hpp: a height field, linear on the two
+  // A terrain under the blocks (the flow's, common/Terrain.hpp: a height field, linear on the two
   // triangles of each raster cell) with its SDEM material (a registered index): every moving
   // body meets it through Ig2_SpheroPolyhedron_Terrain's contacts (its core vertices against the
   // triangles under them; the crest nodes and convex edges of ridges and peaks against its core,
@@ -134,7 +133,7 @@ class SdemEngine {
   // raster under it, whatever the raster's size. Terrain reaching a core (a vertex at or below
   // the surface, a crest in it) stops the run (RuntimeFailure), as interpenetrating cores do.
   // ParameterError for an invalid terrain (the checks of the flow's) or material.
-  void setTerrain(const mpm::TerrainSpec& terrain, int material);
+  void setTerrain(const mpmsdem::TerrainSpec& terrain, int material);
   bool hasTerrain() const { return terrainMaterial_ >= 0; }
 
   // World-frame state: centroid position [m], orientation (x_world = pos + ori * x_body),

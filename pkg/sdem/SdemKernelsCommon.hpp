@@ -10,12 +10,12 @@
 #pragma once
 #include <cstdint>
 
-#include "mpm/MathHD.hpp"
+#include "common/MathHD.hpp"
 
 namespace mpmsdem {
 namespace sdem {
 
-using mpm::Vec3T;
+using mpmsdem::Vec3T;
 
 template <typename T>
 MPM_HD_INLINE Vec3T<T> cross(const Vec3T<T>& a, const Vec3T<T>& b) {
@@ -23,7 +23,7 @@ MPM_HD_INLINE Vec3T<T> cross(const Vec3T<T>& a, const Vec3T<T>& b) {
 }
 template <typename T>
 MPM_HD_INLINE T norm(const Vec3T<T>& a) {
-  return mpm::hdSqrt(mpm::dot(a, a));
+  return mpmsdem::hdSqrt(mpmsdem::dot(a, a));
 }
 
 // Flat shape table (views into arrays owned by the host ShapeTable or by device buffers).
@@ -75,7 +75,7 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
   const int v0 = S.shapeVertexStart[s], e0 = S.shapeEdgeStart[s], f0 = S.shapeFaceStart[s];
   auto offer = [&](const Vec3T<T>& q, int kind, int index) {
     const Vec3T<T> d = p - q;
-    const T d2 = mpm::dot(d, d);
+    const T d2 = mpmsdem::dot(d, d);
     if (bestD2 < T(0) || d2 < bestD2 - tieTol || (d2 <= bestD2 + tieTol && kind < best.featureKind)) {
       bestD2 = (bestD2 < T(0) || d2 < bestD2) ? d2 : bestD2;
       best.closest = q;
@@ -95,7 +95,7 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
     for (int i = 0; i < m && inside; ++i) {
       const Vec3T<T> a = vertexAt(S.loopVertex[l0 + i]);
       const Vec3T<T> b = vertexAt(S.loopVertex[l0 + (i + 1) % m]);
-      inside = mpm::dot(cross(b - a, q - a), n) >= T(0);
+      inside = mpmsdem::dot(cross(b - a, q - a), n) >= T(0);
     }
     if (inside) {
       offer(q, kFeatureFace, f - f0);
@@ -105,7 +105,7 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
       const int ia = S.loopVertex[l0 + i], ib = S.loopVertex[l0 + (i + 1) % m];
       const Vec3T<T> a = vertexAt(ia), b = vertexAt(ib);
       const Vec3T<T> ab = b - a;
-      const T t = mpm::dot(p - a, ab) / mpm::dot(ab, ab);
+      const T t = mpmsdem::dot(p - a, ab) / mpmsdem::dot(ab, ab);
       if (t <= T(0))
         offer(a, kFeatureVertex, ia - v0);
       else if (t >= T(1))
@@ -119,15 +119,15 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
   bool facing = false;  // p is in front of a face plane of the convex core, so outside it
   if (convex)
     for (int f = f0; f < f1; ++f) {
-      const T height = mpm::dot(normalAt(f), p) - S.faceOffset[f];
+      const T height = mpmsdem::dot(normalAt(f), p) - S.faceOffset[f];
       if (height > T(0)) {
         facing = true;
         searchFace(f, height);
       }
     }
   if (!facing)
-    for (int f = f0; f < f1; ++f) searchFace(f, mpm::dot(normalAt(f), p) - S.faceOffset[f]);
-  best.distance = mpm::hdSqrt(bestD2 < T(0) ? T(0) : bestD2);
+    for (int f = f0; f < f1; ++f) searchFace(f, mpmsdem::dot(normalAt(f), p) - S.faceOffset[f]);
+  best.distance = mpmsdem::hdSqrt(bestD2 < T(0) ? T(0) : bestD2);
   bool inside;
   if (convex) {
     inside = !facing;
@@ -139,8 +139,8 @@ MPM_HD_INLINE CoreQuery<T> closestPointOnCore(const ShapeTableView<T>& S, int s,
         const Vec3T<T> a = vertexAt(S.loopVertex[l0]) - p, b = vertexAt(S.loopVertex[i]) - p,
                        c = vertexAt(S.loopVertex[i + 1]) - p;
         const T la = norm(a), lb = norm(b), lc = norm(c);
-        omega += T(2) * mpm::hdAtan2(mpm::dot(a, cross(b, c)),
-                                la * lb * lc + mpm::dot(a, b) * lc + mpm::dot(b, c) * la + mpm::dot(c, a) * lb);
+        omega += T(2) * mpmsdem::hdAtan2(mpmsdem::dot(a, cross(b, c)),
+                                la * lb * lc + mpmsdem::dot(a, b) * lc + mpmsdem::dot(b, c) * la + mpmsdem::dot(c, a) * lb);
       }
     }
     inside = omega > T(2 * 3.14159265358979323846);
@@ -187,20 +187,20 @@ template <typename T>
 MPM_HD_INLINE T barrierForce(T kc, T R, T delta) {
   if (!(delta > T(0))) return T(0);
   const T x = delta / R;
-  return -kc * delta * (T(2) * mpm::hdLog1p(-x) - x / (T(1) - x));
+  return -kc * delta * (T(2) * mpmsdem::hdLog1p(-x) - x / (T(1) - x));
 }
 // Tangent stiffness k_n = dF_n/ddelta [N/m].
 template <typename T>
 MPM_HD_INLINE T barrierStiffness(T kc, T R, T delta) {
   if (!(delta > T(0))) return T(0);
   const T x = delta / R;
-  return -kc * (T(2) * mpm::hdLog1p(-x) - T(3) * x / (T(1) - x) - x / ((T(1) - x) * (T(1) - x)));
+  return -kc * (T(2) * mpmsdem::hdLog1p(-x) - T(3) * x / (T(1) - x) - x / ((T(1) - x) * (T(1) - x)));
 }
 // Barrier potential b(R - delta) [J]; F_n = db/ddelta.
 template <typename T>
 MPM_HD_INLINE T barrierPotential(T kc, T R, T delta) {
   if (!(delta > T(0))) return T(0);
-  return -kc * delta * delta * mpm::hdLog1p(-delta / R);
+  return -kc * delta * delta * mpmsdem::hdLog1p(-delta / R);
 }
 
 // Pair parameters of the law (YADE's IPhys role), plain values for device use.
@@ -232,7 +232,7 @@ MPM_HD_INLINE void rotateTangentialHistory(T h[3], const Vec3T<T>& n) {
   const Vec3T<T> x{h[0], h[1], h[2]};
   const T len = norm(x);
   if (len == T(0)) return;
-  const Vec3T<T> proj = x - mpm::dot(x, n) * n;
+  const Vec3T<T> proj = x - mpmsdem::dot(x, n) * n;
   const T plen = norm(proj);
   const T scale = plen > T(1e-12) * len ? len / plen : T(0);
   h[0] = proj.x * scale;
@@ -259,8 +259,8 @@ MPM_HD_INLINE BarrierCoulombResult<T> barrierCoulomb(const BarrierCoulombPhys<T>
   r.kn = barrierStiffness(ph.kc, R, delta);
   r.kt = r.kn / (T(2) * (T(1) + ph.nu));
   r.barrierEnergy = barrierPotential(ph.kc, R, delta);
-  const T vn = mpm::dot(relVel, n);
-  const T cn = T(2) * ph.zetaN * mpm::hdSqrt(meff * r.kn);
+  const T vn = mpmsdem::dot(relVel, n);
+  const T cn = T(2) * ph.zetaN * mpmsdem::hdSqrt(meff * r.kn);
   const T fElastic = barrierForce(ph.kc, R, delta);
   const T fn = fElastic - cn * vn;
   r.normalForce = fn > T(0) ? fn : T(0);
@@ -283,12 +283,12 @@ MPM_HD_INLINE BarrierCoulombResult<T> barrierCoulomb(const BarrierCoulombPhys<T>
     r.tangential = Vec3T<T>{fEl[0], fEl[1], fEl[2]};
   } else {
     r.sliding = false;
-    const T ct = T(2) * ph.zetaT * mpm::hdSqrt(meff * r.kt);
+    const T ct = T(2) * ph.zetaT * mpmsdem::hdSqrt(meff * r.kt);
     Vec3T<T> ft = fSpring - ct * vt;
     const T ftNorm = norm(ft);
     if (ftNorm > cap) ft = (cap / ftNorm) * ft;
     r.tangential = ft;
-    r.dampingWork += -mpm::dot(ft - fSpring, vt) * dt;
+    r.dampingWork += -mpmsdem::dot(ft - fSpring, vt) * dt;
   }
   const T f2 = fEl[0] * fEl[0] + fEl[1] * fEl[1] + fEl[2] * fEl[2];
   r.springEnergy = r.kt > T(0) ? f2 / (T(2) * r.kt) : T(0);

@@ -22,7 +22,7 @@
 #include <sstream>
 
 #include "common/Error.hpp"
-#include "io/MeshReader.hpp"
+#include "input/MeshReader.hpp"
 #include "sdem/MassProperties.hpp"
 
 namespace mpmsdem {

@@ -117,7 +117,7 @@ def writeScene(path, coupled, duration, dt="auto", flowProbes=(), **run):
     :param flowProbes: stations where the driver records the flow's depth and velocity (the
         free-flow tests of the paper's §3.2.3 and §5), dicts with ``x`` [m] and optionally
         ``halfWidth`` [m], ``bedZ`` [m], ``minPoints``, ``window`` [s] (the scene's
-        ``flow_probes``: pkg/mpm/MpmScene.hpp); results in the output's flow_probes.json.
+        ``flow_probes``: pkg/scene/MpmScene.hpp); results in the output's flow_probes.json.
     :param run: other run settings of the scene (``outputEvery``, ``seriesEvery`` [s],
         ``outputDir``, ``vtk``, ``backend``, ``precision``, ``dtFactor``, ``stopWhenProbed``,
         ``stopWhenFrontStill`` [s], ``snapshotWhenFrontAt`` [m]: the state where another scene of

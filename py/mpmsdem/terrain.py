@@ -3,7 +3,7 @@
 A :class:`Terrain` is heights ``z[i, j]`` [m] at ``(x0 + i·spacing, y0 + j·spacing)`` in the
 grid frame (i along x, west to east; j along y, south to north), read between nodes linearly on
 the two triangles of each raster cell (split along the diagonal from node (i+1, j) to node
-(i, j+1)) and continued flat beyond the raster (``pkg/mpm/Terrain.hpp``, the same formula on
+(i, j+1)) and continued flat beyond the raster (``pkg/common/Terrain.hpp``, the same formula on
 CPU and CUDA). The flow cannot enter it: grid nodes at or below the surface lose their velocity
 into it, with Coulomb friction on the rest (the walls' law of Appendix A, along the surface's
 normal), and material points carried below it are lifted back onto it. Use it with vertical

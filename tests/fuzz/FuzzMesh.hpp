@@ -11,7 +11,7 @@
 #include <string>
 
 #include "FuzzInput.hpp"
-#include "io/MeshReader.hpp"
+#include "input/MeshReader.hpp"
 #include "mpm/MpmTypes.hpp"
 #include "mpm/Seeding.hpp"
 

@@ -32,7 +32,7 @@
 #include "coupling/CoupledScene.hpp"
 #include "io/Hdf5Writer.hpp"
 #include "io/StoredScene.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 
 namespace {

@@ -7,7 +7,7 @@
 #include <utility>
 
 #include "FuzzInput.hpp"
-#include "io/TerrainRaster.hpp"
+#include "input/TerrainRaster.hpp"
 #include "mpm/MpmTypes.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -20,7 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     read = true;
   });
   if (!read) return 0;
-  mpm::TerrainSpec t;
+  mpmsdem::TerrainSpec t;
   t.nx = r.nx;
   t.ny = r.ny;
   t.x0 = r.x0;

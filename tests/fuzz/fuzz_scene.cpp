@@ -11,7 +11,7 @@
 
 #include "FuzzInput.hpp"
 #include "coupling/CoupledScene.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace mpmsdem;

@@ -517,9 +517,9 @@ TEST(ShapeTable, ClosestPointMatchesShapeQuery) {
     for (int k = 0; k < 3000; ++k) {
       const Vec3 p(u(rng), u(rng), u(rng));
       const auto ref = shapes[s]->closestPoint(p);
-      const auto q = sdem::closestPointOnCore(view, s, mpm::Vec3T<double>{p[0], p[1], p[2]});
+      const auto q = sdem::closestPointOnCore(view, s, mpmsdem::Vec3T<double>{p[0], p[1], p[2]});
       ASSERT_NEAR(q.distance, ref.distance, 1e-14) << "shape " << s;
-      ASSERT_LE(sdem::coreDistanceLowerBound(view, s, mpm::Vec3T<double>{p[0], p[1], p[2]}), ref.distance + 1e-14);
+      ASSERT_LE(sdem::coreDistanceLowerBound(view, s, mpmsdem::Vec3T<double>{p[0], p[1], p[2]}), ref.distance + 1e-14);
       ASSERT_EQ(q.featureKind, ref.featureKind) << "shape " << s;
       ASSERT_EQ(q.featureIndex, ref.featureIndex) << "shape " << s;
       for (int d = 0; d < 3; ++d) ASSERT_NEAR(q.closest[d], ref.closest[d], 1e-14);
@@ -546,8 +546,8 @@ TEST(ShapeTable, FloatFormulasAgreeWithDouble) {
   for (int s = 0; s < 3; ++s)
     for (int k = 0; k < 500; ++k) {
       const Vec3 p(u(rng), u(rng), u(rng));
-      const auto d = sdem::closestPointOnCore(dv, s, mpm::Vec3T<double>{p[0], p[1], p[2]});
-      const auto f = sdem::closestPointOnCore(fv, s, mpm::Vec3T<float>{float(p[0]), float(p[1]), float(p[2])});
+      const auto d = sdem::closestPointOnCore(dv, s, mpmsdem::Vec3T<double>{p[0], p[1], p[2]});
+      const auto f = sdem::closestPointOnCore(fv, s, mpmsdem::Vec3T<float>{float(p[0]), float(p[1]), float(p[2])});
       EXPECT_NEAR(f.distance, d.distance, 2e-6 * 0.12);
     }
   // the law: float within 1e-5 relative of double over the barrier's range
@@ -557,10 +557,10 @@ TEST(ShapeTable, FloatFormulasAgreeWithDouble) {
     const double R = 0.008, delta = x * R;
     double xid[3] = {1e-5, 0, 0};
     float xif[3] = {1e-5f, 0, 0};
-    const auto rd = sdem::barrierCoulomb(pd, R, delta, mpm::Vec3T<double>{0, 0, 1}, mpm::Vec3T<double>{0.1, 0.02, -0.3},
+    const auto rd = sdem::barrierCoulomb(pd, R, delta, mpmsdem::Vec3T<double>{0, 0, 1}, mpmsdem::Vec3T<double>{0.1, 0.02, -0.3},
                                          0.01, 1e-5, xid);
-    const auto rf2 = sdem::barrierCoulomb(pf, float(R), float(delta), mpm::Vec3T<float>{0, 0, 1},
-                                          mpm::Vec3T<float>{0.1f, 0.02f, -0.3f}, 0.01f, 1e-5f, xif);
+    const auto rf2 = sdem::barrierCoulomb(pf, float(R), float(delta), mpmsdem::Vec3T<float>{0, 0, 1},
+                                          mpmsdem::Vec3T<float>{0.1f, 0.02f, -0.3f}, 0.01f, 1e-5f, xif);
     EXPECT_NEAR(rf2.normalForce, rd.normalForce, 1e-5 * rd.normalForce) << "x = " << x;
     EXPECT_NEAR(rf2.kn, rd.kn, 1e-5 * rd.kn) << "x = " << x;
     EXPECT_NEAR(rf2.tangential.x, rd.tangential.x, 1e-5 * std::abs(rd.tangential.x) + 1e-12);
@@ -601,7 +601,7 @@ TEST(CouplingKernels, LoopMemoGivesExactlyWhatAFreshMemoGives) {
   auto clear = [&](const Vec3& xw) {
     for (const auto& k : blocks) {
       const Vec3 r = R.transpose() * (xw - Vec3(k.pos[0], k.pos[1], k.pos[2]));
-      if (sdem::closestPointOnCore(S, k.shape, mpm::Vec3T<double>{r[0], r[1], r[2]}).distance < 3e-3) return false;
+      if (sdem::closestPointOnCore(S, k.shape, mpmsdem::Vec3T<double>{r[0], r[1], r[2]}).distance < 3e-3) return false;
     }
     return true;
   };
@@ -700,7 +700,7 @@ TEST(CouplingKernels, TangentialHistoryEndsWithTheContact) {
   const BinGridView bins{{-0.2, -0.2, -0.2}, 5.0, {3, 1, 1}, binSlot, binFirst, binBlocks, 0.01};
   const double vol0 = 1e-6, mass = 1.6e-3;
   const double rp = std::cbrt(3 * vol0 / (4 * M_PI));
-  const double top = 1 - sdem::closestPointOnCore(S, 0, mpm::Vec3T<double>{0, 0, 1}).distance;
+  const double top = 1 - sdem::closestPointOnCore(S, 0, mpmsdem::Vec3T<double>{0, 0, 1}).distance;
   const double onTop = top + S.sweepRadius[0] + rp - 1e-3;  // 1 mm overlap
   const double vx = 0.05, dt = 1e-3;  // the spring gains about 0.1 N a step, below mu F_n = 1.4 N
   auto forcesAlong = [&](const std::vector<std::array<double, 3>>& path) {

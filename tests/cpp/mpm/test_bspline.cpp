@@ -5,6 +5,7 @@
 
 #include "mpm/BSpline.hpp"
 
+using namespace mpmsdem;
 using namespace mpmsdem::mpm;
 
 TEST(BSpline, HandValuesOfEq2) {

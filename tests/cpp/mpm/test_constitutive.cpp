@@ -11,6 +11,7 @@
 #include "mpm/GridBoundary.hpp"
 #include "mpm/MpmKernelsCommon.hpp"
 
+using namespace mpmsdem;
 using namespace mpmsdem::mpm;
 
 namespace {

@@ -12,6 +12,7 @@
 
 #include "GranularColumn.hpp"
 
+using namespace mpmsdem;
 using namespace mpmsdem::mpm;
 
 namespace {

@@ -17,6 +17,7 @@
 
 #include "AgreementHelpers.hpp"
 
+using namespace mpmsdem;
 using namespace mpmsdem::mpm;
 
 // On every backend in both precisions: the float run must resolve the 0.17 mm settlement of a

@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "common/Error.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "mpm/Seeding.hpp"
 

@@ -13,7 +13,7 @@
 #include "common/Error.hpp"
 #include "mpm/Gate.hpp"
 #include "mpm/MpmKernelsCommon.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "mpm/Seeding.hpp"
 

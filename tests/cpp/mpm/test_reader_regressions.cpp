@@ -22,9 +22,9 @@
 #include "io/Hdf5Writer.hpp"
 #include "io/StoredScene.hpp"
 #endif
-#include "io/MeshReader.hpp"
-#include "io/TerrainRaster.hpp"
-#include "mpm/MpmScene.hpp"
+#include "input/MeshReader.hpp"
+#include "input/TerrainRaster.hpp"
+#include "scene/MpmScene.hpp"
 
 using namespace mpmsdem;
 using mpmsdem::testutil::expectRefused;

@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/Error.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 
 #include "AgreementHelpers.hpp"

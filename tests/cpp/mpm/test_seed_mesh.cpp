@@ -15,8 +15,8 @@
 #include <nlohmann/json.hpp>
 
 #include "common/Error.hpp"
-#include "io/MeshReader.hpp"
-#include "mpm/MpmScene.hpp"
+#include "input/MeshReader.hpp"
+#include "scene/MpmScene.hpp"
 #include "mpm/Seeding.hpp"
 
 using namespace mpmsdem;

@@ -1,4 +1,4 @@
-// The terrain under the flow (mpm/Terrain.hpp, io/TerrainRaster, the scene's "terrain"): heights
+// The terrain under the flow (common/Terrain.hpp, mpm/TerrainBoundary.hpp, input/TerrainRaster, the scene's "terrain"): heights
 // read off the raster, the boundary on grid nodes against the walls' law, and flows on a slope
 // against the sliding block's analytic motion.
 #include <gtest/gtest.h>
@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "common/Error.hpp"
-#include "io/TerrainRaster.hpp"
+#include "input/TerrainRaster.hpp"
 #include "mpm/MpmKernelsCommon.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "mpm/Seeding.hpp"
 

@@ -13,7 +13,7 @@
 #include "coupling/CoupledCheckpoint.hpp"
 #include "coupling/CoupledScene.hpp"
 #include "io/Hdf5Writer.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "run/RunScene.hpp"
 
 namespace fs = std::filesystem;

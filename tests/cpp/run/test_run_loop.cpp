@@ -9,7 +9,7 @@
 #include <string>
 
 #include "common/Error.hpp"
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "run/OutputCadence.hpp"
 #include "run/Progress.hpp"

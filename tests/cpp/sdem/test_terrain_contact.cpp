@@ -21,8 +21,8 @@ namespace {
 const Real a = 0.045, R = 0.005, rho = 3000, g0 = 9.81;
 
 // The plane z = -tan(theta) x over [-2, 2]^2 on a raster of `spacing`.
-mpm::TerrainSpec slope(Real thetaDeg, Real spacing) {
-  mpm::TerrainSpec t;
+mpmsdem::TerrainSpec slope(Real thetaDeg, Real spacing) {
+  mpmsdem::TerrainSpec t;
   t.nx = t.ny = static_cast<int>(std::round(4.0 / spacing)) + 1;
   t.x0 = t.y0 = -2.0;
   t.spacing = spacing;
@@ -172,7 +172,7 @@ TEST(TerrainContact, HistoriesCheckpointAndACoreBelowTheGroundIsRefused) {
   cubeOnSlope(deep, m, 10.0, 0.05, -0.001, 0.0, 0.0);  // its bottom core face 1 mm into the ground
   expectRefused(deep, "SDEM body 7: core vertex", "below the terrain");
   EXPECT_THROW(deep.world.engine.setTerrain(slope(0.0, 0.1), 5), ParameterError);
-  mpm::TerrainSpec bad = slope(0.0, 0.1);
+  mpmsdem::TerrainSpec bad = slope(0.0, 0.1);
   bad.heights.pop_back();
   EXPECT_THROW(deep.world.engine.setTerrain(bad, 0), ParameterError);
 }
@@ -182,8 +182,8 @@ namespace {
 
 // Flat ground z = 0 on [-1, 1]^2, raster `spacing`, with the heights `raise` adds.
 template <typename F>
-mpm::TerrainSpec relief(Real spacing, F raise) {
-  mpm::TerrainSpec t;
+mpmsdem::TerrainSpec relief(Real spacing, F raise) {
+  mpmsdem::TerrainSpec t;
   t.nx = t.ny = static_cast<int>(std::round(2.0 / spacing)) + 1;
   t.x0 = t.y0 = -1.0;
   t.spacing = spacing;
@@ -199,7 +199,7 @@ Real eq10(Real delta, Real Rc) {
 
 // The cube of these tests at rest, face-down and unturned, centred over (x, y), its bottom core
 // face at height zb; gravity off, so that one step shows the contacts of that pose.
-void cubeAt(OnTerrain& s, const mpm::TerrainSpec& t, Real x, Real y, Real zb, const SdemMaterial& m) {
+void cubeAt(OnTerrain& s, const mpmsdem::TerrainSpec& t, Real x, Real y, Real zb, const SdemMaterial& m) {
   const int mat = s.world.engine.addMaterial(m);
   s.world.engine.setTerrain(t, mat);
   auto cube = SpheroPolyhedron::box(Vec3::Constant(0.05), R);
@@ -216,12 +216,12 @@ void cubeAt(OnTerrain& s, const mpm::TerrainSpec& t, Real x, Real y, Real zb, co
 TEST(TerrainCrest, ConvexEdgesAreTheRidgesAndPeaks) {
   const Real s = 0.1;
   const int mid = 10;  // node of x = 0 (and y = 0)
-  auto flags = [](const mpm::TerrainSpec& t) {
+  auto flags = [](const mpmsdem::TerrainSpec& t) {
     Ig2_SpheroPolyhedron_Terrain g;
     g.setTerrain(t);
     return g;
   };
-  for (const mpm::TerrainSpec& t : {relief(s, [](int i, int j) { return 0.3 * i - 0.1 * j; }),
+  for (const mpmsdem::TerrainSpec& t : {relief(s, [](int i, int j) { return 0.3 * i - 0.1 * j; }),
                                     relief(s, [&](int i, int) { return 0.05 * std::abs(i - mid); })}) {
     const Ig2_SpheroPolyhedron_Terrain g = flags(t);
     for (int i = 0; i < t.nx; ++i)
@@ -323,7 +323,7 @@ TEST(TerrainCrest, ACubeDroppedOnASpikeNeverTakesItInside) {
   m.friction = 0.5;
   m.normalDamping = 0.5;
   m.tangentialDamping = 0.5;
-  const mpm::TerrainSpec t = relief(0.02, [&](int i, int j) { return i == 50 && j == 50 ? H : 0.0; });
+  const mpmsdem::TerrainSpec t = relief(0.02, [&](int i, int j) { return i == 50 && j == 50 ? H : 0.0; });
   cubeAt(s, t, 0.02, 0.01, H + 0.9 * R, m);
   for (int k = 0; k < 12000; ++k) s.world.step(1e-4);
   const SdemEngine& e = s.world.engine;
@@ -368,7 +368,7 @@ namespace {
 
 // Flat ground z = 0 up to x = 0.1 m (node 55 of the 0.02 m raster), then a wall rising at 80 deg.
 const Real wallX = 0.1, wallAngle = 80 * M_PI / 180;
-mpm::TerrainSpec wall() {
+mpmsdem::TerrainSpec wall() {
   return relief(0.02, [](int i, int) { return i > 55 ? std::tan(wallAngle) * (-1.0 + 0.02 * i - wallX) : 0.0; });
 }
 
@@ -452,7 +452,7 @@ TEST(TerrainWall, ACubeSlidingIntoAWallRestsAgainstIt) {
 // overlap. Counting both would push the corner out of the fold twice.
 TEST(TerrainWall, AVertexInAFoldOfOneSlopeTouchesItOnce) {
   const Real s = 0.002, t60 = std::tan(M_PI / 3), t80 = std::tan(80 * M_PI / 180);
-  const mpm::TerrainSpec fold = relief(s, [&](int i, int) {
+  const mpmsdem::TerrainSpec fold = relief(s, [&](int i, int) {
     return i <= 550 ? 0.0 : i == 551 ? s * t60 : s * t60 + (i - 551) * s * t80;  // node 550 at x = 0.1
   });
   const Real dA = 0.49 * R, dB = 0.51 * R, c = std::cos(M_PI / 9);  // the two walls' normals, 20 deg apart

@@ -1,5 +1,5 @@
 // ESRI ASCII grid reader (see TerrainRaster.hpp).
-#include "io/TerrainRaster.hpp"
+#include "input/TerrainRaster.hpp"
 
 #include <algorithm>
 #include <cctype>

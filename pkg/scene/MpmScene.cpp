@@ -1,4 +1,4 @@
-#include "mpm/MpmScene.hpp"
+#include "scene/MpmScene.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -12,8 +12,8 @@
 
 #include "common/Error.hpp"
 #include "common/SceneJson.hpp"
-#include "io/MeshReader.hpp"
-#include "io/TerrainRaster.hpp"
+#include "input/MeshReader.hpp"
+#include "input/TerrainRaster.hpp"
 #include "mpm/GridBoundary.hpp"
 #include "mpm/MpmKernelsCommon.hpp"
 #include "mpm/Seeding.hpp"

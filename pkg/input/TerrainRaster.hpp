@@ -1,4 +1,4 @@
-// Terrain rasters for mpm::TerrainSpec: the ESRI ASCII grid (.asc), the plain-text elevation
+// Terrain rasters for mpmsdem::TerrainSpec: the ESRI ASCII grid (.asc), the plain-text elevation
 // raster GIS tools export (GDAL's "AAIGrid"). GeoTIFF and the other formats GDAL reads come in
 // through the Python package (mpmsdem.terrain), which hands their heights over as arrays.
 #pragma once
@@ -10,7 +10,7 @@ namespace io {
 
 // A raster of heights with its georeference: node (i, j), 0 <= i < nx (columns, west to east),
 // 0 <= j < ny (rows, south to north), at (x0 + i spacing, y0 + j spacing) with height
-// heights[i * ny + j] (the layout of mpm::TerrainSpec).
+// heights[i * ny + j] (the layout of mpmsdem::TerrainSpec).
 struct TerrainRaster {
   int nx = 0, ny = 0;
   double x0 = 0, y0 = 0;  // centre of the south-west cell, in the file's coordinates [m]

@@ -24,7 +24,6 @@
 #endif
 
 namespace mpmsdem {
-namespace mpm {
 
 // Scalar functions that resolve to the CUDA device overloads in device code and to
 // std:: in host code (float stays float on both sides).
@@ -158,5 +157,4 @@ MPM_HD_INLINE Sym6T<T> jaumannTerm(const Mat3T<T>& W, const Sym6T<T>& S) {
            ws[0][1] + ws[1][0]}};
 }
 
-}  // namespace mpm
 }  // namespace mpmsdem

@@ -1,5 +1,5 @@
 // STL/OBJ readers (see MeshReader.hpp).
-#include "io/MeshReader.hpp"
+#include "input/MeshReader.hpp"
 
 #include <algorithm>
 #include <cctype>
