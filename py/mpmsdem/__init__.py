@@ -60,7 +60,8 @@ _import_yade()
 _import_core()
 
 from ._mpmsdem import SpheroPolyhedron, SdemMat, cudaAvailable  # noqa: E402
-from .sdem import SdemEngine, _dispatch  # noqa: E402,F401  (_dispatch: the engines' PyRunner commands)
+from .engine import _dispatch  # noqa: E402,F401  (the engines' PyRunner commands, saved scenes' too)
+from .sdem import SdemEngine  # noqa: E402
 from .mpm import MpmEngine  # noqa: E402
 from .coupling import CoupledEngine  # noqa: E402
 from . import analysis  # noqa: E402
@@ -80,7 +81,7 @@ def material(density, friction=0.5, poisson=0.3, barrierStiffness=1e4, normalDam
     :param normalDamping: fraction of critical [-], >= 0 (0: elastic barrier, as the paper)
     :param tangentialDamping: fraction of critical [-], >= 0 (c_t of Eq 9)
     """
-    from .sdem import _material
+    from ._util import _material
     return _material(dict(density=density, friction=friction, poisson=poisson, barrierStiffness=barrierStiffness,
                           normalDamping=normalDamping, tangentialDamping=tangentialDamping))
 
@@ -93,14 +94,15 @@ def run(steps, *engines):
     The steps are taken in the calling thread, one ``O.step()`` each: ``O.run(n, True)`` hands
     them to YADE's worker thread and waits for it in 40 ms polls, which cost more than the steps
     when a script runs in short chunks to sample its scene (docs/benchmarks.md). An
-    ``O.pause()`` from an engine therefore does not end this call early; use ``O.run`` for that."""
+    ``O.pause()`` from an engine therefore does not end this call early; use ``O.run`` for that.
+
+    The scene's progress line (every 10 s of wall time, when an engine is verbose) says how much
+    of the ``steps`` is done and when they will be."""
     from yade import O
     from yade.wrapper import PyRunner
+    from .engine import _PROGRESS
     for e in engines:  # a misplaced or missing runner, a block state no scene has: say so now
-        if isinstance(e, (SdemEngine, MpmEngine)):
-            e._checkEngines()
-        elif isinstance(e, CoupledEngine) and not e._started:
-            e._checkBlockSpeeds()
+        e._beforeRun()
     # Before each command of a PyRunner whose updateGlobals is on (YADE's default), YADE copies
     # the local names of the Python function that called O.step() -- this one -- into the
     # script's globals: a script's own `steps` or `engines` would be overwritten. Our runners
@@ -109,6 +111,7 @@ def run(steps, *engines):
     userRunners = [r for r in O.engines if isinstance(r, PyRunner) and r.updateGlobals]
     for r in userRunners:
         r.updateGlobals = False
+    _PROGRESS.running(int(steps))
     try:
         for _ in range(int(steps)):
             O.step()
@@ -117,6 +120,7 @@ def run(steps, *engines):
             e.check()
         raise
     finally:
+        _PROGRESS.running(None)
         for r in userRunners:
             r.updateGlobals = True
     for e in engines:

@@ -21,21 +21,19 @@ opposite, to the grid through the particle's P2G weights (Eqs 14–16). Typical 
 ``coupled.runner`` replaces ``sdem.runner`` and ``mpm.runner`` (it steps both).
 """
 import math
-import sys
-import time as _time
 import warnings
 
 from yade import O
 from yade.minieigenHP import Quaternion, Vector3
 
 from . import _mpmsdem
-from .sdem import _AutoStep, _nextOnGrid, _requireBetweenResetAndNewton, _stepRunner
+from ._util import _material, _matDict, _nextOnGrid
+from .engine import DT_CHECKS, Engine, _StepControl
 
-DT_CHECKS = ("raise", "warn")
 PAIR_KEYS = ("friction", "barrierStiffness", "poisson", "normalDamping", "tangentialDamping")
 
 
-class CoupledEngine(_AutoStep):
+class CoupledEngine(Engine, _StepControl):
     """Couples an :class:`SdemEngine` (blocks) and an :class:`MpmEngine` (flow).
 
     :param sdem: the SDEM engine whose bodies are the blocks (all of them are coupled).
@@ -89,8 +87,10 @@ class CoupledEngine(_AutoStep):
         block id ``Ft_<id>``, ``Ff_<id>``, ``Fe_<id>`` [N], ``x_<id>`` [m], ``vx_<id>``
         [m/s], ``rot_<id>`` [deg]; per LevelSet body the same without ``Ff``/``Fe``), so
         ``plot.plots``/``plot.saveDataTxt`` work as with any YADE engine. Needs ``outputEvery``.
-    :param verbose: progress line on stderr every 10 s of wall time: time, step, contacts, the
-        critical step and ``O.dt`` with what sets it.
+    :param verbose: add the coupling's fields (MP–block contacts, the critical step, what sets
+        ``O.dt``) to the scene's progress line on stderr, every 10 s of wall time (with time,
+        step, ``O.dt`` and wall time per step, and the fields of the SDEM and MPM engines that are
+        verbose themselves; :mod:`mpmsdem.engine`).
     :param levelSets: YADE ``LevelSet`` bodies in the flow, beside the SDEM blocks (CPU backend
         of the flow only): a dict ``{body id: {"friction": μ, "barrierStiffness": k_c [N/m],
         "poisson": ν, "normalDamping": ζ_n, "tangentialDamping": ζ_t}}`` of the flow–body contact
@@ -155,8 +155,7 @@ class CoupledEngine(_AutoStep):
         self._lastRecord = self._lastVtk = -math.inf
         self._ori0 = {}
         self._appendOutput = False  # restore(): continue the files in `output`
-        self._wall0 = self._lastReport = None
-        self.runner = _stepRunner("coupled", id(self), self._step, label)
+        self._bindRunner("coupled", label)
 
     def setPair(self, material, spec):
         """Set the flow–block contact physics for blocks of ``material`` (see ``pairs``)."""
@@ -260,13 +259,15 @@ class CoupledEngine(_AutoStep):
         the SDEM safety factor. Before the first step only the MPM part is known."""
         return self._bridge.criticalTimeStep()
 
+    _name, _runnerName = "CoupledEngine", "coupled.runner"
+    _between = "the coupled runner adds the block forces after they are reset and before YADE moves the blocks"
+
     def _checkEngines(self):
         engines = list(O.engines)
         if self.sdem.runner in engines or self.mpm.runner in engines:
             raise ValueError("O.engines holds sdem.runner or mpm.runner besides coupled.runner: the coupled runner "
                              "steps both; use O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(...)]")
-        newton = _requireBetweenResetAndNewton(self.runner, "coupled.runner", "the coupled runner adds the block "
-                                               "forces after they are reset and before YADE moves the blocks")
+        newton = super()._checkEngines()
         g = Vector3(newton.gravity)
         gm = self.mpm.gravity
         if (g - Vector3(*gm)).norm() > 1e-9 * max(g.norm(), 1.0):
@@ -277,9 +278,15 @@ class CoupledEngine(_AutoStep):
         """ValueError naming a block faster than maxBlockSpeed: no scene starts so."""
         self._bridge.checkBlockSpeeds(O.bodies, self.maxBlockSpeed or self._bridge.defaultMaxBlockSpeed)
 
-    def _step(self):
+    def _beforeRun(self):
+        # O.engines is checked at the first step: a wrong list stops the run there (RuntimeError)
         if not self._started:
-            self._checkEngines()
+            self._checkBlockSpeeds()
+
+    def _step(self):
+        self._stepping(O.time, O.iter, O.dt)
+        if not self._started:
+            self._checkEnginesOnce()
             self._checkBlockSpeeds()
             self._started = True
             self.sdem._beforeFirstStep()
@@ -288,7 +295,6 @@ class CoupledEngine(_AutoStep):
                 self._openOutput()
             for w in self._bridge.outsideGridWarnings(O.bodies):
                 warnings.warn("mpmsdem.CoupledEngine: " + w, RuntimeWarning)
-            self._wall0 = self._lastReport = _time.time()
         if self._dtAuto is not None:
             # Set before this step's forces, so that the coupling, NewtonIntegrator and O.time
             # all advance by the same dt, and before the records, whose time slack is half of it.
@@ -318,18 +324,14 @@ class CoupledEngine(_AutoStep):
         self._restoredContactStep = None
         self.sdem._afterStep()
         self.mpm._afterStep(O.dt)
-        t = self.mpm.time
-        if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
-            if self._warned == 0:
-                warnings.warn("mpmsdem.CoupledEngine: O.dt = %g s exceeds the contact critical step %g s at step %d"
-                              % (O.dt, self._bridge.contactStep, O.iter), RuntimeWarning)
-            self._warned = self._bridge.timeStepWarnings
-        if self.verbose and _time.time() - self._lastReport > 10.0:
-            self._lastReport = now = _time.time()
-            print("mpmsdem.CoupledEngine: t = %.4f s, step %d, %d MP-block contacts, critical step %.3g s (O.dt %.3g s, "
-                  "%s), %.1f ms/step" % (t, O.iter, self._bridge.totalContacts, self._bridge.contactStep, O.dt,
-                                         self.stepLimit, 1e3 * (now - self._wall0) / max(O.iter, 1)),
-                  file=sys.stderr, flush=True)
+        self._warnTimeStep("contact critical step", self._bridge.contactStep)
+
+    def _progressParts(self, perStep):
+        return self.sdem._progressParts(perStep) + self.mpm._progressParts(perStep) + super()._progressParts(perStep)
+
+    def _progressFields(self, perStep):
+        return "%d MP-block contacts, critical step %.3g s, O.dt: %s" % (self._bridge.totalContacts,
+                                                                       self._bridge.contactStep, self.stepLimit)
 
     @property
     def stepLimit(self):
@@ -372,17 +374,18 @@ class CoupledEngine(_AutoStep):
         self._bridge.openOutput(str(self.output), append)
         self.sdem._outputsOpen = self.sdem._outputsOpen or h5
 
-    def _fail(self, e):
-        self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
+    def _lastGoodState(self, e):
+        note = ""
         self.sdem._fail(e)
         if self.sdem.error and "saved" in self.sdem.error:
-            self.error += self.sdem.error[self.sdem.error.index(" [last good"):]
+            note += self.sdem.error[self.sdem.error.index(" [last good"):]
         if self.mpm.output is not None:
             if self.mpm.solver.holdsLastGoodState:
                 self.mpm.solver.writeSnapshot()
-                self.error += " [particles of the last good step: last snapshot in %s]" % self.mpm.output
+                note += " [particles of the last good step: last snapshot in %s]" % self.mpm.output
             else:
-                self.error += " [particles' last good state: the last snapshot in %s]" % self.mpm.output
+                note += " [particles' last good state: the last snapshot in %s]" % self.mpm.output
+        return note
 
     def _dissipated(self):
         e = self._bridge.energies()
@@ -431,11 +434,6 @@ class CoupledEngine(_AutoStep):
             e += 0.5 * s.mass * s.vel.squaredNorm() + 0.5 * sum(s.inertia[k] * wb[k] ** 2 for k in range(3))
         return e
 
-    def check(self):
-        """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
-        if self.error:
-            raise RuntimeError("mpmsdem.CoupledEngine stopped the run at " + self.error)
-
     # ------------------------------------------------------------------ checkpoint
     def save(self, prefix):
         """Write a checkpoint of the coupled state, to go alongside ``O.save(prefix +
@@ -463,7 +461,7 @@ class CoupledEngine(_AutoStep):
                 # what dtAuto's next step reads (None: not known yet; a string keeps inf JSON-clean)
                 "contactStep": repr(self._bridge.contactStep) if self._contactsKnown else None,
                 "particleApproachStep": repr(self._bridge.particleApproachStep) if self._contactsKnown else None,
-                "pairs": [{"material": _matDictOf(mats[k]), "pair": p} for k, p in sorted(self._pairs.items())],
+                "pairs": [{"material": _matDict(mats[k]), "pair": p} for k, p in sorted(self._pairs.items())],
                 "historyKeys": base64.b64encode(keys).decode(), "historyXi": base64.b64encode(xi).decode(),
                 "dissipation": [self._bridge.energies()["friction"], self._bridge.energies()["damping"]],
                 "referenceOrientations": [list(q) for q in self._bridge.referenceOrientations()],
@@ -490,7 +488,7 @@ class CoupledEngine(_AutoStep):
         import base64
         import json
         from .mpm import MpmEngine
-        from .sdem import SdemEngine, _material
+        from .sdem import SdemEngine
         with open(prefix + ".coupled.json") as f:
             data = json.load(f)
         if data.get("format") == "mpmsdem-coupled-1":
@@ -514,7 +512,7 @@ class CoupledEngine(_AutoStep):
             raise ValueError("prefix = %r: O.time = %r s, O.iter = %d, but the checkpoint is at t = %r s, step %d: "
                              "O.load(%r) first" % (prefix, O.time, O.iter, data["time"], data["iter"],
                                                    prefix + ".yade.gz"))
-        mats = {json.dumps(_matDictOf(m), sort_keys=True): m for m, k in sdem._materials}
+        mats = {json.dumps(_matDict(m), sort_keys=True): m for m, k in sdem._materials}
         pairs = {}
         for entry in data["pairs"]:
             key = json.dumps(entry["material"], sort_keys=True)
@@ -637,8 +635,3 @@ class CoupledEngine(_AutoStep):
     def resetTimings(self):
         self._bridge.resetTimings()
         self.sdem.resetTimings()
-
-
-def _matDictOf(m):
-    from .sdem import _matDict
-    return _matDict(m)

@@ -153,7 +153,7 @@ def executable():
 def _materialIndex(coupled, yadeId):
     # The engine keeps a body's material values, not the object: equal values are one material
     # unless their flow pairs differ, which the file could not tell apart.
-    from .sdem import _matDict
+    from ._util import _matDict
     sdem = coupled.sdem
     values = sdem._recipes[sdem._index[yadeId]]["material"]
     ks = [k for mat, k in sdem._materials if _matDict(mat) == values]

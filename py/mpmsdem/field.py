@@ -25,7 +25,7 @@ from yade import O
 from yade.minieigenHP import Quaternion, Vector3
 
 from . import _mpmsdem
-from .sdem import _stepRunner
+from .engine import _stepRunner
 from .terrain import mapOffset
 
 WALL_LAYER = _mpmsdem.wallLayer  # cells inside each face of the grid box where its walls act

@@ -18,14 +18,11 @@ material points. Example, an MPM-only YADE script::
 """
 import json
 import math
-import sys
-import time as _time
 
 from yade import O
 
 from . import _mpmsdem
-
-from .sdem import _stepRunner
+from .engine import Engine
 
 
 # The step of the paper's coupled runs (§3.1, Appendix D) [s]: with flipReferenceDt=PAPER_STEP the
@@ -51,7 +48,7 @@ def flipReferenceArg(text):
     return v
 
 
-class MpmEngine:
+class MpmEngine(Engine):
     """Explicit MPM with the μ(I) granular model (paper §2.1, Appendices A–B).
 
     :param grid: ``{"dx": [m], "cells": [nx, ny, nz], "origin": [x, y, z] [m]}``.
@@ -103,6 +100,9 @@ class MpmEngine:
         files (``particles.pvd`` for ParaView); None: no files.
     :param outputEvery: snapshot interval [s] (with ``output``).
     :param label: label of the PyRunner for ``O.engines``.
+    :param verbose: add the flow's fields (its CFL step, particle-updates/s) to the scene's
+        progress line on stderr, every 10 s of wall time (with time, step, ``O.dt`` and wall time
+        per step; :mod:`mpmsdem.engine`).
     """
 
     def __init__(self, grid, material, particles, gravity=(0, 0, -9.81), walls=None, flipAlpha=None, cfl=0.3,
@@ -142,9 +142,7 @@ class MpmEngine:
         self.error = None
         if output is not None:
             self._openOutput(output, outputEvery, append=False)
-        self.runner = _stepRunner("mpm", id(self), self._yadeStep, label)
-        self._wall0 = _time.time()
-        self._lastReport = self._wall0
+        self._bindRunner("mpm", label)
 
     def _openOutput(self, output, outputEvery, append):
         if not (outputEvery and outputEvery > 0):
@@ -191,18 +189,22 @@ class MpmEngine:
 
     def step(self, dt):
         """One MPM step of ``dt`` seconds, then outputs if due."""
-        self.solver.step(float(dt))
-        self._afterStep(float(dt))
+        self._stepping(self.solver.time, self.solver.steps, float(dt))
+        self._advance(float(dt))
 
-    def _yadeStep(self):
+    def _advance(self, dt):
+        self.solver.step(dt)
+        self._afterStep(dt)
+
+    def _step(self):
+        self._stepping(O.time, O.iter, O.dt)
         try:
-            self.step(O.dt)
+            self._advance(float(O.dt))
         except Exception as e:
-            self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
-            self.error += self._lastGoodStateNote()
+            self._fail(e)
             raise
 
-    def _lastGoodStateNote(self):
+    def _lastGoodState(self, e):
         """Save the last good state after a failed step, if the solver kept it, and say where it is."""
         if self.output is None:
             return ""
@@ -223,20 +225,15 @@ class MpmEngine:
                     self._writeSnapshot()
                 while self._nextOutput <= t + 0.5 * dt:
                     self._nextOutput += self.outputEvery
-        now = _time.time()
-        if self.verbose and now - self._lastReport > 10.0:
-            self._lastReport = now
-            rate = self.solver.steps * self.solver.numParticles / max(now - self._wall0, 1e-9)
-            print("mpmsdem.MpmEngine: t = %.4f s, step %d, O.dt %.3g s (the flow's CFL step %.3g s), %.3g "
-                  "particle-updates/s" % (t, self.solver.steps, dt, self.solver.stableTimeStep(), rate),
-                  file=sys.stderr, flush=True)
 
-    def _checkEngines(self):
-        """ValueError unless this engine's runner is in O.engines (the flow needs no other
-        engine and no order)."""
-        if self.runner not in list(O.engines):
-            raise ValueError("O.engines does not hold this MpmEngine's runner: put it there (O.engines = "
-                             "[mpm.runner], or next to other engines), else the flow does not move")
+    # the flow needs no other engine and no order
+    _name, _runnerName = "MpmEngine", "mpm.runner"
+    _missing = ("O.engines does not hold this MpmEngine's runner: put it there (O.engines = [mpm.runner], or next "
+                "to other engines), else the flow does not move")
+
+    def _progressFields(self, perStep):
+        return "the flow's CFL step %.3g s, %.3g particle-updates/s" % (self.solver.stableTimeStep(),
+                                                                       self.solver.numParticles / max(perStep, 1e-12))
 
     def finish(self, snapshot=True):
         """Record the current state in the series of ``mpm.h5`` and, with ``snapshot``, as a
@@ -249,11 +246,6 @@ class MpmEngine:
             self._recordSeries(O.dt if O.dt > 0 else 0.0)
         if snapshot and self._lastSnapshotStep != self.solver.steps:
             self._writeSnapshot()
-
-    def check(self):
-        """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
-        if self.error:
-            raise RuntimeError("mpmsdem.MpmEngine stopped the run at " + self.error)
 
     # ------------------------------------------------------------------ checkpoint
     def save(self, path):

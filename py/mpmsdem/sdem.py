@@ -20,106 +20,18 @@ The YADE body is the source of truth for motion (mass, inertia, pos, ori, vel, a
 import json
 import math
 import os
-import sys
-import time
 import warnings
 
 from yade import O
-from yade.wrapper import Body, FrictMat, Polyhedra, PyRunner
+from yade.wrapper import Body, FrictMat, Polyhedra
 from yade.minieigenHP import Quaternion, Vector3
 
 from . import _mpmsdem
-
-DT_CHECKS = ("raise", "warn")
-
-
-# Step functions of the engines of this process, by the name their PyRunner command calls.
-_REGISTRY = {}
+from ._util import _material, _matDict, _nextOnGrid, _quat, _vec
+from .engine import DT_CHECKS, Engine, _StepControl
 
 
-def _stepRunner(kind, key, step, label, initRun=True):
-    """Register ``step`` and return the PyRunner (every step) that calls it, for ``O.engines``.
-    The command goes through :func:`_dispatch` rather than naming a function in ``__main__``: a
-    scene saved with ``O.save`` and loaded in another process keeps the command but not the
-    function, and YADE would then report only a ``NameError`` on a generated name. The runner's
-    ``updateGlobals`` is off: YADE's default copies the local names of the Python function that
-    called ``O.step()`` into the script's globals before each command (``mpmsdem.run``'s
-    ``steps`` would overwrite a script's own ``steps``), and the command needs none of them."""
-    name = "%s_%d" % (kind, key)
-    _REGISTRY[name] = step
-    return PyRunner(command="__import__('mpmsdem')._dispatch(%r)" % name, iterPeriod=1, initRun=initRun, label=label,
-                    updateGlobals=False)
-
-
-def _requireBetweenResetAndNewton(runner, name, why):
-    """ValueError unless O.engines runs ForceResetter, ``runner``, NewtonIntegrator in this order
-    (other engines may come before or after); ``name`` is the runner as a script names it
-    (``sdem.runner``), ``why`` what it does between the two. Returns the NewtonIntegrator."""
-    from yade.wrapper import ForceResetter, NewtonIntegrator
-    engines = list(O.engines)
-    me = engines.index(runner) if runner in engines else -1
-    resetters = [i for i, e in enumerate(engines) if isinstance(e, ForceResetter)]
-    newtons = [i for i, e in enumerate(engines) if isinstance(e, NewtonIntegrator)]
-    if me < 0 or not resetters or not newtons or not (resetters[0] < me < newtons[0]):
-        raise ValueError("O.engines = [%s]: must be [ForceResetter(), %s, NewtonIntegrator(...)] (in this order; other "
-                         "engines may come before or after): %s" % (", ".join(type(e).__name__ for e in engines),
-                                                                    name, why))
-    return engines[newtons[0]]
-
-
-def _dispatch(name):
-    """Run the step registered as ``name`` (the PyRunner commands of mpmsdem engines)."""
-    try:
-        step = _REGISTRY[name]
-    except KeyError:
-        raise RuntimeError(
-            "this mpmsdem engine (%r) is not registered in this process: after O.load(), rebuild it with "
-            "mpmsdem.SdemEngine.restore(...) or mpmsdem.MpmEngine.restore(...) and put its runner in O.engines in "
-            "place of the loaded one (e.g. O.engines = [ForceResetter(), engine.runner, NewtonIntegrator(...)])"
-            % name) from None
-    step()
-
-
-class _AutoStep:
-    """``dtAuto`` and ``dtMax`` of an engine whose bridge has ``checkFactor`` and
-    ``autoStep(bodies, factor, critical, lastDt)`` (SdemEngine, CoupledEngine)."""
-
-    @property
-    def dtAuto(self):
-        """None, or the factor f of the step set every step (``dtAuto`` of the constructor)."""
-        return self._dtAuto
-
-    @dtAuto.setter
-    def dtAuto(self, value):
-        if value is not None and not (isinstance(value, (int, float)) and 0 < value <= 1):
-            raise ValueError("dtAuto = %r: must be None or a factor in (0, 1] of the critical step" % (value,))
-        self._bridge.checkFactor = 1.0 if value is None else 2.0
-        self._dtAuto = value
-
-    @property
-    def dtMax(self):
-        """None, or the largest ``O.dt`` that ``dtAuto`` sets [s]."""
-        return self._dtMax
-
-    @dtMax.setter
-    def dtMax(self, value):
-        if value is not None and not (isinstance(value, (int, float)) and value > 0):
-            raise ValueError("dtMax = %r s: must be None or > 0" % (value,))
-        self._dtMax = value
-
-    def _setAutoStep(self, critical, contactsKnown):
-        """With dtAuto, set O.dt for the step about to run; critical: a bound on the critical
-        step besides the bridge's own [s] (inf: none). Before the contacts are known (first
-        step) O.dt is only capped."""
-        if self._dtAuto is None:
-            return
-        step = self._bridge.autoStep(O.bodies, self._dtAuto, critical, O.dt if contactsKnown else 0.0)
-        if self._dtMax is not None:
-            step = min(step, self._dtMax)
-        O.dt = step if contactsKnown else min(O.dt, step)
-
-
-class SdemEngine(_AutoStep):
+class SdemEngine(Engine, _StepControl):
     """Contact forces between sphero-polyhedral blocks, run inside YADE's loop.
 
     :param dtCheck: ``"raise"`` (default): stop the run with an error when ``O.dt`` exceeds
@@ -151,8 +63,9 @@ class SdemEngine(_AutoStep):
         ``bodies.pvd`` + ``vtk/bodies_*.vtp`` (outer shapes, for ParaView). None: no files.
     :param outputEvery: interval of the HDF5 records [s], > 0 (with ``output``).
     :param vtkEvery: interval of the VTK files [s], > 0, or None for none.
-    :param verbose: print a progress line (time, step, contacts, critical step, wall time per
-        step) to stderr every 10 s of wall time on long runs.
+    :param verbose: add the engine's fields (contacts, critical step) to the scene's progress
+        line on stderr, every 10 s of wall time on long runs (with time, step, ``O.dt`` and wall
+        time per step; :mod:`mpmsdem.engine`).
     :param label: label of the PyRunner put into ``O.engines``.
     """
 
@@ -184,13 +97,10 @@ class SdemEngine(_AutoStep):
         self._shapes = {}         # YADE id -> SpheroPolyhedron
         self._warned = 0
         self.verbose = verbose
-        self._lastReport = None  # (wall time, step) of the last progress line
         self._checkedEngines = False
-        self._checkedOrder = False  # O.engines checked (runner path only: CoupledEngine checks its own)
         self._appendOutput = False  # restore(): continue the files in `output`
         self._rolledBackAt = None   # O.iter of a failure whose bodies were put back (save() time)
-        self.error = None
-        self.runner = _stepRunner("sdem", id(self), self._step, label)
+        self._bindRunner("sdem", label)
 
     # ------------------------------------------------------------------ bodies
     def box(self, halfExtents, sweepRadius, material, pos=(0, 0, 0), ori=None, fixed=False, color=None):
@@ -316,22 +226,16 @@ class SdemEngine(_AutoStep):
         return [r["yadeId"] for r in self._recipes]
 
     # ------------------------------------------------------------------ stepping
-    def _checkEngines(self):
-        """ValueError unless O.engines runs ForceResetter, this runner, NewtonIntegrator in this
-        order: forces reset before the contacts add theirs, bodies moved after. Any other order
-        fails later with a misleading time-step error (forces added twice or lost), and without
-        the runner blocks fall through each other silently."""
-        _requireBetweenResetAndNewton(self.runner, "sdem.runner", "the SDEM runner adds the contact forces after "
-                                      "ForceResetter clears them and before NewtonIntegrator moves the bodies")
+    # Forces reset before the contacts add theirs, bodies moved after. Any other order fails
+    # later with a misleading time-step error (forces added twice or lost), and without the
+    # runner blocks fall through each other silently.
+    _name, _runnerName = "SdemEngine", "sdem.runner"
+    _between = ("the SDEM runner adds the contact forces after ForceResetter clears them and before "
+                "NewtonIntegrator moves the bodies")
 
     def _step(self):
-        if not self._checkedOrder:
-            self._checkedOrder = True
-            try:
-                self._checkEngines()
-            except ValueError as e:
-                self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
-                raise
+        self._stepping(O.time, O.iter, O.dt)
+        self._checkEnginesOnce()
         self._beforeFirstStep()
         try:
             # set before this step's forces, so that NewtonIntegrator and O.time advance by it
@@ -359,30 +263,30 @@ class SdemEngine(_AutoStep):
                 self._nextRecord = t if math.isnan(lastRecord) else max(t, _nextOnGrid(lastRecord, self.outputEvery))
                 self._nextVtk = t if (math.isnan(lastVtk) or not self.vtkEvery) else max(t, lastVtk + self.vtkEvery)
 
-    def _fail(self, e):
-        """Record the error of a failed step, put the SDEM bodies back to the last good state
-        and save it (saveOnFailure).
+    def _lastGoodState(self, e):
+        """Put the SDEM bodies back to the last good state after a failed step and save it
+        (saveOnFailure); returns what the error adds about it.
 
         The last good state is the one at the start of the last step that completed: when the
         blow-up guard fires, the state YADE holds was produced by NewtonIntegrator from the
         previous step's forces and is already bad, so the failed step's own start cannot be
         trusted. YADE has no setter for O.iter and O.time: they stay at the failed step, one
         step after the state (the checkpoint records the state's own time)."""
-        self.error = "step %d (t = %.6g s): %s" % (O.iter, O.time, e)
+        note = ""
         it = self._bridge.rollBack(O.bodies)
         if it >= 0:
             self._rolledBackAt = O.iter
-            self.error += " [bodies put back to their state at the start of step %d (t = %.6g s)]" % (
-                it, self._bridge.goodTime)
+            note += " [bodies put back to their state at the start of step %d (t = %.6g s)]" % (it, self._bridge.goodTime)
         if self.saveOnFailure:
             O.save(self.saveOnFailure + ".yade.gz")
             self.save(self.saveOnFailure + ".sdem.json")
-            self.error += (" [last good state saved: %s.yade.gz, %s.sdem.json; to resume: O.load(%r), "
-                           "engine = mpmsdem.SdemEngine.restore(%r), O.engines = [ForceResetter(), engine.runner, "
-                           "NewtonIntegrator(...)], and a smaller O.dt (now %g s; the critical step is "
-                           "engine.criticalTimeStep after a step)]"
-                           % (self.saveOnFailure, self.saveOnFailure, self.saveOnFailure + ".yade.gz",
-                              self.saveOnFailure + ".sdem.json", O.dt))
+            note += (" [last good state saved: %s.yade.gz, %s.sdem.json; to resume: O.load(%r), "
+                     "engine = mpmsdem.SdemEngine.restore(%r), O.engines = [ForceResetter(), engine.runner, "
+                     "NewtonIntegrator(...)], and a smaller O.dt (now %g s; the critical step is "
+                     "engine.criticalTimeStep after a step)]"
+                     % (self.saveOnFailure, self.saveOnFailure, self.saveOnFailure + ".yade.gz",
+                        self.saveOnFailure + ".sdem.json", O.dt))
+        return note
 
     def _afterStep(self):
         if self.output is not None:
@@ -402,24 +306,10 @@ class SdemEngine(_AutoStep):
                     self._lastVtkIter = O.iter
                 while self._nextVtk <= t + slack:
                     self._nextVtk += self.vtkEvery
-        if self.verbose and O.iter % 1000 == 0:
-            self._progress()
-        if self.dtCheck == "warn" and self._bridge.timeStepWarnings > self._warned:
-            if self._warned == 0:
-                warnings.warn("mpmsdem.SdemEngine: O.dt = %g s exceeds the critical step %g s at step %d"
-                              % (O.dt, self._bridge.criticalTimeStep, O.iter), RuntimeWarning)
-            self._warned = self._bridge.timeStepWarnings
+        self._warnTimeStep("critical step", self._bridge.criticalTimeStep)
 
-    def _progress(self):
-        now = time.time()
-        if self._lastReport is None:
-            self._lastReport = (now, O.iter)
-        elif now - self._lastReport[0] > 10.0:
-            wall, it = self._lastReport
-            print("mpmsdem.SdemEngine: t = %.5g s, step %d, %d contacts, critical step %.3g s (O.dt %.3g s), "
-                  "%.1f us/step" % (O.time, O.iter, self._bridge.numContacts, self._bridge.criticalTimeStep, O.dt,
-                                    1e6 * (now - wall) / max(O.iter - it, 1)), file=sys.stderr, flush=True)
-            self._lastReport = (now, O.iter)
+    def _progressFields(self, perStep):
+        return "%d contacts, critical step %.3g s" % (self._bridge.numContacts, self._bridge.criticalTimeStep)
 
     def finish(self, vtk=True):
         """Record the state YADE holds now (the bodies as the last step moved them, at O.time)
@@ -436,11 +326,6 @@ class SdemEngine(_AutoStep):
         if vtk and self.vtkEvery and self._lastVtkIter != O.iter:
             self._bridge.writeVtk(O.time)
             self._lastVtkIter = O.iter
-
-    def check(self):
-        """Raise RuntimeError if a step failed (YADE stops the run but O.run does not raise)."""
-        if self.error:
-            raise RuntimeError("mpmsdem.SdemEngine stopped the run at " + self.error)
 
     def refresh(self):
         """Re-read YADE's body state objects (after replacing O.bodies or O.load())."""
@@ -598,12 +483,6 @@ class SdemEngine(_AutoStep):
         return eng
 
 
-def _nextOnGrid(last, every):
-    """The first multiple of ``every`` after ``last``: a restarted run keeps the record times of
-    the unbroken one, also when its last record was an extra one (finish()) between them."""
-    return (math.floor(last / every * (1 + 1e-12) + 1e-9) + 1) * every
-
-
 def _warnDamping():
     from yade.wrapper import NewtonIntegrator
     for e in O.engines:
@@ -611,49 +490,3 @@ def _warnDamping():
             warnings.warn("NewtonIntegrator.damping = %g: YADE's numerical damping removes energy the contact law "
                           "would conserve (restitution < 1 with an elastic barrier); use damping=0 and the "
                           "materials' normalDamping/tangentialDamping instead" % e.damping, RuntimeWarning)
-
-
-def _vec(v, name):
-    # NaN/inf caught here, where the caller can be named: later they surface as a blow-up
-    # blamed on the time step.
-    try:
-        if len(v) != 3:
-            raise TypeError
-        out = Vector3(float(v[0]), float(v[1]), float(v[2]))
-    except (TypeError, ValueError):
-        raise ValueError("%s = %r: must be a 3-vector of finite numbers [m]" % (name, v)) from None
-    if not all(math.isfinite(out[k]) for k in range(3)):
-        raise ValueError("%s = %r: must be a 3-vector of finite numbers [m]" % (name, v))
-    return out
-
-
-def _quat(q):
-    try:
-        if not isinstance(q, Quaternion):
-            if len(q) != 4:
-                raise TypeError
-            q = Quaternion(*[float(c) for c in q])
-        c = [q[k] for k in range(4)]
-    except (TypeError, ValueError):
-        raise ValueError("ori = %r: must be a Quaternion (or 4 finite numbers w, x, y, z)" % (q,)) from None
-    n = math.sqrt(sum(x * x for x in c))
-    if not (math.isfinite(n) and n > 0):
-        raise ValueError("ori = %r: must be a Quaternion of finite, not all zero components" % (q,))
-    return q
-
-
-def _material(d):
-    m = _mpmsdem.SdemMat()
-    for k, v in d.items():
-        try:
-            setattr(m, k, float(v))
-        except (TypeError, ValueError):
-            raise ValueError("%s = %r: must be a number (see mpmsdem.material for its range)" % (k, v)) from None
-    m.validate()
-    return m
-
-
-def _matDict(m):
-    return {"density": m.density, "friction": m.friction, "poisson": m.poisson,
-            "barrierStiffness": m.barrierStiffness, "normalDamping": m.normalDamping,
-            "tangentialDamping": m.tangentialDamping}

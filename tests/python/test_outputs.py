@@ -21,9 +21,9 @@ GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.
 
 def _forget(*engines):
     """What a killed process leaves: the engines gone, their files closed."""
-    from mpmsdem import sdem
-    for name in [n for n, f in sdem._REGISTRY.items() if getattr(f, "__self__", None) in engines]:
-        del sdem._REGISTRY[name]
+    from mpmsdem.engine import _REGISTRY
+    for name in [n for n, f in _REGISTRY.items() if getattr(f, "__self__", None) in engines]:
+        del _REGISTRY[name]
     O.reset()
     gc.collect()
 

@@ -26,10 +26,10 @@ def _finite(v):
 
 def _kill(engine):
     """What a killed process leaves: the engine gone, with its open output files closed. The
-    registry of runner commands keeps a reference (see sdem._stepRunner): drop it too."""
-    from mpmsdem import sdem
-    for name in [n for n, f in sdem._REGISTRY.items() if getattr(f, "__self__", None) is engine]:
-        del sdem._REGISTRY[name]
+    registry of runner commands keeps a reference (see mpmsdem.engine._stepRunner): drop it too."""
+    from mpmsdem.engine import _REGISTRY
+    for name in [n for n, f in _REGISTRY.items() if getattr(f, "__self__", None) is engine]:
+        del _REGISTRY[name]
     O.reset()
     gc.collect()
 
