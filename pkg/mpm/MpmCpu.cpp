@@ -505,14 +505,9 @@ void MpmCpu<T>::scatter(T dt, const ParticleIn<T>& in) {
 }
 
 template <typename T>
-void MpmCpu<T>::step(double dt) {
-  requireLastGoodState("step");
-  requireCompleteForces("step");
+void MpmCpu<T>::stageP2G(double dt) {
   std::vector<int>().swap(slotOf_);  // the particles move in storage
-  if (steps_ % 100 == 0) checkTimeStep(dt);
-  const T dtT = static_cast<T>(dt);
   const ParticleIn<T> in = input();
-  const ParticleOut<T> out = output();
   {
     // Only the previous step's active tiles hold non-zero values.
     T* gridData = nodes_.data();
@@ -523,27 +518,53 @@ void MpmCpu<T>::step(double dt) {
     });
   }
   bin(in);  // stores the columns the particles newly reach
-  T* gridData = nodes_.data();
-  scatter(dtT, in);
-  const GridConst<T> g = grid_;
-  if (hooks_.empty()) {
-    forActiveNodes([gridData, &g, dtT](int node) { gridNodeUpdate(node, gridData, g, dtT); });
-  } else {
-    forActiveNodes([gridData, &g, dtT](int node) { gridNodeVelocity(node, gridData, g, dtT); });
-    GridView view = gridViewFrame(dt);
-    view.precision = kPrecision;
-    view.device = false;
-    view.stride = kNodeValues;
-    view.mass = gridData + kNodeMass;
-    for (int d = 0; d < 3; ++d) view.v[d] = gridData + kNodeVNew + d;
-    view.column = column_.data();
-    view.storedNodes = static_cast<long>(columns_) * grid_.nodes[2];
-    applyGridHooks(view);
-    forActiveNodes([gridData, &g](int node) { gridNodeWalls(node, gridData, g); });
-  }
+  scatter(static_cast<T>(dt), in);
+}
 
+template <typename T>
+void MpmCpu<T>::stageGrid(double dt) {
+  T* gridData = nodes_.data();
+  const GridConst<T> g = grid_;
+  const T dtT = static_cast<T>(dt);
+  forActiveNodes([gridData, &g, dtT](int node) { gridNodeUpdate(node, gridData, g, dtT); });
+}
+
+template <typename T>
+void MpmCpu<T>::stageGridVelocity(double dt) {
+  T* gridData = nodes_.data();
+  const GridConst<T> g = grid_;
+  const T dtT = static_cast<T>(dt);
+  forActiveNodes([gridData, &g, dtT](int node) { gridNodeVelocity(node, gridData, g, dtT); });
+}
+
+template <typename T>
+GridView MpmCpu<T>::gridView(double dt) {
+  GridView view = gridViewFrame(dt);
+  view.precision = kPrecision;
+  view.device = false;
+  view.stride = kNodeValues;
+  view.mass = nodes_.data() + kNodeMass;
+  for (int d = 0; d < 3; ++d) view.v[d] = nodes_.data() + kNodeVNew + d;
+  view.column = column_.data();
+  view.storedNodes = static_cast<long>(columns_) * grid_.nodes[2];
+  return view;
+}
+
+template <typename T>
+void MpmCpu<T>::stageGridBoundaries() {
+  T* gridData = nodes_.data();
+  const GridConst<T> g = grid_;
+  forActiveNodes([gridData, &g](int node) { gridNodeWalls(node, gridData, g); });
+}
+
+template <typename T>
+void MpmCpu<T>::stageG2P(double dt) {
+  const ParticleIn<T> in = input();
+  const ParticleOut<T> out = output();
+  T* gridData = nodes_.data();
+  const GridConst<T> g = grid_;
   StepConst<T> sc;
-  sc.dt = dtT;
+  sc.dt = static_cast<T>(dt);
   sc.alpha = static_cast<T>(params_.flipAlphaFor(dt));
   sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
   sc.mat = mat_;
@@ -596,13 +617,23 @@ void MpmCpu<T>::step(double dt) {
       outVol0[q0 + l] = a[kG2PVol0 * kG2PBatch + l];
     }
   }
-  if (firstBad < n) {
+  g2pFirstBad_ = firstBad;
+  g2pMaxSpeed_ = vmax;
+}
+
+template <typename T>
+void MpmCpu<T>::stageEnd(double dt) {
+  const bool inPlace = !params_.keepLastGoodState;
+  const long n = static_cast<long>(n_);
+  if (g2pFirstBad_ < n) {
     partlyAdvanced_ = inPlace;
-    const long p = std::find(outId, outId + n, static_cast<int>(firstBad)) - outId;  // its slot
+    const ParticleOut<T> out = output();
+    const int* outId = state_[inPlace ? cur_ : 1 - cur_].id.data();
+    const long p = std::find(outId, outId + n, static_cast<int>(g2pFirstBad_)) - outId;  // its slot
     const double x[3] = {double(out.x[0][p]), double(out.x[1][p]), double(out.x[2][p])};
     const double v[3] = {double(out.v[0][p]), double(out.v[1][p]), double(out.v[2][p])};
     throw RuntimeFailure(badParticleMessage(
-        steps_ + 1, time_ + dt, name(), firstBad, maxSpeedAllowed_, x, v, out.J[p],
+        steps_ + 1, time_ + dt, name(), g2pFirstBad_, maxSpeedAllowed_, x, v, out.J[p],
         inPlace ? "The particles are partly advanced (keepLastGoodState is off): the last good state is the last "
                   "one saved."
                 : "The particle state is kept at the start of this step."));
@@ -613,10 +644,8 @@ void MpmCpu<T>::step(double dt) {
     reorder();
     stepsSinceReorder_ = 0;
   }
-  maxSpeed_ = vmax;
+  maxSpeed_ = g2pMaxSpeed_;
   hasFext_ = false;
-  time_ += dt;
-  ++steps_;
 }
 
 template class MpmCpu<double>;

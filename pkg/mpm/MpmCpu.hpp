@@ -51,13 +51,13 @@
 #include <vector>
 
 #include "mpm/MpmKernelsCommon.hpp"
-#include "mpm/MpmSolver.hpp"
+#include "mpm/StagedSolver.hpp"
 
 namespace mpmsdem {
 namespace mpm {
 
 template <typename T>
-class MpmCpu : public MpmSolver {
+class MpmCpu : public StagedSolver {
   static_assert(std::is_same_v<T, double> || std::is_same_v<T, float>, "MpmCpu runs in double or float");
 
  public:
@@ -76,11 +76,21 @@ class MpmCpu : public MpmSolver {
   void setExternalForces(const std::vector<double>& f) override;
   ParticleView openForceBuffer() override;
   ParticleView extendForceBuffer() override;
-  void step(double dt) override;
   double stableTimeStep() override;
   std::size_t memoryBytes() const override;
 
  private:
+  // The stages of a step (StagedSolver holds their order).
+  void stageP2G(double dt) override;
+  void stageGrid(double dt) override;
+  void stageGridVelocity(double dt) override;
+  GridView gridView(double dt) override;
+  void stageGridBoundaries() override;
+  void stageG2P(double dt) override;
+  void stageEnd(double dt) override;
+  long g2pFirstBad_ = 0;  // G2P's first failing particle number, or the particle count: none
+  T g2pMaxSpeed_ = 0;     // G2P's largest particle speed [m/s]
+
   void load(ParticleSlices& particles, bool checked);
   struct State {
     // mass and volume0 never change; they are kept by slot like the rest, so that a step reads

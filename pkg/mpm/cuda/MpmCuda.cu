@@ -529,34 +529,41 @@ void MpmCuda<T>::sortParticles() {
 }
 
 template <typename T>
-void MpmCuda<T>::step(double dt) {
-  launchStep(dt);
-  finishStep();
+void MpmCuda<T>::launchStep(double dt) {
+  runStages(dt);
 }
 
 template <typename T>
-void MpmCuda<T>::launchStep(double dt) {
+void MpmCuda<T>::finishStep() {
+  endStages(launchedDt_);
+}
+
+template <typename T>
+void MpmCuda<T>::beforeChecks() {
   if (launched_) throw RuntimeFailure(name() + ": launchStep: the step launched before has not been finished or abandoned");
-  requireCompleteForces("step");
-  if (steps_ % 100 == 0) checkTimeStep(dt);
-  const int n = static_cast<int>(n_);
+}
+
+// The device-event marks k of a step bound its timed stages (stageSeconds: sort, p2g, grid, g2p).
+template <typename T>
+void MpmCuda<T>::markStage(int k) {
+  if (events_[k]) CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(events_[k])));
+}
+
+template <typename T>
+void MpmCuda<T>::stageP2G(double dt) {
   const T dtT = static_cast<T>(dt);
   const cudak::BlockGrid bg = blockGrid();
-  auto mark = [this](int k) {
-    if (events_[k]) CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(events_[k])));
-  };
-  mark(0);
+  markStage(0);
   beginLists();
   CUDA_CHECK(cudaMemsetAsync(&flags_->firstBad, 0xff, sizeof(flags_->firstBad)));
   static_assert(offsetof(StepFlags, columnsMissing) == offsetof(StepFlags, maxSpeedBits) + sizeof(unsigned int),
                 "one memset clears both");
   CUDA_CHECK(cudaMemsetAsync(&flags_->maxSpeedBits, 0, 2 * sizeof(unsigned int)));
   const ParticleIn<T> in = input();
-  const ParticleOut<T> out = output();
-  mark(1);
-  if (n > 0) {
+  markStage(1);
+  if (n_ > 0) {
     sortParticles();
-    mark(2);
+    markStage(2);
     if (tileScratch_) {
       cudak::p2gTilesKernel<T><<<std::min(tileCapacity_, p2gLaunch_), cudak::kBaseThreads>>>(
           bg, activeLists(), in, sorted_, sortedKeys_, numberBits_, grid_, dtT, tileScratch_, slotOf_);
@@ -574,43 +581,62 @@ void MpmCuda<T>::launchStep(double dt) {
       }
     }
   }
-  mark(3);
-  if (hooks_.empty()) {
-    cudak::gridKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_, dtT);
-    CUDA_CHECK(cudaGetLastError());
-  } else {
-    cudak::gridVelocityKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_, dtT);
-    CUDA_CHECK(cudaGetLastError());
-    GridView view = gridViewFrame(dt);
-    view.precision = sizeof(T) == sizeof(float) ? Precision::Float : Precision::Double;
-    view.device = true;
-    view.stride = kNodeValues;
-    view.column = column_;
-    view.storedNodes = static_cast<long>(columnsStored_) * grid_.nodes[2];
-    view.mass = nodes_ + kNodeMass;
-    for (int d = 0; d < 3; ++d) view.v[d] = nodes_ + kNodeVNew + d;
-    applyGridHooks(view);
-    cudak::gridWallsKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), bg, nodes_, grid_);
-    CUDA_CHECK(cudaGetLastError());
-  }
-  mark(4);
+  markStage(3);
+}
+
+template <typename T>
+void MpmCuda<T>::stageGrid(double dt) {
+  cudak::gridKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), blockGrid(), nodes_, grid_, static_cast<T>(dt));
+  CUDA_CHECK(cudaGetLastError());
+}
+
+template <typename T>
+void MpmCuda<T>::stageGridVelocity(double dt) {
+  cudak::gridVelocityKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), blockGrid(), nodes_, grid_,
+                                                          static_cast<T>(dt));
+  CUDA_CHECK(cudaGetLastError());
+}
+
+template <typename T>
+GridView MpmCuda<T>::gridView(double dt) {
+  GridView view = gridViewFrame(dt);
+  view.precision = sizeof(T) == sizeof(float) ? Precision::Float : Precision::Double;
+  view.device = true;
+  view.stride = kNodeValues;
+  view.column = column_;
+  view.storedNodes = static_cast<long>(columnsStored_) * grid_.nodes[2];
+  view.mass = nodes_ + kNodeMass;
+  for (int d = 0; d < 3; ++d) view.v[d] = nodes_ + kNodeVNew + d;
+  return view;
+}
+
+template <typename T>
+void MpmCuda<T>::stageGridBoundaries() {
+  cudak::gridWallsKernel<T><<<gridLaunch_, kThreads>>>(activeLists(), blockGrid(), nodes_, grid_);
+  CUDA_CHECK(cudaGetLastError());
+}
+
+template <typename T>
+void MpmCuda<T>::stageG2P(double dt) {
+  markStage(4);
   StepConst<T> sc;
-  sc.dt = dtT;
+  sc.dt = static_cast<T>(dt);
   sc.alpha = static_cast<T>(params_.flipAlphaFor(dt));
   sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
   sc.mat = mat_;
   const DeviceState& next = state_[1 - cur_];
-  if (n > 0) {
+  if (n_ > 0) {
     const cudak::MovedWith<T> moved{next.mass, next.vol0, next.id};
-    cudak::g2pKernel<T><<<blocksFor(n_), kThreads>>>(n, in, out, moved, sorted_, nodes_, grid_, sc, &flags_->firstBad,
-                                                     &flags_->maxSpeedBits, &flags_->columnsMissing);
+    cudak::g2pKernel<T><<<blocksFor(n_), kThreads>>>(static_cast<int>(n_), input(), output(), moved, sorted_, nodes_,
+                                                     grid_, sc, &flags_->firstBad, &flags_->maxSpeedBits,
+                                                     &flags_->columnsMissing);
     CUDA_CHECK(cudaGetLastError());
   }
-  mark(5);
+  markStage(5);
   // the columns the next step's particles can reach (they move less than a cell), counted in the
   // copy back of the flags that every step waits for
   queueColumnsNear();
-  mark(6);
+  markStage(6);
   CUDA_CHECK(cudaMemcpyAsync(flagsHost_, flags_, sizeof(StepFlags), cudaMemcpyDeviceToHost));
   CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(stepDone_)));
   launched_ = true;
@@ -637,9 +663,8 @@ void MpmCuda<T>::abandonStep() {
 }
 
 template <typename T>
-void MpmCuda<T>::finishStep() {
+void MpmCuda<T>::stageEnd(double dt) {
   const StepFlags res = waitForLaunched("finishStep");
-  const double dt = launchedDt_;
   const ParticleOut<T> out = output();
   takeColumns(res);
   if (res.columnsMissing) {
@@ -672,8 +697,6 @@ void MpmCuda<T>::finishStep() {
   maxSpeed_ = vmax;
   cur_ = 1 - cur_;
   hasFext_ = false;
-  time_ += dt;
-  ++steps_;
 }
 
 template <typename T>

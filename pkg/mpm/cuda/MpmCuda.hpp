@@ -33,7 +33,7 @@
 #include <vector>
 
 #include "mpm/MpmKernelsCommon.hpp"
-#include "mpm/MpmSolver.hpp"
+#include "mpm/StagedSolver.hpp"
 
 namespace mpmsdem {
 namespace mpm {
@@ -44,7 +44,7 @@ struct ColumnMap;
 }
 
 template <typename T>
-class MpmCuda : public MpmSolver {
+class MpmCuda : public StagedSolver {
  public:
   explicit MpmCuda(const MpmParams& params);  // params must have been validated
   ~MpmCuda() override;
@@ -60,7 +60,6 @@ class MpmCuda : public MpmSolver {
   std::size_t numParticles() const override { return n_; }
   void setExternalForces(const std::vector<double>& f) override;
   ParticleView openForceBuffer() override;
-  void step(double dt) override;
   bool queuesSteps() const override { return true; }
   void launchStep(double dt) override;
   void finishStep() override;
@@ -73,6 +72,18 @@ class MpmCuda : public MpmSolver {
                       DiagnosticSums& sums, std::vector<ProbeSums>& probeSums) override;
 
  private:
+  // The stages of a step (StagedSolver holds their order): queued by launchStep, waited for by
+  // finishStep in stageEnd.
+  void beforeChecks() override;
+  void stageP2G(double dt) override;
+  void stageGrid(double dt) override;
+  void stageGridVelocity(double dt) override;
+  GridView gridView(double dt) override;
+  void stageGridBoundaries() override;
+  void stageG2P(double dt) override;
+  void stageEnd(double dt) override;
+  void markStage(int k);  // device event k of the step's stage clock, where timing is on
+
   struct DeviceState {
     T* x[3] = {};
     T* v[3] = {};
