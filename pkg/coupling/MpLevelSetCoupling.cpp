@@ -210,33 +210,8 @@ void MpLevelSetCoupling::reduce(const std::vector<MpContact<T>>& contacts, const
     addBlockShare(ct, B[ct.block], sums_.data(), add);
     minParticleStep_ = std::min(minParticleStep_, static_cast<double>(particleStepBound(ct)));
   }
-  for (int b = 0; b < numBodies(); ++b) {
-    const double* s = sums_.data() + kBlockSums * b;
-    barrierEnergy_ += s[kSumBarrier];
-    springEnergy_ += s[kSumSpring];
-    frictionWork_ += s[kSumFriction];
-    dampingWork_ += s[kSumDamping];
-  }
+  takeEnergies(sums_, numBodies());
 }
-
-const double* MpLevelSetCoupling::sums(int i, int offset) const {
-  if (i < 0 || i >= numBodies() || sums_.size() < static_cast<std::size_t>(kBlockSums) * numBodies())
-    throwParameter("LevelSet body index", i, "", "a body index in [0, " + std::to_string(numBodies()) +
-                                                     ") of the last coupling step");
-  return sums_.data() + kBlockSums * i + offset;
-}
-
-Vec3 MpLevelSetCoupling::force(int i) const {
-  const double* s = sums(i, kSumForce);
-  return Vec3(s[0], s[1], s[2]);
-}
-Vec3 MpLevelSetCoupling::torque(int i) const {
-  const double* s = sums(i, kSumTorque);
-  return Vec3(s[0], s[1], s[2]);
-}
-int MpLevelSetCoupling::contactCount(int i) const { return static_cast<int>(*sums(i, kSumCount)); }
-double MpLevelSetCoupling::stiffnessSum(int i) const { return *sums(i, kSumK); }
-double MpLevelSetCoupling::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }
 
 long MpLevelSetCoupling::totalContacts() const {
   long n = 0;

@@ -40,8 +40,9 @@ struct LevelSetGrid {
 // corners before the barrier saw them.
 inline double levelSetSpacingLimit(double particleRadius) { return particleRadius; }
 
-class MpLevelSetCoupling {
+class MpLevelSetCoupling : public CouplingReport {
  public:
+  MpLevelSetCoupling() : CouplingReport("LevelSet body index", "a body index") {}
   // Add a body: its YADE id (for messages and the caller's look-ups), its grid and the contact
   // physics of the pair "flow, this body" (checkPairPhys ranges). Returns its index.
   // ParameterError for a grid out of range (names the field).
@@ -72,35 +73,26 @@ class MpLevelSetCoupling {
   // the grids allow appears.
   void computeForces(const mpm::ParticleView& view, double dt, double safety, double watch);
 
-  // ---- results of the last computeForces, per body index (world frame)
-  Vec3 force(int i) const;    // of the flow on the body [N]
-  Vec3 torque(int i) const;   // about the body's position (grid origin) [N m]
-  int contactCount(int i) const;
-  double stiffnessSum(int i) const;            // sum max(k_n, K_t) [N/m]
-  double rotationalStiffnessSum(int i) const;  // sum k_n |r x n|^2 + K_t |r|^2 [N m]
+  // ---- results of the last computeForces, per body index (world frame): force, torque (about
+  // the body's position, its grid's origin), contactCount, stiffness sums, step bounds and
+  // energies of CouplingReport, and
   long totalContacts() const;
   // The contacts, by particle number (featureKind: sdem::kFeatureFace; block: the body index);
   // those of body `body` only, or all for body < 0.
   std::vector<MpContactRecord> contacts(int body = -1) const;
-  double particleCriticalStep() const { return minParticleStep_; }  // as MpSdemCoupling's [s]
-  double particleApproachStep() const { return minApproachStep_; }  // as MpSdemCoupling's [s]
   // safety x the smallest sqrt(m / sum k) and sqrt(I_min / sum k_r) over the moving bodies of the
   // last step, from their flow contacts alone [s] (+inf without).
   double bodyContactStep(double safety) const;
-  long historyOverflow() const { return overflow_; }
-  double barrierEnergy() const { return barrierEnergy_; }
-  double springEnergy() const { return springEnergy_; }
-  double frictionDissipation() const { return frictionWork_; }
-  double dampingDissipation() const { return dampingWork_; }
 
  private:
+  const std::vector<double>& lastSums() const override { return sums_; }
+  int reportedBodies() const override { return numBodies(); }
   template <typename T>
   void run(const mpm::ParticleView& view, const BlockState<T>* B, const LevelSetGridView<T>* G,
            const sdem::BarrierCoulombPhys<T>* phys, std::vector<T>& xi, std::vector<MpContact<T>>& contacts,
            double dt, double safety, double watch);
   template <typename T>
   void reduce(const std::vector<MpContact<T>>& contacts, const BlockState<T>* B);
-  const double* sums(int i, int offset) const;
 
   std::vector<int> ids_;
   std::vector<LevelSetGrid> grids_;
@@ -120,10 +112,6 @@ class MpLevelSetCoupling {
   std::vector<MpContact<float>> contactsF_;
   bool floatRun_ = false;
   std::vector<double> sums_;
-  double minParticleStep_ = std::numeric_limits<double>::infinity();
-  double minApproachStep_ = std::numeric_limits<double>::infinity();
-  long overflow_ = 0;
-  double barrierEnergy_ = 0, springEnergy_ = 0, frictionWork_ = 0, dampingWork_ = 0;
 };
 
 }  // namespace coupling

@@ -36,7 +36,8 @@ double largest(const void* values, std::size_t n) {
 std::unique_ptr<CouplingDeviceBackend> makeCouplingDeviceBackend(mpm::Precision) { return nullptr; }
 #endif
 
-MpSdemCoupling::MpSdemCoupling(const sdem::SdemEngine& sdem) : sdem_(sdem) {}
+MpSdemCoupling::MpSdemCoupling(const sdem::SdemEngine& sdem)
+    : CouplingReport("block", "a block (SDEM body) index"), sdem_(sdem) {}
 MpSdemCoupling::~MpSdemCoupling() = default;
 
 void MpSdemCoupling::setPair(int material, const sdem::BarrierPhys& p) {
@@ -391,14 +392,7 @@ void MpSdemCoupling::collectForces() {
   minParticleStep_ = out.minParticleStep;
   minApproachStep_ = out.minApproachStep;
   overflow_ += out.overflow;
-  barrierEnergy_ = springEnergy_ = 0;
-  for (std::size_t b = 0; b < blocks_.size(); ++b) {
-    const double* s = out.sums.data() + kBlockSums * b;
-    barrierEnergy_ += s[kSumBarrier];
-    springEnergy_ += s[kSumSpring];
-    frictionWork_ += s[kSumFriction];
-    dampingWork_ += s[kSumDamping];
-  }
+  takeEnergies(out.sums, numBlocks());
 }
 
 // Float copies of what a float host step reads: the shape table when it grew, the blocks and
@@ -480,21 +474,6 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
 
 // ------------------------------------------------------------------ results
 
-const double* MpSdemCoupling::sums(int i, int offset) const {
-  if (i < 0 || i >= numBlocks() || last_.sums.size() < static_cast<std::size_t>(kBlockSums) * numBlocks())
-    throwParameter("block", i, "", "a block (SDEM body) index in [0, " + std::to_string(numBlocks()) +
-                                       ") of the last coupling step");
-  return last_.sums.data() + kBlockSums * i + offset;
-}
-
-Vec3 MpSdemCoupling::force(int i) const {
-  const double* s = sums(i, kSumForce);
-  return Vec3(s[0], s[1], s[2]);
-}
-Vec3 MpSdemCoupling::torque(int i) const {
-  const double* s = sums(i, kSumTorque);
-  return Vec3(s[0], s[1], s[2]);
-}
 void MpSdemCoupling::blockForces(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
   const int n = numBlocks();
   force.resize(n);
@@ -512,9 +491,6 @@ Vec3 MpSdemCoupling::edgeForce(int i) const {
   const double* s = sums(i, kSumEdge);
   return Vec3(s[0], s[1], s[2]);
 }
-int MpSdemCoupling::contactCount(int i) const { return static_cast<int>(*sums(i, kSumCount)); }
-double MpSdemCoupling::stiffnessSum(int i) const { return *sums(i, kSumK); }
-double MpSdemCoupling::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }
 MpContactRecord recordOf(const double* r) {
   MpContactRecord c;
   c.particle = static_cast<int>(r[kRecParticle]);

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "coupling/CouplingBackend.hpp"
+#include "coupling/CouplingReport.hpp"
 #include "mpm/MpmSolver.hpp"
 #include "sdem/SdemEngine.hpp"
 #include "sdem/ShapeTable.hpp"
@@ -57,7 +58,7 @@ void checkPairPhys(const sdem::BarrierPhys& phys);
 // The record of a contact written by contactRecord (kContactValues doubles).
 MpContactRecord recordOf(const double* r);
 
-class MpSdemCoupling {
+class MpSdemCoupling : public CouplingReport {
  public:
   explicit MpSdemCoupling(const sdem::SdemEngine& sdem);
   ~MpSdemCoupling();
@@ -91,17 +92,13 @@ class MpSdemCoupling {
   void launchForces(mpm::MpmSolver& solver, double dt);
   void collectForces();
 
-  // ---- results of the last computeForces, per SDEM body index (world frame)
-  Vec3 force(int block) const;        // force of the flow on the block [N]
-  Vec3 torque(int block) const;       // its torque about the block centroid [N m]
+  // ---- results of the last computeForces, per SDEM body index (world frame): force, torque,
+  // contactCount, stiffness sums, step bounds and energies of CouplingReport, and
   // force(i) and torque(i) of every block of the last step, numBlocks() of each (the SDEM
   // engine's bodies at that step), as the rigid-body update takes them.
   void blockForces(std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
   Vec3 faceForce(int block) const;    // share through face interiors, F_f [N]
   Vec3 edgeForce(int block) const;    // share through edges and vertices, F_e [N]
-  int contactCount(int block) const;  // number of MP contacts
-  double stiffnessSum(int block) const;            // sum max(k_n, K_t) [N/m]
-  double rotationalStiffnessSum(int block) const;  // sum k_n |r x n|^2 + K_t |r|^2 [N m]
   int numBlocks() const { return static_cast<int>(blocks_.size()); }
   long totalContacts() const;
   // The contacts behind these sums, by particle number (a point's contacts in the order it
@@ -129,26 +126,11 @@ class MpSdemCoupling {
   void setDeviceListCapacity(unsigned int capacity);
   // contacts() can answer for the last step (false on CUDA without recording).
   bool contactsAvailable() const { return contactsIn_ != ContactsIn::Device || recordContacts_; }
-  // Smallest sqrt(m_p / max(k_n, K_t)) over the MP contacts [s]; +inf without contacts.
-  double particleCriticalStep() const { return minParticleStep_; }
-  // The longest next step [s] that stays within the contact step of the contacts the last step
-  // made (points that did not touch a block at its start but reached its barrier within it):
-  // the smallest approachStepBound (CouplingKernelsCommon.hpp) with the SDEM engine's time-step
-  // safety; +inf when no point did. The contact step itself sees those contacts one step late.
-  // Pairs are examined up to the distance they close in the step, at most one grid cell (a
-  // particle moves less than a cell per stable MPM step).
-  double particleApproachStep() const { return minApproachStep_; }
   // The value a checkpointed run's last step left (> 0, inf for none), until the next step.
   void restoreParticleApproachStep(double s);
-  long historyOverflow() const { return overflow_; }
 
-  // ---- energies [J]: current barrier and tangential-spring potentials, cumulative slip and
-  // dashpot work of MP–block contacts.
-  double barrierEnergy() const { return barrierEnergy_; }
-  double springEnergy() const { return springEnergy_; }
-  double frictionDissipation() const { return frictionWork_; }
-  double dampingDissipation() const { return dampingWork_; }
-  void setDissipation(double friction, double damping);  // continue counters after a restart
+  // The energies' dissipation counters (CouplingReport), to continue after a restart.
+  void setDissipation(double friction, double damping);
 
   // ---- checkpoint of the tangential histories: per particle `slots` keys and 3 x slots xi
   // values, elastic tangential forces [N] (a float run's converted to double). On CUDA they
@@ -170,6 +152,8 @@ class MpSdemCoupling {
   std::vector<int> binnedBlocks(const Vec3& x) const;
 
  private:
+  const std::vector<double>& lastSums() const override { return last_.sums; }
+  int reportedBodies() const override { return numBlocks(); }
   void syncBlocks();
   void buildBins(const mpm::MpmParams& grid);
   BinGridView binView() const;  // the host's bin table
@@ -185,7 +169,6 @@ class MpSdemCoupling {
   void runCpu(const CouplingStepInput& in, const sdem::ShapeTableView<T>& shapes, const BlockState<T>* blocks,
               const sdem::BarrierCoulombPhys<T>* phys, HostSide<T>& side, CouplingStepOutput& out);
   void syncFloatTables();
-  const double* sums(int block, int offset) const;
 
   const sdem::SdemEngine& sdem_;
   std::map<int, sdem::BarrierPhys> pairs_;
@@ -243,10 +226,6 @@ class MpSdemCoupling {
   mpm::Precision devicePrecision_ = mpm::Precision::Double;
 
   CouplingStepOutput last_;
-  double minParticleStep_ = std::numeric_limits<double>::infinity();
-  double minApproachStep_ = std::numeric_limits<double>::infinity();
-  long overflow_ = 0;
-  double barrierEnergy_ = 0, springEnergy_ = 0, frictionWork_ = 0, dampingWork_ = 0;
 };
 
 }  // namespace coupling

@@ -1,0 +1,66 @@
+// What a coupling of the flow with rigid bodies reports of its last step, per body (the sums of
+// its contacts: kBlockSums doubles a body, CouplingKernelsCommon.hpp) and in all (step bounds,
+// history overflow, energies). MpSdemCoupling (SDEM blocks) and MpLevelSetCoupling (YADE
+// LevelSet bodies) report through it alike.
+#pragma once
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "common/Types.hpp"
+
+namespace mpmsdem {
+namespace coupling {
+
+class CouplingReport {
+ public:
+  // ---- per body index, world frame
+  Vec3 force(int body) const;        // force of the flow on the body [N]
+  Vec3 torque(int body) const;       // its torque about the body's centroid (SDEM) or position (LevelSet) [N m]
+  int contactCount(int body) const;  // number of MP contacts
+  double stiffnessSum(int body) const;            // sum max(k_n, K_t) [N/m]
+  double rotationalStiffnessSum(int body) const;  // sum k_n |r x n|^2 + K_t |r|^2 [N m]
+
+  // Smallest sqrt(m_p / max(k_n, K_t)) over the MP contacts [s]; +inf without contacts.
+  double particleCriticalStep() const { return minParticleStep_; }
+  // The longest next step [s] that stays within the contact step of the contacts the last step
+  // made (points that did not touch a body at its start but reached its barrier within it):
+  // the smallest approachStepBound (CouplingKernelsCommon.hpp) with the time-step safety; +inf
+  // when no point did. The contact step itself sees those contacts one step late. Pairs are
+  // examined up to the distance they close in the step, at most one grid cell (a particle moves
+  // less than a cell per stable MPM step).
+  double particleApproachStep() const { return minApproachStep_; }
+  long historyOverflow() const { return overflow_; }
+
+  // ---- energies [J]: current barrier and tangential-spring potentials, cumulative slip and
+  // dashpot work of MP–body contacts.
+  double barrierEnergy() const { return barrierEnergy_; }
+  double springEnergy() const { return springEnergy_; }
+  double frictionDissipation() const { return frictionWork_; }
+  double dampingDissipation() const { return dampingWork_; }
+
+ protected:
+  // indexKey, indexWhat: how a bad body index is named in the ParameterError (the parameter and
+  // what it must be, e.g. "block", "a block (SDEM body) index").
+  CouplingReport(std::string indexKey, std::string indexWhat)
+      : indexKey_(std::move(indexKey)), indexWhat_(std::move(indexWhat)) {}
+  virtual ~CouplingReport() = default;
+  // The per-body sums of the last step and the number of bodies they were summed for.
+  virtual const std::vector<double>& lastSums() const = 0;
+  virtual int reportedBodies() const = 0;
+  // Body i's sums from `offset`; ParameterError when i is no body of the last step.
+  const double* sums(int body, int offset) const;
+  // The step's potentials (replaced) and dissipations (added) from its per-body sums.
+  void takeEnergies(const std::vector<double>& sums, int bodies);
+
+  double minParticleStep_ = std::numeric_limits<double>::infinity();
+  double minApproachStep_ = std::numeric_limits<double>::infinity();
+  long overflow_ = 0;
+  double barrierEnergy_ = 0, springEnergy_ = 0, frictionWork_ = 0, dampingWork_ = 0;
+
+ private:
+  std::string indexKey_, indexWhat_;
+};
+
+}  // namespace coupling
+}  // namespace mpmsdem
