@@ -7,14 +7,13 @@
 
 #include "common/Error.hpp"
 #include "coupling/CouplingBackend.hpp"
+#include "coupling/CpuContactLoop.hpp"
 
 namespace mpmsdem {
 namespace coupling {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-// Particles per chunk of the loop; contacts are reduced chunk by chunk in particle order.
-constexpr long kChunk = 4096;
 
 template <typename T>
 double smallest(const void* values, std::size_t n) {
@@ -160,40 +159,19 @@ void MpLevelSetCoupling::run(const mpm::ParticleView& view, const BlockState<T>*
   const HistoryView<T> H{key_.data(), xi.data(), written_.data(), ++historyStep_, slots_};
   const int nb = numBodies();
   const long n = static_cast<long>(view.n);
-  const long nChunks = (n + kChunk - 1) / kChunk;
-  std::vector<std::vector<MpContact<T>>> chunkContacts(nChunks);
-  long overflow = 0;
-  double approach = std::numeric_limits<double>::infinity();
-  long firstBad = n;
-  int badBody = -1;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : overflow) reduction(min : approach)
-  for (long c = 0; c < nChunks; ++c) {
-    std::vector<MpContact<T>>& list = chunkContacts[c];
-    auto sink = [&list](const MpContact<T>& ct) { list.push_back(ct); };
-    int over = 0;
-    T chunkApproach = std::numeric_limits<T>::infinity();
-    CouplingLoopMemo<T> memo;
-    for (long p = c * kChunk; p < std::min(n, (c + 1) * kChunk); ++p) {
-      int bad = -1;
-      if (coupleParticleLevelSets(static_cast<int>(p), P, B, nb, G, phys, H, T(dt), T(safety), T(watch), sink, &bad,
-                                  &over, &chunkApproach, memo) != kCoupleOk) {
-        const long number = particleNumber(P, static_cast<int>(p));
-#pragma omp critical(mplevelset_bad)
-        if (number < firstBad) {
-          firstBad = number;
-          badBody = bad;
-        }
-      }
-    }
-    overflow += over;
-    approach = std::min(approach, static_cast<double>(chunkApproach));
-  }
-  overflow_ += overflow;
-  minApproachStep_ = approach;
-  if (firstBad < n) {
+  std::vector<std::vector<MpContact<T>>> chunkContacts;
+  const ContactLoopTotals t = runContactChunks(
+      P, n, chunkContacts,
+      [&](int p, auto& sink, int* bad, int* over, T* approach, CouplingLoopMemo<T>& memo) {
+        return coupleParticleLevelSets(p, P, B, nb, G, phys, H, T(dt), T(safety), T(watch), sink, bad, over, approach,
+                                       memo);
+      });
+  overflow_ += t.overflow;
+  minApproachStep_ = t.approach;
+  if (t.firstBad < n) {
     std::ostringstream os;
-    os << "MP-LevelSet coupling: the centre of material point " << firstBad << " reached the surface of LevelSet body "
-       << ids_[badBody] << " (distance <= 0, overlap >= R_p0); at the first step the particles were seeded inside "
+    os << "MP-LevelSet coupling: the centre of material point " << t.firstBad << " reached the surface of LevelSet body "
+       << ids_[t.badBody] << " (distance <= 0, overlap >= R_p0); at the first step the particles were seeded inside "
        << "the body, later the time step was too long for the barrier stiffness";
     throw RuntimeFailure(os.str());
   }

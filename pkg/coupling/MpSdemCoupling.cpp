@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/Error.hpp"
+#include "coupling/CpuContactLoop.hpp"
 #include "sdem/Bo1_SpheroPolyhedron_Aabb.hpp"
 #include "sdem/Law2_SdemGeom_BarrierPhys_Coulomb.hpp"
 
@@ -16,9 +17,6 @@ namespace coupling {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-// Particles per chunk of the CPU loop: contacts are reduced chunk by chunk in this fixed
-// order, so the block sums do not depend on the thread count.
-constexpr long kChunk = 4096;
 // Upper bound of the number of bins: the bin edge grows until the grid box fits.
 constexpr double kMaxBins = 1 << 22;
 
@@ -420,41 +418,16 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
   const T dt = static_cast<T>(in.dt);
   const T safety = static_cast<T>(in.stepSafety);
   const long n = static_cast<long>(v.n);
-  const long nChunks = (n + kChunk - 1) / kChunk;
-  side.chunkContacts.resize(nChunks);
-  long overflow = 0;
-  double approach = std::numeric_limits<double>::infinity();
-  long firstBad = n;
-  int badBlock = -1;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : overflow) reduction(min : approach)
-  for (long c = 0; c < nChunks; ++c) {
-    std::vector<MpContact<T>>& list = side.chunkContacts[c];
-    list.clear();
-    auto sink = [&list](const MpContact<T>& ct) { list.push_back(ct); };
-    int over = 0;
-    T chunkApproach = std::numeric_limits<T>::infinity();
-    CouplingLoopMemo<T> memo;
-    for (long p = c * kChunk; p < std::min(n, (c + 1) * kChunk); ++p) {
-      int bad = -1;
-      if (coupleParticle(static_cast<int>(p), P, B, S, phys, in.bins, H, dt, safety, sink, &bad, &over,
-                         &chunkApproach, memo) != kCoupleOk) {
-        // the step fails: the loop goes on to name the smallest particle number, as CUDA does
-        const long number = particleNumber(P, static_cast<int>(p));
-#pragma omp critical(mpsdem_bad)
-        if (number < firstBad) {
-          firstBad = number;
-          badBlock = bad;
-        }
-      }
-    }
-    overflow += over;
-    approach = std::min(approach, static_cast<double>(chunkApproach));
-  }
-  out.overflow = overflow;
-  out.minApproachStep = approach;
-  if (firstBad < n) {
-    out.badParticle = static_cast<int>(firstBad);
-    out.badBlock = badBlock;
+  const ContactLoopTotals t = runContactChunks(
+      P, n, side.chunkContacts,
+      [&](int p, auto& sink, int* bad, int* over, T* approach, CouplingLoopMemo<T>& memo) {
+        return coupleParticle(p, P, B, S, phys, in.bins, H, dt, safety, sink, bad, over, approach, memo);
+      });
+  out.overflow = t.overflow;
+  out.minApproachStep = t.approach;
+  if (t.firstBad < n) {
+    out.badParticle = static_cast<int>(t.firstBad);
+    out.badBlock = t.badBody;
     return;
   }
   // The solver may store its particles in an order of its own: the block sums go by particle
