@@ -14,14 +14,12 @@ const double* CouplingReport::sums(int i, int offset) const {
   return s.data() + kBlockSums * i + offset;
 }
 
-Vec3 CouplingReport::force(int i) const {
-  const double* s = sums(i, kSumForce);
+Vec3 CouplingReport::sumVector(int i, int offset) const {
+  const double* s = sums(i, offset);
   return Vec3(s[0], s[1], s[2]);
 }
-Vec3 CouplingReport::torque(int i) const {
-  const double* s = sums(i, kSumTorque);
-  return Vec3(s[0], s[1], s[2]);
-}
+Vec3 CouplingReport::force(int i) const { return sumVector(i, kSumForce); }
+Vec3 CouplingReport::torque(int i) const { return sumVector(i, kSumTorque); }
 int CouplingReport::contactCount(int i) const { return static_cast<int>(*sums(i, kSumCount)); }
 double CouplingReport::stiffnessSum(int i) const { return *sums(i, kSumK); }
 double CouplingReport::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }

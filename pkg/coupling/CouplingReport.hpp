@@ -50,6 +50,8 @@ class CouplingReport {
   virtual int reportedBodies() const = 0;
   // Body i's sums from `offset`; ParameterError when i is no body of the last step.
   const double* sums(int body, int offset) const;
+  // The three sums of body i from `offset` as a vector (force, torque, their face and edge shares).
+  Vec3 sumVector(int body, int offset) const;
   // The step's potentials (replaced) and dissipations (added) from its per-body sums.
   void takeEnergies(const std::vector<double>& sums, int bodies);
 

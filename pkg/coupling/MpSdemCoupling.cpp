@@ -456,14 +456,8 @@ void MpSdemCoupling::blockForces(std::vector<Vec3>& force, std::vector<Vec3>& to
     torque[i] = this->torque(i);
   }
 }
-Vec3 MpSdemCoupling::faceForce(int i) const {
-  const double* s = sums(i, kSumFace);
-  return Vec3(s[0], s[1], s[2]);
-}
-Vec3 MpSdemCoupling::edgeForce(int i) const {
-  const double* s = sums(i, kSumEdge);
-  return Vec3(s[0], s[1], s[2]);
-}
+Vec3 MpSdemCoupling::faceForce(int i) const { return sumVector(i, kSumFace); }
+Vec3 MpSdemCoupling::edgeForce(int i) const { return sumVector(i, kSumEdge); }
 MpContactRecord recordOf(const double* r) {
   MpContactRecord c;
   c.particle = static_cast<int>(r[kRecParticle]);
