@@ -223,6 +223,7 @@ def runOne(a, dx, exe):
         meta = json.load(f)
     resume = os.path.exists(os.path.join(folder, "coupled", "coupled.checkpoint.json"))
     free = meta.get("free_wall") if resume else None
+    started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
     if free is None:
         resume = False
         free = drive(exe, folder, "free.json", "free")
@@ -236,7 +237,7 @@ def runOne(a, dx, exe):
     r = dict(meta, free=freeFlow(folder, dx), coupled=coupled(folder, meta["duration"]), dx=dx, hold=a.hold,
              settings=a.settings, width=a.width, viscosity=viscosity(a, dx), damping_rate=4 * viscosity(a, dx) / dx ** 2,
              cells_per_block=CUBE / dx, wall_seconds={"free": free, "coupled": wall}, coupled_from_step=start,
-             threads=os.environ.get("OMP_NUM_THREADS", "all"), commit=commit(), resumed=resume)
+             threads=os.environ.get("OMP_NUM_THREADS", "all"), commit=started, resumed=resume)
     return writeResult(a, dx, r)
 
 

@@ -216,8 +216,9 @@ def runCase(a, kind, theta, exe):
         subprocess.run([sys.executable, os.path.abspath(__file__)] + child, check=True)
     with open(os.path.join(folder, "meta.json")) as f:
         meta = json.load(f)
+    started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
     wall = drive(exe, folder, "scene.json", "out", ["--restart"] if resume else [])
-    r = dict(meta, wall_seconds=wall, resumed=resume, commit=commit(), threads=os.environ.get("OMP_NUM_THREADS", "all"))
+    r = dict(meta, wall_seconds=wall, resumed=resume, commit=started, threads=os.environ.get("OMP_NUM_THREADS", "all"))
     if kind == "free":
         r["free"] = readFree(folder)
     else:
