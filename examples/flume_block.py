@@ -287,18 +287,25 @@ def fromDriver(a):
 
 def resolutionNote(dx):
     """What refinement measured of the cube's force at this run's cells per block height (the
-    study of docs/coupled-results.md, "The impact under grid refinement", through
-    mpmsdem.tradeoffs): the plateau's error there, and that the peak is not converged."""
+    studies of docs/coupled-results.md, "The impact under grid refinement" and the wall's, through
+    mpmsdem.tradeoffs): the plateau's error there, that the cube's peak is not converged, and how
+    far a wall's converging first blow still is from its limit at the finest spacing measured."""
     from mpmsdem import tradeoffs
     cells = HB / dx
     p = tradeoffs.nearest("plateau_force", cells_per_block_height=cells)
     note = ("resolution: the cube is %.1f cells tall (dx %g m). Refinement of this scene (%s) measured the plateau "
             "force %+.0f %% off its extrapolated limit at %.1f cells per block height" % (
                 cells, dx, p.study["scene"].split("), ", 1)[-1], 100 * p.error, p.settings["cells_per_block_height"]))
-    try:
-        tradeoffs.table("peak_force")
-    except ValueError:  # not converged over the measured resolutions: say so rather than give an error
+    if any("cells per block height" in w for w in tradeoffs.unconverged("peak_force")):
         note += "; the peak (first blow) did not converge over 1 to 2.8 cells per block height"
+    try:
+        wall = [q for q in tradeoffs.table("peak_force") if "cells_per_flow_depth" in q.settings]
+    except ValueError:  # no study converged in it
+        wall = []
+    if wall:
+        finest = max(wall, key=lambda q: q.settings["cells_per_flow_depth"])
+        note += (", while a wall's does, at about first order from above, still %+.0f %% off its limit at %.1f "
+                 "cells per flow depth" % (100 * finest.error, finest.settings["cells_per_flow_depth"]))
     return note + " (docs/coupled-results.md)"
 
 

@@ -6,18 +6,22 @@
     for row in tradeoffs.table("runout"):           # every measured setting for that output
         print(row)
     tradeoffs.nearest("plateau_force", cells_per_block_height=2)   # the error measured nearest a setting
+    tradeoffs.propose(1.0, output="peak_force")     # a wall's first blow, in cells per flow depth
 
 The numbers are measurements, shipped with the package in ``tradeoffs.json`` and written by the
-benchmark scripts that made them (``scripts/bench/tradeoff_mpm.py`` and
-``scripts/bench/tradeoff_stacked_blocks.py``, with ``--package-data``): each study
+scripts that made them (``scripts/bench/tradeoff_mpm.py``,
+``scripts/bench/tradeoff_stacked_blocks.py``, ``scripts/validation/flume_convergence.py`` and
+``scripts/validation/impact_walls.py``, with ``--package-data``): each study
 ran one scene at many settings, took the finest setting as the converged reference and
 recorded every output's relative error against it and the run's cost relative to the default
 setting (the work, points x steps, and the CPU time of one thread, all runs in one command).
-A study refined towards a limit it could not run (``scripts/validation/flume_convergence.py``:
-the §3.2 cube's impact at 1, 2 and 2.8 cells per block height) takes the limit extrapolated
-through its three spacings as the reference (``extrapolated``: how) and lists the outputs
-whose sequence gave no limit under ``unconverged``; asking for one of those raises a
-ValueError that says what was measured. Proposals come from the resolution settings (grid
+A study refined towards a limit it could not run (the §3.2 cube's impact at 1, 2 and 2.8
+cells per block height; a rigid wall struck by the flume's flow at 2.4, 4.2 and 7.7 cells per
+flow depth) takes the limit extrapolated through its three spacings as the reference
+(``extrapolated``: how) and lists the outputs whose sequence gave no limit under
+``unconverged``; asking for one of those raises a ValueError that says what was measured, or,
+where another study's converged (the wall's first blow: the cube's did not), the proposal
+carries the others' findings in ``caveats`` (:func:`unconverged` lists them). Proposals come from the resolution settings (grid
 spacing, points per cell, precision); rows
 that change a model choice such as the FLIP/PIC alpha are listed by :func:`table` with
 ``sensitivity`` set, and not proposed. A proposal is therefore an empirical
@@ -39,7 +43,7 @@ class Proposal:
     FLIP/PIC blend each row's flow ran with is one of its settings: ``settings["flip_viscosity"]``,
     a PIC viscosity [m²/s] (docs/physics.md, "The blend as a viscosity")."""
 
-    def __init__(self, output, row, study):
+    def __init__(self, output, row, study, caveats=()):
         self.output = output
         self.settings = dict(row["settings"])
         self.error = row["errors"][output]
@@ -48,11 +52,15 @@ class Proposal:
         self.reference = bool(row.get("reference", False))
         self.sensitivity = bool(row.get("sensitivity", False))
         self.study = {k: study[k] for k in ("name", "scene", "commit", "machine", "command", "reference")}
+        # what other studies found of the same output without a limit (e.g. a wall's peak force
+        # converges where a block's did not): a proposal holds only for scenes like its own
+        self.caveats = list(caveats)
 
     def __repr__(self):
-        return "Proposal(%s: %s, error %+.2f %%, cost %.3g x default; measured on %s, commit %s)" % (
+        return "Proposal(%s: %s, error %+.2f %%, cost %.3g x default; measured on %s, commit %s%s)" % (
             self.output, ", ".join("%s=%s" % kv for kv in sorted(self.settings.items())), 100 * self.error,
-            self.cost, self.study["scene"], self.study["commit"])
+            self.cost, self.study["scene"], self.study["commit"],
+            "".join("; not converged elsewhere: " + c for c in self.caveats))
 
 
 def _studies(path=None):
@@ -76,10 +84,18 @@ def _unconverged(studies, output):
             for s in studies if output in s.get("unconverged", {})]
 
 
+def unconverged(output, path=None):
+    """What each study that refined ``output`` without reaching a limit measured of it (a list
+    of sentences, empty when every study that measured it converged), e.g. the §3.2 cube's
+    first blow at 1, 2 and 2.8 cells per block height."""
+    return _unconverged(_studies(path), output)
+
+
 def table(output, path=None):
     """Every measured setting for ``output``, cheapest first: a list of :class:`Proposal`.
     An output a study refined without reaching a converged value (its sequence not monotone)
-    has no errors to offer: a ValueError says what was measured."""
+    has no errors to offer: a ValueError says what was measured when no other study converged
+    in it, and otherwise each row carries it in ``caveats``."""
     studies = _studies(path)
     known = _outputsOf(studies)
     if output not in known:
@@ -88,7 +104,8 @@ def table(output, path=None):
             raise ValueError("output = %r: measured under refinement but not converged, so no setting's error is "
                              "known: %s" % (output, "; ".join(why)))
         raise ValueError("output = %r: not measured; one of %s" % (output, ", ".join(known)))
-    rows = [Proposal(output, r, s) for s in studies for r in s["rows"] if output in r["errors"]]
+    why = _unconverged(studies, output)
+    rows = [Proposal(output, r, s, why) for s in studies for r in s["rows"] if output in r["errors"]]
     return sorted(rows, key=lambda p: (p.cost, p.cpuCost if p.cpuCost is not None else p.cost, abs(p.error)))
 
 
@@ -136,5 +153,7 @@ def nearest(output, path=None, **settings):
         raise ValueError("settings = %r: name one or more measured settings, each a number > 0" % (settings,))
     rows = [p for p in table(output, path) if not p.reference and all(k in p.settings for k in settings)]
     if not rows:
-        raise ValueError("settings %s: no measured row of %s has them" % (", ".join(sorted(settings)), output))
+        why = unconverged(output, path)
+        raise ValueError("settings %s: no measured row of %s has them%s" % (
+            ", ".join(sorted(settings)), output, "".join("; not converged: " + w for w in why)))
     return min(rows, key=lambda p: sum(abs(math.log(p.settings[k] / v)) for k, v in settings.items()))

@@ -386,6 +386,12 @@ def packageData(runs, settings, hold, width, command):
     if study is None:
         raise SystemExit("--package-data: the %s set held by %s at width %g m needs three finished spacings, one "
                          "of them %g m" % (settings, hold, width, REFERENCE_DX))
+    storeStudy(study)
+
+
+def storeStudy(study):
+    """Replace the study of this name in py/mpmsdem/tradeoffs.json (the other studies stay),
+    through a temporary file: a killed run leaves the old file whole."""
     path = os.path.join(ROOT, "py", "mpmsdem", "tradeoffs.json")
     with open(path) as f:
         data = json.load(f)

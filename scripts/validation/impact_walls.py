@@ -46,7 +46,8 @@ import time
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from flume_convergence import CUBE, SERIES_EVERY, STATION_HALF, commit, drive, fmt  # noqa: E402
+from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, commit, drive, fmt, richardson,  # noqa: E402
+                               storeStudy)
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
@@ -76,6 +77,9 @@ def parse(argv):
     ap.add_argument("--cases", default="free,wall", help="which runs: free, wall, block (comma-separated; "
                     "the block needs Δx 0.01 m or finer: at 0.02 m it is one cell)")
     ap.add_argument("--out", default="results/impact_walls", help="folder of the runs")
+    ap.add_argument("--package-data", action="store_true",
+                    help="store the wall's refinement (three spacings of one incline, one of them 0.01 m) in "
+                         "py/mpmsdem/tradeoffs.json (mpmsdem.tradeoffs: errors against the extrapolated limit)")
     ap.add_argument("--report-only", action="store_true",
                     help="only print and write the table of finished runs (read again from their outputs)")
     ap.add_argument("--child", nargs=3, metavar=("prepare", "KIND", "THETA"), help=argparse.SUPPRESS)
@@ -280,6 +284,77 @@ def table(out):
     return "\n".join(lines)
 
 
+# The outputs mpmsdem.tradeoffs offers from a wall's refinement, by the number each one is.
+WALL_OUTPUTS = {"F_peak": "peak_force", "F_later": "quasi_steady_force", "F_end": "deposit_force"}
+REFERENCE_DX = 0.01  # the spacing whose run has cost 1 (the paper's)
+
+
+def packageStudy(runs, theta, L0, young, command):
+    """The wall's refinement at one incline, L0 and E for py/mpmsdem/tradeoffs.json: over its
+    three finest spacings, each run's relative error in each force of WALL_OUTPUTS against the
+    value extrapolated to Δx 0 (Richardson) where the sequence gives one, the others under
+    ``unconverged``; the resolution as cells per flow depth (the run's own h_f over Δx); the
+    work (points x steps of the wall's run) relative to the run at Δx 0.01 m. None when those
+    runs are not all there."""
+    rs = sorted([r for r in runs if r["kind"] == "wall" and (r["theta"], r["L0"], r["young"]) == (theta, L0, young)],
+                key=lambda r: -r["dx"])[-3:]
+    default = [r for r in rs if abs(r["dx"] - REFERENCE_DX) <= 1e-12 * REFERENCE_DX]
+    if len(rs) != 3 or not default:
+        return None
+    h = [r["dx"] for r in rs]
+    cells = [r["free"]["h_f"] / r["dx"] for r in rs]
+    work = lambda r: r["points"] * r["duration"] / r["dt"]  # noqa: E731
+    limits, unconverged, orders = {}, {}, {}
+    for key, out in WALL_OUTPUTS.items():
+        vals = [r["obstacle"][key] for r in rs]
+        e = richardson(vals, h)
+        if e is None:
+            unconverged[out] = "%s on a wall at %s cells per flow depth (Δx %s m): %s N, not monotone or not " \
+                               "converging with shrinking steps" % (out, " / ".join("%.1f" % c for c in cells),
+                                                                    " / ".join("%.4g" % d for d in h),
+                                                                    " / ".join("%.4g" % v for v in vals))
+        else:
+            orders[out], limits[key] = e[0], e[1]
+    viscosity = [float(r["flip_blend"].split()[2]) for r in rs]  # "PIC viscosity NU m^2/s (...)"
+    rows = [{"settings": {"dx": r["dx"], "cells_per_flow_depth": c, "ppc": 8, "flip_viscosity": nu,
+                          "precision": "double"},
+             "errors": {WALL_OUTPUTS[k]: (r["obstacle"][k] - f0) / f0 for k, f0 in limits.items()},
+             "cost": work(r) / work(default[0]), "cpu_cost": None, "reference": False, "sensitivity": False}
+            for r, c, nu in zip(rs, cells, viscosity)]
+    return {"name": "wall_impact_t%g_L%g_E%g" % (theta, L0, young),
+            "scene": "scripts/validation/impact_walls.py (the §3.2 flume at %g°, a rigid wall across a %g m slice "
+                     "%g m from the column, E %g Pa, PIC viscosity held)" % (theta, rs[0]["width"], L0, young),
+            "commit": ", ".join(sorted({r["commit"] for r in rs})),
+            "machine": "2-core x86_64 VM, one thread, shared (cpu_cost not measured)",
+            "command": command,
+            "reference": {"dx": 0.0},
+            "extrapolated": "f0 of f = f0 + C dx^p through Δx %s m (Richardson, observed order p: %s)" % (
+                " / ".join("%.4g" % d for d in h), ", ".join("%s %.2f" % (o, orders[o]) for o in sorted(orders))),
+            "rows": rows, "unconverged": unconverged}
+
+
+def packageData(out):
+    """Store the refinement of every incline, L0 and E with three spacings (one of them 0.01 m)."""
+    runs = []
+    for path in sorted(glob.glob(os.path.join(out, "*.json"))):
+        with open(path) as f:
+            runs.append(json.load(f))
+    stored = 0
+    for theta, L0, young in sorted({(r["theta"], r["L0"], r["young"]) for r in runs if r["kind"] == "wall"}):
+        dxs = sorted({r["dx"] for r in runs if r["kind"] == "wall" and (r["theta"], r["L0"], r["young"]) ==
+                      (theta, L0, young)}, reverse=True)[-3:]
+        study = packageStudy(runs, theta, L0, young,
+                             "OMP_NUM_THREADS=1 python3 scripts/validation/impact_walls.py --out OUT --incline %g "
+                             "--L0 %g --dx D for D in %s, then --report-only --package-data" % (
+                                 theta, L0, ", ".join("%g" % d for d in dxs)))
+        if study is not None:
+            storeStudy(study)
+            stored += 1
+    if not stored:
+        raise SystemExit("--package-data: no wall has three finished spacings at one incline, L0 and E, one of "
+                         "them %g m" % REFERENCE_DX)
+
+
 def main(argv):
     a = parse(argv)
     a.argv = argv
@@ -308,6 +383,8 @@ def main(argv):
     print(text)
     with open(os.path.join(a.out, "impact_walls.md"), "w") as f:
         f.write(text + "\n")
+    if a.package_data:
+        packageData(a.out)
 
 
 if __name__ == "__main__":

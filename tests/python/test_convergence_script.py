@@ -1,4 +1,4 @@
-"""scripts/validation/flume_convergence.py: its extrapolation to Δx 0 on exact power laws."""
+"""scripts/validation/flume_convergence.py and impact_walls.py: their extrapolation to Δx 0 on exact power laws."""
 import os
 import sys
 
@@ -6,6 +6,7 @@ import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts", "validation"))
 import flume_convergence as fc  # noqa: E402
+import impact_walls as iw  # noqa: E402
 
 
 @pytest.mark.parametrize("p, h", [(2.0, (0.02, 0.01, 0.005)), (1.5, (0.02, 0.01, 0.2 / 28)),
@@ -38,3 +39,27 @@ def test_package_study_errors_against_the_extrapolated_limit():
     assert [r["cost"] for r in s["rows"]] == pytest.approx([1 / 16, 1.0, 1.4 ** 4], rel=1e-9)
     assert list(s["unconverged"]) == ["peak_force"] and "7 / 5.8 / 6, not monotone" in s["unconverged"]["peak_force"]
     assert fc.packageStudy(runs[:2], "joint", "viscosity", 0.2, "cmd") is None   # two spacings: no study
+
+
+def test_wall_study_errors_against_the_extrapolated_limit():
+    # a wall's first blow on an exact first-order law (8 N + 700 dx), a quasi-steady load that
+    # zigzags and a deposit's load that steps further each halving (not converging); a run at
+    # another incline and one at another E stay out of the study
+    h = [0.02, 0.01, 0.005]
+
+    def run(dx, later, end, theta=20.0, young=1e6):
+        return {"kind": "wall", "theta": theta, "L0": 0.5, "young": young, "dx": dx, "width": 0.04,
+                "points": 2400 * (0.02 / dx) ** 2, "duration": 1.45, "dt": 1e-4 * dx / 0.02, "commit": "abc",
+                "flip_blend": "PIC viscosity 0.0360141 m^2/s (PIC damping 360 /s at dx 0.02 m)",
+                "free": {"h_f": 0.04}, "obstacle": {"F_peak": 8.0 + 700 * dx, "F_later": later, "F_end": end}}
+    runs = [run(d, l, e) for d, l, e in zip(h, (10.8, 9.4, 9.6), (6.3, 6.4, 7.0))]
+    runs += [run(0.01, 1, 1, theta=35.0), run(0.01, 1, 1, young=4e6), dict(run(0.01, 1, 1), kind="free")]
+    s = iw.packageStudy(runs, 20.0, 0.5, 1e6, "cmd")
+    assert s["name"] == "wall_impact_t20_L0.5_E1e+06" and "peak_force 1.00" in s["extrapolated"]
+    assert [r["settings"]["cells_per_flow_depth"] for r in s["rows"]] == pytest.approx([2.0, 4.0, 8.0])
+    assert [r["errors"]["peak_force"] for r in s["rows"]] == pytest.approx([700 * d / 8.0 for d in h], rel=1e-6)
+    assert [r["settings"]["flip_viscosity"] for r in s["rows"]] == [0.0360141] * 3
+    assert [r["cost"] for r in s["rows"]] == pytest.approx([1 / 8, 1.0, 8.0], rel=1e-9)   # points x steps
+    assert sorted(s["unconverged"]) == ["deposit_force", "quasi_steady_force"]
+    assert "10.8 / 9.4 / 9.6 N" in s["unconverged"]["quasi_steady_force"]
+    assert iw.packageStudy(runs[:2], 20.0, 0.5, 1e6, "cmd") is None   # two spacings: no study
