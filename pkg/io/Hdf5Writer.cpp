@@ -443,6 +443,14 @@ void Hdf5Writer::appendRow(const std::string& name, const double* values, hsize_
   flush();
 }
 
+std::vector<double> Hdf5Writer::series(const std::string& name, std::size_t* width) const {
+  std::size_t rows = 0, cols = 1;
+  std::vector<double> values = linkExists(series_, name) ? readArray(series_, name, rows, cols, path_)
+                                                         : std::vector<double>();
+  if (width) *width = cols;
+  return values;
+}
+
 long Hdf5Writer::seriesLength(const std::string& name) const {
   if (!linkExists(series_, name)) return 0;
   Handle dset(H5Dopen2(series_, name.c_str(), H5P_DEFAULT), H5Dclose);

@@ -99,6 +99,9 @@ class Hdf5Writer {
 
   // Number of records in /series/<name> (0 when absent) and of snapshots in the file.
   long seriesLength(const std::string& name) const;
+  // /series/<name> as it is in the open file, flat row-major (empty when absent); `width`
+  // receives the record width. A restart reads the records it continues from with it.
+  std::vector<double> series(const std::string& name, std::size_t* width = nullptr) const;
   long numSnapshots() const { return nextSnapshot_; }
 
  private:

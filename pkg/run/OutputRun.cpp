@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -67,6 +68,26 @@ OutputRun::OutputRun(Stepper& stepper, const mpm::MpmScene& scene, bool restart,
   io::writeMpmHeader(h5_, scene.sourceJson, scene.params, solver_.name());
   if (coupled_) coupled_->h5().setAttribute("flip_blend", mpm::describeFlipBlend(scene.params));
   for (const mpm::FlowProbeSpec& p : scene.probes) probes_.emplace_back(p);
+  if (restart) replayProbes();
+}
+
+void OutputRun::replayProbes() {
+  std::size_t width = 0;
+  const std::vector<double> time = h5_.series("time"), front = h5_.series("front_x");
+  const std::vector<double> depth = h5_.series("probe_depth", &width), velocity = h5_.series("probe_velocity"),
+                            points = h5_.series("probe_points");
+  if (!probes_.empty() && (width != probes_.size() || depth.size() != time.size() * width ||
+                           velocity.size() != depth.size() || points.size() != depth.size()))
+    throw ParameterError("--restart: " + h5_.path() + " holds " + std::to_string(depth.size()) +
+                         " probe values in records of " + std::to_string(width) + " for " +
+                         std::to_string(time.size()) + " series records, where the scene has " +
+                         std::to_string(probes_.size()) + " flow_probes: not the same run (start it again "
+                         "without --restart)");
+  for (std::size_t r = 0; r < time.size(); ++r) {
+    for (std::size_t k = 0; k < probes_.size(); ++k)
+      probes_[k].add(time[r], {depth[r * width + k], velocity[r * width + k], std::lround(points[r * width + k])});
+    if (r < front.size() && front[r] > front_ + 0.5 * scene_.params.dx) front_ = front[r], frontAt_ = time[r];
+  }
 }
 
 RunEnd OutputRun::run(long maxSteps) {

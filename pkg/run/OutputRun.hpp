@@ -75,6 +75,9 @@ class OutputRun {
   mpm::Diagnostics diagnose();
   // The flow probes' records and the run's stop rules, at a series record of time t.
   void recordProbes(const mpm::Diagnostics& d, double t);
+  // A restart: the probes and the front's stop rule take again the records the run kept (a
+  // front that arrived before the restart point keeps its arrival and its means so far).
+  void replayProbes();
   // flow_probes.json: why the run stopped and each probe's result (scenes with flow_probes).
   void writeProbeResults(const std::string& stopped);
   void recordSeries(const mpm::Diagnostics& d, double dt = 0);

@@ -34,9 +34,6 @@ RunEnd runScene(const mpm::MpmScene& scene, const coupling::SceneBlocks& blocks,
   std::optional<coupling::FrontSnapshot> flowFront;
   std::optional<coupling::CoupledCheckpoint> flowCheckpoint;
   if (request.restart) {
-    if (!scene.probes.empty())
-      throw ParameterError("--restart: this scene has flow_probes, whose records are not kept in a restart point; "
-                           "run it again without --restart (a free-flow probe run is short)");
     const std::filesystem::path dir(scene.run.outputDir);
     const std::string h5 = (dir / "mpm.h5").string();
     // Back to the files as they were at the last snapshot: a run killed while it flushed

@@ -48,6 +48,7 @@ STATION_HALF = 0.01          # half the window along the flume that h_f and v_f 
 BLOW_WINDOW = 0.05           # the first blow is looked for within this time after the touch [s]
 PLATEAU = (0.4, 0.5)         # [s]
 SERIES_EVERY = 0.001         # records of the probe and the cube [s]
+RESTART_EVERY = 0.05         # the free flow saves a snapshot (a restart point) this often [s]
 AHEAD = 0.03                 # the coupled run starts from the free flow with its front this far (and two cells,
                              # the grid's reach) short of the cube [m]: no point within its bounding sphere yet
 CUBE = 0.02                  # the cube's side h_b [m] (examples/flume_block.py)
@@ -132,7 +133,7 @@ def prepare(a, dx, folder):
     scene = Flume(**common)  # the cube's step for the free flow too: --flow-from continues it
     driver.writeScene(os.path.join(folder, "free.json"), scene.coupled, duration=2.0, dt=dt,
                       flowProbes=[{"x": station, "halfWidth": STATION_HALF, "bedZ": 0.0, "window": 0.05}],
-                      seriesEvery=every, outputEvery=2.0, vtk="none", stopWhenProbed=True,
+                      seriesEvery=every, outputEvery=RESTART_EVERY, vtk="none", stopWhenProbed=True,
                       snapshotWhenFrontAt=[station - AHEAD - 2 * dx, station])
     with open(os.path.join(folder, "meta.json"), "w") as f:
         json.dump(meta, f, indent=1)
@@ -207,9 +208,9 @@ def writeResult(a, dx, r):
 
 
 def runOne(a, dx, exe):
-    """Prepare, run and read one spacing; writes OUT/<run>.json and returns its numbers. A coupled leg that was
-    interrupted continues (--restart); the free flow, whose probe records a restart would lose,
-    runs again from its start."""
+    """Prepare, run and read one spacing; writes OUT/<run>.json and returns its numbers. A leg that was
+    interrupted continues from its last restart point (--restart; the free flow's probe records
+    with it, the driver reads them again from its mpm.h5)."""
     same = sameRunAtReference(a, dx)
     if same:
         with open(same) as f:
@@ -226,9 +227,10 @@ def runOne(a, dx, exe):
     started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
     if free is None:
         resume = False
-        free = drive(exe, folder, "free.json", "free")
+        again = os.path.exists(os.path.join(folder, "free", "mpm.h5.restart"))
+        free = drive(exe, folder, "free.json", "free", ["--restart"] if again else [])
         with open(os.path.join(folder, "meta.json"), "w") as f:
-            json.dump(dict(meta, free_wall=free), f, indent=1)
+            json.dump(dict(meta, free_wall=free, free_resumed=again), f, indent=1)
     with open(os.path.join(folder, "free", "front_snapshot_0.json")) as f:
         start = json.load(f)["step"]
     steps = int(round(meta["duration"] / meta["dt"])) - start

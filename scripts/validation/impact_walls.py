@@ -31,8 +31,8 @@ for both with F_static = ½ ρ g h_f A (Eq 21's, k 1).
         [--incline 10,20,25,30,35] [--L0 0.5] [--dx 0.01] [--width 0.04] [--young E] [--cases free,wall,block]
     /usr/bin/python3 scripts/validation/impact_walls.py --out results/impact_walls --report-only
 
-Each case's numbers go to OUT/<case>.json when it ends and finished cases are not run again; an
-obstacle's run that was interrupted continues from its last snapshot (every 0.1 s);
+Each case's numbers go to OUT/<case>.json when it ends and finished cases are not run again; a
+run that was interrupted continues from its last snapshot (every 0.1 s);
 the table of all finished cases is printed and written to OUT/impact_walls.md.
 """
 import argparse
@@ -59,7 +59,7 @@ END = 0.1                 # F_end: mean over the run's last END seconds [s]
 DEPOSIT = 0.02            # h_d: the highest point within this distance upstream of the wall [m]
 FLUME_BEYOND = 0.3        # the flume goes on this far past the station [m]: its end wall sends nothing back
                           # into the probe's 50 ms
-RESTART_EVERY = 0.1       # an obstacle's run saves a snapshot (a restart point) this often [s]
+RESTART_EVERY = 0.1       # a run saves a snapshot (a restart point) this often [s]
 RHO = 1600.0              # the flow's bulk density [kg/m³] (the glass beads' of Table 1)
 G = 9.81
 
@@ -143,7 +143,7 @@ def prepare(a, kind, theta, folder):
             "points": scene.mpm.numParticles, "flip_blend": scene.flipBlend()}
     if kind == "free":
         driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=3.0, dt=dt, seriesEvery=every,
-                          outputEvery=3.0, vtk="none", stopWhenProbed=True,
+                          outputEvery=RESTART_EVERY, vtk="none", stopWhenProbed=True,
                           flowProbes=[{"x": station, "halfWidth": STATION_HALF, "bedZ": 0.0, "window": 0.05}])
     else:
         meta["duration"] = a.arrival + REST
@@ -210,9 +210,10 @@ def runCase(a, kind, theta, exe):
             raise RuntimeError("%s: needs the free flow at %g deg first (--cases free,...)" % (name, theta))
         with open(path) as f:
             free = json.load(f)["free"]
-    # an obstacle's run that was interrupted continues from its last restart point (the free flow's probe
-    # records are not in a restart point: it runs again from its start)
-    resume = kind != "free" and os.path.exists(os.path.join(folder, "out", "coupled.checkpoint.json"))
+    # a run that was interrupted continues from its last restart point (the free flow's probe records with it:
+    # the driver reads them again from its mpm.h5)
+    resume = os.path.exists(os.path.join(folder, "meta.json")) and os.path.exists(
+        os.path.join(folder, "out", "coupled.checkpoint.json" if kind != "free" else "mpm.h5.restart"))
     if not resume:
         child = ["--child", "prepare", kind, repr(theta)] + a.argv
         if free:

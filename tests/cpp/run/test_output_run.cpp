@@ -1,11 +1,15 @@
 // Runs with outputs through the run layer's entry point: the outputs of a run by steps, a
-// restart that continues it bit for bit, a front snapshot, and a restart refused.
+// restart that continues it bit for bit (its flow probes too), a front snapshot, and a restart
+// refused.
 #include <gtest/gtest.h>
 
 #ifdef MPMSDEM_WITH_HDF5  // runs with outputs need HDF5 (CMakeLists.txt)
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -93,6 +97,41 @@ TEST(OutputRun, ARestartContinuesTheRunBitForBit) {
         << name;
   EXPECT_EQ(io::readNumSnapshots((whole / "mpm.h5").string()), io::readNumSnapshots((parts / "mpm.h5").string()) - 1)
       << "the restarted run has the snapshot at step 12 besides those at multiples of 5 steps";
+  fs::remove_all(whole);
+  fs::remove_all(parts);
+}
+
+// The collapse with a flow probe at the block's downstream face: the flow is there from the
+// first record (its arrival is t = 0) and the means run over 15 steps, across a restart at step
+// 12. The restarted run must report what the whole run does, not an arrival at its restart.
+TEST(OutputRun, ARestartKeepsTheProbesRecords) {
+  const fs::path whole = scratchDir("probe_whole"), parts = scratchDir("probe_parts");
+  auto scene = [](const fs::path& out) {
+    mpm::MpmScene s = collapse(out);
+    s.probes.push_back({0.06, 0.005, 0.02, 4, 7.5e-4});
+    return s;
+  };
+  ASSERT_EQ(runSteps(scene(whole), 20), RunEnd::Done);
+  ASSERT_EQ(runSteps(scene(parts), 12), RunEnd::Done);
+  ASSERT_EQ(runSteps(scene(parts), 8, true), RunEnd::Done);
+  const nlohmann::json a = nlohmann::json::parse(std::ifstream(whole / "flow_probes.json"));
+  const nlohmann::json b = nlohmann::json::parse(std::ifstream(parts / "flow_probes.json"));
+  ASSERT_EQ(a["probes"].size(), 1u);
+  EXPECT_EQ(a["probes"][0]["arrival"], 0.0);
+  EXPECT_EQ(a["probes"][0]["records"], 21);
+  EXPECT_GT(a["probes"][0]["h_f"].get<double>(), 0.03);  // the block's 0.04 m less its first slump
+  for (const char* key : {"arrival", "h_f", "v_f", "Fr", "records", "complete"})
+    EXPECT_EQ(a["probes"][0][key], b["probes"][0][key]) << key;
+  EXPECT_EQ(a["front_still_since"], b["front_still_since"]);
+  // a run whose records hold another number of probes is not the one the scene describes
+  mpm::MpmScene two = scene(parts);
+  two.probes.push_back(two.probes[0]);
+  try {
+    runSteps(two, 2, true);
+    ADD_FAILURE() << "expected ParameterError";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("flow_probes"), std::string::npos) << e.what();
+  }
   fs::remove_all(whole);
   fs::remove_all(parts);
 }
