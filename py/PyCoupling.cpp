@@ -203,7 +203,9 @@ class PyCoupling {
   // ---- outputs: <dir>/coupled.h5 and <dir>/scene.pvd (coupling::CoupledOutput, the layout the
   // driver writes too)
   void openOutput(const std::string& dir, bool append) {
-    output_ = std::make_unique<coupling::CoupledOutput>(dir, append, sdem_.engine());
+    std::vector<int> levelSetIds;
+    for (int i = 0; i < levelSets_.numBodies(); ++i) levelSetIds.push_back(levelSets_.externalId(i));
+    output_ = std::make_unique<coupling::CoupledOutput>(dir, append, sdem_.engine(), levelSetIds);
     if (!ori0_.empty()) output_->setReferenceOrientations(ori0_);
   }
   // ParameterError (ValueError) naming the first block (YADE id) faster than maxSpeed [m/s].
@@ -241,7 +243,7 @@ class PyCoupling {
   void record(const bp::object& bodies, double time, long step) {
     requireOutput();
     sdem_.readStates(bodies);
-    output_->record(time, step, sdem_.engine(), coupling_);
+    output_->record(time, step, sdem_.engine(), coupling_, levelSetRecords(bodies));
   }
   void appendSeries(const std::string& name, double value) {
     requireOutput();
@@ -258,25 +260,21 @@ class PyCoupling {
   // record (the origin of the `rotation` series).
   bp::tuple histories() {
     coupling_.pullHistories();
-    const auto& k = coupling_.historyKeys();
-    const auto& x = coupling_.historyXi();
-    return bp::make_tuple(bytes(k.data(), k.size() * sizeof(long long)), bytes(x.data(), x.size() * sizeof(double)),
-                          coupling_.historySlots());
+    return historyBytes(coupling_);
   }
-  void setHistories(const bp::object& keys, const bp::object& xi) {
-    char *kp = nullptr, *xp = nullptr;
-    Py_ssize_t kn = 0, xn = 0;
-    if (PyBytes_AsStringAndSize(keys.ptr(), &kp, &kn) < 0 || PyBytes_AsStringAndSize(xi.ptr(), &xp, &xn) < 0)
-      bp::throw_error_already_set();
-    if (kn % sizeof(long long) || xn % sizeof(double))
-      throw ParameterError("checkpoint histories: byte lengths are not whole int64 / float64 arrays");
-    std::vector<long long> k(kn / sizeof(long long));
-    std::vector<double> x(xn / sizeof(double));
-    if (kn) std::memcpy(k.data(), kp, kn);
-    if (xn) std::memcpy(x.data(), xp, xn);
-    coupling_.setHistories(k, x);
+  void setHistories(const bp::object& keys, const bp::object& xi) { setHistoryBytes(coupling_, keys, xi); }
+  bp::tuple blockDissipation() const {
+    return bp::make_tuple(coupling_.frictionDissipation(), coupling_.dampingDissipation());
   }
   void setDissipation(double friction, double damping) { coupling_.setDissipation(friction, damping); }
+  // The same for the LevelSet bodies' contacts (their dissipations kept apart, so that a restart
+  // adds up the same numbers as the unbroken run).
+  bp::tuple levelSetHistories() const { return historyBytes(levelSets_); }
+  void setLevelSetHistories(const bp::object& keys, const bp::object& xi) { setHistoryBytes(levelSets_, keys, xi); }
+  bp::tuple levelSetDissipation() const {
+    return bp::make_tuple(levelSets_.frictionDissipation(), levelSets_.dampingDissipation());
+  }
+  void setLevelSetDissipation(double friction, double damping) { levelSets_.setDissipation(friction, damping); }
   bp::list referenceOrientations() const {
     bp::list l;
     for (const Quat& q : output_ ? output_->referenceOrientations() : ori0_)
@@ -360,6 +358,47 @@ class PyCoupling {
       addT(levelSets_.externalId(i), levelSets_.torque(i));
     }
   }
+  // Each LevelSet body's record for coupled.h5: its state now, read from YADE, and the flow's
+  // action on it in the last step.
+  std::vector<coupling::OtherBodyRecord> levelSetRecords(const bp::object& bodies) const {
+    std::vector<coupling::OtherBodyRecord> out(levelSets_.numBodies());
+    for (int i = 0; i < levelSets_.numBodies(); ++i) {
+      const bp::object st = bodies[levelSets_.externalId(i)].attr("state");
+      coupling::OtherBodyRecord& r = out[i];
+      r.pos = bp::extract<Vec3>(st.attr("pos"));
+      r.vel = bp::extract<Vec3>(st.attr("vel"));
+      r.ori = bp::extract<Quat>(st.attr("ori"));
+      if (levelSets_.reported(i)) {
+        r.force = levelSets_.force(i);
+        r.torque = levelSets_.torque(i);
+        r.contacts = levelSets_.contactCount(i);
+      }
+    }
+    return out;
+  }
+  // Tangential histories of a coupling as raw bytes (int64 keys, float64 xi: a restart is
+  // bit-for-bit) and its slots per particle, and back.
+  template <typename C>
+  static bp::tuple historyBytes(const C& c) {
+    const std::vector<long long> k = c.historyKeys();
+    const std::vector<double> x = c.historyXi();
+    return bp::make_tuple(bytes(k.data(), k.size() * sizeof(long long)), bytes(x.data(), x.size() * sizeof(double)),
+                          c.historySlots());
+  }
+  template <typename C>
+  static void setHistoryBytes(C& c, const bp::object& keys, const bp::object& xi) {
+    char *kp = nullptr, *xp = nullptr;
+    Py_ssize_t kn = 0, xn = 0;
+    if (PyBytes_AsStringAndSize(keys.ptr(), &kp, &kn) < 0 || PyBytes_AsStringAndSize(xi.ptr(), &xp, &xn) < 0)
+      bp::throw_error_already_set();
+    if (kn % sizeof(long long) || xn % sizeof(double))
+      throw ParameterError("checkpoint histories: byte lengths are not whole int64 / float64 arrays");
+    std::vector<long long> k(kn / sizeof(long long));
+    std::vector<double> x(xn / sizeof(double));
+    if (kn) std::memcpy(k.data(), kp, kn);
+    if (xn) std::memcpy(x.data(), xp, xn);
+    c.setHistories(k, x);
+  }
   bool seen(int i) const { return !(i >= coupling_.numBlocks() && i < sdem_.engine().numBodies()); }
   void requireOutput() const {
     if (!output_) throw ParameterError("output: call openOutput(dir) before writing outputs");
@@ -426,7 +465,12 @@ void exportCoupling() {
       .def("criticalTimeStep", &PyCoupling::criticalTimeStep)
       .def("histories", &PyCoupling::histories)
       .def("setHistories", &PyCoupling::setHistories)
+      .def("blockDissipation", &PyCoupling::blockDissipation)
       .def("setDissipation", &PyCoupling::setDissipation)
+      .def("levelSetHistories", &PyCoupling::levelSetHistories)
+      .def("setLevelSetHistories", &PyCoupling::setLevelSetHistories)
+      .def("levelSetDissipation", &PyCoupling::levelSetDissipation)
+      .def("setLevelSetDissipation", &PyCoupling::setLevelSetDissipation)
       .def("referenceOrientations", &PyCoupling::referenceOrientations)
       .def("setReferenceOrientations", &PyCoupling::setReferenceOrientations)
       .add_property("contactStep", &PyCoupling::contactStep)

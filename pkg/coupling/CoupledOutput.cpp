@@ -4,7 +4,10 @@
 #include <algorithm>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <sstream>
+
+#include "common/Error.hpp"
 
 namespace mpmsdem {
 namespace coupling {
@@ -18,19 +21,29 @@ std::string prepare(const std::string& dir) {
 }
 }  // namespace
 
-CoupledOutput::CoupledOutput(const std::string& dir, bool append, const sdem::SdemEngine& engine)
+CoupledOutput::CoupledOutput(const std::string& dir, bool append, const sdem::SdemEngine& engine,
+                             const std::vector<int>& otherIds)
     : dir_(dir),
       h5_(prepare(dir), append ? io::Hdf5Writer::Mode::Append : io::Hdf5Writer::Mode::Truncate),
-      pvd_((fs::path(dir) / "scene.pvd").string(), append) {
-  std::ostringstream ids;
-  ids << "[";
-  for (int i = 0; i < engine.numBodies(); ++i) ids << (i ? ", " : "") << engine.externalId(i);
-  ids << "]";
-  h5_.setAttribute("ids", ids.str());
+      pvd_((fs::path(dir) / "scene.pvd").string(), append),
+      others_(otherIds.size()) {
+  std::vector<int> all;
+  for (int i = 0; i < engine.numBodies(); ++i) all.push_back(engine.externalId(i));
+  all.insert(all.end(), otherIds.begin(), otherIds.end());
+  auto list = [](const std::vector<int>& v) {
+    std::ostringstream os;
+    os << "[";
+    for (std::size_t i = 0; i < v.size(); ++i) os << (i ? ", " : "") << v[i];
+    os << "]";
+    return os.str();
+  };
+  h5_.setAttribute("ids", list(all));
+  if (!otherIds.empty()) h5_.setAttribute("levelset_ids", list(otherIds));
   h5_.setAttribute("units",
                    "SI: m, s, N, N m, J, rad. Per-block series are (records, 3 x blocks) in the order of the "
                    "attribute ids: pos, vel, rotation (rotation vector from the reference orientation), "
-                   "flow_force F_t, face_force F_f, edge_force F_e, flow_torque; contacts (records, blocks)");
+                   "flow_force F_t, face_force F_f, edge_force F_e, flow_torque; contacts (records, blocks). "
+                   "LevelSet bodies (attribute levelset_ids) follow the blocks, with F_f and F_e NaN");
 }
 
 void CoupledOutput::dropAfter(double t) {
@@ -38,27 +51,38 @@ void CoupledOutput::dropAfter(double t) {
   pvd_.dropAfter(t);
 }
 
-void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, const MpSdemCoupling& coupling) {
+void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, const MpSdemCoupling& coupling,
+                           const std::vector<OtherBodyRecord>& others) {
+  if (others.size() != others_)
+    throwParameter("others", others.size(), "", "one record per LevelSet body of the output (" +
+                                                    std::to_string(others_) + ")");
   // blocks the coupling has not seen yet (before the first step) have no flow force
-  const int n = e.numBodies(), seen = std::min(n, coupling.numBlocks());
-  for (int i = static_cast<int>(ori0_.size()); i < n; ++i) ori0_.push_back(e.orientation(i));
+  const int nb = e.numBodies(), seen = std::min(nb, coupling.numBlocks());
+  const int n = nb + static_cast<int>(others.size());
+  auto orientation = [&](int i) { return i < nb ? e.orientation(i) : others[i - nb].ori; };
+  for (int i = static_cast<int>(ori0_.size()); i < n; ++i) ori0_.push_back(orientation(i));
   std::vector<double> pos(3 * n), vel(3 * n), rot(3 * n), ft(3 * n), ff(3 * n), fe(3 * n), tq(3 * n), cnt(n);
+  const Vec3 none = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   for (int i = 0; i < n; ++i) {
-    const Eigen::AngleAxis<double> aa(e.orientation(i) * ori0_[i].conjugate());
+    const Eigen::AngleAxis<double> aa(orientation(i) * ori0_[i].conjugate());
     const Vec3 rv = aa.angle() * aa.axis();
-    const bool s = i < seen;
-    const Vec3 f = s ? coupling.force(i) : Vec3::Zero(), a = s ? coupling.faceForce(i) : Vec3::Zero(),
-               b = s ? coupling.edgeForce(i) : Vec3::Zero(), t = s ? coupling.torque(i) : Vec3::Zero();
+    const bool block = i < nb, s = i < seen;
+    const OtherBodyRecord* o = block ? nullptr : &others[i - nb];
+    const Vec3 x = block ? e.position(i) : o->pos, v = block ? e.velocity(i) : o->vel;
+    const Vec3 f = block ? (s ? coupling.force(i) : Vec3::Zero()) : o->force,
+               a = block ? (s ? coupling.faceForce(i) : Vec3::Zero()) : none,
+               b = block ? (s ? coupling.edgeForce(i) : Vec3::Zero()) : none,
+               t = block ? (s ? coupling.torque(i) : Vec3::Zero()) : o->torque;
     for (int k = 0; k < 3; ++k) {
-      pos[3 * i + k] = e.position(i)[k];
-      vel[3 * i + k] = e.velocity(i)[k];
+      pos[3 * i + k] = x[k];
+      vel[3 * i + k] = v[k];
       rot[3 * i + k] = rv[k];
       ft[3 * i + k] = f[k];
       ff[3 * i + k] = a[k];
       fe[3 * i + k] = b[k];
       tq[3 * i + k] = t[k];
     }
-    cnt[i] = s ? coupling.contactCount(i) : 0;
+    cnt[i] = block ? (s ? coupling.contactCount(i) : 0) : o->contacts;
   }
   h5_.appendScalar("time", time);
   h5_.appendScalar("step", static_cast<double>(step));

@@ -3,7 +3,11 @@
 //                     order of the root attribute "ids": pos, vel, rotation (rotation vector from
 //                     the block's reference orientation), flow_force F_t, face_force F_f,
 //                     edge_force F_e (§3.2.3), flow_torque (each records x 3 blocks), contacts
-//                     (records x blocks); energy series are appended by the caller.
+//                     (records x blocks); energy series are appended by the caller. Bodies
+//                     beside the SDEM blocks (YADE LevelSet bodies, root attribute
+//                     "levelset_ids") follow the blocks in "ids" and in every per-block series;
+//                     their face_force and edge_force are NaN (a level set has no faces or edges
+//                     to tell apart).
 //   <dir>/scene.pvd   one ParaView time series: particles (part 0), block surfaces (part 1) and
 //                     the material point–block contacts of the last step (part 2: points with
 //                     the force on the block; on CUDA when the coupling records them) in
@@ -22,17 +26,30 @@
 namespace mpmsdem {
 namespace coupling {
 
+// A body beside the SDEM blocks at a record: its state (position: YADE's state.pos) and the
+// flow's action on it in the last step (zero before the body's first step).
+struct OtherBodyRecord {
+  Vec3 pos = Vec3::Zero(), vel = Vec3::Zero();
+  Quat ori = Quat::Identity();
+  Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+  int contacts = 0;
+};
+
 class CoupledOutput {
  public:
-  // Creates dir and dir/vtk; append continues an existing coupled.h5 and scene.pvd.
-  CoupledOutput(const std::string& dir, bool append, const sdem::SdemEngine& engine);
+  // Creates dir and dir/vtk; append continues an existing coupled.h5 and scene.pvd. otherIds:
+  // the external ids of the bodies recorded after the blocks (LevelSet bodies).
+  CoupledOutput(const std::string& dir, bool append, const sdem::SdemEngine& engine,
+                const std::vector<int>& otherIds = {});
 
-  // Orientation the "rotation" series is measured from, per block index (default: the
-  // orientation at a block's first record).
+  // Orientation the "rotation" series is measured from, per block index and then per other body
+  // (default: the orientation at a body's first record).
   void setReferenceOrientations(const std::vector<Quat>& ori0) { ori0_ = ori0; }
   const std::vector<Quat>& referenceOrientations() const { return ori0_; }
 
-  void record(double time, long step, const sdem::SdemEngine& engine, const MpSdemCoupling& coupling);
+  // others: one per id of otherIds, in that order.
+  void record(double time, long step, const sdem::SdemEngine& engine, const MpSdemCoupling& coupling,
+              const std::vector<OtherBodyRecord>& others = {});
   void appendSeries(const std::string& name, double value) { h5_.appendScalar(name, value); }
   void writeVtk(double time, mpm::ParticleSlices& particles, const sdem::SdemEngine& engine,
                 const MpSdemCoupling& coupling);
@@ -46,6 +63,7 @@ class CoupledOutput {
   io::Hdf5Writer h5_;
   io::PvdCollection pvd_;
   std::vector<Quat> ori0_;
+  std::size_t others_ = 0;
 };
 
 // Outer surfaces of the SDEM bodies at their current poses (ids: the bodies' external ids).

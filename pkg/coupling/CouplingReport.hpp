@@ -12,6 +12,14 @@
 namespace mpmsdem {
 namespace coupling {
 
+// A checkpoint of a coupling's tangential histories, per particle `slots` keys and 3 x slots
+// elastic tangential forces xi [N]: the keys with the slots not written by the last step
+// (written[p] != step) set to -1 (empty), and the checks of a set to restore (sizes, finite xi),
+// ParameterError naming what is wrong.
+std::vector<long long> currentHistoryKeys(const std::vector<long long>& keys, const std::vector<unsigned>& written,
+                                          unsigned step, int slots);
+void checkHistories(const std::vector<long long>& keys, const std::vector<double>& xi, int slots);
+
 class CouplingReport {
  public:
   // ---- per body index, world frame
@@ -38,6 +46,10 @@ class CouplingReport {
   double springEnergy() const { return springEnergy_; }
   double frictionDissipation() const { return frictionWork_; }
   double dampingDissipation() const { return dampingWork_; }
+  // The dissipation counters, to continue after a restart [J], each >= 0.
+  void setDissipation(double friction, double damping);
+  // Whether body i has sums of a last step (a body added since, or before the first step, has none).
+  bool reported(int body) const;
 
  protected:
   // indexKey, indexWhat: how a bad body index is named in the ParameterError (the parameter and

@@ -102,6 +102,24 @@ void MpLevelSetCoupling::setHistorySlots(int slots) {
   }
 }
 
+std::vector<long long> MpLevelSetCoupling::historyKeys() const {
+  return currentHistoryKeys(key_, written_, historyStep_, slots_);
+}
+
+std::vector<double> MpLevelSetCoupling::historyXi() const {
+  return floatRun_ ? std::vector<double>(xiF_.begin(), xiF_.end()) : xi_;
+}
+
+void MpLevelSetCoupling::setHistories(const std::vector<long long>& keys, const std::vector<double>& xi) {
+  checkHistories(keys, xi, slots_);
+  particleCount_ = keys.size() / slots_;
+  key_ = keys;
+  written_.assign(particleCount_, historyStep_);  // current at the next step
+  // the next step's precision picks its copy (computeForces keeps the one of its size)
+  xi_ = xi;
+  xiF_.assign(xi.begin(), xi.end());
+}
+
 void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt, double safety, double watch) {
   if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
   if (view.device)

@@ -64,6 +64,15 @@ class MpLevelSetCoupling : public CouplingReport {
 
   // Tangential-history slots per particle, in [1, 4] (default 2), as MpSdemCoupling's.
   void setHistorySlots(int slots);
+  int historySlots() const { return slots_; }
+
+  // ---- checkpoint of the tangential histories, as MpSdemCoupling's: per particle `slots` keys
+  // and 3 x slots xi values, elastic tangential forces [N] (a float run's converted to double).
+  // setHistories() makes them current for the next step, for a particle set of keys.size() /
+  // slots particles.
+  std::vector<long long> historyKeys() const;
+  std::vector<double> historyXi() const;
+  void setHistories(const std::vector<long long>& keys, const std::vector<double>& xi);
 
   // One step at the particles of `view` (host memory; they must stay put until the solver's
   // step): adds their contact forces into view.force and sums the bodies' share. `safety` is

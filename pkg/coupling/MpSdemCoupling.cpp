@@ -67,18 +67,8 @@ void MpSdemCoupling::setHistorySlots(int slots) {
   }
 }
 
-void MpSdemCoupling::setDissipation(double friction, double damping) {
-  if (!(friction >= 0) || !(damping >= 0)) throwParameter("dissipation", friction < 0 ? friction : damping, "J", ">= 0");
-  frictionWork_ = friction;
-  dampingWork_ = damping;
-}
-
 void MpSdemCoupling::setHistories(const std::vector<long long>& keys, const std::vector<double>& xi) {
-  if (xi.size() != 3 * keys.size()) throwParameter("history xi size", xi.size(), "", "3 x the number of keys");
-  if (keys.size() % slots_ != 0)
-    throwParameter("history keys size", keys.size(), "", "a multiple of historySlots = " + std::to_string(slots_));
-  for (double v : xi)
-    if (!std::isfinite(v)) throw ParameterError("history xi: must be finite");
+  checkHistories(keys, xi, slots_);
   heldKeys_ = keys.size();
   key_ = keys;
   written_.assign(keys.size() / slots_, historyStep_);  // current at the next step
@@ -100,11 +90,7 @@ void MpSdemCoupling::restoreParticleApproachStep(double s) {
 }
 
 std::vector<long long> MpSdemCoupling::historyKeys() const {
-  std::vector<long long> keys = key_;
-  for (std::size_t h = 0; h < written_.size(); ++h)
-    if (written_[h] != historyStep_)  // not written by the last step: empty
-      std::fill_n(keys.begin() + slots_ * h, slots_, -1LL);
-  return keys;
+  return currentHistoryKeys(key_, written_, historyStep_, slots_);
 }
 
 std::vector<double> MpSdemCoupling::historyXi() const {

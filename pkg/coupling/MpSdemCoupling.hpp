@@ -129,9 +129,6 @@ class MpSdemCoupling : public CouplingReport {
   // The value a checkpointed run's last step left (> 0, inf for none), until the next step.
   void restoreParticleApproachStep(double s);
 
-  // The energies' dissipation counters (CouplingReport), to continue after a restart.
-  void setDissipation(double friction, double damping);
-
   // ---- checkpoint of the tangential histories: per particle `slots` keys and 3 x slots xi
   // values, elastic tangential forces [N] (a float run's converted to double). On CUDA they
   // live on the device: pullHistories() brings them to the host before these are read (a no-op

@@ -142,6 +142,7 @@ class CoupledEngine(Engine, _StepControl):
         for mat, spec in pairs.items():
             self.setPair(mat, spec)
         self._levelSets = {}  # YADE id -> index in the bridge
+        self._levelSetPairs = {}  # YADE id -> its flow-body contact physics (for checkpoints)
         for bid, spec in (levelSets or {}).items():
             self._addLevelSet(bid, spec)
         self.output, self.outputEvery, self.vtkEvery, self.plot = output, outputEvery, vtkEvery, plot
@@ -206,6 +207,7 @@ class CoupledEngine(Engine, _StepControl):
                                  p["barrierStiffness"], p["friction"], p["poisson"], p["normalDamping"],
                                  p["tangentialDamping"])
         self._levelSets[bid] = len(self._levelSets)
+        self._levelSetPairs[bid] = p
 
     @property
     def levelSetIds(self):
@@ -439,17 +441,16 @@ class CoupledEngine(Engine, _StepControl):
         """Write a checkpoint of the coupled state, to go alongside ``O.save(prefix +
         ".yade.gz")``: ``prefix.sdem.json`` (:meth:`SdemEngine.save`), ``prefix.mpm.h5``
         (:meth:`MpmEngine.save`) and ``prefix.coupled.json`` (flow–block pairs, the MP–block
-        tangential histories, dissipations, each block's reference orientation). Continue with
+        tangential histories, dissipations, each block's reference orientation; the same of the
+        LevelSet bodies, whose shapes and states ``O.save`` keeps). Continue with
         :meth:`CoupledEngine.restore`; the restart is bit-for-bit (CPU backend). The
         ``.coupled.json`` is written last and names the time of the other two, so a set left
         half-written by a kill is refused at restore rather than mixed."""
         import base64
         import json
         import os
-        if self._levelSets:
-            raise ValueError("save(%r): checkpoints of a coupled scene with LevelSet bodies (%s) are not supported"
-                             % (prefix, ", ".join(str(i) for i in self._levelSets)))
         keys, xi, slots = self._bridge.histories()
+        lsKeys, lsXi, _ = self._bridge.levelSetHistories()
         self.sdem.save(prefix + ".sdem.json")
         self.mpm.save(prefix + ".mpm.h5")
         self._bridge.commitOutput()  # a restart from this checkpoint finds coupled.h5 as it is now
@@ -463,7 +464,11 @@ class CoupledEngine(Engine, _StepControl):
                 "particleApproachStep": repr(self._bridge.particleApproachStep) if self._contactsKnown else None,
                 "pairs": [{"material": _matDict(mats[k]), "pair": p} for k, p in sorted(self._pairs.items())],
                 "historyKeys": base64.b64encode(keys).decode(), "historyXi": base64.b64encode(xi).decode(),
-                "dissipation": [self._bridge.energies()["friction"], self._bridge.energies()["damping"]],
+                "dissipation": list(self._bridge.blockDissipation()),
+                "levelSets": [{"id": bid, "pair": self._levelSetPairs[bid]} for bid in self._levelSets],
+                "levelSetHistoryKeys": base64.b64encode(lsKeys).decode(),
+                "levelSetHistoryXi": base64.b64encode(lsXi).decode(),
+                "levelSetDissipation": list(self._bridge.levelSetDissipation()),
                 "referenceOrientations": [list(q) for q in self._bridge.referenceOrientations()],
                 "plotOrientations": {str(i): [q[k] for k in range(4)] for i, q in self._ori0.items()},
                 # before the first step coupled.h5 is not open yet (unless restored onto one): a
@@ -484,11 +489,15 @@ class CoupledEngine(Engine, _StepControl):
         ``plot`` as in the constructor; with ``output`` the files there are continued
         (``appendOutput``), records later than the checkpoint dropped first. ``sdemKw`` and
         ``mpmKw`` go to :meth:`SdemEngine.restore` and :meth:`MpmEngine.restore` (their own
-        outputs, for instance)."""
+        outputs, for instance). LevelSet bodies and their contact physics come from the
+        checkpoint (the bodies themselves from ``O.load``)."""
         import base64
         import json
         from .mpm import MpmEngine
         from .sdem import SdemEngine
+        if "levelSets" in kw:
+            raise ValueError("restore(%r): levelSets come from the checkpoint (the run goes on with the bodies and "
+                             "contact physics it was saved with)" % (prefix,))
         with open(prefix + ".coupled.json") as f:
             data = json.load(f)
         if data.get("format") == "mpmsdem-coupled-1":
@@ -523,7 +532,7 @@ class CoupledEngine(Engine, _StepControl):
                   minStepFraction=kw.pop("minStepFraction", data.get("minStepFraction", 1e-4)),
                   maxBlockSpeed=kw.pop("maxBlockSpeed", data.get("maxBlockSpeed")),
                   historySlots=data["historySlots"], output=output, outputEvery=outputEvery, vtkEvery=vtkEvery,
-                  plot=plot, **kw)
+                  plot=plot, levelSets={e["id"]: e["pair"] for e in data.get("levelSets", [])} or None, **kw)
         if data.get("contactStep") is not None:  # the first step's dtAuto sees what it would have seen
             eng._contactsKnown = True
             eng._restoredContactStep = float(data["contactStep"])
@@ -531,6 +540,10 @@ class CoupledEngine(Engine, _StepControl):
                 eng._bridge.particleApproachStep = float(data["particleApproachStep"])
         eng._bridge.setHistories(base64.b64decode(data["historyKeys"]), base64.b64decode(data["historyXi"]))
         eng._bridge.setDissipation(*data["dissipation"])
+        if data.get("levelSets"):
+            eng._bridge.setLevelSetHistories(base64.b64decode(data["levelSetHistoryKeys"]),
+                                             base64.b64decode(data["levelSetHistoryXi"]))
+            eng._bridge.setLevelSetDissipation(*data["levelSetDissipation"])
         eng._bridge.setReferenceOrientations(data["referenceOrientations"])
         eng._ori0 = {int(i): Quaternion(*q) for i, q in data["plotOrientations"].items()}
         eng._appendOutput = bool(appendOutput) and data.get("outputOpen", True)

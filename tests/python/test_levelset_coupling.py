@@ -12,7 +12,7 @@ import mpmsdem
 from yade import O, plot
 from yade.minieigenHP import Quaternion, Vector3
 from yade.utils import levelSetBody
-from yade.wrapper import ForceResetter, NewtonIntegrator
+from yade.wrapper import ForceResetter, FrictMat, NewtonIntegrator
 
 GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
 DX, PPC = 0.01, 8
@@ -158,8 +158,75 @@ def test_bad_levelset_arguments():
     with pytest.raises(ValueError, match="pairs"):
         mpmsdem.CoupledEngine(sdem, mpm, pairs={}, verbose=False)
     coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.3}, levelSets={ls: 0.3}, verbose=False)
-    with pytest.raises(ValueError, match="LevelSet bodies"):
-        coupled.save("/nonexistent/checkpoint")
+    O.engines = [ForceResetter(), coupled.runner]
+    with pytest.raises(ValueError, match="levelSets come from the checkpoint"):
+        mpmsdem.CoupledEngine.restore("/nonexistent/checkpoint", levelSets={ls: 0.3})
+
+
+def _forget(*engines):
+    """What a killed process leaves: the engines gone, their files closed."""
+    import gc
+    from mpmsdem.engine import _REGISTRY
+    for name in [n for n, f in _REGISTRY.items() if getattr(f, "__self__", None) in engines]:
+        del _REGISTRY[name]
+    O.reset()
+    gc.collect()
+
+
+def test_a_checkpoint_with_a_levelset_body_continues_bit_for_bit_with_its_records(tmp_path):
+    """512 points at 1 m/s press into a free, heavy LevelSet box (friction 0.3: the tangential histories
+    carry the contacts' elastic friction forces) beside an SDEM cube they do not reach. A
+    checkpoint taken with the flow on the box, and the run continued from it in a new engine,
+    gives the unbroken run's particles, body state, dissipation and coupled.h5 to the last bit;
+    coupled.h5 records the box after the cube (attributes ids and levelset_ids), its face and
+    edge shares NaN, its flow force that of the engine."""
+    h5py = pytest.importorskip("h5py")
+    out = str(tmp_path / "out")
+    heavy = O.materials.append(FrictMat(density=20000))  # 1.28 kg against the flow's 0.1 kg: the flow stays on it
+    bid = O.bodies.append(levelSetBody("box", center=(0.125, 0.07, 0.07), extents=(0.02, 0.02, 0.02),
+                                       spacing=0.0025, material=heavy))
+    mpm = flow([0.06, 0.05, 0.05], [0.10, 0.09, 0.09], velocity=(1, 0, 0))
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=2000)
+    cube = sdem.box((0.01,) * 3, 0.002, mat, pos=(0.2, 0.02, 0.02))
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.3}, levelSets={bid: {"friction": 0.3}}, verbose=False,
+                                    output=out, outputEvery=2e-4)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    O.dt = 1e-5
+    mpmsdem.run(600, coupled)  # the front reaches the box's barrier after ~440 steps and rebounds after ~750
+    assert coupled.contactCount(bid) > 10 and coupled.energies()["friction"] > 0  # histories matter
+    onBox = (O.time, coupled.force(bid), coupled.contactCount(bid))
+    ck = mpmsdem.saveCheckpoint(str(tmp_path / "ck"), coupled)
+    mpmsdem.run(200, coupled)
+    state = lambda: [*O.bodies[bid].state.pos, *O.bodies[bid].state.ori, *O.bodies[bid].state.vel,  # noqa: E731
+                     *O.bodies[bid].state.angVel]
+    ref = {"x": mpm.particles()["x"].copy(), "v": mpm.particles()["v"].copy(), "body": state(),
+           "friction": coupled.energies()["friction"]}
+    with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:
+        refSeries = {k: f["series/" + k][:] for k in f["series"]}
+        assert json_list(f.attrs["ids"]) == [cube, bid] and json_list(f.attrs["levelset_ids"]) == [bid]
+    r = int(np.argmin(np.abs(refSeries["time"] - onBox[0])))  # the record taken at the checkpoint's step
+    assert refSeries["time"][r] == pytest.approx(onBox[0], abs=1e-12)
+    assert list(refSeries["flow_force"][r, 3:6]) == [onBox[1][k] for k in range(3)] and onBox[1][0] > 1
+    assert refSeries["contacts"][r, 1] == onBox[2] and refSeries["contacts"][r, 0] == 0  # the cube is out of reach
+    assert np.isnan(refSeries["face_force"][:, 3:6]).all() and np.isnan(refSeries["edge_force"][:, 3:6]).all()
+    assert refSeries["pos"][-1, 3] == O.bodies[bid].state.pos[0] > 0.125  # pushed downstream
+    assert not np.isnan(refSeries["face_force"][:, :3]).any()
+    _forget(coupled, sdem, mpm)
+    coupled2 = mpmsdem.loadCheckpoint(ck, output=out, outputEvery=2e-4, verbose=False)
+    assert coupled2.levelSetIds == [bid]
+    mpmsdem.run(200, coupled2)
+    np.testing.assert_array_equal(coupled2.mpm.particles()["x"], ref["x"])
+    np.testing.assert_array_equal(coupled2.mpm.particles()["v"], ref["v"])
+    assert state() == ref["body"] and coupled2.energies()["friction"] == ref["friction"]
+    with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:
+        for k, v in refSeries.items():
+            np.testing.assert_array_equal(f["series/" + k][:], v, err_msg=k)
+
+
+def json_list(attr):
+    import json
+    return json.loads(attr.decode() if isinstance(attr, bytes) else attr)
 
 
 def test_levelset_cube_and_sdem_cube_take_the_same_push():
