@@ -52,7 +52,11 @@ spring per pair of bodies (one contact point, the deepest boundary node), k_n = 
 directly (``MatchMaker`` of the Ip2 functor; the barrier's k_c, which the SDEM barrier exceeds
 as it closes and shares among 4 corner contacts per interface), k_s = k_n/2.6 (the SDEM K_t at
 ν 0.3), friction 0.60, no damping (as the SDEM barrier's). The upper blocks start at the
-spring's equilibrium overlap (the weight carried over k_n). Not with ``--backend cuda`` or
+spring's equilibrium overlap (the weight carried over k_n). The coupled engine's ``dtAuto``
+does not see these YADE contacts; with k_n 1e4 N/m their step (√(m/k_n) = 1.9 ms for a block)
+is far above O.dt. They are not energy-conserving when a block rocks and slides on them
+(docs/coupled-results.md, "§4.1: the §3.3 blocks as YADE LevelSet bodies"): loose blocks keep
+bouncing where SDEM blocks come to rest. Not with ``--backend cuda`` or
 ``--precision float`` (the LevelSet coupling runs on the double-precision CPU solver only);
 ``coupled.h5`` and ``scene.pvd`` then hold the SDEM bed only, the force, travel and height
 series of the blocks are in the PNG and summary.json as for SDEM blocks (no face/edge split).
