@@ -16,12 +16,16 @@ RHO_BLOCK, SIZE = 500.0, (0.020, 0.198, 0.018)  # Table 2: wooden blocks [kg/m^3
 K_N = 1e4                                          # the example's YADE contact stiffness [N/m]
 
 
-def example():
-    path = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "liu2018_blocks.py")
-    spec = importlib.util.spec_from_file_location("liu2018_blocks", path)
+def script(name, folder):
+    path = os.path.join(os.path.dirname(__file__), "..", "..", folder, name + ".py")
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def example():
+    return script("liu2018_blocks", "examples")
 
 
 @pytest.fixture(scope="module")
@@ -100,3 +104,14 @@ def test_the_flow_pushes_the_bottom_block_once_it_arrives(run):
     assert np.all(F[:first] == 0.0)
     window = (t >= t[first]) & (t < t[first] + 0.02)
     assert F[window].mean() > 0.0
+
+
+@pytest.mark.parametrize("tilt, axis", [(0.5, (1, 0, 0)), (10.0, (1, 1, 0))])
+def test_a_dropped_levelset_block_keeps_its_energy_on_the_bed(tilt, axis):
+    """The flume's YADE contact of a LevelSet block with the bed (linear spring k_n 1e4 N/m,
+    Coulomb friction, no damping; scripts/validation/levelset_contact_energy.py): a block dropped
+    from rest, tilted, bounces on its corners without sliding; over 1 s (1e4 steps) its energy
+    stays within 1 % of the start (measured 1.000 and 1.000). Thrown sliding and spinning it
+    gains energy (2.08 times in 1 s, docs/coupled-results.md "§4.1"): not asserted here."""
+    probe = script("levelset_contact_energy", os.path.join("scripts", "validation"))
+    assert 0.99 < probe.energyRatio(1e-4, tilt, axis, thrown=False) < 1.01
