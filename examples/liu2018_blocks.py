@@ -6,6 +6,7 @@ Table 2), MPM–SDEM coupled.
                                           [--flip-alpha A] [--young E] [--backend cpu|cuda]
                                           [--precision double|float]
                                           [--blocks sdem|levelset] [--ls-spacing H] [--ls-nodes N]
+                                          [--ls-kn K]
     /usr/bin/python3 examples/liu2018_blocks.py ...       (same, without YADE's GUI shell)
 
 Scene (Table 2): horizontal flume 600 mm long, 200 mm wide; granular column 100 mm long ×
@@ -49,12 +50,13 @@ the SDEM bed. They meet each other through YADE's ``Ig2_LevelSet_LevelSet_ScGeom
 for them a YADE ``Wall`` at z = 0, through ``Ig2_Wall_LevelSet_ScGeom``, with
 ``Ip2_FrictMat_FrictMat_FrictPhys`` and ``Law2_ScGeom_FrictPhys_CundallStrack``: one linear
 spring per pair of bodies (one contact point, the deepest boundary node), k_n = 1e4 N/m set
+(``--ls-kn``)
 directly (``MatchMaker`` of the Ip2 functor; the barrier's k_c, which the SDEM barrier exceeds
 as it closes and shares among 4 corner contacts per interface), k_s = k_n/2.6 (the SDEM K_t at
 ν 0.3), friction 0.60, no damping (as the SDEM barrier's). The upper blocks start at the
 spring's equilibrium overlap (the weight carried over k_n). The coupled engine's ``dtAuto``
-does not see these YADE contacts; with k_n 1e4 N/m their step (√(m/k_n) = 1.9 ms for a block)
-is far above O.dt. They are not energy-conserving when a block rocks and slides on them
+does not see these YADE contacts; the flume holds O.dt below 0.3 √(m/k_n) (0.57 ms for a block
+at 1e4 N/m, above the flow's step: binding only for a stiffer ``--ls-kn``). They are not energy-conserving when a block rocks and slides on them
 (docs/coupled-results.md, "§4.1: the §3.3 blocks as YADE LevelSet bodies"): loose blocks keep
 bouncing where SDEM blocks come to rest. Not with ``--backend cuda`` or
 ``--precision float`` (the LevelSet coupling runs on the double-precision CPU solver only);
@@ -98,7 +100,11 @@ GRANULAR = {"density": RHO_FLOW, "young_modulus": 5e4, "poisson_ratio": 0.40,
 NAMES = ("bottom", "middle", "top")
 LS_SPACING, LS_NODES = 0.002, 602          # --blocks levelset defaults [m], boundary nodes per block
 LS_KN = 1e4                               # YADE contact stiffness of the LevelSet blocks [N/m]
-LS_CONTACT = {"kn": LS_KN, "ks": LS_KN / (2 * (1 + 0.3))}
+
+
+def lsContact(kn=LS_KN):
+    """YADE's contact stiffnesses of the LevelSet blocks: k_n, and k_s = k_n/(2(1 + 0.3))."""
+    return {"kn": kn, "ks": kn / (2 * (1 + 0.3))}
 
 
 def parse(argv):
@@ -130,6 +136,9 @@ def parse(argv):
                          "R_p0 (default %g)" % LS_SPACING)
     ap.add_argument("--ls-nodes", type=int, default=LS_NODES,
                     help="--blocks levelset: boundary nodes per block >= 8 (default the paper's %d)" % LS_NODES)
+    ap.add_argument("--ls-kn", type=float, default=LS_KN,
+                    help="--blocks levelset: YADE's normal contact stiffness of the blocks [N/m] > 0 (default %g; "
+                         "k_s = k_n/2.6)" % LS_KN)
     a = ap.parse_known_args(argv)[0]
     if a.blocks == "levelset":
         if a.backend != "cpu":
@@ -140,6 +149,8 @@ def parse(argv):
             ap.error("--ls-spacing %r m: must be > 0" % a.ls_spacing)
         if a.ls_nodes < 8:
             ap.error("--ls-nodes %r: must be >= 8" % a.ls_nodes)
+        if not a.ls_kn > 0:
+            ap.error("--ls-kn %r N/m: must be > 0" % a.ls_kn)
     if a.flip_alpha is not None and a.flip_reference_dt is None:
         ap.error("--flip-alpha %g needs --flip-reference-dt (its reference step [s], or 'step')" % a.flip_alpha)
     if a.flip_viscosity is not None and (a.flip_alpha is not None or a.flip_reference_dt is not None):
@@ -157,16 +168,16 @@ def settings(a):
     return dx, ppc, a.duration
 
 
-def stackedBlocks(flowFriction=0.13, levelSet=None):
+def stackedBlocks(flowFriction=0.13, levelSet=None, kn=LS_KN):
     """The three blocks, each upper one at the barrier's equilibrium overlap on the one below;
     with ``levelSet`` ({"spacing", "nSurfNodes"}) YADE LevelSet boxes, each upper one at the
-    overlap of the linear spring LS_KN under the weight it carries."""
+    overlap of the linear spring ``kn`` [N/m] under the weight it carries."""
     weight = RHO_BLOCK * 8 * HALF[0] * HALF[1] * HALF[2] * 9.81
     if levelSet is not None:
         common = dict(half=HALF, x=X_BLOCKS, density=RHO_BLOCK, friction=0.60, flowFriction=flowFriction,
                       barrierStiffness=KC, levelSet=levelSet)
-        zMiddle = 2 * HALF[2] - weight / LS_KN - 2 * weight / LS_KN  # Flume seats the bottom one W/k_n deep
-        zTop = zMiddle + 2 * HALF[2] - weight / LS_KN
+        zMiddle = 2 * HALF[2] - weight / kn - 2 * weight / kn  # Flume seats the bottom one W/k_n deep
+        zTop = zMiddle + 2 * HALF[2] - weight / kn
         return [Block(z=0.0, blockedDOFs="xyzXYZ", **common), Block(z=zMiddle, **common), Block(z=zTop, **common)]
     zBottomTop = 2 * HALF[2] - analysis.equilibriumOverlap(weight, SWEEP + BED_SWEEP, KC, contacts=4)
     zMiddle = zBottomTop - analysis.equilibriumOverlap(2 * weight, 2 * SWEEP, KC, contacts=4)
@@ -191,7 +202,7 @@ def scene(dx, ppc, a, blocks=(), output=None, verbose=True):
               ppc=ppc, granular=dict(GRANULAR, young_modulus=a.young), basalFriction=0.13, blocks=blocks, backend=a.backend, flipAlpha=a.flip_alpha,
               flipReferenceDt=a.flip_reference_dt, flipViscosity=flipViscosity(a),
               precision=a.precision, output=output, outputEvery=0.01, vtkEvery=0.05 if output else None,
-              verbose=verbose, levelSetContact=LS_CONTACT)
+              verbose=verbose, levelSetContact=lsContact(getattr(a, "ls_kn", LS_KN)))
     from yade import O
     O.dt = min(O.dt, CONTACT_DT)
     s.coupled.dtAuto = 0.5
@@ -309,7 +320,7 @@ def main(argv):
     print("free flow at x = %.2f m: front at %.3f s, h_f = %.4f m, v_f = %.3f m/s, Fr = %.2f; Eq 20 on the bottom "
           "block: %.2f N" % (X_BLOCKS, ff["arrival"], ff["h_f"], ff["v_f"], ff["Fr"], eq20))
     t1 = time.time()
-    s = scene(dx, ppc, a, blocks=stackedBlocks(a.flow_friction, levelSetOf(a)), output=out)
+    s = scene(dx, ppc, a, blocks=stackedBlocks(a.flow_friction, levelSetOf(a), a.ls_kn), output=out)
     runCoupled(s, duration)
     tCoupled = time.time() - t1
     ev = events(s)
@@ -318,7 +329,7 @@ def main(argv):
                "particles": s.mpm.numParticles, "duration": duration,
                "dt_min": s.extra["dtMin"], "steps": O.iter,
                "blocks_kind": a.blocks, "level_set": levelSetOf(a),
-               "yade_contact": LS_CONTACT if a.blocks == "levelset" else None,
+               "yade_contact": lsContact(a.ls_kn) if a.blocks == "levelset" else None,
                "block_mass": [O.bodies[i].state.mass for i in s.blockIds],
                "flow_friction": a.flow_friction, "young_modulus": a.young, "free_flow": ff, "eq20_bottom": eq20, "blocks": ev,
                "paper": {"peak_force_bottom": 9.7, "eq20_bottom": 10.6, "middle_falls": 0.4, "top_hit": 0.5},

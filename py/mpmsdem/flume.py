@@ -128,7 +128,9 @@ class Flume:
         of bodies: ``Ig2_LevelSet_LevelSet_ScGeom``, ``Ig2_Wall_LevelSet_ScGeom``) with
         ``Law2_ScGeom_FrictPhys_CundallStrack``; friction the smaller of the two bodies'
         (the bed's: the LevelSet blocks'). Default k_n 1e4 N/m (the blocks' barrier stiffness
-        scale), k_s = k_n/(2(1 + 0.3)) (the SDEM K_t at ν 0.3);
+        scale), k_s = k_n/(2(1 + 0.3)) (the SDEM K_t at ν 0.3). The coupled engine's step
+        control does not see these contacts: O.dt and the coupled engine's ``dtMax`` are set to
+        ``levelSetStep`` = 0.3 sqrt(m/k_n) of the lightest moving LevelSet block;
     :param backend, precision: MPM backend; :param output: folder for all outputs (None: none),
         :param outputEvery: record interval [s]; :param vtkEvery: ParaView interval [s].
     """
@@ -232,6 +234,17 @@ class Flume:
         O.engines = [ForceResetter()] + yadeContacts + [self.coupled.runner,
                                                         NewtonIntegrator(gravity=Vector3(*self.gravity), damping=0)]
         O.dt = dtFactor * self.mpm.stableTimeStep()
+        self.levelSetStep = math.inf
+        moving = [O.bodies[i].state.mass for i in self.levelSetIds if O.bodies[i].state.blockedDOFs != "xyzXYZ"]
+        if moving:
+            # The coupled engine's step control does not see YADE's own contacts of the LevelSet
+            # blocks. One linear spring k_n on a body of mass m: central differences are stable
+            # below 2 sqrt(m/k_n) in translation; a box turning about its centre on an edge
+            # contact has m r^2 / I = 3, so sqrt(3) times the frequency. O.dt is held below
+            # 0.3 sqrt(m/k_n) (0.52 rad a step in the fastest mode).
+            self.levelSetStep = 0.3 * math.sqrt(min(moving) / contact["kn"])
+            self.coupled.dtMax = self.levelSetStep
+            O.dt = min(O.dt, self.levelSetStep)
         self.x0 = [O.bodies[i].state.pos[0] for i in self.blockIds]
         # per sample: (t, [x], [vx], [Fx], [Ffx], [Fex], [rotation], [tilt], [yaw] deg, (flow
         # kinetic, flow potential, blocks' kinetic energy [J], the flow's front [m]))

@@ -7,7 +7,7 @@ upstream end, Table 2's flow, flow–block friction 0.13) with N free wooden cub
 kg/m³, friction 0.60, barrier stiffness 1e4 N/m) resting on the bed in rows of five across the
 flume, 50 mm apart along it, the first row's upstream faces at x = 0.2 m. SDEM: sweep radius 1 mm
 (h/20). LevelSet: grid spacing ``--ls-spacing`` (2 mm), ``--ls-nodes`` boundary nodes (602),
-YADE's contacts with k_n 1e4 N/m (Flume's ``levelSetContact`` default). Each case runs
+YADE's contacts with k_n ``--ls-kn`` (1e4 N/m, Flume's ``levelSetContact`` default). Each case runs
 ``--duration`` seconds of the coupled scene (the flow reaches the first row at about 0.18 s)
 with the example's step control (``dtAuto`` 0.5); prints wall time, steps, wall time per step
 and per simulated second, the ratios LevelSet / SDEM at each N, and the fastest block of each
@@ -15,7 +15,8 @@ case (how hard the front throws them: the two kinds do not move alike). The case
 other in this process; on a shared machine their ratio is what to read, not the absolute times.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/bench/bench_levelset_blocks.py [--n 1,3,10,30]
-        [--dx 0.01] [--ppc 1] [--duration 0.3] [--ls-spacing 0.002] [--ls-nodes 602] [--json PATH]
+        [--dx 0.01] [--ppc 1] [--duration 0.3] [--ls-spacing 0.002] [--ls-nodes 602] [--ls-kn 1e4]
+        [--json PATH]
 
 docs/benchmarks.md quotes its output.
 """
@@ -44,6 +45,7 @@ def parse(argv):
     ap.add_argument("--duration", type=float, default=0.3, help="coupled run per case [s] > 0 (0.3)")
     ap.add_argument("--ls-spacing", type=float, default=0.002, help="level-set grid spacing [m] > 0 (0.002)")
     ap.add_argument("--ls-nodes", type=int, default=602, help="boundary nodes per LevelSet block >= 8 (602)")
+    ap.add_argument("--ls-kn", type=float, default=1e4, help="YADE's k_n of the LevelSet cubes [N/m] > 0 (1e4)")
     ap.add_argument("--json", default=None, help="also write the rows to this file")
     a = ap.parse_args(argv)
     try:
@@ -52,8 +54,8 @@ def parse(argv):
         ap.error("--n %r: must be comma-separated integers" % a.n)
     if not all(1 <= k <= 6 * ROW for k in a.n):
         ap.error("--n %r: each must be in 1..%d (six rows of %d)" % (a.n, 6 * ROW, ROW))
-    if not (a.dx > 0 and a.duration > 0 and a.ls_spacing > 0 and a.ls_nodes >= 8):
-        ap.error("--dx, --duration, --ls-spacing must be > 0 and --ls-nodes >= 8")
+    if not (a.dx > 0 and a.duration > 0 and a.ls_spacing > 0 and a.ls_kn > 0 and a.ls_nodes >= 8):
+        ap.error("--dx, --duration, --ls-spacing, --ls-kn must be > 0 and --ls-nodes >= 8")
     return a
 
 
@@ -73,7 +75,8 @@ def case(a, n, kind):
     from yade import O
     ls = {"spacing": a.ls_spacing, "nSurfNodes": a.ls_nodes} if kind == "levelset" else None
     s = Flume(inclineDeg=0.0, length=0.6, width=0.2, columnLength=0.1, columnHeight=0.2, dx=a.dx, ppc=a.ppc,
-              granular=GRANULAR, basalFriction=0.13, blocks=blocks(n, ls), verbose=False)
+              granular=GRANULAR, basalFriction=0.13, blocks=blocks(n, ls), verbose=False,
+              levelSetContact={"kn": a.ls_kn, "ks": a.ls_kn / 2.6})
     O.dt = min(O.dt, 4e-5)
     s.coupled.dtAuto = 0.5
     t0 = time.time()

@@ -115,3 +115,35 @@ def test_a_dropped_levelset_block_keeps_its_energy_on_the_bed(tilt, axis):
     gains energy (2.08 times in 1 s, docs/coupled-results.md "§4.1"): not asserted here."""
     probe = script("levelset_contact_energy", os.path.join("scripts", "validation"))
     assert 0.99 < probe.energyRatio(1e-4, tilt, axis, thrown=False) < 1.01
+
+
+def test_a_stiff_levelset_contact_holds_the_step():
+    """The coupled engine's step control does not see YADE's contacts of LevelSet blocks, so
+    Flume holds O.dt (and the coupled engine's dtMax) below 0.3 sqrt(m/k_n) of the lightest free
+    one: for a 20 mm cube of 500 kg/m^3 (4.00e-3 kg; YADE's integral over its 2 mm grid gives
+    4.12e-3 kg, +3 %) on k_n = 1e6 N/m, 0.3 sqrt(4.12e-3/1e6) = 1.926e-5 s, under the flow's
+    step at dx 0.02 m. Resting on the bed at its equilibrium
+    overlap W/k_n = 39 nm, it must stay there: a spring released from touching swings by 2 W/k_n
+    at most; unstable steps would throw it off the bed. 400 steps, before the flow arrives."""
+    import mpmsdem
+    from mpmsdem.flume import Block, Flume
+    L = example()
+    cube = Block(half=(0.01,) * 3, x=0.3, density=RHO_BLOCK, friction=0.6, flowFriction=0.13,
+                 levelSet={"spacing": 0.002, "nSurfNodes": 602})
+    s = Flume(inclineDeg=0.0, length=0.6, width=0.2, columnLength=0.1, columnHeight=0.2, dx=0.02, ppc=1,
+              granular=L.GRANULAR, basalFriction=0.13, blocks=[cube], verbose=False, dtAuto=0.5,
+              levelSetContact={"kn": 1e6, "ks": 1e6 / 2.6})
+    i = s.blockIds[0]
+    m = O.bodies[i].state.mass
+    assert m == pytest.approx(RHO_BLOCK * 0.02 ** 3, rel=0.05)
+    assert s.levelSetStep == pytest.approx(0.3 * math.sqrt(m / 1e6), rel=1e-12)
+    assert s.levelSetStep == pytest.approx(1.926e-5, rel=1e-3)
+    assert s.coupled.dtMax == s.levelSetStep and O.dt <= s.levelSetStep
+    z0 = O.bodies[i].state.pos[2]
+    worst = 0.0
+    for _ in range(40):
+        mpmsdem.run(10, s.coupled)
+        assert O.dt <= s.levelSetStep * (1 + 1e-12)
+        worst = max(worst, abs(O.bodies[i].state.pos[2] - z0))
+    assert s.coupled.contactCount(i) == 0  # the flow has not reached it
+    assert worst < 2 * m * G / 1e6
