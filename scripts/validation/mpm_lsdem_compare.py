@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Validation probe (opt-in, about a minute a run on one core at the default resolution): paper
+"""Validation probe (opt-in, one to three minutes a run on one core at the default resolution): paper
 §4.1, MPM–SDEM against MPM–LSDEM. Runs the §3.3 scene (examples/liu2018_blocks.py: three
 stacked wooden blocks in the Liu et al. 2018 flume, the bottom one glued) with the blocks as
 SDEM sphero-boxes and as YADE LevelSet boxes (``--blocks levelset``, one run per level-set grid
