@@ -165,6 +165,10 @@ def settings(a):
         raise ValueError("--dx = %r m: must be > 0" % (dx,))
     if not a.duration > 0:
         raise ValueError("--duration = %r s: must be > 0" % (a.duration,))
+    rp = (3.0 * dx ** 3 / ppc / (4.0 * math.pi)) ** (1.0 / 3.0)  # R_p0, Eq 13
+    if getattr(a, "blocks", "sdem") == "levelset" and a.ls_spacing > rp:
+        raise ValueError("--ls-spacing = %r m: must be at most the material points' radius R_p0 = %.4g m at dx %g m, "
+                         "%d per cell" % (a.ls_spacing, rp, dx, ppc))
     return dx, ppc, a.duration
 
 

@@ -147,3 +147,22 @@ def test_a_stiff_levelset_contact_holds_the_step():
         worst = max(worst, abs(O.bodies[i].state.pos[2] - z0))
     assert s.coupled.contactCount(i) == 0  # the flow has not reached it
     assert worst < 2 * m * G / 1e6
+
+
+def test_options_the_levelset_blocks_do_not_take_are_refused():
+    """--backend cuda and --precision float (the LevelSet coupling runs on the double CPU solver),
+    and a level-set grid coarser than the points' radius R_p0 = (3 dx^3 / (4 pi ppc))^(1/3)
+    (6.2 mm at dx 0.01 m, 1 per cell; 3.1 mm at 8 per cell) are refused before anything runs."""
+    L = example()
+    for bad in (["--backend", "cuda"], ["--precision", "float"], ["--ls-spacing", "0"], ["--ls-nodes", "4"],
+                ["--ls-kn", "-1"]):
+        with pytest.raises(SystemExit):
+            L.parse(["--blocks", "levelset"] + bad)
+    rp = (3 * 0.01 ** 3 / (4 * math.pi)) ** (1 / 3)
+    assert rp == pytest.approx(6.204e-3, rel=1e-3)
+    with pytest.raises(ValueError, match="--ls-spacing"):
+        L.settings(L.parse(["--blocks", "levelset", "--ls-spacing", "0.0063"]))
+    assert L.settings(L.parse(["--blocks", "levelset", "--ls-spacing", "0.0062"]))[:2] == (0.01, 1)
+    with pytest.raises(ValueError, match="--ls-spacing"):
+        L.settings(L.parse(["--blocks", "levelset", "--full", "--ls-spacing", "0.0032"]))
+    assert L.parse(["--backend", "cuda"]).blocks == "sdem"  # the SDEM path keeps its options
