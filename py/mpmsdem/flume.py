@@ -64,8 +64,8 @@ class Block:
     :param blockedDOFs: YADE's blockedDOFs string, e.g. ``"xyzXYZ"`` for a glued block.
     :param levelSet: None (default): an SDEM sphero-box; or ``{"spacing": h [m] > 0,
         "nSurfNodes": n ≥ 8}``: a YADE ``LevelSet`` box of the outer size ``half``
-        (``yade.utils.levelSetBody("box", ...)``, grid spacing h, n boundary nodes; sweepRadius
-        unused), in the flow through ``CoupledEngine(levelSets=...)`` with ``flowFriction`` and
+        (``yade.utils.levelSetBody("box", ...)``, grid spacing h, default a fifth of the
+        smallest half-extent, n boundary nodes, default 602; sweepRadius unused), in the flow through ``CoupledEngine(levelSets=...)`` with ``flowFriction`` and
         ``barrierStiffness``, and against the other LevelSet blocks and the bed through YADE's
         own contacts (:class:`Flume`'s ``levelSetContact``). CPU backend of the flow only.
     """
@@ -323,9 +323,11 @@ class Flume:
 
     def series(self, k):
         """numpy arrays of block k: t, travel S_b, v_x, F_t, F_f, F_e (downstream, N), rotation
-        (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`); and
+        (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`; F_f and
+        F_e are nan for a LevelSet block); and
         of the scene: flow_kinetic, flow_potential (zero at the origin: the bed under the
-        column's upstream end) and block_kinetic (all blocks, translation and rotation) [J], and
+        column's upstream end) and block_kinetic (all SDEM blocks, translation and rotation;
+        not the LevelSet ones) [J], and
         flow_front, the flow's most downstream point [m].
         On the CPU backend also ``faces``: the flow's normal load on each face of the block in
         its own frame, a dict of arrays [N] keyed as :func:`analysis.boxFaceLoads` ("-x" the
