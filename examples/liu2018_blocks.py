@@ -5,6 +5,8 @@ Table 2), MPM–SDEM coupled.
     yade -n -x examples/liu2018_blocks.py [--full] [--out DIR] [--duration T] [--dx DX] [--ppc N]
                                           [--flip-alpha A] [--young E] [--backend cpu|cuda]
                                           [--precision double|float]
+                                          [--blocks sdem|levelset] [--ls-spacing H] [--ls-nodes N]
+                                          [--ls-kn K]
     /usr/bin/python3 examples/liu2018_blocks.py ...       (same, without YADE's GUI shell)
 
 Scene (Table 2): horizontal flume 600 mm long, 200 mm wide; granular column 100 mm long ×
@@ -38,6 +40,28 @@ Our readings where the paper leaves room:
   block move a tenth of its sweep radius, so that the middle block falling onto the bed enters
   the barrier over several steps (the glued bottom block is a fixed body and does not limit the
   step). The coupled engine stops the run if a step ever exceeds twice the critical step.
+
+``--blocks levelset`` (paper §4.1: the same scene with level-set DEM blocks): the three blocks
+are YADE ``LevelSet`` boxes of the same outer size (``yade.utils.levelSetBody("box", ...)``,
+grid spacing ``--ls-spacing``, default 2 mm, and ``--ls-nodes`` boundary nodes, default the
+paper's 602), the bottom one glued. The flow meets them through ``CoupledEngine(levelSets=...)``
+with the SDEM run's flow–block friction and barrier stiffness (1e4 N/m); the flow still runs on
+the SDEM bed. They meet each other through YADE's ``Ig2_LevelSet_LevelSet_ScGeom`` and the bed,
+for them a YADE ``Wall`` at z = 0, through ``Ig2_Wall_LevelSet_ScGeom``, with
+``Ip2_FrictMat_FrictMat_FrictPhys`` and ``Law2_ScGeom_FrictPhys_CundallStrack``: one linear
+spring per pair of bodies (one contact point, the deepest boundary node), k_n = 1e4 N/m set
+(``--ls-kn``)
+directly (``MatchMaker`` of the Ip2 functor; the barrier's k_c, which the SDEM barrier exceeds
+as it closes and shares among 4 corner contacts per interface), k_s = k_n/2.6 (the SDEM K_t at
+ν 0.3), friction 0.60, no damping (as the SDEM barrier's). The upper blocks start at the
+spring's equilibrium overlap (the weight carried over k_n). The coupled engine's ``dtAuto``
+does not see these YADE contacts; the flume holds O.dt below 0.3 √(m/k_n) (0.57 ms for a block
+at 1e4 N/m, above the flow's step: binding only for a stiffer ``--ls-kn``). They are not energy-conserving when a block rocks and slides on them
+(docs/coupled-results.md, "§4.1: the §3.3 blocks as YADE LevelSet bodies"): loose blocks keep
+bouncing where SDEM blocks come to rest. Not with ``--backend cuda`` or
+``--precision float`` (the LevelSet coupling runs on the double-precision CPU solver only);
+``coupled.h5`` and ``scene.pvd`` then hold the SDEM bed only, the force, travel and height
+series of the blocks are in the PNG and summary.json as for SDEM blocks (no face/edge split).
 
 Two runs: the free flow without blocks (h_f, v_f at the blocks' station when the front arrives,
 for Eq 20), then the coupled run. Writes to ``--out`` (default ``results/liu2018_blocks``):
@@ -74,6 +98,13 @@ FALL_DROP = HALF[2]                       # "fallen": centre half a block height
 GRANULAR = {"density": RHO_FLOW, "young_modulus": 5e4, "poisson_ratio": 0.40,
             "mu_s": math.tan(math.radians(22.0)), "mu_2": 0.60}
 NAMES = ("bottom", "middle", "top")
+LS_SPACING, LS_NODES = 0.002, 602          # --blocks levelset defaults [m], boundary nodes per block
+LS_KN = 1e4                               # YADE contact stiffness of the LevelSet blocks [N/m]
+
+
+def lsContact(kn=LS_KN):
+    """YADE's contact stiffnesses of the LevelSet blocks: k_n, and k_s = k_n/(2(1 + 0.3))."""
+    return {"kn": kn, "ks": kn / (2 * (1 + 0.3))}
 
 
 def parse(argv):
@@ -98,7 +129,28 @@ def parse(argv):
     ap.add_argument("--backend", default="cpu", choices=("cpu", "cuda"))
     ap.add_argument("--precision", default="double", choices=("double", "float"))
     ap.add_argument("--no-plots", action="store_true", help="skip the PNG")
+    ap.add_argument("--blocks", default="sdem", choices=("sdem", "levelset"),
+                    help="the blocks as SDEM sphero-boxes (default) or YADE LevelSet boxes (paper §4.1)")
+    ap.add_argument("--ls-spacing", type=float, default=LS_SPACING,
+                    help="--blocks levelset: level-set grid spacing [m] > 0, at most the material points' radius "
+                         "R_p0 (default %g)" % LS_SPACING)
+    ap.add_argument("--ls-nodes", type=int, default=LS_NODES,
+                    help="--blocks levelset: boundary nodes per block >= 8 (default the paper's %d)" % LS_NODES)
+    ap.add_argument("--ls-kn", type=float, default=LS_KN,
+                    help="--blocks levelset: YADE's normal contact stiffness of the blocks [N/m] > 0 (default %g; "
+                         "k_s = k_n/2.6)" % LS_KN)
     a = ap.parse_known_args(argv)[0]
+    if a.blocks == "levelset":
+        if a.backend != "cpu":
+            ap.error("--backend %s: --blocks levelset runs on the cpu backend only" % a.backend)
+        if a.precision != "double":
+            ap.error("--precision %s: --blocks levelset runs in double precision only" % a.precision)
+        if not a.ls_spacing > 0:
+            ap.error("--ls-spacing %r m: must be > 0" % a.ls_spacing)
+        if a.ls_nodes < 8:
+            ap.error("--ls-nodes %r: must be >= 8" % a.ls_nodes)
+        if not a.ls_kn > 0:
+            ap.error("--ls-kn %r N/m: must be > 0" % a.ls_kn)
     if a.flip_alpha is not None and a.flip_reference_dt is None:
         ap.error("--flip-alpha %g needs --flip-reference-dt (its reference step [s], or 'step')" % a.flip_alpha)
     if a.flip_viscosity is not None and (a.flip_alpha is not None or a.flip_reference_dt is not None):
@@ -113,12 +165,24 @@ def settings(a):
         raise ValueError("--dx = %r m: must be > 0" % (dx,))
     if not a.duration > 0:
         raise ValueError("--duration = %r s: must be > 0" % (a.duration,))
+    rp = (3.0 * dx ** 3 / ppc / (4.0 * math.pi)) ** (1.0 / 3.0)  # R_p0, Eq 13
+    if getattr(a, "blocks", "sdem") == "levelset" and a.ls_spacing > rp:
+        raise ValueError("--ls-spacing = %r m: must be at most the material points' radius R_p0 = %.4g m at dx %g m, "
+                         "%d per cell" % (a.ls_spacing, rp, dx, ppc))
     return dx, ppc, a.duration
 
 
-def stackedBlocks(flowFriction=0.13):
-    """The three blocks, each upper one at the barrier's equilibrium overlap on the one below."""
+def stackedBlocks(flowFriction=0.13, levelSet=None, kn=LS_KN):
+    """The three blocks, each upper one at the barrier's equilibrium overlap on the one below;
+    with ``levelSet`` ({"spacing", "nSurfNodes"}) YADE LevelSet boxes, each upper one at the
+    overlap of the linear spring ``kn`` [N/m] under the weight it carries."""
     weight = RHO_BLOCK * 8 * HALF[0] * HALF[1] * HALF[2] * 9.81
+    if levelSet is not None:
+        common = dict(half=HALF, x=X_BLOCKS, density=RHO_BLOCK, friction=0.60, flowFriction=flowFriction,
+                      barrierStiffness=KC, levelSet=levelSet)
+        zMiddle = 2 * HALF[2] - weight / kn - 2 * weight / kn  # Flume seats the bottom one W/k_n deep
+        zTop = zMiddle + 2 * HALF[2] - weight / kn
+        return [Block(z=0.0, blockedDOFs="xyzXYZ", **common), Block(z=zMiddle, **common), Block(z=zTop, **common)]
     zBottomTop = 2 * HALF[2] - analysis.equilibriumOverlap(weight, SWEEP + BED_SWEEP, KC, contacts=4)
     zMiddle = zBottomTop - analysis.equilibriumOverlap(2 * weight, 2 * SWEEP, KC, contacts=4)
     zTop = zMiddle + 2 * HALF[2] - analysis.equilibriumOverlap(weight, 2 * SWEEP, KC, contacts=4)
@@ -142,7 +206,7 @@ def scene(dx, ppc, a, blocks=(), output=None, verbose=True):
               ppc=ppc, granular=dict(GRANULAR, young_modulus=a.young), basalFriction=0.13, blocks=blocks, backend=a.backend, flipAlpha=a.flip_alpha,
               flipReferenceDt=a.flip_reference_dt, flipViscosity=flipViscosity(a),
               precision=a.precision, output=output, outputEvery=0.01, vtkEvery=0.05 if output else None,
-              verbose=verbose)
+              verbose=verbose, levelSetContact=lsContact(getattr(a, "ls_kn", LS_KN)))
     from yade import O
     O.dt = min(O.dt, CONTACT_DT)
     s.coupled.dtAuto = 0.5
@@ -232,10 +296,15 @@ def plot(s, ff, eq20, path):
     ax[2].set_xlabel("t [s]")
     ax[2].set_ylabel("bottom face height (centre − h/2) [m]")
     ax[2].legend()
-    fig.suptitle("Stacked wooden blocks in the Liu et al. (2018) flume (paper §3.3), dx = %g m, %d material points"
-                 % (s.dx, s.mpm.numParticles))
+    fig.suptitle("Stacked wooden blocks in the Liu et al. (2018) flume (paper §3.3), %s blocks, dx = %g m, "
+                 "%d material points" % ("LevelSet" if s.levelSetIds else "SDEM", s.dx, s.mpm.numParticles))
     fig.tight_layout()
     fig.savefig(path, dpi=90)
+
+
+def levelSetOf(a):
+    """--blocks levelset: the blocks' level-set grid ({"spacing", "nSurfNodes"}); else None."""
+    return {"spacing": a.ls_spacing, "nSurfNodes": a.ls_nodes} if getattr(a, "blocks", "sdem") == "levelset" else None
 
 
 def fmt(t):
@@ -255,7 +324,7 @@ def main(argv):
     print("free flow at x = %.2f m: front at %.3f s, h_f = %.4f m, v_f = %.3f m/s, Fr = %.2f; Eq 20 on the bottom "
           "block: %.2f N" % (X_BLOCKS, ff["arrival"], ff["h_f"], ff["v_f"], ff["Fr"], eq20))
     t1 = time.time()
-    s = scene(dx, ppc, a, blocks=stackedBlocks(a.flow_friction), output=out)
+    s = scene(dx, ppc, a, blocks=stackedBlocks(a.flow_friction, levelSetOf(a), a.ls_kn), output=out)
     runCoupled(s, duration)
     tCoupled = time.time() - t1
     ev = events(s)
@@ -263,6 +332,9 @@ def main(argv):
     summary = {"dx": dx, "ppc": ppc, "flip_blend": s.flipBlend(), "precision": a.precision,
                "particles": s.mpm.numParticles, "duration": duration,
                "dt_min": s.extra["dtMin"], "steps": O.iter,
+               "blocks_kind": a.blocks, "level_set": levelSetOf(a),
+               "yade_contact": lsContact(a.ls_kn) if a.blocks == "levelset" else None,
+               "block_mass": [O.bodies[i].state.mass for i in s.blockIds],
                "flow_friction": a.flow_friction, "young_modulus": a.young, "free_flow": ff, "eq20_bottom": eq20, "blocks": ev,
                "paper": {"peak_force_bottom": 9.7, "eq20_bottom": 10.6, "middle_falls": 0.4, "top_hit": 0.5},
                "wall_seconds": {"free_flow": tFree, "coupled": tCoupled}, "timings": s.coupled.timings()}

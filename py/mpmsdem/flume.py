@@ -18,7 +18,10 @@ import os
 
 from yade import O
 from yade.minieigenHP import Vector3
-from yade.wrapper import ForceResetter, NewtonIntegrator
+from yade import utils
+from yade.wrapper import (Bo1_LevelSet_Aabb, Bo1_Wall_Aabb, ForceResetter, FrictMat, Ig2_LevelSet_LevelSet_ScGeom,
+                          Ig2_Wall_LevelSet_ScGeom, InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_FrictPhys,
+                          Law2_ScGeom_FrictPhys_CundallStrack, MatchMaker, NewtonIntegrator)
 
 from . import analysis
 from .analysis import tiltAndYaw
@@ -59,10 +62,16 @@ class Block:
     :param density: [kg/m³]; :param friction: block–bed and block–block friction;
         :param flowFriction: flow–block friction (coupling pair).
     :param blockedDOFs: YADE's blockedDOFs string, e.g. ``"xyzXYZ"`` for a glued block.
+    :param levelSet: None (default): an SDEM sphero-box; or ``{"spacing": h [m] > 0,
+        "nSurfNodes": n ≥ 8}``: a YADE ``LevelSet`` box of the outer size ``half``
+        (``yade.utils.levelSetBody("box", ...)``, grid spacing h, default a fifth of the
+        smallest half-extent, n boundary nodes, default 602; sweepRadius unused), in the flow through ``CoupledEngine(levelSets=...)`` with ``flowFriction`` and
+        ``barrierStiffness``, and against the other LevelSet blocks and the bed through YADE's
+        own contacts (:class:`Flume`'s ``levelSetContact``). CPU backend of the flow only.
     """
 
     def __init__(self, half, x, y=None, z=0.0, sweepRadius=None, density=8900, friction=0.67, flowFriction=0.21,
-                 blockedDOFs="", barrierStiffness=1e4):
+                 blockedDOFs="", barrierStiffness=1e4, levelSet=None):
         self.half = tuple(float(h) for h in half)
         if len(self.half) != 3 or min(self.half) <= 0:
             raise ValueError("half = %r: must be three half-extents > 0 [m]" % (half,))
@@ -70,6 +79,17 @@ class Block:
         self.sweepRadius = sweepRadius if sweepRadius is not None else min(self.half) / 10.0
         self.density, self.friction, self.flowFriction = density, friction, flowFriction
         self.blockedDOFs, self.barrierStiffness = blockedDOFs, barrierStiffness
+        if levelSet is not None:
+            if not isinstance(levelSet, dict) or set(levelSet) - {"spacing", "nSurfNodes"}:
+                raise ValueError("levelSet = %r: must be None or a dict with keys among spacing [m], nSurfNodes"
+                                 % (levelSet,))
+            levelSet = {"spacing": float(levelSet.get("spacing", min(self.half) / 5.0)),
+                        "nSurfNodes": int(levelSet.get("nSurfNodes", 602))}
+            if not levelSet["spacing"] > 0:
+                raise ValueError("levelSet spacing = %r m: must be > 0" % (levelSet["spacing"],))
+            if levelSet["nSurfNodes"] < 8:
+                raise ValueError("levelSet nSurfNodes = %r: must be >= 8" % (levelSet["nSurfNodes"],))
+        self.levelSet = levelSet
 
 
 class Flume:
@@ -101,6 +121,16 @@ class Flume:
         flipReferenceDt: instead, α per Δt_ref [s] (``mpmsdem.mpm.PAPER_STEP``: the paper's
         α 0.99 per 5e-6 s) or per ``"step"``; see :class:`MpmEngine`. ``flipBlend()`` names the
         blend a run used;
+    :param levelSetContact: YADE's contacts of the LevelSet blocks (:class:`Block`'s
+        ``levelSet``) with each other and with the bed, a YADE ``Wall`` at z = 0 (the flow still
+        meets the SDEM bed): ``{"kn": k_n [N/m] > 0, "ks": k_s [N/m] ≥ 0}`` of
+        ``Ip2_FrictMat_FrictMat_FrictPhys`` (one linear spring per contact, one contact per pair
+        of bodies: ``Ig2_LevelSet_LevelSet_ScGeom``, ``Ig2_Wall_LevelSet_ScGeom``) with
+        ``Law2_ScGeom_FrictPhys_CundallStrack``; friction the smaller of the two bodies'
+        (the bed's: the LevelSet blocks'). Default k_n 1e4 N/m (the blocks' barrier stiffness
+        scale), k_s = k_n/(2(1 + 0.3)) (the SDEM K_t at ν 0.3). The coupled engine's step
+        control does not see these contacts: O.dt and the coupled engine's ``dtMax`` are set to
+        ``levelSetStep`` = 0.3 sqrt(m/k_n) of the lightest moving LevelSet block;
     :param backend, precision: MPM backend; :param output: folder for all outputs (None: none),
         :param outputEvery: record interval [s]; :param vtkEvery: ParaView interval [s].
     """
@@ -109,10 +139,22 @@ class Flume:
                  granular=None, basalFriction=0.21, sideWallFriction=0.0, blocks=(), bedSweep=0.005,
                  bedBarrierStiffness=1e4, dtFactor=0.5, backend="cpu", precision="double", output=None,
                  outputEvery=0.01, vtkEvery=None, plot=False, verbose=True, gate=None, flipReferenceDt=None,
-                 dtAuto=None, dtCheck="raise", flipAlpha=None, flipViscosity=None):
+                 dtAuto=None, dtCheck="raise", flipAlpha=None, flipViscosity=None, levelSetContact=None):
         if gate is not None and (not isinstance(gate, dict) or set(gate) - {"speed", "open_at", "friction"}):
             raise ValueError("gate = %r: must be None or a dict with keys among speed [m/s], open_at [s], friction"
                              % (gate,))
+        levelSetBlocks = [b for b in blocks if b.levelSet is not None]
+        if levelSetBlocks and backend != "cpu":
+            raise ValueError("backend = %r: LevelSet blocks need the flow's CPU backend" % (backend,))
+        contact = {"kn": 1e4, "ks": 1e4 / 2.6}
+        if levelSetContact is not None:
+            if not isinstance(levelSetContact, dict) or set(levelSetContact) - set(contact):
+                raise ValueError("levelSetContact = %r: must be None or a dict with keys among kn, ks [N/m]"
+                                 % (levelSetContact,))
+            contact.update({k: float(v) for k, v in levelSetContact.items()})
+            if not (contact["kn"] > 0 and contact["ks"] >= 0):
+                raise ValueError("levelSetContact = %r: kn must be > 0 and ks >= 0 [N/m]" % (levelSetContact,))
+        self.levelSetContact = contact
         O.reset()
         self.inclineDeg, self.dx, self.length, self.width = inclineDeg, dx, length, width
         self.columnLength, self.columnHeight = columnLength, columnHeight
@@ -145,7 +187,15 @@ class Flume:
                                    pos=(length / 2 - dx, width / 2, -0.02), fixed=True)
         pairs = {bedMat: {"friction": basalFriction}}
         self.blockIds = []
+        self.levelSetIds = []
+        if levelSetBlocks:
+            lsBed = O.materials.append(FrictMat(density=2500, frictionAngle=math.atan(max(b.friction for b in
+                                                                                      levelSetBlocks))))
+            self.levelSetBedId = O.bodies.append(utils.wall(0.0, axis=2, material=lsBed))
         for b in blocks:
+            if b.levelSet is not None:
+                self.blockIds.append(self._levelSetBlock(b, th))
+                continue
             mat = _material(density=b.density, friction=b.friction, barrierStiffness=b.barrierStiffness)
             y = width / 2 if b.y is None else b.y
             zc = b.z + b.half[2]
@@ -169,15 +219,52 @@ class Flume:
             flipViscosity=flipViscosity,
             gate=None if gate is None else dict(gate, x=columnLength, bottom=0.0),
             output=os.path.join(output, "mpm") if output else None, outputEvery=vtkEvery or outputEvery)
+        levelSets = {i: {"friction": b.flowFriction, "barrierStiffness": b.barrierStiffness}
+                     for i, b in zip(self.blockIds, blocks) if b.levelSet is not None}
         self.coupled = CoupledEngine(self.sdem, self.mpm, pairs=pairs, output=output, outputEvery=outputEvery,
                                      vtkEvery=vtkEvery, plot=plot, verbose=verbose, dtAuto=dtAuto,
-                                     dtCheck=dtCheck)
-        O.engines = [ForceResetter(), self.coupled.runner, NewtonIntegrator(gravity=Vector3(*self.gravity), damping=0)]
+                                     dtCheck=dtCheck, levelSets=levelSets or None)
+        yadeContacts = []
+        if levelSetBlocks:
+            ip2 = Ip2_FrictMat_FrictMat_FrictPhys(kn=MatchMaker(algo="val", val=contact["kn"]),
+                                                  ks=MatchMaker(algo="val", val=contact["ks"]))
+            yadeContacts = [InsertionSortCollider([Bo1_LevelSet_Aabb(), Bo1_Wall_Aabb()], verletDist=0.1 * dx),
+                            InteractionLoop([Ig2_LevelSet_LevelSet_ScGeom(), Ig2_Wall_LevelSet_ScGeom()], [ip2],
+                                            [Law2_ScGeom_FrictPhys_CundallStrack()])]
+        O.engines = [ForceResetter()] + yadeContacts + [self.coupled.runner,
+                                                        NewtonIntegrator(gravity=Vector3(*self.gravity), damping=0)]
         O.dt = dtFactor * self.mpm.stableTimeStep()
+        self.levelSetStep = math.inf
+        moving = [O.bodies[i].state.mass for i in self.levelSetIds if O.bodies[i].state.blockedDOFs != "xyzXYZ"]
+        if moving:
+            # The coupled engine's step control does not see YADE's own contacts of the LevelSet
+            # blocks. One linear spring k_n on a body of mass m: central differences are stable
+            # below 2 sqrt(m/k_n) in translation; a box turning about its centre on an edge
+            # contact has m r^2 / I = 3, so sqrt(3) times the frequency. O.dt is held below
+            # 0.3 sqrt(m/k_n) (0.52 rad a step in the fastest mode).
+            self.levelSetStep = 0.3 * math.sqrt(min(moving) / contact["kn"])
+            self.coupled.dtMax = self.levelSetStep
+            O.dt = min(O.dt, self.levelSetStep)
         self.x0 = [O.bodies[i].state.pos[0] for i in self.blockIds]
         # per sample: (t, [x], [vx], [Fx], [Ffx], [Fex], [rotation], [tilt], [yaw] deg, (flow
         # kinetic, flow potential, blocks' kinetic energy [J], the flow's front [m]))
         self.history = []
+
+    def _levelSetBlock(self, b, th):
+        """A YADE LevelSet box for :class:`Block` ``b``; returns its id."""
+        mat = O.materials.append(FrictMat(density=b.density, frictionAngle=math.atan(b.friction)))
+        y = self.width / 2 if b.y is None else b.y
+        zc = b.z + b.half[2]
+        if b.z == 0.0:  # resting on the bed: at the overlap of the linear spring that carries its weight
+            mass = b.density * 8 * b.half[0] * b.half[1] * b.half[2]
+            zc -= mass * 9.81 * math.cos(th) / self.levelSetContact["kn"]
+        i = O.bodies.append(utils.levelSetBody("box", center=(b.x + b.half[0], y, zc), extents=b.half,
+                                               spacing=b.levelSet["spacing"], nSurfNodes=b.levelSet["nSurfNodes"],
+                                               material=mat))
+        if b.blockedDOFs:
+            O.bodies[i].state.blockedDOFs = b.blockedDOFs
+        self.levelSetIds.append(i)
+        return i
 
     def sample(self):
         """Append the blocks' state and flow forces (downstream components) to ``history``."""
@@ -186,8 +273,9 @@ class Flume:
         row.append([b.state.pos[0] for b in bodies])
         row.append([b.state.vel[0] for b in bodies])
         row.append([self.coupled.force(i)[0] for i in self.blockIds])
-        row.append([self.coupled.faceForce(i)[0] for i in self.blockIds])
-        row.append([self.coupled.edgeForce(i)[0] for i in self.blockIds])
+        # a LevelSet body has no faces and edges to tell apart: nan
+        row.append([math.nan if i in self.levelSetIds else self.coupled.faceForce(i)[0] for i in self.blockIds])
+        row.append([math.nan if i in self.levelSetIds else self.coupled.edgeForce(i)[0] for i in self.blockIds])
         turns = [b.state.ori.toAngleAxis() for b in bodies]
         row.append([math.degrees(angle) for angle, _ in turns])
         split = [tiltAndYaw(angle, axis) for angle, axis in turns]
@@ -196,7 +284,8 @@ class Flume:
         d = self.mpm.diagnostics()
         row.append((d["kinetic_energy"], d["potential_energy"], self.coupled.blockKineticEnergy(), d["front_x"]))
         # the CUDA backend keeps its contacts on the device: no split by face there
-        row.append([analysis.boxFaceLoads(self.coupled.contacts(i), b.state.ori.toRotationMatrix())
+        row.append([None if i in self.levelSetIds else
+                    analysis.boxFaceLoads(self.coupled.contacts(i), b.state.ori.toRotationMatrix())
                     for i, b in zip(self.blockIds, bodies)] if self.mpm.solver.name.startswith("cpu") else None)
         self.history.append(row)
 
@@ -234,9 +323,11 @@ class Flume:
 
     def series(self, k):
         """numpy arrays of block k: t, travel S_b, v_x, F_t, F_f, F_e (downstream, N), rotation
-        (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`); and
+        (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`; F_f and
+        F_e are nan for a LevelSet block); and
         of the scene: flow_kinetic, flow_potential (zero at the origin: the bed under the
-        column's upstream end) and block_kinetic (all blocks, translation and rotation) [J], and
+        column's upstream end) and block_kinetic (all SDEM blocks, translation and rotation;
+        not the LevelSet ones) [J], and
         flow_front, the flow's most downstream point [m].
         On the CPU backend also ``faces``: the flow's normal load on each face of the block in
         its own frame, a dict of arrays [N] keyed as :func:`analysis.boxFaceLoads` ("-x" the
@@ -248,7 +339,7 @@ class Flume:
         out = {"t": t, "travel": cols[0] - self.x0[k], "vx": cols[1], "Ft": cols[2], "Ff": cols[3], "Fe": cols[4],
                "rotation": cols[5], "tilt": cols[6], "yaw": cols[7], "flow_kinetic": scene[:, 0],
                "flow_potential": scene[:, 1], "block_kinetic": scene[:, 2], "flow_front": scene[:, 3]}
-        if self.history and self.history[0][10] is not None:
+        if self.history and self.history[0][10] is not None and self.history[0][10][k] is not None:
             out["faces"] = {f: np.array([r[10][k][f] for r in self.history]) for f in self.history[0][10][k]}
         return out
 
