@@ -2,7 +2,9 @@
 // read by the plain C++ driver `mpmsdem-run` (apps/mpmsdem-run.cpp). SI units throughout.
 //
 // Schema (keys are case-sensitive; an unknown key anywhere is a ParameterError naming it;
-// "(req)" marks required keys, the others show their default):
+// "(req)" marks required keys, the others show their default). The parser takes each key's
+// range and default from its entry in scene/SceneParameters (docs/parameters.md is generated
+// from it); this is the shape of a scene:
 //
 // {
 //   "description": "free text (optional)",
@@ -165,22 +167,23 @@ struct ParticleBox {
   std::vector<std::array<int, 3>> triangles;  // the mesh's triangles (vertex indices)
 };
 
-// How the scene is run and written (see "run" above).
+// How the scene is run and written (see "run" above; units and ranges: the "run." entries of
+// scene/SceneParameters, docs/parameters.md).
 struct RunSettings {
-  double duration = 0;            // simulated time [s], > 0
-  double dt = 0;                  // fixed step [s]; 0 means "auto"
-  double dtFactor = 0.9;          // auto step = dtFactor * stableTimeStep(), in (0, 1]
-  double minStepFraction = 1e-4;  // auto step floor, a fraction of the CFL step, in [0, 1)
-  double maxBlockSpeed = 0;       // [m/s] > 0; 0: 10 x the flow's P-wave speed (set by parseScene)
-  double progressEvery = 10;      // wall-time interval of progress lines [s], > 0
+  double duration = 0;            // simulated time
+  double dt = 0;                  // fixed step; 0 means "auto"
+  double dtFactor = 0.9;          // auto step = dtFactor * stableTimeStep()
+  double minStepFraction = 1e-4;  // auto step floor, a fraction of the CFL step
+  double maxBlockSpeed = 0;       // 0: 10 x the flow's P-wave speed (set by parseScene)
+  double progressEvery = 10;      // wall-time interval of progress lines
   bool stopWhenProbed = false;    // end once every flow probe's result is complete
-  double stopWhenFrontStill = 0;  // end when the front has been still this long [s]; 0: never
-  // run.snapshot_when_front_at: the x [m] at which the front's first arrival is saved, ascending
+  double stopWhenFrontStill = 0;  // end when the front has been still this long; 0: never
+  // run.snapshot_when_front_at: the x at which the front's first arrival is saved, ascending
   // (empty: none); indexed: given as a list, so the records are front_snapshot_<k>.json
   std::vector<double> snapshotsWhenFrontAt;
   bool snapshotsIndexed = false;
-  double outputEvery = 0;         // snapshot interval [s], > 0
-  double seriesEvery = 0;         // time-series record interval [s], > 0
+  double outputEvery = 0;         // snapshot interval
+  double seriesEvery = 0;         // time-series record interval
   std::string outputDir = "out";  // output folder
   std::string vtk = "raw";        // "raw", "ascii" or "none"
   Backend backend = Backend::Cpu;
