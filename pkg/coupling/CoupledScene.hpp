@@ -1,6 +1,8 @@
 // The blocks of a coupled driver scene: the "block_materials" and "blocks" keys of the JSON
 // scene that pkg/scene/MpmScene.hpp describes for the flow. SI units; an unknown key is a
-// ParameterError naming it, as for the rest of the scene; "(req)" marks required keys.
+// ParameterError naming it, as for the rest of the scene; "(req)" marks required keys. The
+// reader takes each key's range and default from its entry in coupling/BlockParameters
+// (docs/parameters.md is generated from it); this is the shape of the blocks:
 //
 //   "block_materials": {            (req with "blocks") materials by name
 //     "copper": {
