@@ -87,6 +87,7 @@ void exportShapes();
 void exportSdem();
 void exportMpm();
 void exportCoupling();
+void exportParameters();
 
 }  // namespace py
 }  // namespace mpmsdem

@@ -28,6 +28,7 @@ BOOST_PYTHON_MODULE(_mpmsdem) {
   mpmsdem::py::exportSdem();
   mpmsdem::py::exportMpm();
   mpmsdem::py::exportCoupling();
+  mpmsdem::py::exportParameters();
   // cells inside each face of the grid box where its walls act (mpm/GridBoundary.hpp)
   boost::python::scope().attr("wallLayer") = mpmsdem::mpm::kWallLayer;
 }

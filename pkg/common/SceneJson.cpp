@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <set>
-#include <sstream>
 
 #include "common/Error.hpp"
 
@@ -31,16 +30,20 @@ json parse(const std::string& text, const std::string& source) {
 
 std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
 
-void checkKeys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) {
+void checkKeys(const json& obj, const std::string& path, const std::vector<std::string>& allowed) {
   std::set<std::string> ok(allowed.begin(), allowed.end());
   for (auto it = obj.begin(); it != obj.end(); ++it) {
     if (!ok.count(it.key())) {
       std::string list;
-      for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
       throw ParameterError("unknown key '" + join(path, it.key()) + "': allowed keys" +
                            (path.empty() ? "" : " in '" + path + "'") + " are " + list);
     }
   }
+}
+
+void checkKeys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed) {
+  checkKeys(obj, path, std::vector<std::string>(allowed.begin(), allowed.end()));
 }
 
 const json& requireObject(const json& parent, const std::string& path, const char* key) {
@@ -64,19 +67,6 @@ double optNumber(const json& obj, const std::string& path, const char* key, doub
   return obj.contains(key) ? number(obj.at(key), join(path, key)) : def;
 }
 
-std::string optString(const json& obj, const std::string& path, const char* key, const std::string& def,
-                      std::initializer_list<const char*> allowed) {
-  if (!obj.contains(key)) return def;
-  const json& v = obj.at(key);
-  std::string list;
-  for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string("\"") + a + "\"";
-  if (!v.is_string()) throwParameter(join(path, key), v.dump(), "", "one of " + list);
-  const std::string s = v.get<std::string>();
-  for (const char* a : allowed)
-    if (s == a) return s;
-  throwParameter(join(path, key), v.dump(), "", "one of " + list);
-}
-
 std::array<double, 3> vec3(const json& v, const std::string& name) {
   if (!v.is_array() || v.size() != 3) throwParameter(name, v.dump(), "", "an array of 3 numbers");
   std::array<double, 3> out{};
@@ -87,14 +77,56 @@ std::array<double, 3> vec3(const json& v, const std::string& name) {
 void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
                 bool hiOpen) {
   const bool ok = std::isfinite(value) && (loOpen ? value > lo : value >= lo) && (hiOpen ? value < hi : value <= hi);
-  if (ok) return;
-  std::ostringstream range;
-  range << "in " << (loOpen ? "(" : "[") << lo << ", ";
-  if (std::isinf(hi))
-    range << "inf)";
-  else
-    range << hi << (hiOpen ? ")" : "]");
-  throwParameter(name, value, unit, range.str());
+  if (!ok) throwParameter(name, value, unit, intervalText(lo, !loOpen, hi, !hiOpen));
 }
+
+double readNumber(const json& obj, const std::string& path, const ParameterSpec& spec) {
+  return readNumberIn(obj, path, spec, spec.lo, spec.hi);
+}
+
+double readNumberIn(const json& obj, const std::string& path, const ParameterSpec& spec, double lo, double hi) {
+  const std::string key = leafName(spec);
+  const double v = isRequired(spec) ? requireNumber(obj, path, key.c_str())
+                                    : optNumber(obj, path, key.c_str(), spec.defaultValue);
+  checkParameter(spec, join(path, key), v, lo, hi);
+  return v;
+}
+
+double readNumber(const json& obj, const std::string& path, const ParameterSpec& spec, double def) {
+  const std::string key = leafName(spec);
+  const double v = optNumber(obj, path, key.c_str(), def);
+  checkParameter(spec, join(path, key), v, spec.lo, spec.hi);
+  return v;
+}
+
+void checkParameter(const ParameterSpec& spec, const std::string& name, double value, double lo, double hi) {
+  checkRange(name, value, spec.unit, lo, !spec.loInclusive, hi, !spec.hiInclusive);
+}
+
+long integer(const json& v, const std::string& name, const ParameterSpec& spec) {
+  if (!v.is_number_integer()) throwParameter(name, v.dump(), "", rangeText(spec));
+  const long n = v.get<long>();
+  if (n < spec.lo || n > spec.hi) throwParameter(name, n, "", rangeText(spec));
+  return n;
+}
+
+bool readBool(const json& obj, const std::string& path, const ParameterSpec& spec, bool def) {
+  const std::string key = leafName(spec);
+  if (!obj.contains(key)) return def;
+  const json& b = obj.at(key);
+  if (!b.is_boolean()) throwParameter(join(path, key), b.dump(), "", rangeText(spec));
+  return b.get<bool>();
+}
+
+std::string readChoice(const json& obj, const std::string& path, const ParameterSpec& spec) {
+  const std::string key = leafName(spec);
+  if (!obj.contains(key)) return spec.defaultText;
+  const json& v = obj.at(key);
+  if (v.is_string())
+    for (const std::string& c : choices(spec))
+      if (v.get<std::string>() == c) return c;
+  throwParameter(join(path, key), v.dump(), "", rangeText(spec));
+}
+
 }  // namespace scenejson
 }  // namespace mpmsdem

@@ -7,6 +7,9 @@
 #include <array>
 #include <initializer_list>
 #include <string>
+#include <vector>
+
+#include "common/Parameters.hpp"
 
 namespace mpmsdem {
 namespace scenejson {
@@ -25,16 +28,33 @@ json parse(const std::string& text, const std::string& source);
 std::string join(const std::string& path, const std::string& key);
 // Every key of `obj` must be in `allowed` (else names the unknown key and the allowed ones).
 void checkKeys(const json& obj, const std::string& path, std::initializer_list<const char*> allowed);
+void checkKeys(const json& obj, const std::string& path, const std::vector<std::string>& allowed);
 const json& requireObject(const json& parent, const std::string& path, const char* key);
 double number(const json& v, const std::string& name);
 double requireNumber(const json& obj, const std::string& path, const char* key);
 double optNumber(const json& obj, const std::string& path, const char* key, double def);
-std::string optString(const json& obj, const std::string& path, const char* key, const std::string& def,
-                      std::initializer_list<const char*> allowed);
 std::array<double, 3> vec3(const json& v, const std::string& name);
 // value must be finite and satisfy lo <(=) value <(=) hi (hi may be infinite).
 void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
                 bool hiOpen);
+
+// Reading a value through its table entry (common/Parameters.hpp): the message names
+// "path.<leaf of the key>" with the entry's unit and range.
+// A number: required or the entry's default, in the entry's range.
+double readNumber(const json& obj, const std::string& path, const ParameterSpec& spec);
+// A number whose default follows from other values (run.output_every: run.duration / 20).
+double readNumber(const json& obj, const std::string& path, const ParameterSpec& spec, double def);
+// A number, required or the entry's default, in [lo, hi] with the entry's open and closed ends:
+// for a bound that is another value (gate.x in the material region).
+double readNumberIn(const json& obj, const std::string& path, const ParameterSpec& spec, double lo, double hi);
+// `value` in [lo, hi] with the entry's open and closed ends and unit: for a bound that is
+// another parameter's value (material.mu_2 >= material.mu_s).
+void checkParameter(const ParameterSpec& spec, const std::string& name, double value, double lo, double hi);
+// An integer in the entry's range (an array's element: name it with `name`).
+long integer(const json& v, const std::string& name, const ParameterSpec& spec);
+bool readBool(const json& obj, const std::string& path, const ParameterSpec& spec, bool def);
+// One of the entry's choices, its default when absent.
+std::string readChoice(const json& obj, const std::string& path, const ParameterSpec& spec);
 
 }  // namespace scenejson
 }  // namespace mpmsdem

@@ -1,5 +1,6 @@
 #include "coupling/CoupledScene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -7,6 +8,7 @@
 
 #include "common/Error.hpp"
 #include "common/SceneJson.hpp"
+#include "coupling/BlockParameters.hpp"
 
 namespace mpmsdem {
 namespace coupling {
@@ -25,43 +27,33 @@ Vec3 optVec(const json& obj, const std::string& path, const char* key, const Vec
 }
 
 void readPhys(const json& j, const std::string& path, sdem::BarrierPhys& p) {
-  checkKeys(j, path, {"friction", "barrier_stiffness", "poisson", "normal_damping", "tangential_damping"});
-  p.friction = requireNumber(j, path, "friction");
-  p.barrierStiffness = optNumber(j, path, "barrier_stiffness", p.barrierStiffness);
-  p.poisson = optNumber(j, path, "poisson", p.poisson);
-  p.normalDamping = optNumber(j, path, "normal_damping", p.normalDamping);
-  p.tangentialDamping = optNumber(j, path, "tangential_damping", p.tangentialDamping);
-  const double inf = INFINITY;
-  checkRange(join(path, "friction"), p.friction, "", 0, false, inf, true);
-  checkRange(join(path, "barrier_stiffness"), p.barrierStiffness, "N/m", 0, true, inf, true);
-  checkRange(join(path, "poisson"), p.poisson, "", -1, true, 0.5, true);
-  checkRange(join(path, "normal_damping"), p.normalDamping, "", 0, false, inf, true);
-  checkRange(join(path, "tangential_damping"), p.tangentialDamping, "", 0, false, inf, true);
+  checkKeys(j, path, sectionKeys(blockParameters(), "block_materials.<name>.flow"));
+  const auto read = [&](const char* key) { return readNumber(j, path, blockParameter(key)); };
+  p.friction = read("block_materials.<name>.flow.friction");
+  p.barrierStiffness = read("block_materials.<name>.flow.barrier_stiffness");
+  p.poisson = read("block_materials.<name>.flow.poisson");
+  p.normalDamping = read("block_materials.<name>.flow.normal_damping");
+  p.tangentialDamping = read("block_materials.<name>.flow.tangential_damping");
 }
 
 // withFlow: a block material (its "flow" pair required); else the terrain's (no flow key, no
 // density needed: the ground does not move).
 BlockMaterialSpec readMaterial(const json& j, const std::string& path, const std::string& name, bool withFlow = true) {
   if (!j.is_object()) throwParameter(path, j.dump(), "", "a JSON object");
-  if (withFlow)
-    checkKeys(j, path, {"density", "friction", "poisson", "barrier_stiffness", "normal_damping", "tangential_damping",
-                        "flow"});
-  else
-    checkKeys(j, path, {"density", "friction", "poisson", "barrier_stiffness", "normal_damping", "tangential_damping"});
+  std::vector<std::string> keys = sectionKeys(blockParameters(), "block_materials.<name>");
+  if (!withFlow) keys.erase(std::find(keys.begin(), keys.end(), "flow"));
+  checkKeys(j, path, keys);
   BlockMaterialSpec m;
   m.name = name;
   sdem::SdemMaterial& s = m.material;
-  s.density = withFlow ? requireNumber(j, path, "density") : optNumber(j, path, "density", s.density);
-  s.friction = optNumber(j, path, "friction", s.friction);
-  s.poisson = optNumber(j, path, "poisson", s.poisson);
-  s.barrierStiffness = optNumber(j, path, "barrier_stiffness", s.barrierStiffness);
-  s.normalDamping = optNumber(j, path, "normal_damping", s.normalDamping);
-  s.tangentialDamping = optNumber(j, path, "tangential_damping", s.tangentialDamping);
-  try {
-    s.validate();
-  } catch (const ParameterError& e) {  // name the scene key, not the C++ field
-    throw ParameterError(path + "." + e.what());
-  }
+  const auto read = [&](const char* key) { return readNumber(j, path, blockParameter(key)); };
+  const ParameterSpec& density = blockParameter("block_materials.<name>.density");
+  s.density = withFlow ? readNumber(j, path, density) : readNumber(j, path, density, s.density);
+  s.friction = read("block_materials.<name>.friction");
+  s.poisson = read("block_materials.<name>.poisson");
+  s.barrierStiffness = read("block_materials.<name>.barrier_stiffness");
+  s.normalDamping = read("block_materials.<name>.normal_damping");
+  s.tangentialDamping = read("block_materials.<name>.tangential_damping");
   if (withFlow) readPhys(requireObject(j, path, "flow"), join(path, "flow"), m.flow);
   return m;
 }
@@ -171,8 +163,7 @@ SceneBlocks parseBlocks(const std::string& sceneJson) {
     const std::string path = "blocks[" + std::to_string(i) + "]";
     const json& b = list[i];
     if (!b.is_object()) throwParameter(path, b.dump().substr(0, 80), "", "a JSON object");
-    checkKeys(b, path, {"material", "box", "core", "outer", "sweep_radius", "position", "orientation", "velocity",
-                        "angular_velocity", "fixed", "blocked_dofs", "id"});
+    checkKeys(b, path, sectionKeys(blockParameters(), "blocks[]"));
     BlockSpec s;
     if (!b.contains("material") || !b.at("material").is_string())
       throw ParameterError(path + ".material: required, the name of one of block_materials");
@@ -198,24 +189,16 @@ SceneBlocks parseBlocks(const std::string& sceneJson) {
     }
     s.velocity = optVec(b, path, "velocity", Vec3::Zero());
     s.angularVelocity = optVec(b, path, "angular_velocity", Vec3::Zero());
-    if (b.contains("fixed")) {
-      if (!b.at("fixed").is_boolean()) throwParameter(join(path, "fixed"), b.at("fixed").dump(), "", "true or false");
-      s.fixed = b.at("fixed").get<bool>();
-    }
+    s.fixed = readBool(b, path, blockParameter("blocks[].fixed"), s.fixed);
     if (b.contains("blocked_dofs")) {
       const json& d = b.at("blocked_dofs");
       const std::string letters = "xyzXYZ";
       if (!d.is_string() || d.get<std::string>().find_first_not_of(letters) != std::string::npos)
-        throwParameter(join(path, "blocked_dofs"), d.dump(), "", "a string of letters among x y z X Y Z");
+        throwParameter(join(path, "blocked_dofs"), d.dump(), "", rangeText(blockParameter("blocks[].blocked_dofs")));
       s.blockedDofs = d.get<std::string>();
     }
-    s.id = static_cast<int>(i);
-    if (b.contains("id")) {
-      const json& v = b.at("id");
-      if (!v.is_number_integer() || v.get<long long>() < 0 || v.get<long long>() > 2147483647)
-        throwParameter(join(path, "id"), v.dump(), "", "an integer in [0, 2^31)");
-      s.id = v.get<int>();
-    }
+    s.id = b.contains("id") ? static_cast<int>(integer(b.at("id"), join(path, "id"), blockParameter("blocks[].id")))
+                            : static_cast<int>(i);
     if (!ids.insert(s.id).second) throwParameter(join(path, "id"), s.id, "", "unique among the blocks");
     out.blocks.push_back(s);
   }

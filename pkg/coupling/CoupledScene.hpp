@@ -1,14 +1,16 @@
 // The blocks of a coupled driver scene: the "block_materials" and "blocks" keys of the JSON
 // scene that pkg/scene/MpmScene.hpp describes for the flow. SI units; an unknown key is a
-// ParameterError naming it, as for the rest of the scene; "(req)" marks required keys.
+// ParameterError naming it, as for the rest of the scene; "(req)" marks required keys. The
+// unit, default and range of each key are its entry in coupling/BlockParameters, which the reader
+// checks against (docs/parameters.md is generated from it); this is the shape of the blocks:
 //
 //   "block_materials": {            (req with "blocks") materials by name
 //     "copper": {
-//       "density": 8900,            (req) [kg/m^3], > 0; block mass = density x rounded volume
-//       "friction": 0.5,            block–block Coulomb friction, >= 0 (Eq 9)
-//       "poisson": 0.3,             for K_t = k_n / (2 (1 + nu)) (Eq 11), in (-1, 0.5)
-//       "barrier_stiffness": 1e4,   k_c [N/m] of Eq 10, > 0
-//       "normal_damping": 0,        fractions of critical, >= 0
+//       "density": 8900,            (req) block mass = density x rounded volume
+//       "friction": 0.5,            block–block Coulomb friction (Eq 9)
+//       "poisson": 0.3,             for K_t = k_n / (2 (1 + nu)) (Eq 11)
+//       "barrier_stiffness": 1e4,   k_c of Eq 10
+//       "normal_damping": 0,        fractions of critical
 //       "tangential_damping": 0.1,
 //       "flow": {                   (req) contact of the material points with blocks of this
 //         "friction": 0.21,         (req)   material (paper Eq 12; the pair's own physics)

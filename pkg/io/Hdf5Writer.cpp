@@ -14,6 +14,7 @@
 
 #include "common/Error.hpp"
 #include "scene/MpmScene.hpp"
+#include "scene/SceneParameters.hpp"
 
 namespace mpmsdem {
 namespace io {
@@ -670,10 +671,12 @@ void writeMpmHeader(Hdf5Writer& w, const std::string& sceneJson, const mpm::MpmP
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const bool viscosity = params.flipViscosity > 0, perStep = params.flipBlendPerStep();
   const double unit = viscosity ? 1.0 : params.flipReferenceDt;  // unless per step, the rate is the same at any step
-  w.setAttribute("flip_viscosity", perStep ? nan : params.flipViscosityFor(unit));
+  // the blend's parameters under their scene keys; the damping rate is derived, not a key
+  const auto key = [](const char* k) -> std::string { return mpm::sceneParameter(k).key; };
+  w.setAttribute(key("flip_viscosity"), perStep ? nan : params.flipViscosityFor(unit));
   w.setAttribute("flip_damping_rate", perStep ? nan : params.flipDampingRate(unit));
-  w.setAttribute("flip_alpha", viscosity ? nan : params.flipAlpha);
-  w.setAttribute("flip_reference_dt", viscosity ? nan : params.flipReferenceDt);
+  w.setAttribute(key("flip_alpha"), viscosity ? nan : params.flipAlpha);
+  w.setAttribute(key("flip_reference_dt"), viscosity ? nan : params.flipReferenceDt);
   w.setAttribute("flip_blend", mpm::describeFlipBlend(params));
 }
 

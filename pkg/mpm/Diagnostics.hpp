@@ -15,12 +15,13 @@ namespace mpm {
 
 // A station across a flume where the free flow's depth and velocity are taken (the paper's
 // free-flow tests, §3.2.3 and §5: h_f and v_f at the block's station before the block is there).
+// Units and ranges: the "flow_probes[]." entries of scene/SceneParameters (docs/parameters.md).
 struct FlowProbeSpec {
-  double x = 0;          // station along x [m]
-  double halfWidth = 0;  // the points with |x_p - x| <= halfWidth are the flow at the station [m], > 0
-  double bedZ = 0;       // bed height: depth = highest of those points - bedZ [m]
-  int minPoints = 4;     // with fewer points the front has not arrived, >= 1
-  double window = 0.05;  // h_f and v_f: means of the records within window after the arrival [s], >= 0
+  double x = 0;          // station along x
+  double halfWidth = 0;  // the points with |x_p - x| <= halfWidth are the flow at the station
+  double bedZ = 0;       // bed height: depth = highest of those points - bedZ
+  int minPoints = 4;     // with fewer points the front has not arrived
+  double window = 0.05;  // h_f and v_f: means of the records within window after the arrival
 };
 
 // The flow at one probe in one particle state; depth and velocity are 0 while fewer than

@@ -16,17 +16,18 @@
 namespace mpmsdem {
 namespace mpm {
 
-// Granular material of Appendix B (with the corrections of docs/physics.md). SI units.
+// Granular material of Appendix B (with the corrections of docs/physics.md). SI units; each
+// member's unit and range: its "material." entry in scene/SceneParameters (docs/parameters.md).
 struct GranularMaterial {
-  double density = 1600;       // rho_0, initial bulk density of the material points [kg/m^3], > 0
-  double youngModulus = 1e6;   // E [Pa], > 0 (Table 1: 1 MPa)
-  double poissonRatio = 0.3;   // nu [-], in [0, 0.5)
-  double muS = 0.24;           // mu_s, static friction coefficient, Eq B.2 [-], >= 0
-  double mu2 = 0.65;           // mu_2, limiting dynamic friction, Eq B.2 [-], >= mu_s
-  double I0 = 0.279;           // I_0, inertial-number scale, Eq B.2 [-], > 0
-  double grainDiameter = 0.002;  // d [m], > 0
-  double solidDensity = 2500;  // rho_s, grain density [kg/m^3], > 0
-  double criticalDensity = 0;  // rho_c [kg/m^3]; 0 means "= density" (paper §2.1). Stress-free below it.
+  double density = 1600;       // rho_0, initial bulk density of the material points
+  double youngModulus = 1e6;   // E (Table 1)
+  double poissonRatio = 0.3;   // nu
+  double muS = 0.24;           // mu_s, static friction coefficient, Eq B.2
+  double mu2 = 0.65;           // mu_2, limiting dynamic friction, Eq B.2
+  double I0 = 0.279;           // I_0, inertial-number scale, Eq B.2
+  double grainDiameter = 0.002;  // d
+  double solidDensity = 2500;  // rho_s, grain density
+  double criticalDensity = 0;  // rho_c; 0 means "= density" (paper §2.1). Stress-free below it.
 };
 
 // One wall of the box-shaped grid domain: index 0..5 = -x,+x,-y,+y,-z,+z.
@@ -40,21 +41,23 @@ struct WallSpec {
 // the grid frame: for an inclined flume (gravity rotated, grid not) z is the bed normal.
 // Edge height z_g(t) = bottom + speed * max(0, t - openAt); speed 0 or infinity: the gate is
 // removed at once at openAt. Applied on the grid nodes after gravity and external forces and
-// before the walls. Range checks: makeSolver (ParameterError naming "gate.<field>").
+// before the walls. Range checks: makeSolver (ParameterError naming "gate.<field>"); units and
+// ranges: the "gate." entries of scene/SceneParameters (docs/parameters.md).
 struct GateSpec {
   bool enabled = false;  // false: no gate
-  double x = 0;          // plane position [m], finite, inside the material region (inside the wall layers)
-  double bottom = 0;     // z_0, height of the lower edge until openAt [m], finite
-  double speed = 0;      // lift speed of the edge [m/s], >= 0 (0 or infinity: instant removal at openAt)
-  double openAt = 0;     // t_open, when the lift starts [s], finite and >= 0
-  double friction = 0;   // Coulomb coefficient between material and gate [-], finite and >= 0 (0 = smooth)
+  double x = 0;          // plane position, inside the material region (inside the wall layers)
+  double bottom = 0;     // z_0, height of the lower edge until openAt
+  double speed = 0;      // lift speed of the edge (0 or infinity: instant removal at openAt)
+  double openAt = 0;     // t_open, when the lift starts
+  double friction = 0;   // Coulomb coefficient between material and gate (0 = smooth)
 };
 
+// The scene's keys, units and ranges of these members: scene/SceneParameters (docs/parameters.md).
 struct MpmParams {
-  double dx = 0.01;                        // grid spacing Delta x [m], > 0
-  std::array<double, 3> origin{0, 0, 0};   // lower corner of the grid domain [m]
-  std::array<int, 3> cells{10, 10, 10};    // number of cells per axis (nodes = cells+1), >= 4
-  std::array<double, 3> gravity{0, 0, -9.81};  // [m/s^2]; incline: rotate gravity, not the grid
+  double dx = 0.01;                        // grid spacing Delta x
+  std::array<double, 3> origin{0, 0, 0};   // lower corner of the grid domain
+  std::array<int, 3> cells{10, 10, 10};    // number of cells per axis (nodes = cells+1)
+  std::array<double, 3> gravity{0, 0, -9.81};  // incline: rotate gravity, not the grid
   // The FLIP/PIC blend of Eq 4. Its PIC part replaces a particle's velocity by the grid's,
   // which the quadratic B-spline transfers (P2G then G2P) smooth by (dx^2/4) lap(v): blending a
   // fraction r dt of PIC per step of length dt acts as a viscosity nu = r dx^2 / 4 on the flow.
@@ -62,18 +65,18 @@ struct MpmParams {
   // follows dx^2) keeps the flow when the step or the grid changes; a viscosity does
   // (docs/physics.md, "The blend as a viscosity": the column collapse and the §3.2 arrival at
   // dx 0.0125 and 0.02 m against 0.01 m).
-  // PIC viscosity nu [m^2/s], >= 0 (default 0.005): a step of length dt blends with
-  // exp(-4 nu dt / dx^2) of FLIP (flipAlpha and flipReferenceDt are then unused). Chosen by
+  // PIC viscosity nu (unit and range: the entry "flip_viscosity"): a step of length dt blends
+  // with exp(-4 nu dt / dx^2) of FLIP (flipAlpha and flipReferenceDt are then unused). Chosen by
   // measurement: 200 /s at dx 0.01 m, where the granular column collapse (a = 2) runs out to
   // 2.8 L_i against Lube et al.'s 3.02. The paper's blend, alpha 0.99 per its 5e-6 s step
   // (kPaperStep) at dx 0.01 m, is 0.0503 m^2/s: it brings the §3.2 and §3.3 arrival times
   // onto the paper's at its resolution and stops that column at 1.2 L_i. 0: the blend is
   // flipAlpha per flipReferenceDt.
   double flipViscosity = 0.005;
-  // alpha [-], in [0, 1] (Table 1: 0.99): the FLIP fraction kept per flipReferenceDt of
-  // simulated time, used when flipViscosity is 0.
+  // alpha (Table 1): the FLIP fraction kept per flipReferenceDt of simulated time, used when
+  // flipViscosity is 0.
   double flipAlpha = 0.99;
-  // Reference step of alpha [s], >= 0, used when flipViscosity is 0: a step of length dt
+  // Reference step of alpha, used when flipViscosity is 0: a step of length dt
   // blends with alpha^(dt / flipReferenceDt), the same damping per second at any step; 0 (the
   // default): alpha per step, Eq 4 as written. Set with flipViscosity 0 (both > 0 is refused).
   static constexpr double kPaperStep = 5e-6;
@@ -94,7 +97,7 @@ struct MpmParams {
   // Whether the blend depends on the step (alpha per step): then flipDampingRate and
   // flipViscosityFor follow dt.
   bool flipBlendPerStep() const { return !(flipViscosity > 0) && !(flipReferenceDt > 0); }
-  double cfl = 0.3;                        // CFL number for the time-step estimate, in (0, 1]
+  double cfl = 0.3;                        // CFL number for the time-step estimate
   // Keep a second copy of the particle state (default true), so that a step that fails (NaN,
   // blow-up) leaves the particles as they were at its start, ready to be saved. false: one
   // copy, updated in place, 125 B per particle less in double and 65 in float

@@ -17,6 +17,7 @@
 #include "mpm/GridBoundary.hpp"
 #include "mpm/MpmKernelsCommon.hpp"
 #include "mpm/Seeding.hpp"
+#include "scene/SceneParameters.hpp"
 
 namespace mpmsdem {
 namespace mpm {
@@ -27,23 +28,18 @@ using nlohmann::json;
 
 using namespace scenejson;
 
-const double kInf = INFINITY;
+// The keys a section may have: its entries in the table.
+std::vector<std::string> keysOf(const char* section) { return sectionKeys(sceneParameters(), section); }
 
 void parseGrid(const json& root, MpmParams& p) {
   const json& g = requireObject(root, "", "grid");
-  checkKeys(g, "grid", {"dx", "cells", "origin"});
-  p.dx = requireNumber(g, "grid", "dx");
-  checkRange("grid.dx", p.dx, "m", 0, true, kInf, true);
+  checkKeys(g, "grid", keysOf("grid"));
+  p.dx = readNumber(g, "grid", sceneParameter("grid.dx"));
   if (!g.contains("cells")) throw ParameterError("missing required key 'grid.cells'");
   const json& c = g.at("cells");
   if (!c.is_array() || c.size() != 3) throwParameter("grid.cells", c.dump(), "", "an array of 3 integers");
-  for (int a = 0; a < 3; ++a) {
-    const std::string name = "grid.cells[" + std::to_string(a) + "]";
-    if (!c[a].is_number_integer()) throwParameter(name, c[a].dump(), "", "an integer >= 4");
-    const long n = c[a].get<long>();
-    if (n < 4 || n > (1L << 30)) throwParameter(name, n, "", "an integer in [4, 2^30]");
-    p.cells[a] = static_cast<int>(n);
-  }
+  for (int a = 0; a < 3; ++a)
+    p.cells[a] = static_cast<int>(integer(c[a], "grid.cells[" + std::to_string(a) + "]", sceneParameter("grid.cells")));
   if (g.contains("origin")) p.origin = vec3(g.at("origin"), "grid.origin");
 }
 
@@ -56,11 +52,9 @@ void parseGravity(const json& root, MpmParams& p) {
   }
   if (!g.is_object())
     throwParameter("gravity", g.dump(), "", "an array [gx, gy, gz] or an object {\"g\", \"incline_deg\"}");
-  checkKeys(g, "gravity", {"g", "incline_deg"});
-  const double mag = requireNumber(g, "gravity", "g");
-  checkRange("gravity.g", mag, "m/s^2", 0, false, kInf, true);
-  const double deg = optNumber(g, "gravity", "incline_deg", 0);
-  checkRange("gravity.incline_deg", deg, "deg", 0, false, 90, true);
+  checkKeys(g, "gravity", keysOf("gravity"));
+  const double mag = readNumber(g, "gravity", sceneParameter("gravity.g"));
+  const double deg = readNumber(g, "gravity", sceneParameter("gravity.incline_deg"));
   const double a = deg * M_PI / 180.0;
   p.gravity = {mag * std::sin(a), 0.0, -mag * std::cos(a)};
 }
@@ -81,14 +75,12 @@ void parseFlipBlend(const json& root, MpmParams& p) {
                    "5e-6 s, or \"step\": per step, Eq 4 as written); without it the blend is flip_viscosity "
                    "[m^2/s] (default 0.005)");
   if (viscosity) {
-    p.flipViscosity = optNumber(root, "", "flip_viscosity", p.flipViscosity);
-    checkRange("flip_viscosity", p.flipViscosity, "m^2/s", 0, true, kInf, true);
+    p.flipViscosity = readNumber(root, "", sceneParameter("flip_viscosity"));
     return;
   }
   if (!reference) return;
   p.flipViscosity = 0;
-  p.flipAlpha = optNumber(root, "", "flip_alpha", p.flipAlpha);
-  checkRange("flip_alpha", p.flipAlpha, "", 0, false, 1, false);
+  p.flipAlpha = readNumber(root, "", sceneParameter("flip_alpha"));
   const json& v = root.at("flip_reference_dt");
   if (v.is_string() && v.get<std::string>() == "step") {
     p.flipReferenceDt = 0;
@@ -102,13 +94,14 @@ void parseFlipBlend(const json& root, MpmParams& p) {
   p.flipReferenceDt = v.get<double>();
 }
 
-// A wall's or the terrain's friction: "free" (0), "noslip" (-1) or a Coulomb coefficient >= 0.
-double parseFriction(const json& v, const std::string& name) {
+// A wall's or the terrain's friction: "free" (0), "noslip" (-1) or a Coulomb coefficient in the
+// range of `spec`.
+double parseFriction(const json& v, const std::string& name, const ParameterSpec& spec) {
   if (v.is_string() && v.get<std::string>() == "free") return 0;
   if (v.is_string() && v.get<std::string>() == "noslip") return -1;
   if (!v.is_number()) throwParameter(name, v.dump(), "", "\"free\", \"noslip\" or a friction coefficient >= 0");
   const double mu = v.get<double>();
-  checkRange(name, mu, "", 0, false, kInf, true);
+  checkParameter(spec, name, mu, spec.lo, spec.hi);
   return mu;
 }
 
@@ -120,7 +113,8 @@ void parseWalls(const json& root, MpmParams& p) {
   checkKeys(w, "walls", {names[0], names[1], names[2], names[3], names[4], names[5]});
   for (int i = 0; i < 6; ++i) {
     if (!w.contains(names[i])) continue;
-    p.walls[i].friction = parseFriction(w.at(names[i]), std::string("walls.") + names[i]);
+    p.walls[i].friction =
+        parseFriction(w.at(names[i]), std::string("walls.") + names[i], sceneParameter("walls.<face>"));
   }
 }
 
@@ -128,19 +122,14 @@ void parseGate(const json& root, MpmParams& p) {
   if (!root.contains("gate")) return;
   const json& j = root.at("gate");
   if (!j.is_object()) throwParameter("gate", j.dump(), "", "a JSON object {x, bottom, speed, open_at, friction}");
-  checkKeys(j, "gate", {"x", "bottom", "speed", "open_at", "friction"});
+  checkKeys(j, "gate", keysOf("gate"));
   GateSpec& g = p.gate;
   g.enabled = true;
-  g.x = requireNumber(j, "gate", "x");
-  const double lo = materialRegionLo(p)[0], hi = materialRegionHi(p)[0];
-  checkRange("gate.x", g.x, "m", lo, false, hi, false);
-  g.bottom = optNumber(j, "gate", "bottom", g.bottom);  // any JSON number is finite
-  g.speed = optNumber(j, "gate", "speed", g.speed);
-  checkRange("gate.speed", g.speed, "m/s", 0, false, kInf, true);
-  g.openAt = optNumber(j, "gate", "open_at", g.openAt);
-  checkRange("gate.open_at", g.openAt, "s", 0, false, kInf, true);
-  g.friction = optNumber(j, "gate", "friction", g.friction);
-  checkRange("gate.friction", g.friction, "", 0, false, kInf, true);
+  g.x = readNumberIn(j, "gate", sceneParameter("gate.x"), materialRegionLo(p)[0], materialRegionHi(p)[0]);
+  g.bottom = readNumber(j, "gate", sceneParameter("gate.bottom"));
+  g.speed = readNumber(j, "gate", sceneParameter("gate.speed"));
+  g.openAt = readNumber(j, "gate", sceneParameter("gate.open_at"));
+  g.friction = readNumber(j, "gate", sceneParameter("gate.friction"));
 }
 // "terrain": an ESRI ASCII grid {file, origin, friction} (the file's point `origin` [m] goes to
 // the grid frame's zero; the file relative to the scene's folder) or the heights themselves {nx,
@@ -171,17 +160,15 @@ void parseTerrain(const json& root, MpmParams& p, const std::string& baseDir) {
     for (double& z : t.heights) z -= o[2];
   } else {
     checkKeys(j, "terrain", {"nx", "ny", "x0", "y0", "spacing", "heights", "friction"});
-    const double nx = requireNumber(j, "terrain", "nx"), ny = requireNumber(j, "terrain", "ny");
-    checkRange("terrain.nx", nx, "", 2, false, 1e8, false);
-    checkRange("terrain.ny", ny, "", 2, false, 1e8, false);
-    if (nx != std::floor(nx)) throwParameter("terrain.nx", nx, "", "a whole number >= 2");
-    if (ny != std::floor(ny)) throwParameter("terrain.ny", ny, "", "a whole number >= 2");
+    const ParameterSpec &nxSpec = sceneParameter("terrain.nx"), &nySpec = sceneParameter("terrain.ny");
+    const double nx = readNumber(j, "terrain", nxSpec), ny = readNumber(j, "terrain", nySpec);
+    if (nx != std::floor(nx)) throwParameter("terrain.nx", nx, "", rangeText(nxSpec));
+    if (ny != std::floor(ny)) throwParameter("terrain.ny", ny, "", rangeText(nySpec));
     t.nx = static_cast<int>(nx);
     t.ny = static_cast<int>(ny);
-    t.x0 = requireNumber(j, "terrain", "x0");
-    t.y0 = requireNumber(j, "terrain", "y0");
-    t.spacing = requireNumber(j, "terrain", "spacing");
-    checkRange("terrain.spacing", t.spacing, "m", 0, true, kInf, true);
+    t.x0 = readNumber(j, "terrain", sceneParameter("terrain.x0"));
+    t.y0 = readNumber(j, "terrain", sceneParameter("terrain.y0"));
+    t.spacing = readNumber(j, "terrain", sceneParameter("terrain.spacing"));
     if (!j.contains("heights") || !j.at("heights").is_array())
       throw ParameterError("terrain.heights: required, an array of nx * ny heights [m] (heights[i * ny + j])");
     const json& h = j.at("heights");
@@ -191,33 +178,26 @@ void parseTerrain(const json& root, MpmParams& p, const std::string& baseDir) {
     t.heights.reserve(h.size());
     for (std::size_t k = 0; k < h.size(); ++k) t.heights.push_back(number(h[k], "terrain.heights[" + std::to_string(k) + "]"));
   }
-  t.friction = j.contains("friction") ? parseFriction(j.at("friction"), "terrain.friction") : 0;
+  const ParameterSpec& friction = sceneParameter("terrain.friction");
+  t.friction = j.contains("friction") ? parseFriction(j.at("friction"), "terrain.friction", friction) : 0;
   t.validate();  // before the seeding reads it
 }
 
 void parseMaterial(const json& root, MpmParams& p) {
   const json& m = requireObject(root, "", "material");
-  checkKeys(m, "material", {"density", "young_modulus", "poisson_ratio", "mu_s", "mu_2", "I0", "grain_diameter",
-                            "solid_density", "critical_density"});
+  checkKeys(m, "material", keysOf("material"));
   GranularMaterial& g = p.material;
-  g.density = requireNumber(m, "material", "density");
-  checkRange("material.density", g.density, "kg/m^3", 0, true, kInf, true);
-  g.youngModulus = requireNumber(m, "material", "young_modulus");
-  checkRange("material.young_modulus", g.youngModulus, "Pa", 0, true, kInf, true);
-  g.poissonRatio = requireNumber(m, "material", "poisson_ratio");
-  checkRange("material.poisson_ratio", g.poissonRatio, "", 0, false, 0.5, true);
-  g.muS = requireNumber(m, "material", "mu_s");
-  checkRange("material.mu_s", g.muS, "", 0, false, kInf, true);
-  g.mu2 = requireNumber(m, "material", "mu_2");
-  checkRange("material.mu_2", g.mu2, "", g.muS, false, kInf, true);
-  g.I0 = optNumber(m, "material", "I0", g.I0);
-  checkRange("material.I0", g.I0, "", 0, true, kInf, true);
-  g.grainDiameter = optNumber(m, "material", "grain_diameter", g.grainDiameter);
-  checkRange("material.grain_diameter", g.grainDiameter, "m", 0, true, kInf, true);
-  g.solidDensity = optNumber(m, "material", "solid_density", g.solidDensity);
-  checkRange("material.solid_density", g.solidDensity, "kg/m^3", 0, true, kInf, true);
-  g.criticalDensity = optNumber(m, "material", "critical_density", g.criticalDensity);
-  checkRange("material.critical_density", g.criticalDensity, "kg/m^3", 0, false, kInf, true);
+  const auto read = [&m](const char* key) { return readNumber(m, "material", sceneParameter(key)); };
+  g.density = read("material.density");
+  g.youngModulus = read("material.young_modulus");
+  g.poissonRatio = read("material.poisson_ratio");
+  g.muS = read("material.mu_s");
+  const ParameterSpec& mu2 = sceneParameter("material.mu_2");
+  g.mu2 = readNumberIn(m, "material", mu2, g.muS, mu2.hi);
+  g.I0 = read("material.I0");
+  g.grainDiameter = read("material.grain_diameter");
+  g.solidDensity = read("material.solid_density");
+  g.criticalDensity = read("material.critical_density");
 }
 
 // Number of whole cells between two grid-line coordinates on axis `a`; throws unless both
@@ -303,8 +283,7 @@ void parseMesh(const json& j, const std::string& path, const std::string& baseDi
   const std::string given = m.get<std::string>();
   const std::filesystem::path file(given);
   box.mesh = (baseDir.empty() || file.is_absolute()) ? given : (std::filesystem::path(baseDir) / file).string();
-  box.scale = optNumber(j, path, "scale", 1.0);
-  checkRange(path + ".scale", box.scale, "", 0, true, kInf, true);
+  box.scale = readNumber(j, path, sceneParameter("particles[].scale"));
   if (j.contains("offset")) box.offset = vec3(j.at("offset"), path + ".offset");
   try {
     io::TriangleMesh mesh = io::readMesh(box.mesh, box.scale);
@@ -374,60 +353,40 @@ void parseProbes(const json& root, MpmScene& s) {
     const std::string path = "flow_probes[" + std::to_string(k) + "]";
     const json& j = list[k];
     if (!j.is_object()) throwParameter(path, j.dump(), "", "an object {x, half_width, bed_z, min_points, window}");
-    checkKeys(j, path, {"x", "half_width", "bed_z", "min_points", "window"});
+    checkKeys(j, path, keysOf("flow_probes[]"));
     FlowProbeSpec p;
-    p.x = requireNumber(j, path, "x");
-    checkRange(path + ".x", p.x, "m", lo, false, hi, false);
-    p.halfWidth = optNumber(j, path, "half_width", s.params.dx);
-    checkRange(path + ".half_width", p.halfWidth, "m", 0, true, kInf, true);
-    p.bedZ = optNumber(j, path, "bed_z", 0);
-    if (j.contains("min_points")) {
-      const json& m = j.at("min_points");
-      if (!m.is_number_integer() || m.get<long>() < 1 || m.get<long>() > (1L << 30))
-        throwParameter(path + ".min_points", m.dump(), "", "an integer in [1, 2^30]");
-      p.minPoints = static_cast<int>(m.get<long>());
-    }
-    p.window = optNumber(j, path, "window", p.window);
-    checkRange(path + ".window", p.window, "s", 0, false, kInf, true);
+    p.x = readNumberIn(j, path, sceneParameter("flow_probes[].x"), lo, hi);
+    p.halfWidth = readNumber(j, path, sceneParameter("flow_probes[].half_width"), s.params.dx);
+    p.bedZ = readNumber(j, path, sceneParameter("flow_probes[].bed_z"));
+    if (j.contains("min_points"))
+      p.minPoints = static_cast<int>(
+          integer(j.at("min_points"), path + ".min_points", sceneParameter("flow_probes[].min_points")));
+    p.window = readNumber(j, path, sceneParameter("flow_probes[].window"));
     s.probes.push_back(p);
   }
 }
 
 void parseRun(const json& root, RunSettings& r) {
   const json& j = requireObject(root, "", "run");
-  checkKeys(j, "run", {"duration", "dt", "dt_factor", "output_every", "series_every", "output_dir", "vtk", "backend",
-                       "precision", "min_step_fraction", "max_block_speed", "progress_every", "stop_when_probed",
-                       "stop_when_front_still", "snapshot_when_front_at"});
-  r.duration = requireNumber(j, "run", "duration");
-  checkRange("run.duration", r.duration, "s", 0, true, kInf, true);
+  checkKeys(j, "run", keysOf("run"));
+  r.duration = readNumber(j, "run", sceneParameter("run.duration"));
   if (j.contains("dt")) {
     const json& d = j.at("dt");
     if (d.is_string() && d.get<std::string>() == "auto") {
       r.dt = 0;
     } else if (d.is_number()) {
       r.dt = d.get<double>();
-      checkRange("run.dt", r.dt, "s", 0, true, r.duration, false);
+      checkParameter(sceneParameter("run.dt"), "run.dt", r.dt, 0, r.duration);
     } else {
-      throwParameter("run.dt", d.dump(), "", "\"auto\" or a step in (0, run.duration] s");
+      throwParameter("run.dt", d.dump(), "", rangeText(sceneParameter("run.dt")));
     }
   }
-  r.dtFactor = optNumber(j, "run", "dt_factor", 0.9);
-  checkRange("run.dt_factor", r.dtFactor, "", 0, true, 1, false);
-  r.minStepFraction = optNumber(j, "run", "min_step_fraction", r.minStepFraction);
-  checkRange("run.min_step_fraction", r.minStepFraction, "", 0, false, 1, true);
-  if (j.contains("max_block_speed")) {
-    r.maxBlockSpeed = requireNumber(j, "run", "max_block_speed");
-    checkRange("run.max_block_speed", r.maxBlockSpeed, "m/s", 0, true, kInf, true);
-  }
-  r.progressEvery = optNumber(j, "run", "progress_every", r.progressEvery);
-  checkRange("run.progress_every", r.progressEvery, "s", 0, true, kInf, true);
-  if (j.contains("stop_when_probed")) {
-    const json& b = j.at("stop_when_probed");
-    if (!b.is_boolean()) throwParameter("run.stop_when_probed", b.dump(), "", "true or false");
-    r.stopWhenProbed = b.get<bool>();
-  }
-  r.stopWhenFrontStill = optNumber(j, "run", "stop_when_front_still", r.stopWhenFrontStill);
-  checkRange("run.stop_when_front_still", r.stopWhenFrontStill, "s", 0, false, kInf, true);
+  r.dtFactor = readNumber(j, "run", sceneParameter("run.dt_factor"));
+  r.minStepFraction = readNumber(j, "run", sceneParameter("run.min_step_fraction"));
+  if (j.contains("max_block_speed")) r.maxBlockSpeed = readNumber(j, "run", sceneParameter("run.max_block_speed"), 0);
+  r.progressEvery = readNumber(j, "run", sceneParameter("run.progress_every"));
+  r.stopWhenProbed = readBool(j, "run", sceneParameter("run.stop_when_probed"), r.stopWhenProbed);
+  r.stopWhenFrontStill = readNumber(j, "run", sceneParameter("run.stop_when_front_still"));
   if (j.contains("snapshot_when_front_at")) {
     const json& at = j.at("snapshot_when_front_at");
     r.snapshotsIndexed = at.is_array();
@@ -438,23 +397,23 @@ void parseRun(const json& root, RunSettings& r) {
       const json& x = r.snapshotsIndexed ? at.at(k) : at;
       if (!x.is_number()) throwParameter(name, x.dump(), "", "a number [m]");
       const double v = x.get<double>();
-      checkRange(name, v, "m", r.snapshotsWhenFrontAt.empty() ? -kInf : r.snapshotsWhenFrontAt.back(), true, kInf, true);
+      const ParameterSpec& front = sceneParameter("run.snapshot_when_front_at");
+      const double after = r.snapshotsWhenFrontAt.empty() ? front.lo : r.snapshotsWhenFrontAt.back();
+      checkParameter(front, name, v, after, front.hi);
       r.snapshotsWhenFrontAt.push_back(v);
     }
   }
-  r.outputEvery = optNumber(j, "run", "output_every", r.duration / 20);
-  checkRange("run.output_every", r.outputEvery, "s", 0, true, kInf, true);
-  r.seriesEvery = optNumber(j, "run", "series_every", r.outputEvery / 10);
-  checkRange("run.series_every", r.seriesEvery, "s", 0, true, kInf, true);
+  r.outputEvery = readNumber(j, "run", sceneParameter("run.output_every"), r.duration / 20);
+  r.seriesEvery = readNumber(j, "run", sceneParameter("run.series_every"), r.outputEvery / 10);
   if (j.contains("output_dir")) {
     const json& d = j.at("output_dir");
-    if (!d.is_string() || d.get<std::string>().empty()) throwParameter("run.output_dir", d.dump(), "", "a non-empty string");
+    if (!d.is_string() || d.get<std::string>().empty())
+      throwParameter("run.output_dir", d.dump(), "", rangeText(sceneParameter("run.output_dir")));
     r.outputDir = d.get<std::string>();
   }
-  r.vtk = optString(j, "run", "vtk", "raw", {"raw", "ascii", "none"});
-  r.backend = optString(j, "run", "backend", "cpu", {"cpu", "cuda"}) == "cuda" ? Backend::Cuda : Backend::Cpu;
-  r.precision =
-      optString(j, "run", "precision", "double", {"double", "float"}) == "float" ? Precision::Float : Precision::Double;
+  r.vtk = readChoice(j, "run", sceneParameter("run.vtk"));
+  r.backend = readChoice(j, "run", sceneParameter("run.backend")) == "cuda" ? Backend::Cuda : Backend::Cpu;
+  r.precision = readChoice(j, "run", sceneParameter("run.precision")) == "float" ? Precision::Float : Precision::Double;
 }
 
 }  // namespace
@@ -474,22 +433,19 @@ std::array<double, 3> materialRegionHi(const MpmParams& p) {
 MpmScene parseScene(const std::string& jsonText, const std::string& source, const std::string& baseDir) {
   const json root = scenejson::parse(jsonText, source);
   if (!root.is_object()) throw ParameterError(source + ": the scene must be a JSON object");
-  // "blocks" and "block_materials" are read by coupling::parseBlocks (a coupled scene)
-  checkKeys(root, "", {"description", "grid", "gravity", "flip_viscosity", "flip_alpha", "flip_reference_dt", "cfl", "keep_last_good_state", "walls", "gate", "terrain", "material", "particles",
-                       "flow_probes", "run", "blocks", "block_materials", "terrain_material"});
+  // "blocks", "block_materials" and "terrain_material" are read by coupling::parseBlocks (a
+  // coupled scene)
+  std::vector<std::string> keys = keysOf("");
+  keys.insert(keys.end(), {"blocks", "block_materials", "terrain_material"});
+  checkKeys(root, "", keys);
   if (root.contains("description") && !root.at("description").is_string())
-    throwParameter("description", root.at("description").dump(), "", "a string");
+    throwParameter("description", root.at("description").dump(), "", rangeText(sceneParameter("description")));
   MpmScene s;
   parseGrid(root, s.params);
   parseGravity(root, s.params);
   parseFlipBlend(root, s.params);
-  s.params.cfl = optNumber(root, "", "cfl", s.params.cfl);
-  checkRange("cfl", s.params.cfl, "", 0, true, 1, false);
-  if (root.contains("keep_last_good_state")) {
-    const json& k = root.at("keep_last_good_state");
-    if (!k.is_boolean()) throwParameter("keep_last_good_state", k.dump(), "", "true or false");
-    s.params.keepLastGoodState = k.get<bool>();
-  }
+  s.params.cfl = readNumber(root, "", sceneParameter("cfl"));
+  s.params.keepLastGoodState = readBool(root, "", sceneParameter("keep_last_good_state"), s.params.keepLastGoodState);
   parseWalls(root, s.params);
   parseGate(root, s.params);
   parseTerrain(root, s.params, baseDir);

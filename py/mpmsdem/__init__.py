@@ -18,6 +18,7 @@ Main entry points (all SI units):
   ``NewtonIntegrator``.
 * :mod:`mpmsdem.analysis` — analytic references (paper Eq 19, runout fits, Froude numbers).
 * :mod:`mpmsdem.tradeoffs` — measured settings against error and cost; ``propose(error)``.
+* :mod:`mpmsdem.parameters` — every scene key's Python name, unit, default and range.
 """
 import os
 import sys

@@ -29,8 +29,10 @@ from yade.minieigenHP import Quaternion, Vector3
 from . import _mpmsdem
 from ._util import _material, _matDict, _nextOnGrid
 from .engine import DT_CHECKS, Engine, _StepControl
+from .parameters import parameters, pythonNames
 
-PAIR_KEYS = ("friction", "barrierStiffness", "poisson", "normalDamping", "tangentialDamping")
+# The keys of a flow-block pair (a block material's "flow" in a scene: mpmsdem.parameters).
+PAIR_KEYS = tuple(pythonNames("block_materials.<name>.flow"))
 
 
 class CoupledEngine(Engine, _StepControl):
@@ -195,8 +197,7 @@ class CoupledEngine(Engine, _StepControl):
             raise ValueError("levelSets: body %d is an SDEM block" % bid)
         if bid in self._levelSets:
             raise ValueError("levelSets: body %d given twice" % bid)
-        defaults = {"friction": 0.5, "barrierStiffness": 1e4, "poisson": 0.3, "normalDamping": 0.0,
-                    "tangentialDamping": 0.1}  # mpmsdem.material's
+        defaults = {p["python"]: p["default"] for p in parameters("block_materials.<name>")}  # mpmsdem.material's
         p = {key: float(spec.get(key, defaults[key])) for key in PAIR_KEYS}
         g = shape.lsGrid
         dist = np.ascontiguousarray(np.asarray(shape.distField, dtype=np.float64))

@@ -22,11 +22,14 @@ import shutil
 
 from yade import O
 
-RUN_KEYS = {"outputEvery": "output_every", "seriesEvery": "series_every", "outputDir": "output_dir",
-            "vtk": "vtk", "backend": "backend", "precision": "precision", "dtFactor": "dt_factor",
-            "stopWhenProbed": "stop_when_probed", "stopWhenFrontStill": "stop_when_front_still",
-            "snapshotWhenFrontAt": "snapshot_when_front_at"}
-PROBE_KEYS = {"x": "x", "halfWidth": "half_width", "bedZ": "bed_z", "minPoints": "min_points", "window": "window"}
+from .parameters import pythonNames
+
+# writeScene's keywords and the scene keys they set (mpmsdem.parameters): the run settings but
+# duration and dt, its own arguments; a flow probe's.
+RUN_KEYS = {k: v for k, v in pythonNames("run").items() if v not in ("duration", "dt")}
+PROBE_KEYS = pythonNames("flow_probes[]")
+_MATERIAL_KEYS = pythonNames("block_materials.<name>")
+_PAIR_KEYS = pythonNames("block_materials.<name>.flow")
 
 
 def sceneDict(coupled, duration, dt="auto", flowProbes=(), **run):
@@ -69,12 +72,8 @@ def sceneDict(coupled, duration, dt="auto", flowProbes=(), **run):
         name = "material_%d" % k
         names[k] = name
         pair = coupled._pairs[k]
-        materials[name] = {"density": mat.density, "friction": mat.friction, "poisson": mat.poisson,
-                           "barrier_stiffness": mat.barrierStiffness, "normal_damping": mat.normalDamping,
-                           "tangential_damping": mat.tangentialDamping,
-                           "flow": {"friction": pair["friction"], "barrier_stiffness": pair["barrierStiffness"],
-                                    "poisson": pair["poisson"], "normal_damping": pair["normalDamping"],
-                                    "tangential_damping": pair["tangentialDamping"]}}
+        materials[name] = {key: getattr(mat, attr) for attr, key in _MATERIAL_KEYS.items()}
+        materials[name]["flow"] = {key: pair[attr] for attr, key in _PAIR_KEYS.items()}
     blocks = []
     for i in sdem.ids:
         k = _materialIndex(coupled, i)
@@ -101,10 +100,8 @@ def sceneDict(coupled, duration, dt="auto", flowProbes=(), **run):
                 flow.get("heights") != [z for row in t["heights"] for z in row]:
             raise ValueError("the SDEM engine's terrain is not the flow's (MpmEngine(terrain=...)): a driver scene has "
                              "one ground for both; give them the same Terrain")
-        m = t["material"]
-        scene["terrain_material"] = {"friction": m["friction"], "poisson": m["poisson"],
-                                     "barrier_stiffness": m["barrierStiffness"], "normal_damping": m["normalDamping"],
-                                     "tangential_damping": m["tangentialDamping"]}
+        m = t["material"]  # the ground does not move: no density
+        scene["terrain_material"] = {key: m[attr] for attr, key in _MATERIAL_KEYS.items() if key != "density"}
     return scene
 
 
@@ -118,10 +115,12 @@ def writeScene(path, coupled, duration, dt="auto", flowProbes=(), **run):
         free-flow tests of the paper's §3.2.3 and §5), dicts with ``x`` [m] and optionally
         ``halfWidth`` [m], ``bedZ`` [m], ``minPoints``, ``window`` [s] (the scene's
         ``flow_probes``: pkg/scene/MpmScene.hpp); results in the output's flow_probes.json.
-    :param run: other run settings of the scene (``outputEvery``, ``seriesEvery`` [s],
-        ``outputDir``, ``vtk``, ``backend``, ``precision``, ``dtFactor``, ``stopWhenProbed``,
-        ``stopWhenFrontStill`` [s], ``snapshotWhenFrontAt`` [m]: the state where another scene of
-        the same flow starts, ``mpmsdem-run --flow-from``).
+    :param run: other run settings of the scene, by the names of :data:`RUN_KEYS`
+        (``outputEvery``, ``seriesEvery`` [s], ``outputDir``, ``vtk``, ``backend``, ``precision``,
+        ``dtFactor``, ``minStepFraction``, ``maxBlockSpeed`` [m/s], ``progressEvery`` [s],
+        ``stopWhenProbed``, ``stopWhenFrontStill`` [s], ``snapshotWhenFrontAt`` [m]: the state
+        where another scene of the same flow starts, ``mpmsdem-run --flow-from``); units, defaults
+        and ranges: docs/parameters.md.
     :returns: the path written.
     """
     scene = sceneDict(coupled, duration, dt, flowProbes, **run)

@@ -23,6 +23,11 @@ from yade import O
 
 from . import _mpmsdem
 from .engine import Engine
+from .parameters import pythonNames
+
+# The scene's top-level keys by their keywords here (mpmsdem.parameters): "flip_viscosity" for
+# flipViscosity, ...
+_SCENE_KEYS = pythonNames("")
 
 
 # The step of the paper's coupled runs (§3.1, Appendix D) [s]: with flipReferenceDt=PAPER_STEP the
@@ -112,10 +117,10 @@ class MpmEngine(Engine):
                  "gravity": list(gravity) if not isinstance(gravity, dict) else gravity,
                  "cfl": cfl, "keep_last_good_state": keepLastGoodState,
                  "run": {"duration": 1.0, "backend": backend, "precision": precision}}
-        for key, value in (("flip_viscosity", flipViscosity), ("flip_alpha", flipAlpha),
-                           ("flip_reference_dt", flipReferenceDt)):
+        for name, value in (("flipViscosity", flipViscosity), ("flipAlpha", flipAlpha),
+                            ("flipReferenceDt", flipReferenceDt)):
             if value is not None:
-                scene[key] = value
+                scene[_SCENE_KEYS[name]] = value
         if walls:
             scene["walls"] = walls
         if gate is not None:

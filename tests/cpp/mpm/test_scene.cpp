@@ -4,10 +4,12 @@
 
 #include <cmath>
 #include <regex>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "common/Error.hpp"
 #include "scene/MpmScene.hpp"
+#include "scene/SceneParameters.hpp"
 #include "mpm/MpmSolver.hpp"
 
 #include "AgreementHelpers.hpp"
@@ -364,4 +366,85 @@ TEST(MpmScene, FlowProbesAndStopRules) {
   json nothing = goodScene();
   nothing["run"]["stop_when_probed"] = true;
   expectError(nothing, {"run.stop_when_probed", "flow_probes"});
+}
+
+// The table's defaults are what the parser applies to a scene that leaves the keys out.
+TEST(SceneParameters, DefaultsAreTheParsers) {
+  json j = goodScene();
+  for (const char* key : {"flip_alpha", "flip_reference_dt", "cfl"}) j.erase(key);
+  for (const char* key : {"grain_diameter", "critical_density"}) j["material"].erase(key);
+  j["gate"] = json::parse(R"({"x": 0.3})");
+  j["flow_probes"] = json::parse(R"([{"x": 0.3}])");
+  const MpmScene s = parseScene(j.dump());
+  const auto def = [](const char* key) { return sceneParameter(key).defaultValue; };
+  EXPECT_EQ(s.params.flipViscosity, def("flip_viscosity"));
+  EXPECT_EQ(s.params.cfl, def("cfl"));
+  EXPECT_EQ(s.params.material.I0, def("material.I0"));
+  EXPECT_EQ(s.params.material.grainDiameter, def("material.grain_diameter"));
+  EXPECT_EQ(s.params.material.solidDensity, def("material.solid_density"));
+  EXPECT_EQ(s.params.material.criticalDensity, def("material.critical_density"));
+  EXPECT_EQ(s.params.gate.bottom, def("gate.bottom"));
+  EXPECT_EQ(s.params.gate.speed, def("gate.speed"));
+  EXPECT_EQ(s.params.gate.openAt, def("gate.open_at"));
+  EXPECT_EQ(s.params.gate.friction, def("gate.friction"));
+  EXPECT_EQ(s.probes.at(0).bedZ, def("flow_probes[].bed_z"));
+  EXPECT_EQ(s.probes.at(0).minPoints, def("flow_probes[].min_points"));
+  EXPECT_EQ(s.probes.at(0).window, def("flow_probes[].window"));
+  EXPECT_EQ(s.run.dtFactor, def("run.dt_factor"));
+  EXPECT_EQ(s.run.minStepFraction, def("run.min_step_fraction"));
+  EXPECT_EQ(s.run.progressEvery, def("run.progress_every"));
+  EXPECT_EQ(s.run.stopWhenFrontStill, def("run.stop_when_front_still"));
+  EXPECT_EQ(s.run.backend == Backend::Cuda ? "cuda" : "cpu", std::string(sceneParameter("run.backend").defaultText));
+  // the values Table 1 and the schema state
+  EXPECT_EQ(def("cfl"), 0.3);
+  EXPECT_EQ(def("flip_viscosity"), 0.005);
+  EXPECT_EQ(def("material.I0"), 0.279);
+}
+
+// A value just outside a numeric entry's range is refused, naming the key and the table's range.
+TEST(SceneParameters, RangeErrorsNameTheTablesRange) {
+  const std::vector<std::pair<std::string, const char*>> cases = {
+      {"/grid/dx", "grid.dx"},
+      {"/gravity/incline_deg", "gravity.incline_deg"},
+      {"/cfl", "cfl"},
+      {"/material/density", "material.density"},
+      {"/material/poisson_ratio", "material.poisson_ratio"},
+      {"/material/I0", "material.I0"},
+      {"/material/critical_density", "material.critical_density"},
+      {"/run/duration", "run.duration"},
+      {"/run/dt_factor", "run.dt_factor"},
+      {"/run/min_step_fraction", "run.min_step_fraction"},
+      {"/run/output_every", "run.output_every"}};
+  for (const auto& [ptr, key] : cases) {
+    const ParameterSpec& spec = sceneParameter(key);
+    // beyond a finite hi, else below lo
+    const double bad = std::isinf(spec.hi) ? spec.lo - 1 : (spec.hiInclusive ? spec.hi + 0.5 : spec.hi);
+    json j = goodScene();
+    j[json::json_pointer(ptr)] = bad;
+    SCOPED_TRACE(key);
+    expectError(j, {(std::string(key) + " = ").c_str(), ("must be " + rangeText(spec)).c_str()});
+  }
+}
+
+// Every key a section's reader allows is in the table, once, with a consistent range.
+TEST(SceneParameters, TableIsConsistent) {
+  std::set<std::string> keys;
+  for (const ParameterSpec& s : sceneParameters()) {
+    SCOPED_TRACE(s.key);
+    EXPECT_TRUE(keys.insert(s.key).second);
+    EXPECT_TRUE(*s.doc);
+    if (s.kind == ParameterKind::kNumber || s.kind == ParameterKind::kInteger) {
+      EXPECT_LE(s.lo, s.hi);
+      if (!isRequired(s) && !std::isnan(s.defaultValue)) {
+        EXPECT_TRUE(s.loInclusive ? s.defaultValue >= s.lo : s.defaultValue > s.lo);
+        EXPECT_TRUE(s.hiInclusive ? s.defaultValue <= s.hi : s.defaultValue < s.hi);
+      }
+    }
+  }
+  EXPECT_EQ(sectionKeys(sceneParameters(), "flow_probes[]"),
+            (std::vector<std::string>{"x", "half_width", "bed_z", "min_points", "window"}));
+  EXPECT_EQ(rangeText(sceneParameter("grid.cells")), "an integer in [4, 2^30]");
+  EXPECT_EQ(rangeText(sceneParameter("run.vtk")), "one of \"raw\", \"ascii\", \"none\"");
+  EXPECT_EQ(rangeText(sceneParameter("material.poisson_ratio")), "in [0, 0.5)");
+  EXPECT_THROW(sceneParameter("material.mu_3"), std::logic_error);
 }

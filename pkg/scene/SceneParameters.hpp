@@ -1,0 +1,17 @@
+// The parameters of the flow's scene (pkg/scene/MpmScene.hpp), one entry each: what parseScene
+// reads and checks, the Python API's names for them and docs/parameters.md. The blocks' keys are
+// coupling::coupledSceneParameters().
+#pragma once
+#include "common/Parameters.hpp"
+
+namespace mpmsdem {
+namespace mpm {
+
+// In section order; an object or a list (grid, run, flow_probes) comes first as one entry at the
+// top level, its keys then under it ("run.dt", "flow_probes[].x").
+const ParameterTable& sceneParameters();
+// The entry of `key` (e.g. "material.mu_s") in sceneParameters().
+const ParameterSpec& sceneParameter(const char* key);
+
+}  // namespace mpm
+}  // namespace mpmsdem
