@@ -29,6 +29,8 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from flume_convergence import commit  # noqa: E402  (same folder: the checkout's commit, as the other validations)
 EXAMPLE = os.path.join(ROOT, "examples", "liu2018_blocks.py")
 PAPER = {"top": {"sdem": 4.0, "lsdem": 10.7}, "middle": {"sdem": 1.4, "lsdem": 1.7}}  # % off the experiment
 
@@ -58,14 +60,6 @@ def parse(argv):
     if a.ls_nodes < 8:
         ap.error("--ls-nodes %r: must be >= 8" % a.ls_nodes)
     return a
-
-
-def commit():
-    try:
-        return subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                              check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def runOne(a, name, extra):
