@@ -27,7 +27,7 @@ CASES = (("dropped flat", 0.0, (1, 0, 0), False), ("dropped, tilted 0.5 deg abou
 
 def energyRatio(dt, tiltDeg, axis, thrown, duration=1.0, kn=1e4):
     """The block's energy after ``duration`` over its energy at the start."""
-    __import__("mpmsdem")  # imports YADE
+    import mpmsdem  # noqa: F401  (finds YADE's folder in a plain python3)
     from yade import O, utils
     from yade.minieigenHP import Quaternion, Vector3
     from yade.wrapper import (Bo1_LevelSet_Aabb, Bo1_Wall_Aabb, ForceResetter, FrictMat, Ig2_Wall_LevelSet_ScGeom,

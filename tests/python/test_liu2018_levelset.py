@@ -8,6 +8,7 @@ import os
 import numpy as np
 import pytest
 
+import mpmsdem
 from yade import O
 from yade.wrapper import LevelSet
 
@@ -125,7 +126,6 @@ def test_a_stiff_levelset_contact_holds_the_step():
     step at dx 0.02 m. Resting on the bed at its equilibrium
     overlap W/k_n = 39 nm, it must stay there: a spring released from touching swings by 2 W/k_n
     at most; unstable steps would throw it off the bed. 400 steps, before the flow arrives."""
-    import mpmsdem
     from mpmsdem.flume import Block, Flume
     L = example()
     cube = Block(half=(0.01,) * 3, x=0.3, density=RHO_BLOCK, friction=0.6, flowFriction=0.13,
