@@ -16,6 +16,17 @@ RHO = 3000.0     # block density [kg/m^3]
 KC = 1e4         # barrier stiffness [N/m]
 
 
+def forget(*engines):
+    """What a killed process leaves: the engines gone, with their open output files closed. The
+    registry of runner commands keeps a reference (see mpmsdem.engine._stepRunner): drop it too."""
+    import gc
+    from mpmsdem.engine import _REGISTRY
+    for name in [n for n, f in _REGISTRY.items() if getattr(f, "__self__", None) in engines]:
+        del _REGISTRY[name]
+    O.reset()
+    gc.collect()
+
+
 def run(engine, steps):
     """Run YADE for ``steps`` steps and re-raise an error that stopped the run."""
     mpmsdem.run(steps, engine)

@@ -14,6 +14,8 @@ from yade.minieigenHP import Quaternion, Vector3
 from yade.utils import levelSetBody
 from yade.wrapper import ForceResetter, FrictMat, NewtonIntegrator
 
+from scenes import forget
+
 GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
 DX, PPC = 0.01, 8
 RP = (3 * DX ** 3 / PPC / (4 * math.pi)) ** (1 / 3)  # Eq 13: 3.1018 mm
@@ -163,16 +165,6 @@ def test_bad_levelset_arguments():
         mpmsdem.CoupledEngine.restore("/nonexistent/checkpoint", levelSets={ls: 0.3})
 
 
-def _forget(*engines):
-    """What a killed process leaves: the engines gone, their files closed."""
-    import gc
-    from mpmsdem.engine import _REGISTRY
-    for name in [n for n, f in _REGISTRY.items() if getattr(f, "__self__", None) in engines]:
-        del _REGISTRY[name]
-    O.reset()
-    gc.collect()
-
-
 def test_a_checkpoint_with_a_levelset_body_continues_bit_for_bit_with_its_records(tmp_path):
     """512 points at 1 m/s press into a free, heavy LevelSet box (friction 0.3: the tangential histories
     carry the contacts' elastic friction forces) beside an SDEM cube they do not reach. A
@@ -212,7 +204,7 @@ def test_a_checkpoint_with_a_levelset_body_continues_bit_for_bit_with_its_record
     assert np.isnan(refSeries["face_force"][:, 3:6]).all() and np.isnan(refSeries["edge_force"][:, 3:6]).all()
     assert refSeries["pos"][-1, 3] == O.bodies[bid].state.pos[0] > 0.125  # pushed downstream
     assert not np.isnan(refSeries["face_force"][:, :3]).any()
-    _forget(coupled, sdem, mpm)
+    forget(coupled, sdem, mpm)
     coupled2 = mpmsdem.loadCheckpoint(ck, output=out, outputEvery=2e-4, verbose=False)
     assert coupled2.levelSetIds == [bid]
     mpmsdem.run(200, coupled2)

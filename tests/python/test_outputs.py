@@ -1,7 +1,6 @@
 """Outputs as docs/outputs.md describes them: layout of sdem.h5 and mpm.h5, the final state of
 a run recorded, the coupled checkpoint continuing bit-for-bit, bodies added mid-run refused
 while a per-body output is being written."""
-import gc
 
 import numpy as np
 import pytest
@@ -10,22 +9,13 @@ import mpmsdem
 from yade import O
 from yade.wrapper import ForceResetter, NewtonIntegrator
 
-from scenes import cubeOnSlab, run
+from scenes import cubeOnSlab, forget, run
 
 h5py = pytest.importorskip("h5py")
 
 DRIVER_SERIES = {"time", "step", "dt", "kinetic_energy", "front_x", "height_z", "centre_of_mass", "max_speed",
                  "flowing_fraction", "gasified_fraction"}  # pkg/run/OutputRun.cpp, recordSeries
 GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
-
-
-def _forget(*engines):
-    """What a killed process leaves: the engines gone, their files closed."""
-    from mpmsdem.engine import _REGISTRY
-    for name in [n for n, f in _REGISTRY.items() if getattr(f, "__self__", None) in engines]:
-        del _REGISTRY[name]
-    O.reset()
-    gc.collect()
 
 
 def test_sdem_h5_layout_and_the_final_state_of_a_run_is_recorded(tmp_path):
@@ -130,7 +120,7 @@ def test_coupled_checkpoint_continues_bit_for_bit(tmp_path, dtAuto, kc, before):
            "friction": coupled.energies()["friction"], "time": O.time}
     with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:
         refSeries = {k: f["series/" + k][:] for k in f["series"]}
-    _forget(coupled, coupled.sdem, coupled.mpm)
+    forget(coupled, coupled.sdem, coupled.mpm)
     coupled2 = mpmsdem.loadCheckpoint(ck, output=out, outputEvery=1e-4, verbose=False)
     assert O.engines[1] is coupled2.runner
     mpmsdem.run(150, coupled2)
@@ -186,7 +176,7 @@ def test_a_half_written_coupled_checkpoint_is_refused(tmp_path):
     coupled.save(prefix)
     mpmsdem.run(10, coupled)
     coupled.sdem.save(prefix + ".sdem.json")        # a save killed after its first file
-    _forget(coupled, coupled.sdem, coupled.mpm)
+    forget(coupled, coupled.sdem, coupled.mpm)
     O.load(prefix + ".yade.gz")
     with pytest.raises(ValueError, match="different times.*earlier checkpoint"):
         mpmsdem.CoupledEngine.restore(prefix, verbose=False)
@@ -205,7 +195,7 @@ def test_adding_a_body_while_a_per_body_output_is_written_is_refused_at_the_call
     assert len(O.bodies) == n and eng.ids == [slab, cube, extra]   # nothing half-added
     run(eng, 10)
     # the coupled engine's coupled.h5 is per block too
-    _forget(eng)
+    forget(eng)
     coupled, cube = _coupledScene(str(tmp_path / "c"))
     mpmsdem.run(2, coupled)
     with pytest.raises(ValueError, match=r"polyhedron\(\): .*coupled.h5"):

@@ -1,7 +1,6 @@
 """Reliability of runs that fail, stop and restart (issue 8): saved failure states that can be
 resumed, checkpoints that continue their outputs and restore from any folder, clear errors for
 misordered engines and bad input."""
-import gc
 import json
 import math
 import os
@@ -17,21 +16,11 @@ from yade import O
 from yade.minieigenHP import Vector3
 from yade.wrapper import ForceResetter, NewtonIntegrator
 
-from scenes import DATA, KC, R, cubeOnSlab, run
+from scenes import DATA, KC, R, cubeOnSlab, forget, run
 
 
 def _finite(v):
     return all(math.isfinite(v[k]) for k in range(len(v)))
-
-
-def _kill(engine):
-    """What a killed process leaves: the engine gone, with its open output files closed. The
-    registry of runner commands keeps a reference (see mpmsdem.engine._stepRunner): drop it too."""
-    from mpmsdem.engine import _REGISTRY
-    for name in [n for n, f in _REGISTRY.items() if getattr(f, "__self__", None) is engine]:
-        del _REGISTRY[name]
-    O.reset()
-    gc.collect()
 
 
 # ---------------------------------------------------------------- 1. failure state resumable
@@ -78,7 +67,7 @@ def test_restore_continues_outputs_and_dissipation_without_duplicates(tmp_path):
     friction = eng.energies()["friction"]
     assert friction > 0
     run(eng, 300)                                   # ... the run goes on to 0.08 s, then is killed
-    _kill(eng)
+    forget(eng)
     O.load(str(ck) + ".yade.gz")
     eng2 = mpmsdem.SdemEngine.restore(str(ck) + ".sdem.json", output=str(out), outputEvery=0.01, vtkEvery=0.02,
                                       verbose=False)
