@@ -41,9 +41,9 @@ class PyMpm {
   }
   bool holdsLastGoodState() const { return solver_->holdsLastGoodState(); }
   double stableTimeStep() { return solver_->stableTimeStep(); }
-  std::string flipBlend() const { return mpm::describeFlipBlend(scene_.params); }
-  double flipDampingRate(double dt) const { return scene_.params.flipDampingRate(dt); }
-  double flipViscosity(double dt) const { return scene_.params.flipViscosityFor(dt); }
+  std::string flipBlend() const { return scene_.params.flip.describe(scene_.params.dx); }
+  double flipDampingRate(double dt) const { return scene_.params.flip.dampingRate(dt, scene_.params.dx); }
+  double flipViscosity(double dt) const { return scene_.params.flip.viscosityFor(dt, scene_.params.dx); }
   double time() const { return solver_->time(); }
   long steps() const { return solver_->steps(); }
   std::size_t numParticles() const { return solver_->numParticles(); }

@@ -669,15 +669,15 @@ void writeMpmHeader(Hdf5Writer& w, const std::string& sceneJson, const mpm::MpmP
   w.setAttribute("units", "SI: m, kg, s, Pa; stress tension positive, components xx yy zz yz xz xy");
   w.setAttribute("solver", solverName);
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  const bool viscosity = params.flipViscosity > 0, perStep = params.flipBlendPerStep();
-  const double unit = viscosity ? 1.0 : params.flipReferenceDt;  // unless per step, the rate is the same at any step
+  const mpm::FlipBlend& blend = params.flip;
+  const double step = blend.rateStep();  // unless per step, the rate is the same at any step
   // the blend's parameters under their scene keys; the damping rate is derived, not a key
   const auto key = [](const char* k) -> std::string { return mpm::sceneParameter(k).key; };
-  w.setAttribute(key("flip_viscosity"), perStep ? nan : params.flipViscosityFor(unit));
-  w.setAttribute("flip_damping_rate", perStep ? nan : params.flipDampingRate(unit));
-  w.setAttribute(key("flip_alpha"), viscosity ? nan : params.flipAlpha);
-  w.setAttribute(key("flip_reference_dt"), viscosity ? nan : params.flipReferenceDt);
-  w.setAttribute("flip_blend", mpm::describeFlipBlend(params));
+  w.setAttribute(key("flip_viscosity"), blend.perStep() ? nan : blend.viscosityFor(step, params.dx));
+  w.setAttribute("flip_damping_rate", blend.perStep() ? nan : blend.dampingRate(step, params.dx));
+  w.setAttribute(key("flip_alpha"), blend.setAlpha());
+  w.setAttribute(key("flip_reference_dt"), blend.perStep() ? 0.0 : blend.referenceDt());
+  w.setAttribute("flip_blend", params.flip.describe(params.dx));
 }
 
 std::optional<std::string> readOptionalStringAttribute(const std::string& path, const std::string& name) {

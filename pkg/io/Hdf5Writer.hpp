@@ -134,7 +134,7 @@ bool resumeFromCommit(const std::string& path);
 // "solver", and the FLIP/PIC blend it ran with (the damping per second is a model quantity,
 // docs/physics.md): "flip_viscosity" [m^2/s] and "flip_damping_rate" [1/s] (NaN per step: they
 // then follow the step, see /series/dt), "flip_alpha" and "flip_reference_dt" [s] (0: per step;
-// both NaN when a viscosity set the blend) and "flip_blend" (mpm::describeFlipBlend).
+// both NaN when a viscosity set the blend) and "flip_blend" (mpm::FlipBlend::describe).
 void writeMpmHeader(Hdf5Writer& w, const std::string& sceneJson, const mpm::MpmParams& params,
                     const std::string& solverName);
 

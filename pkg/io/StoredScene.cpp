@@ -87,7 +87,7 @@ std::optional<std::string> readOptionalString(const std::string& option, const s
 void checkSameBlend(const std::string& option, const mpm::MpmScene& scene, const std::string& h5) {
   const std::string blend = readOptionalString(option, h5, "flip_blend")
                                 .value_or("(not recorded: written before the FLIP/PIC blend became per unit time)");
-  const std::string ours = mpm::describeFlipBlend(scene.params);
+  const std::string ours = scene.params.flip.describe(scene.params.dx);
   if (blend != ours)
     throw ParameterError(option + ": the run in " + h5 + " blended FLIP/PIC as " + blend + ", this scene as " + ours +
                          ": going on from it would glue two different flows into one. Start a new run.");

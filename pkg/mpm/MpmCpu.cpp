@@ -565,7 +565,7 @@ void MpmCpu<T>::stageG2P(double dt) {
   const GridConst<T> g = grid_;
   StepConst<T> sc;
   sc.dt = static_cast<T>(dt);
-  sc.alpha = static_cast<T>(params_.flipAlphaFor(dt));
+  sc.alpha = static_cast<T>(params_.flip.alphaFor(dt, params_.dx));
   sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
   sc.mat = mat_;
   const long n = static_cast<long>(n_);

@@ -37,19 +37,6 @@ void validate(const MpmParams& p) {
   if (bases > 2147483647.0)
     throwParameter("cells", std::to_string(p.cells[0]) + "x" + std::to_string(p.cells[1]) + "x" + std::to_string(p.cells[2]),
                    "", "small enough that 27 x (cells[x]/3 + 1)(cells[y]/3 + 1)(cells[z]/3 + 1) < 2^31 (about 2^31 nodes)");
-  if (!(p.flipAlpha >= 0 && p.flipAlpha <= 1)) throwParameter("flipAlpha", p.flipAlpha, "", "in [0, 1]");
-  if (!(p.flipViscosity >= 0 && std::isfinite(p.flipViscosity)))
-    throwParameter("flipViscosity", p.flipViscosity, "m^2/s", ">= 0 and finite (0: flipAlpha per flipReferenceDt)");
-  if (!(p.flipReferenceDt >= 0 && std::isfinite(p.flipReferenceDt)))
-    throwParameter("flipReferenceDt", p.flipReferenceDt, "s", "> 0 and finite, or 0 for alpha per step (Eq 4)");
-  if (p.flipViscosity > 0 && p.flipAlpha != MpmParams().flipAlpha)
-    throwParameter("flipAlpha", p.flipAlpha, "",
-                   "left at 0.99 while flipViscosity > 0 (the viscosity sets the blend; set flipViscosity = 0 to "
-                   "blend flipAlpha per flipReferenceDt, or per step with flipReferenceDt 0)");
-  if (p.flipViscosity > 0 && p.flipReferenceDt > 0)
-    throwParameter("flipReferenceDt", p.flipReferenceDt, "s",
-                   "0 while flipViscosity > 0 (the viscosity sets the blend; set flipViscosity = 0 to blend flipAlpha "
-                   "per flipReferenceDt)");
   if (!(p.cfl > 0 && p.cfl <= 1)) throwParameter("cfl", p.cfl, "", "in (0, 1]");
   for (int w = 0; w < 6; ++w)
     if (!std::isfinite(p.walls[w].friction))

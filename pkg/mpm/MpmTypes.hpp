@@ -12,6 +12,7 @@
 
 #include "common/Error.hpp"
 #include "common/Terrain.hpp"
+#include "mpm/FlipBlend.hpp"
 
 namespace mpmsdem {
 namespace mpm {
@@ -58,45 +59,7 @@ struct MpmParams {
   std::array<double, 3> origin{0, 0, 0};   // lower corner of the grid domain
   std::array<int, 3> cells{10, 10, 10};    // number of cells per axis (nodes = cells+1)
   std::array<double, 3> gravity{0, 0, -9.81};  // incline: rotate gravity, not the grid
-  // The FLIP/PIC blend of Eq 4. Its PIC part replaces a particle's velocity by the grid's,
-  // which the quadratic B-spline transfers (P2G then G2P) smooth by (dx^2/4) lap(v): blending a
-  // fraction r dt of PIC per step of length dt acts as a viscosity nu = r dx^2 / 4 on the flow.
-  // So neither a blend per step (the damping then follows dt) nor one per unit time (it then
-  // follows dx^2) keeps the flow when the step or the grid changes; a viscosity does
-  // (docs/physics.md, "The blend as a viscosity": the column collapse and the §3.2 arrival at
-  // dx 0.0125 and 0.02 m against 0.01 m).
-  // PIC viscosity nu (unit and range: the entry "flip_viscosity"): a step of length dt blends
-  // with exp(-4 nu dt / dx^2) of FLIP (flipAlpha and flipReferenceDt are then unused). Chosen by
-  // measurement: 200 /s at dx 0.01 m, where the granular column collapse (a = 2) runs out to
-  // 2.8 L_i against Lube et al.'s 3.02. The paper's blend, alpha 0.99 per its 5e-6 s step
-  // (kPaperStep) at dx 0.01 m, is 0.0503 m^2/s: it brings the §3.2 and §3.3 arrival times
-  // onto the paper's at its resolution and stops that column at 1.2 L_i. 0: the blend is
-  // flipAlpha per flipReferenceDt.
-  double flipViscosity = 0.005;
-  // alpha (Table 1): the FLIP fraction kept per flipReferenceDt of simulated time, used when
-  // flipViscosity is 0.
-  double flipAlpha = 0.99;
-  // Reference step of alpha, used when flipViscosity is 0: a step of length dt
-  // blends with alpha^(dt / flipReferenceDt), the same damping per second at any step; 0 (the
-  // default): alpha per step, Eq 4 as written. Set with flipViscosity 0 (both > 0 is refused).
-  static constexpr double kPaperStep = 5e-6;
-  double flipReferenceDt = 0;
-  // The blend of a step of length dt [s].
-  double flipAlphaFor(double dt) const {
-    if (flipViscosity > 0) return std::exp(-4.0 * flipViscosity * dt / (dx * dx));
-    return flipReferenceDt > 0 ? std::pow(flipAlpha, dt / flipReferenceDt) : flipAlpha;
-  }
-  // The PIC damping rate of a step of length dt [1/s]: -ln(blend)/dt (infinite for alpha 0).
-  double flipDampingRate(double dt) const {
-    return flipViscosity > 0 ? 4.0 * flipViscosity / (dx * dx) : -std::log(flipAlphaFor(dt)) / dt;
-  }
-  // The PIC viscosity of a step of length dt [m^2/s]: its damping rate times dx^2 / 4.
-  double flipViscosityFor(double dt) const {
-    return flipViscosity > 0 ? flipViscosity : flipDampingRate(dt) * dx * dx / 4.0;
-  }
-  // Whether the blend depends on the step (alpha per step): then flipDampingRate and
-  // flipViscosityFor follow dt.
-  bool flipBlendPerStep() const { return !(flipViscosity > 0) && !(flipReferenceDt > 0); }
+  FlipBlend flip;                          // the FLIP/PIC blend of Eq 4 (mpm/FlipBlend.hpp)
   double cfl = 0.3;                        // CFL number for the time-step estimate
   // Keep a second copy of the particle state (default true), so that a step that fails (NaN,
   // blow-up) leaves the particles as they were at its start, ready to be saved. false: one

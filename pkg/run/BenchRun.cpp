@@ -80,7 +80,7 @@ void runBench(Stepper& st, const mpm::MpmScene& scene, long maxSteps) {
                          n * double(solver.steps() - firstStep - warmupSteps) / (seconds - warmupSeconds)},
                         {"bytes_per_particle", n ? double(solver.memoryBytes()) / n : 0.0},
                         {"threads", omp_get_max_threads()},
-                        {"flip_blend", mpm::describeFlipBlend(scene.params)},
+                        {"flip_blend", scene.params.flip.describe(scene.params.dx)},
                         {"blocks", st.coupled ? st.coupled->world.engine.numBodies() : 0}};
   const auto device = solver.stageSeconds();
   if (!device.empty()) {

@@ -66,7 +66,7 @@ OutputRun::OutputRun(Stepper& stepper, const mpm::MpmScene& scene, bool restart,
       std::filesystem::remove(frontPath(k), ec);
   }
   io::writeMpmHeader(h5_, scene.sourceJson, scene.params, solver_.name());
-  if (coupled_) coupled_->h5().setAttribute("flip_blend", mpm::describeFlipBlend(scene.params));
+  if (coupled_) coupled_->h5().setAttribute("flip_blend", scene.params.flip.describe(scene.params.dx));
   for (const mpm::FlowProbeSpec& p : scene.probes) probes_.emplace_back(p);
   if (restart) replayProbes();
 }
@@ -107,7 +107,7 @@ RunEnd OutputRun::run(long maxSteps) {
   ProgressSchedule progress(ProgressSchedule::markAfter(progressFraction(solver_, run, maxSteps, firstStep)),
                             run.progressEvery);
   const bool byTime = maxSteps == 0;
-  std::printf("mpmsdem-run: FLIP/PIC blend %s\n", mpm::describeFlipBlend(scene_.params).c_str());
+  std::printf("mpmsdem-run: FLIP/PIC blend %s\n", scene_.params.flip.describe(scene_.params.dx).c_str());
   std::printf("mpmsdem-run: %s, %zu particles, %s, output in %s\n", solver_.name().c_str(), n,
               byTime ? ("duration " + std::to_string(run.duration) + " s").c_str()
                      : (std::to_string(maxSteps) + " steps").c_str(),
@@ -277,7 +277,7 @@ void OutputRun::writeProbeResults(const std::string& stopped) {
                               {"time", solver_.time()},
                               {"front_x", front_},
                               {"front_still_since", frontAt_},
-                              {"flip_blend", mpm::describeFlipBlend(scene_.params)},
+                              {"flip_blend", scene_.params.flip.describe(scene_.params.dx)},
                               {"probes", list}};
   const std::filesystem::path path = dir_ / "flow_probes.json";
   std::ofstream f(path);

@@ -59,11 +59,12 @@ void parseGravity(const json& root, MpmParams& p) {
   p.gravity = {mag * std::sin(a), 0.0, -mag * std::cos(a)};
 }
 
-// The blend (MpmParams::flipViscosity): "flip_viscosity" [m^2/s], or "flip_alpha" per
-// "flip_reference_dt" (a step in seconds, or "step" for Eq 4 as written). A bare 0 reference
-// is refused: it meant "per step" before the blend had a reference, and a scene should say which
-// it wants. flip_alpha alone is refused: without a reference it has no time scale.
-void parseFlipBlend(const json& root, MpmParams& p) {
+// The blend (mpm/FlipBlend.hpp): "flip_viscosity" [m^2/s], or "flip_alpha" per
+// "flip_reference_dt" (a step in seconds, or "step" for Eq 4 as written); neither: the default
+// viscosity. A bare 0 reference is refused: it meant "per step" before the blend had a
+// reference, and a scene should say which it wants. flip_alpha alone is refused: without a
+// reference it has no time scale.
+FlipBlend parseFlipBlend(const json& root) {
   const bool viscosity = root.contains("flip_viscosity"), reference = root.contains("flip_reference_dt");
   if (viscosity && (reference || root.contains("flip_alpha")))
     throwParameter(reference ? "flip_reference_dt" : "flip_alpha",
@@ -74,24 +75,17 @@ void parseFlipBlend(const json& root, MpmParams& p) {
                    "given with flip_reference_dt (alpha per that much simulated time, e.g. the paper's 0.99 per "
                    "5e-6 s, or \"step\": per step, Eq 4 as written); without it the blend is flip_viscosity "
                    "[m^2/s] (default 0.005)");
-  if (viscosity) {
-    p.flipViscosity = readNumber(root, "", sceneParameter("flip_viscosity"));
-    return;
-  }
-  if (!reference) return;
-  p.flipViscosity = 0;
-  p.flipAlpha = readNumber(root, "", sceneParameter("flip_alpha"));
+  if (viscosity) return FlipBlend::viscosity(readNumber(root, "", sceneParameter("flip_viscosity")));
+  if (!reference) return FlipBlend();
+  const double alpha = readNumber(root, "", sceneParameter("flip_alpha"));
   const json& v = root.at("flip_reference_dt");
-  if (v.is_string() && v.get<std::string>() == "step") {
-    p.flipReferenceDt = 0;
-    return;
-  }
+  if (v.is_string() && v.get<std::string>() == "step") return FlipBlend::alphaPerStep(alpha);
   if (!v.is_number() || !(v.get<double>() > 0) || !std::isfinite(v.get<double>()))
     throwParameter("flip_reference_dt", v.dump(), "s",
                    "a step > 0 (flip_alpha is kept per that much simulated time; the paper's blend is 0.99 per "
                    "5e-6) or \"step\" (flip_alpha per step, Eq 4 as written: the damping then changes with the "
                    "step)");
-  p.flipReferenceDt = v.get<double>();
+  return FlipBlend::alphaPer(alpha, v.get<double>());
 }
 
 // A wall's or the terrain's friction: "free" (0), "noslip" (-1) or a Coulomb coefficient in the
@@ -443,7 +437,7 @@ MpmScene parseScene(const std::string& jsonText, const std::string& source, cons
   MpmScene s;
   parseGrid(root, s.params);
   parseGravity(root, s.params);
-  parseFlipBlend(root, s.params);
+  s.params.flip = parseFlipBlend(root);
   s.params.cfl = readNumber(root, "", sceneParameter("cfl"));
   s.params.keepLastGoodState = readBool(root, "", sceneParameter("keep_last_good_state"), s.params.keepLastGoodState);
   parseWalls(root, s.params);
@@ -541,20 +535,6 @@ SeededParticles seedParticleSlices(const MpmScene& scene) {
 
 const char* backendName(Backend backend) { return backend == Backend::Cuda ? "cuda" : "cpu"; }
 const char* precisionName(Precision precision) { return precision == Precision::Float ? "float" : "double"; }
-
-std::string describeFlipBlend(const MpmParams& p) {
-  std::ostringstream s;
-  if (p.flipViscosity > 0)
-    s << "PIC viscosity " << p.flipViscosity << " m^2/s (PIC damping " << std::lround(p.flipDampingRate(1.0))
-      << " /s at dx " << p.dx << " m)";
-  else if (p.flipReferenceDt > 0)
-    s << "alpha " << p.flipAlpha << " per " << p.flipReferenceDt << " s (PIC damping "
-      << std::lround(p.flipDampingRate(p.flipReferenceDt)) << " /s, PIC viscosity "
-      << p.flipViscosityFor(p.flipReferenceDt) << " m^2/s at dx " << p.dx << " m)";
-  else
-    s << "alpha " << p.flipAlpha << " per step (PIC damping -ln(alpha)/dt: it changes with the step)";
-  return s.str();
-}
 
 }  // namespace mpm
 }  // namespace mpmsdem

@@ -18,7 +18,7 @@
 //                                   inclined by incline_deg about y, descending
 //                                   toward +x: gravity = g (sin a, 0, -cos a).
 //   "flip_viscosity": 0.005,        PIC viscosity of the FLIP/PIC blend (Eq 4)
-//                                   (MpmParams::flipViscosity): a step of length dt blends with
+//                                   (mpm/FlipBlend.hpp): a step of length dt blends with
 //                                   exp(-4 nu dt / dx^2), the same flow at any step and grid
 //   "flip_alpha": 0.99,             instead of flip_viscosity: alpha kept per
 //   "flip_reference_dt": 5e-6,      flip_reference_dt of simulated time, or "step":
@@ -223,9 +223,6 @@ ParticleSet seedParticles(const MpmScene& scene);
 // The same points held compactly, for MpmSolver::setParticles(ParticleSlices&).
 SeededParticles seedParticleSlices(const MpmScene& scene);
 
-// The FLIP/PIC blend in words, e.g. "alpha 0.99 per 5e-06 s (PIC damping 2010 /s)": what
-// outputs and progress lines record (the damping per second is a model quantity).
-std::string describeFlipBlend(const MpmParams& params);
 const char* backendName(Backend backend);
 const char* precisionName(Precision precision);
 

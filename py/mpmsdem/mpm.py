@@ -77,7 +77,7 @@ class MpmEngine(Engine):
         length Δt blends with exp(−4 ν Δt/Δx²) of FLIP. The PIC part smooths the velocity by
         (Δx²/4) ∇²v, so a blend per unit time acts as a viscosity that grows with Δx²; ν keeps
         the flow when the step or the grid changes. None (default, with no ``flipReferenceDt``):
-        the scene default, 0.005 m²/s (200 /s at Δx 0.01 m; ``MpmParams::flipViscosity``, chosen
+        the scene default, 0.005 m²/s (200 /s at Δx 0.01 m; ``mpm::FlipBlend::kDefaultViscosity``, chosen
         against the column collapse of Lube et al.); :data:`PAPER_VISCOSITY` (0.0503 m²/s): the
         paper's blend, α 0.99 once per its 5e-6 s step at its Δx 0.01 m (§3.1, Appendix D).
     :param flipAlpha, flipReferenceDt: instead of ``flipViscosity``: α in [0, 1] (Table 1: 0.99;

@@ -481,7 +481,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Id file{must(H5Fcreate(r.h5.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl), "mpm.h5"), H5Fclose};
     writeSnapshots(file, r.dir, in);
     writeSeriesGroup(file, in);
-    const std::string ours = mpm::describeFlipBlend(r.scene.params);
+    const std::string ours = r.scene.params.flip.describe(r.scene.params.dx);
     writeString(file, "flip_blend", blendForm, blendText ? in.bytes(in.pick(256)) : ours);
     writeString(file, "parameters", sceneForm, sceneText ? in.rest() : r.scene.sourceJson);
   }

@@ -19,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::expectOnlyDocumentedErrors([&] {
     const mpm::MpmScene scene = mpm::parseScene(text, "scene.json", MPMSDEM_FUZZ_DATA);
     (void)mpm::sceneSizeDescription(scene);
-    (void)mpm::describeFlipBlend(scene.params);
+    (void)scene.params.flip.describe(scene.params.dx);
     (void)coupling::parseBlocks(scene.sourceJson);
   });
   return 0;

@@ -621,7 +621,7 @@ void MpmCuda<T>::stageG2P(double dt) {
   markStage(4);
   StepConst<T> sc;
   sc.dt = static_cast<T>(dt);
-  sc.alpha = static_cast<T>(params_.flipAlphaFor(dt));
+  sc.alpha = static_cast<T>(params_.flip.alphaFor(dt, params_.dx));
   sc.maxSpeed = static_cast<T>(maxSpeedAllowed_);
   sc.mat = mat_;
   const DeviceState& next = state_[1 - cur_];

@@ -76,7 +76,7 @@ def load_scene(path):
 
 
 def stepBlend(s, dt):
-    """The blend of one step of length dt (pkg/mpm/MpmTypes.hpp, MpmParams::flipAlphaFor): a PIC
+    """The blend of one step of length dt (pkg/mpm/FlipBlend.hpp, FlipBlend::alphaFor): a PIC
     viscosity flip_viscosity [m^2/s] (default 0.005) keeps exp(-4 nu dt / dx^2) of FLIP;
     flip_alpha per flip_reference_dt of simulated time, or per step with "step"."""
     if "flip_reference_dt" not in s:

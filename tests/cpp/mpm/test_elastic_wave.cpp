@@ -33,8 +33,7 @@ TEST_P(MpmElasticWave, ColumnUnderSuddenGravityOscillatesWithPeriod4HOverC) {
   prm.origin = {-2 * dx, -2 * dx, -2 * dx};
   prm.cells = {6, 5, 30};  // material region x in [0, 2dx], y in [0, dx], z in [0, 26 dx]
   prm.gravity = {0, 0, -g};
-  prm.flipViscosity = 0;
-  prm.flipAlpha = 1.0;     // pure FLIP: no PIC damping of the oscillation
+  prm.flip = FlipBlend::alphaPerStep(1.0);  // pure FLIP: no PIC damping of the oscillation
   for (auto& w : prm.walls) w.friction = 0;  // free slip everywhere; the base stops the fall
   prm.material.density = rho;
   prm.material.youngModulus = E;

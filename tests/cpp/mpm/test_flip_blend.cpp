@@ -1,5 +1,5 @@
-// The FLIP/PIC blend per step (paper Eq 4), per reference step (MpmParams::flipReferenceDt) and
-// as a viscosity (MpmParams::flipViscosity): Eq 4's PIC part damps the flow (1 - alpha)/dt
+// The FLIP/PIC blend (mpm::FlipBlend) per step (paper Eq 4), per reference step and as a
+// viscosity: Eq 4's PIC part damps the flow (1 - alpha)/dt
 // times per second, so the same scene run at a smaller step is damped more; alpha^(dt/dt_ref)
 // keeps the damping per second, and the damping acts on the flow as a viscosity r dx^2/4, so
 // exp(-4 nu dt/dx^2) keeps the flow when the grid changes too.
@@ -22,9 +22,7 @@ namespace {
 // A granular column collapsing on a rough base (quasi-2D, dx 1 cm, 4 points per cell).
 MpmParams collapse(double alpha, double referenceDt) {
   MpmParams p = testing_scenes::granularColumnParams(0.01, {40, 5, 20}, 2e5);
-  p.flipViscosity = 0;
-  p.flipAlpha = alpha;
-  p.flipReferenceDt = referenceDt;
+  p.flip = referenceDt > 0 ? FlipBlend::alphaPer(alpha, referenceDt) : FlipBlend::alphaPerStep(alpha);
   return p;
 }
 
@@ -46,92 +44,89 @@ double kineticEnergyAfter(const MpmParams& prm, double dt, double duration) {
 }  // namespace
 
 TEST(FlipBlend, ViscosityRule) {
-  MpmParams p;
+  const FlipBlend b;
   // default: a PIC viscosity of 0.005 m^2/s, 4 nu / dx^2 = 200 /s at dx 0.01 m, at any step
-  EXPECT_EQ(p.flipViscosity, 0.005);
-  EXPECT_NEAR(p.flipAlphaFor(5e-5), std::exp(-0.01), 1e-15);
-  EXPECT_NEAR(p.flipDampingRate(5e-6), 200.0, 1e-9);
-  EXPECT_NEAR(p.flipDampingRate(1e-3), 200.0, 1e-9);
-  EXPECT_EQ(p.flipViscosityFor(1e-4), 0.005);
-  EXPECT_FALSE(p.flipBlendPerStep());
+  EXPECT_EQ(b.kind(), FlipBlend::Kind::kViscosity);
+  EXPECT_EQ(b.setViscosity(), 0.005);
+  EXPECT_TRUE(std::isnan(b.setAlpha()) && std::isnan(b.referenceDt()));
+  EXPECT_NEAR(b.alphaFor(5e-5, 0.01), std::exp(-0.01), 1e-15);
+  EXPECT_NEAR(b.dampingRate(5e-6, 0.01), 200.0, 1e-9);
+  EXPECT_NEAR(b.dampingRate(1e-3, 0.01), 200.0, 1e-9);
+  EXPECT_EQ(b.viscosityFor(1e-4, 0.01), 0.005);
+  EXPECT_FALSE(b.perStep());
+  EXPECT_EQ(b.rateStep(), 1.0);
+  EXPECT_TRUE(MpmParams().flip == b);
   // twice the spacing, a quarter of the rate: the same viscosity
-  p.dx = 0.02;
-  EXPECT_NEAR(p.flipDampingRate(1e-4), 50.0, 1e-9);
-  EXPECT_NEAR(p.flipAlphaFor(5e-5) * p.flipAlphaFor(5e-5), p.flipAlphaFor(1e-4), 1e-15);
+  EXPECT_NEAR(b.dampingRate(1e-4, 0.02), 50.0, 1e-9);
+  EXPECT_NEAR(b.alphaFor(5e-5, 0.02) * b.alphaFor(5e-5, 0.02), b.alphaFor(1e-4, 0.02), 1e-15);
   // the paper's blend at its dx 0.01 m: alpha 0.99 per 5e-6 s is nu = 2010 /s x dx^2/4
-  p.dx = 0.01;
-  p.flipViscosity = -std::log(0.99) / MpmParams::kPaperStep * 1e-4 / 4;
-  EXPECT_NEAR(p.flipViscosity, 0.050252, 1e-6);
-  EXPECT_NEAR(p.flipAlphaFor(MpmParams::kPaperStep), 0.99, 1e-15);
-  EXPECT_NEAR(p.flipDampingRate(5e-5), 2010.067, 1e-3);
+  const FlipBlend paper = FlipBlend::viscosity(-std::log(0.99) / FlipBlend::kPaperStep * 1e-4 / 4);
+  EXPECT_NEAR(paper.setViscosity(), 0.050252, 1e-6);
+  EXPECT_NEAR(paper.alphaFor(FlipBlend::kPaperStep, 0.01), 0.99, 1e-15);
+  EXPECT_NEAR(paper.dampingRate(5e-5, 0.01), 2010.067, 1e-3);
+  EXPECT_TRUE(paper != b);
 }
 
 TEST(FlipBlend, ReferenceStepRule) {
-  MpmParams p;
-  p.flipViscosity = 0;
-  p.flipReferenceDt = 5e-5;  // alpha 0.99 per 5e-5 s, 201 /s at any step
-  EXPECT_EQ(p.flipAlphaFor(5e-5), 0.99);
-  EXPECT_NEAR(p.flipAlphaFor(5e-6), std::pow(0.99, 0.1), 1e-15);
-  EXPECT_NEAR(p.flipDampingRate(5e-6), -std::log(0.99) / 5e-5, 1e-9);
-  EXPECT_NEAR(p.flipDampingRate(1e-4), 201.0067, 1e-4);
-  EXPECT_NEAR(p.flipViscosityFor(1e-4), 201.0067 * 1e-4 / 4, 1e-8);
+  const double dx = 0.01;
+  FlipBlend b = FlipBlend::alphaPer(0.99, 5e-5);  // 201 /s at any step
+  EXPECT_EQ(b.kind(), FlipBlend::Kind::kAlphaPerTime);
+  EXPECT_TRUE(std::isnan(b.setViscosity()));
+  EXPECT_EQ(b.rateStep(), 5e-5);
+  EXPECT_EQ(b.alphaFor(5e-5, dx), 0.99);
+  EXPECT_NEAR(b.alphaFor(5e-6, dx), std::pow(0.99, 0.1), 1e-15);
+  EXPECT_NEAR(b.dampingRate(5e-6, dx), -std::log(0.99) / 5e-5, 1e-9);
+  EXPECT_NEAR(b.dampingRate(1e-4, dx), 201.0067, 1e-4);
+  EXPECT_NEAR(b.viscosityFor(1e-4, dx), 201.0067 * 1e-4 / 4, 1e-8);
   // the paper's blend, alpha 0.99 once per its 5e-6 s step (Table 1, Appendix D): 2010 /s
-  p.flipReferenceDt = MpmParams::kPaperStep;
-  EXPECT_NEAR(p.flipDampingRate(5e-5), 2010.067, 1e-3);
-  p.flipAlpha = 0.9;
-  p.flipReferenceDt = 0;
-  EXPECT_TRUE(p.flipBlendPerStep());
-  EXPECT_EQ(p.flipAlphaFor(1e-4), 0.9);  // per step: Eq 4 as written, whatever the step
-  EXPECT_NEAR(p.flipDampingRate(1e-4), 10 * p.flipDampingRate(1e-3), 1e-9);  // ten times the rate at dt/10
-  p.flipReferenceDt = 1e-4;
-  EXPECT_DOUBLE_EQ(p.flipAlphaFor(1e-4), 0.9);
-  EXPECT_NEAR(p.flipAlphaFor(2.5e-5), std::pow(0.9, 0.25), 1e-15);
+  EXPECT_NEAR(FlipBlend::alphaPer(0.99, FlipBlend::kPaperStep).dampingRate(5e-5, dx), 2010.067, 1e-3);
+  b = FlipBlend::alphaPerStep(0.9);
+  EXPECT_TRUE(b.perStep());
+  EXPECT_TRUE(std::isnan(b.referenceDt()) && std::isnan(b.rateStep()));
+  EXPECT_EQ(b.alphaFor(1e-4, dx), 0.9);  // per step: Eq 4 as written, whatever the step
+  EXPECT_NEAR(b.dampingRate(1e-4, dx), 10 * b.dampingRate(1e-3, dx), 1e-9);  // ten times the rate at dt/10
+  b = FlipBlend::alphaPer(0.9, 1e-4);
+  EXPECT_DOUBLE_EQ(b.alphaFor(1e-4, dx), 0.9);
+  EXPECT_NEAR(b.alphaFor(2.5e-5, dx), std::pow(0.9, 0.25), 1e-15);
   // Two half steps blend as much as one whole step: the damping per second is fixed.
-  EXPECT_NEAR(p.flipAlphaFor(5e-5) * p.flipAlphaFor(5e-5), p.flipAlphaFor(1e-4), 1e-15);
-  p.flipAlpha = 0;  // pure PIC stays pure PIC
-  EXPECT_EQ(p.flipAlphaFor(2.5e-5), 0.0);
+  EXPECT_NEAR(b.alphaFor(5e-5, dx) * b.alphaFor(5e-5, dx), b.alphaFor(1e-4, dx), 1e-15);
+  EXPECT_EQ(FlipBlend::alphaPer(0, 1e-4).alphaFor(2.5e-5, dx), 0.0);  // pure PIC stays pure PIC
+  // equal blends: the same kind and numbers (a per-step blend has no reference)
+  EXPECT_TRUE(FlipBlend::alphaPer(0.9, 1e-4) == b);
+  EXPECT_TRUE(FlipBlend::alphaPer(0.9, 2e-4) != b);
+  EXPECT_TRUE(FlipBlend::alphaPerStep(0.9) != b);
+  EXPECT_TRUE(FlipBlend::alphaPerStep(0.9) == FlipBlend::alphaPerStep(0.9));
 }
 
-// A blend set two ways, or an alpha the viscosity would ignore, is refused (a C++ caller who
-// sets flipAlpha or flipReferenceDt must also clear flipViscosity).
-TEST(FlipBlend, ConflictingBlendsAreRefused) {
-  const auto refused = [](const MpmParams& p, const char* name) {
+// Each kind refuses the numbers it cannot mean, naming the scene key and the range: no blend
+// can be set two ways at once, so nothing is left for the solver to check.
+TEST(FlipBlend, EachKindRefusesWhatItCannotMean) {
+  const auto refused = [](const auto& make, const char* name, const char* range) {
     try {
-      makeSolver(p);
+      make();
       ADD_FAILURE() << name << " accepted";
     } catch (const ParameterError& e) {
-      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("flipViscosity"), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind(name, 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find(range), std::string::npos) << e.what();
     }
   };
-  MpmParams p;
-  p.flipReferenceDt = 5e-6;
-  refused(p, "flipReferenceDt");
-  p = MpmParams();
-  p.flipAlpha = 0;
-  refused(p, "flipAlpha");
-  p = MpmParams();
-  p.flipViscosity = -1e-3;
-  refused(p, "flipViscosity");
-  p.flipViscosity = 0;  // alpha 0.99 per step
-  EXPECT_NO_THROW(makeSolver(p));
-}
-
-TEST(FlipBlend, NegativeReferenceStepIsRefused) {
-  MpmParams p;
-  p.flipViscosity = 0;
-  p.flipReferenceDt = -1e-4;
-  try {
-    makeSolver(p);
-    FAIL() << "flipReferenceDt < 0 accepted";
-  } catch (const ParameterError& e) {
-    EXPECT_NE(std::string(e.what()).find("flipReferenceDt"), std::string::npos) << e.what();
+  const double nan = std::nan(""), inf = INFINITY;
+  for (double nu : {0.0, -1e-3, nan, inf})
+    refused([&] { return FlipBlend::viscosity(nu); }, "flip_viscosity", "finite and > 0");
+  for (double alpha : {-0.1, 1.5, nan}) {
+    refused([&] { return FlipBlend::alphaPerStep(alpha); }, "flip_alpha", "in [0, 1]");
+    refused([&] { return FlipBlend::alphaPer(alpha, 1e-4); }, "flip_alpha", "in [0, 1]");
   }
+  for (double ref : {0.0, -1e-4, nan, inf})
+    refused([&] { return FlipBlend::alphaPer(0.99, ref); }, "flip_reference_dt", "finite and > 0");
+  EXPECT_NO_THROW(FlipBlend::alphaPerStep(0));
+  EXPECT_NO_THROW(FlipBlend::alphaPerStep(1));
+  EXPECT_NO_THROW(FlipBlend::viscosity(1e-300));
 }
 
 // Strong PIC (alpha 0.97 at dt 1e-4 s) makes the effect large within 0.08 s of collapse. Per
 // step, a 4x smaller step damps 4x more per second: the column keeps far less kinetic energy
-// (measured: a third). With flipReferenceDt = 1e-4 s the two steps give nearly the same flow
+// (measured: a third). With alpha per a reference step of 1e-4 s the two steps give nearly the same flow
 // (measured within 3.2 %); the bound of 6 % leaves room for the other step effects (the return
 // map and the explicit update are first order in dt, and the blend removes a finite share of
 // the sub-grid velocity per step, not an infinitesimal one).
@@ -159,20 +154,19 @@ TEST(FlipBlend, SceneKeysTakeAViscosityOrAlphaPerAStepOrTheWordStep) {
       "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.3, "mu_2": 0.6},
       "particles": [{"lo": [0.02, 0.02, 0.02], "hi": [0.04, 0.04, 0.04], "ppc": 1}], "run": {"duration": 0.1})";
   const MpmScene byDefault = parseScene(head + "}");
-  EXPECT_EQ(byDefault.params.flipViscosity, 0.005);
-  EXPECT_EQ(describeFlipBlend(byDefault.params), "PIC viscosity 0.005 m^2/s (PIC damping 200 /s at dx 0.01 m)");
+  EXPECT_TRUE(byDefault.params.flip == FlipBlend::viscosity(0.005));
+  EXPECT_EQ(byDefault.params.flip.describe(0.01), "PIC viscosity 0.005 m^2/s (PIC damping 200 /s at dx 0.01 m)");
   const MpmScene paper = parseScene(head + R"(, "flip_viscosity": 0.0502517})");
-  EXPECT_NEAR(paper.params.flipDampingRate(1e-4), 2010.07, 1e-2);
+  EXPECT_NEAR(paper.params.flip.dampingRate(1e-4, 0.01), 2010.07, 1e-2);
   const MpmScene perTime = parseScene(head + R"(, "flip_alpha": 0.99, "flip_reference_dt": 5e-6})");
-  EXPECT_EQ(perTime.params.flipViscosity, 0.0);
-  EXPECT_EQ(perTime.params.flipReferenceDt, MpmParams::kPaperStep);
-  EXPECT_EQ(parseScene(head + R"(, "flip_reference_dt": 5e-6})").params.flipAlpha, 0.99);
-  EXPECT_EQ(describeFlipBlend(perTime.params),
+  EXPECT_TRUE(perTime.params.flip == FlipBlend::alphaPer(0.99, FlipBlend::kPaperStep));
+  EXPECT_TRUE(parseScene(head + R"(, "flip_reference_dt": 5e-6})").params.flip == perTime.params.flip);
+  EXPECT_EQ(perTime.params.flip.describe(0.01),
             "alpha 0.99 per 5e-06 s (PIC damping 2010 /s, PIC viscosity 0.0502517 m^2/s at dx 0.01 m)");
   const MpmScene perStep = parseScene(head + R"(, "flip_reference_dt": "step"})");
-  EXPECT_EQ(perStep.params.flipReferenceDt, 0.0);
-  EXPECT_EQ(perStep.params.flipAlphaFor(1e-3), 0.99);
-  EXPECT_EQ(describeFlipBlend(perStep.params), "alpha 0.99 per step (PIC damping -ln(alpha)/dt: it changes with the step)");
+  EXPECT_TRUE(perStep.params.flip == FlipBlend::alphaPerStep(0.99));
+  EXPECT_EQ(perStep.params.flip.describe(0.01),
+            "alpha 0.99 per step (PIC damping -ln(alpha)/dt: it changes with the step)");
   const auto refused = [&](const std::string& keys, const char* name, const char* hint) {
     try {
       parseScene(head + ", " + keys + "}");
@@ -249,8 +243,7 @@ TEST(FlipBlend, TheBlendIsAViscosityOnTheFlow) {
   };
   MpmParams viscous;  // the default, 0.005 m^2/s
   MpmParams perTime;
-  perTime.flipViscosity = 0;
-  perTime.flipReferenceDt = -std::log(0.99) / 200.0;  // 200 /s at any dx
+  perTime.flip = FlipBlend::alphaPer(0.99, -std::log(0.99) / 200.0);  // 200 /s at any dx
   const double coarseNu = shearWaveDecay(0.01, viscous, wavelength, duration, dt);
   const double fineNu = shearWaveDecay(0.005, viscous, wavelength, duration, dt);
   const double finePerTime = shearWaveDecay(0.005, perTime, wavelength, duration, dt);

@@ -97,8 +97,7 @@ struct PushingHook : GridHook {
 TEST(GridHook, SeesTheGridInHostMemoryAndRunsBeforeTheWalls) {
   MpmParams prm = glassParams(0.01, {12, 8, 8});
   prm.gravity = {0, 0, 0};
-  prm.flipViscosity = 0;
-  prm.flipAlpha = 0;  // PIC: a particle's velocity is exactly the weighted node velocity
+  prm.flip = FlipBlend::alphaPerStep(0);  // PIC: a particle's velocity is exactly the weighted node velocity
   ParticleSet ps;
   seedBox(prm, {0.05, 0.03, 0.03}, {0.10, 0.05, 0.05}, 8, ps);  // touches the +x wall's layer
   auto s = makeSolver(prm);
@@ -156,8 +155,7 @@ TEST_P(GateInPrecision, HoldsAColumnOnAnInclineAndTheMomentumBalances) {
   const double a = 10 * M_PI / 180, xg = 0.11;
   MpmParams prm = glassParams(0.01, {17, 6, 12});
   prm.gravity = {kG * std::sin(a), 0, -kG * std::cos(a)};
-  prm.flipViscosity = 0;
-  prm.flipAlpha = 0;  // PIC damps the elastic settling
+  prm.flip = FlipBlend::alphaPerStep(0);  // PIC damps the elastic settling
   prm.gate.enabled = true;
   prm.gate.x = xg;
   prm.gate.bottom = 0;
@@ -206,8 +204,7 @@ TEST(Gate, CarriesTheLateralEarthThrustOfAColumnAtRest) {
   // for mu_s (any static stress state of a Mohr-Coulomb material does).
   const double dx = 0.01, L = 0.1, W = 0.04, H = 0.06, xg = 0.02 + L;
   MpmParams prm = glassParams(dx, {16, 8, 10});
-  prm.flipViscosity = 0;
-  prm.flipAlpha = 0;
+  prm.flip = FlipBlend::alphaPerStep(0);
   prm.gate.enabled = true;
   prm.gate.x = xg;
   prm.gate.openAt = 100;

@@ -73,9 +73,7 @@ TEST(MpmScene, GoodSceneGivesParameters) {
   EXPECT_EQ(p.gravity[1], 0.0);
   EXPECT_NEAR(p.gravity[2], -9.81 * std::cos(a), 1e-12);
   EXPECT_NEAR(p.gravity[2], -9.660965, 1e-6);
-  EXPECT_EQ(p.flipAlpha, 0.95);
-  EXPECT_EQ(p.flipViscosity, 0.0);
-  EXPECT_EQ(p.flipReferenceDt, 0.0);
+  EXPECT_TRUE(p.flip == FlipBlend::alphaPerStep(0.95));
   EXPECT_EQ(p.cfl, 0.4);
   EXPECT_EQ(p.walls[4].friction, 0.21);  // -z
   EXPECT_LT(p.walls[1].friction, 0.0);   // +x no-slip
@@ -152,7 +150,7 @@ TEST(MpmScene, DefaultsAndPlainGravity) {
   const MpmScene s = parseScene(j.dump());
   EXPECT_EQ(s.params.gravity[1], -1.0);
   EXPECT_EQ(s.params.gravity[2], -9.0);
-  EXPECT_EQ(s.params.flipViscosity, 0.005);
+  EXPECT_TRUE(s.params.flip == FlipBlend::viscosity(0.005));
   for (const WallSpec& w : s.params.walls) EXPECT_EQ(w.friction, 0.0);
   EXPECT_EQ(s.run.dt, 1e-4);
   EXPECT_EQ(s.run.outputEvery, 0.1);
@@ -377,7 +375,7 @@ TEST(SceneParameters, DefaultsAreTheParsers) {
   j["flow_probes"] = json::parse(R"([{"x": 0.3}])");
   const MpmScene s = parseScene(j.dump());
   const auto def = [](const char* key) { return sceneParameter(key).defaultValue; };
-  EXPECT_EQ(s.params.flipViscosity, def("flip_viscosity"));
+  EXPECT_EQ(s.params.flip.setViscosity(), def("flip_viscosity"));
   EXPECT_EQ(s.params.cfl, def("cfl"));
   EXPECT_EQ(s.params.material.I0, def("material.I0"));
   EXPECT_EQ(s.params.material.grainDiameter, def("material.grain_diameter"));

@@ -46,7 +46,6 @@ TEST_P(MpmSolverPhysics, FreeFlightConservesMassAndMomentum) {
   MpmParams prm;
   prm.dx = 0.01;
   prm.cells = {16, 16, 16};
-  prm.flipAlpha = 0.99;
   ParticleSet ps;
   seedBox(prm, {0.06, 0.06, 0.07}, {0.10, 0.10, 0.11}, 8, ps);
   ASSERT_EQ(ps.size(), 4u * 4 * 4 * 8);
@@ -102,8 +101,7 @@ TEST_P(MpmSolverPhysics, HydrostaticColumnAtRest) {
   // frictional base, free-slip sides: at rest sigma_zz = -rho_0 g (H - Z) at Lagrangian
   // height Z (weight of the material above; no side-wall friction so no Janssen effect).
   MpmParams prm = granularColumnParams(0.02, {9, 5, 16}, 1e6);
-  prm.flipViscosity = 0;
-  prm.flipAlpha = 0.0;  // PIC damps the elastic oscillation of the settling column
+  prm.flip = FlipBlend::alphaPerStep(0.0);  // PIC damps the elastic oscillation of the settling column
   ParticleSet ps;
   const double z0 = 0.04, H = 0.2;
   seedBox(prm, {0.04, 0.04, z0}, {0.14, 0.06, z0 + H}, 8, ps);
@@ -284,8 +282,6 @@ TEST(MpmSolver, RejectsBadParameters) {
   };
   MpmParams p;
   p.dx = 0; expectError(p, "dx");
-  p = MpmParams(); p.flipAlpha = 1.5; expectError(p, "flipAlpha");
-  p = MpmParams(); p.flipAlpha = -0.1; expectError(p, "flipAlpha");
   p = MpmParams(); p.material.poissonRatio = 0.5; expectError(p, "material.poissonRatio");
   p = MpmParams(); p.material.mu2 = 0.1; expectError(p, "material.mu2");
   p = MpmParams(); p.cells[1] = 3; expectError(p, "cells[y]");

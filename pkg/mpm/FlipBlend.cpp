@@ -1,0 +1,59 @@
+#include "mpm/FlipBlend.hpp"
+
+#include <sstream>
+
+#include "common/Error.hpp"
+
+namespace mpmsdem {
+namespace mpm {
+
+namespace {
+
+void checkAlpha(double alpha) {
+  if (!(alpha >= 0 && alpha <= 1)) throwParameter("flip_alpha", alpha, "", "in [0, 1]");
+}
+
+}  // namespace
+
+FlipBlend FlipBlend::viscosity(double nu) {
+  if (!(nu > 0) || !std::isfinite(nu))
+    throwParameter("flip_viscosity", nu, "m^2/s",
+                   "finite and > 0 (pure FLIP is alpha 1 per step: flip_alpha 1 with flip_reference_dt \"step\")");
+  return FlipBlend(Kind::kViscosity, nu, 0);
+}
+
+FlipBlend FlipBlend::alphaPer(double alpha, double referenceDt) {
+  checkAlpha(alpha);
+  if (!(referenceDt > 0) || !std::isfinite(referenceDt))
+    throwParameter("flip_reference_dt", referenceDt, "s",
+                   "finite and > 0 (alpha is kept per that much simulated time; the paper's blend is 0.99 per 5e-6 s), "
+                   "or \"step\" for alpha per step");
+  return FlipBlend(Kind::kAlphaPerTime, alpha, referenceDt);
+}
+
+FlipBlend FlipBlend::alphaPerStep(double alpha) {
+  checkAlpha(alpha);
+  return FlipBlend(Kind::kAlphaPerStep, alpha, 0);
+}
+
+std::string FlipBlend::describe(double dx) const {
+  std::ostringstream s;
+  switch (kind_) {
+    case Kind::kViscosity:
+      s << "PIC viscosity " << value_ << " m^2/s (PIC damping " << std::lround(dampingRate(1.0, dx)) << " /s at dx "
+        << dx << " m)";
+      break;
+    case Kind::kAlphaPerTime:
+      s << "alpha " << value_ << " per " << referenceDt_ << " s (PIC damping "
+        << std::lround(dampingRate(referenceDt_, dx)) << " /s, PIC viscosity " << viscosityFor(referenceDt_, dx)
+        << " m^2/s at dx " << dx << " m)";
+      break;
+    case Kind::kAlphaPerStep:
+      s << "alpha " << value_ << " per step (PIC damping -ln(alpha)/dt: it changes with the step)";
+      break;
+  }
+  return s.str();
+}
+
+}  // namespace mpm
+}  // namespace mpmsdem
