@@ -252,7 +252,9 @@ class PyCoupling {
   void writeVtk(const bp::object& bodies, double time) {
     requireOutput();
     sdem_.readStates(bodies);
-    output_->writeVtk(time, mpm_.outputParticles(), sdem_.engine(), coupling_);
+    readLevelSets(bodies);
+    output_->writeVtk(time, mpm_.outputParticles(), sdem_.engine(), coupling_,
+                      levelSets_.numBodies() > 0 ? &levelSets_ : nullptr);
   }
 
   // ---- checkpoint: tangential histories as raw bytes (int64 keys, float64 xi; the restart

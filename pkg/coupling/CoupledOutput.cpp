@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "common/Error.hpp"
+#include "coupling/LevelSetSurface.hpp"
 
 namespace mpmsdem {
 namespace coupling {
@@ -112,31 +113,41 @@ std::vector<io::RigidSurface> bodySurfaces(const sdem::SdemEngine& engine) {
 }
 
 void CoupledOutput::writeVtk(double time, mpm::ParticleSlices& particles, const sdem::SdemEngine& engine,
-                             const MpSdemCoupling& coupling) {
+                             const MpSdemCoupling& coupling, const MpLevelSetCoupling* levelSets) {
   const std::size_t k = pvd_.count(0);
   auto file = [k](const char* what) {
     std::ostringstream f;
     f << "vtk/scene_" << what << "_" << std::setw(6) << std::setfill('0') << k << ".vtp";
     return f.str();
   };
+  const int nLevelSets = levelSets ? levelSets->numBodies() : 0;
+  // a body's grid never changes: its surface is traced once and moved with the body
+  for (int i = static_cast<int>(levelSetLocal_.size()); i < nLevelSets; ++i)
+    levelSetLocal_.push_back(levelSetSurface(levelSets->grid(i), levelSets->externalId(i)));
+  std::vector<io::RigidSurface> surfaces = bodySurfaces(engine);
+  for (int i = 0; i < nLevelSets; ++i)
+    surfaces.push_back(placedSurface(levelSetLocal_[i], levelSets->position(i), levelSets->rotation(i)));
   io::writeParticlesVtp((fs::path(dir_) / file("particles")).string(), particles);
-  io::writeRigidSurfacesVtp((fs::path(dir_) / file("bodies")).string(), bodySurfaces(engine));
+  io::writeRigidSurfacesVtp((fs::path(dir_) / file("bodies")).string(), surfaces);
   pvd_.add(time, file("particles"), 0);
   pvd_.add(time, file("bodies"), 1);
   if (!coupling.contactsAvailable()) return;
   std::vector<io::ContactPoint> points;
-  for (const MpContactRecord& r : coupling.contacts()) {
+  const auto add = [&points](const MpContactRecord& r, int bodyId) {
     io::ContactPoint c;
     for (int d = 0; d < 3; ++d) {
       c.point[d] = r.point[d];
       c.force[d] = r.force[d];
     }
     c.normalForce = r.normalForce;
-    c.blockId = engine.externalId(r.block);
+    c.blockId = bodyId;
     c.particle = r.particle;
     c.feature = r.featureKind;
     points.push_back(c);
-  }
+  };
+  for (const MpContactRecord& r : coupling.contacts()) add(r, engine.externalId(r.block));
+  if (nLevelSets > 0)
+    for (const MpContactRecord& r : levelSets->contacts()) add(r, levelSets->externalId(r.block));
   io::writeContactsVtp((fs::path(dir_) / file("contacts")).string(), points);
   pvd_.add(time, file("contacts"), 2);
 }

@@ -8,9 +8,12 @@
 //                     "levelset_ids") follow the blocks in "ids" and in every per-block series;
 //                     their face_force and edge_force are NaN (a level set has no faces or edges
 //                     to tell apart).
-//   <dir>/scene.pvd   one ParaView time series: particles (part 0), block surfaces (part 1) and
-//                     the material point–block contacts of the last step (part 2: points with
-//                     the force on the block; on CUDA when the coupling records them) in
+//   <dir>/scene.pvd   one ParaView time series: particles (part 0), block surfaces (part 1: the
+//                     SDEM blocks' outer surfaces, then the LevelSet bodies' zero level sets,
+//                     coupling/LevelSetSurface.hpp; cell data bodyId) and the material
+//                     point–body contacts of the last step (part 2: points with the force on the
+//                     body, LevelSet bodies' after the blocks'; on CUDA when the coupling records
+//                     them) in
 //                     vtk/scene_particles_NNNNNN.vtp, vtk/scene_bodies_NNNNNN.vtp and
 //                     vtk/scene_contacts_NNNNNN.vtp.
 #pragma once
@@ -18,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "coupling/MpLevelSetCoupling.hpp"
 #include "coupling/MpSdemCoupling.hpp"
 #include "io/Hdf5Writer.hpp"
 #include "io/VtkWriter.hpp"
@@ -51,8 +55,10 @@ class CoupledOutput {
   void record(double time, long step, const sdem::SdemEngine& engine, const MpSdemCoupling& coupling,
               const std::vector<OtherBodyRecord>& others = {});
   void appendSeries(const std::string& name, double value) { h5_.appendScalar(name, value); }
+  // levelSets: the LevelSet bodies coupled beside the blocks, at the poses of their last
+  // setState (none: nullptr).
   void writeVtk(double time, mpm::ParticleSlices& particles, const sdem::SdemEngine& engine,
-                const MpSdemCoupling& coupling);
+                const MpSdemCoupling& coupling, const MpLevelSetCoupling* levelSets = nullptr);
   io::Hdf5Writer& h5() { return h5_; }
   // A restart from time t [s]: drop the records and ParaView entries written after t by the
   // run that went on past its checkpoint.
@@ -64,6 +70,7 @@ class CoupledOutput {
   io::PvdCollection pvd_;
   std::vector<Quat> ori0_;
   std::size_t others_ = 0;
+  std::vector<io::RigidSurface> levelSetLocal_;  // each LevelSet body's surface in its own frame
 };
 
 // Outer surfaces of the SDEM bodies at their current poses (ids: the bodies' external ids).

@@ -50,6 +50,19 @@ int MpLevelSetCoupling::addBody(int externalId, LevelSetGrid grid, const sdem::B
   return numBodies() - 1;
 }
 
+Vec3 MpLevelSetCoupling::position(int i) const {
+  const BlockState<double>& b = bodies_.at(i);
+  return Vec3(b.pos[0], b.pos[1], b.pos[2]);
+}
+
+Mat3 MpLevelSetCoupling::rotation(int i) const {
+  const BlockState<double>& b = bodies_.at(i);
+  Mat3 R;
+  for (int d = 0; d < 3; ++d)
+    for (int e = 0; e < 3; ++e) R(d, e) = b.rot[3 * d + e];
+  return R;
+}
+
 void MpLevelSetCoupling::setState(int i, const Vec3& pos, const Quat& ori, const Vec3& vel, const Vec3& angVel,
                                   double mass, double minInertia, bool fixed) {
   if (i < 0 || i >= numBodies()) throwParameter("LevelSet body index", i, "", "in [0, " + std::to_string(numBodies()) + ")");

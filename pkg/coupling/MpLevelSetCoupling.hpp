@@ -50,6 +50,11 @@ class MpLevelSetCoupling : public CouplingReport {
   int numBodies() const { return static_cast<int>(grids_.size()); }
   int externalId(int i) const { return ids_.at(i); }
   double spacing(int i) const { return grids_.at(i).spacing; }
+  const LevelSetGrid& grid(int i) const { return grids_.at(i); }
+  // The pose of body i set by the last setState: its grid frame's origin [m] and rotation
+  // local -> world.
+  Vec3 position(int i) const;
+  Mat3 rotation(int i) const;
 
   // Pose and motion of body i for the next step (world frame): position of the grid frame's
   // origin [m], orientation local -> world, velocity [m/s], angular velocity [rad/s], mass [kg]

@@ -27,6 +27,26 @@ def forget(*engines):
     gc.collect()
 
 
+def readVtp(path):
+    """The arrays of a .vtp the writers of pkg/io wrote with appended raw data (header UInt64), by
+    name (points: "Points"; cells: "connectivity", "offsets"), each shaped (values, components),
+    and the piece's counts ("NumberOfPoints", "NumberOfPolys", ...) as ints."""
+    import xml.etree.ElementTree as ET
+    import numpy as np
+    raw = open(path, "rb").read()
+    start = raw.index(b"<AppendedData")
+    data = raw.index(b"_", start) + 1
+    header = ET.fromstring(raw[:start].decode() + "</VTKFile>")
+    types = {"Float64": "<f8", "Float32": "<f4", "Int64": "<i8", "Int32": "<i4", "UInt8": "u1"}
+    out = {k: int(v) for k, v in header.find("PolyData/Piece").attrib.items()}
+    for a in header.iter("DataArray"):
+        at = data + int(a.get("offset"))
+        n = int(np.frombuffer(raw[at:at + 8], "<u8")[0])
+        values = np.frombuffer(raw[at + 8:at + 8 + n], types[a.get("type")])
+        out[a.get("Name")] = values.reshape(-1, int(a.get("NumberOfComponents")))
+    return out
+
+
 def run(engine, steps):
     """Run YADE for ``steps`` steps and re-raise an error that stopped the run."""
     mpmsdem.run(steps, engine)

@@ -238,3 +238,52 @@ def test_levelset_cube_and_sdem_cube_take_the_same_push():
     assert 0.92 < ls["travel"] / sd["travel"] < 1.08
     assert 0.92 < ls["impulse"] / sd["impulse"] < 1.08
     assert 1.05 < ls["peak"] / sd["peak"] < 1.30
+
+
+def test_paraview_records_draw_the_levelset_body_and_its_contacts(tmp_path):
+    """scene.pvd draws a LevelSet body beside the SDEM blocks: its zero level set, moved with the
+    body, in the bodies' file (cell data bodyId), and the flow's contacts on it in the contacts
+    file. A rolled box pushed by the flow: each vertex drawn, taken back into the body's frame with
+    YADE's pose, is where YADE's own LevelSet.distance is zero (to float32) or, near the box's
+    edges, within the hand-derived bound; the vertices' centroid is the box's centre; the
+    contacts drawn are the engine's, force for force."""
+    from scenes import readVtp
+    out = tmp_path / "out"
+    h = 0.0025
+    heavy = O.materials.append(FrictMat(density=20000))  # 0.57 kg: the flow stays on it
+    ori = Quaternion(Vector3(1, 0, 0), 0.5)  # rolled half a radian about the flow's direction
+    bid = O.bodies.append(levelSetBody("box", center=(0.125, 0.07, 0.07), extents=(0.02, 0.015, 0.012),
+                                       spacing=h, orientation=ori, material=heavy))
+    mpm = flow([0.06, 0.05, 0.05], [0.10, 0.09, 0.09], velocity=(1, 0, 0))
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=2000)
+    cube = sdem.box((0.01,) * 3, 0.002, mat, pos=(0.2, 0.02, 0.02))
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.3}, levelSets={bid: {"friction": 0.3}}, verbose=False,
+                                    output=str(out), outputEvery=1e-3, vtkEvery=1e-3)
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    O.dt = 1e-5
+    mpmsdem.run(600, coupled)  # the flow is on the box from ~450 steps on (32 contacts at 600, measured)
+    n = coupled.contactCount(bid)
+    assert n > 10
+    last = sorted((out / "vtk").glob("scene_bodies_*.vtp"))[-1]
+    bodies = readVtp(str(last))
+    ids = bodies["bodyId"][:, 0]
+    assert set(ids) == {cube, bid} and (ids == cube).sum() == 12  # the cube's outer box: 12 triangles
+    tri = bodies["connectivity"][:, 0].reshape(-1, 3)[ids == bid]
+    x = bodies["Points"][np.unique(tri)].astype(float)
+    s, shape = O.bodies[bid].state, O.bodies[bid].shape
+    assert s.pos[0] > 0.125  # pushed: the file has the body where it is now, not where it started
+    local = [s.ori.conjugate() * (Vector3(*p) - s.pos) for p in x]
+    d = np.array([shape.distance(p) for p in local])
+    # On a vertex the grid's interpolant is zero where phi is affine over the cell (trilinear =
+    # linear along the edge): off by the file's float32 coordinates alone (measured: 90 % within
+    # 6.3e-9 m); near the box's edges and corners by at most 0.92 h (trilinear against linear
+    # along a cell's diagonal, nodes within h of each other; measured 0.38 mm = 0.15 h).
+    assert len(d) > 500 and np.quantile(np.abs(d), 0.9) < 1e-7 and np.abs(d).max() <= 0.92 * h
+    # YADE's grid is symmetric about the box's centre: so are the vertices (7e-10 m, measured)
+    assert np.linalg.norm(x.mean(axis=0) - np.array(s.pos)) < 1e-6
+    contacts = readVtp(str(sorted((out / "vtk").glob("scene_contacts_*.vtp"))[-1]))
+    onBox = contacts["blockId"][:, 0] == bid
+    assert onBox.sum() == n and set(contacts["blockId"][:, 0]) == {bid}  # the cube is out of the flow's reach
+    F = np.array(coupled.force(bid))
+    assert contacts["force"][onBox].astype(float).sum(axis=0) == pytest.approx(F, rel=1e-5, abs=1e-6 * abs(F).max())

@@ -1,17 +1,20 @@
 // Material point against a LevelSet body (LevelSetKernelsCommon.hpp, MpLevelSetCoupling): the
 // interpolated distance and normal of analytic sphere and cube grids against hand-derived
 // values, the Eq 10 force they give, the grid's linear continuation, the impulse balance of
-// a flow on a body (Eqs 17–18), float against double, the too-coarse refusal, bad input.
+// a flow on a body (Eqs 17–18), float against double, the too-coarse refusal, bad input; the
+// zero level set drawn for ParaView.
 #include <gtest/gtest.h>
 #include <omp.h>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "common/Error.hpp"
+#include "coupling/LevelSetSurface.hpp"
 #include "coupling/MpLevelSetCoupling.hpp"
 #include "mpm/Seeding.hpp"
 
@@ -402,4 +405,101 @@ TEST(LevelSetCoupling, CentreInsideFails) {
     EXPECT_NE(std::string(e.what()).find("material point 0 reached the surface of LevelSet body 9"), std::string::npos)
         << e.what();
   }
+}
+
+// ---- the zero level set as a ParaView surface (LevelSetSurface.hpp)
+
+namespace {
+
+// Checks that `s` is a closed surface wound consistently: every edge in exactly two triangles,
+// once in each direction, and V - E + F = 2 (a sphere's topology). Returns the volume it
+// encloses (divergence theorem; > 0 when the normals point out).
+double closedSurfaceVolume(const io::RigidSurface& s) {
+  std::map<std::pair<int, int>, int> directed;
+  double volume = 0;
+  for (const auto& t : s.triangles) {
+    for (int e = 0; e < 3; ++e) ++directed[{t[e], t[(e + 1) % 3]}];
+    const Vec3 a(s.vertices[t[0]].data()), b(s.vertices[t[1]].data()), c(s.vertices[t[2]].data());
+    volume += a.dot(b.cross(c)) / 6;
+  }
+  std::size_t edges = 0;
+  for (const auto& [e, n] : directed) {
+    EXPECT_EQ(n, 1) << "edge " << e.first << "-" << e.second << " used " << n << " times in one direction";
+    const auto back = directed.find({e.second, e.first});
+    EXPECT_TRUE(back != directed.end() && back->second == 1) << "edge " << e.first << "-" << e.second << " open";
+    if (e.first < e.second) ++edges;
+  }
+  EXPECT_EQ(static_cast<long>(s.vertices.size()) - static_cast<long>(edges) + static_cast<long>(s.triangles.size()), 2);
+  return volume;
+}
+
+}  // namespace
+
+// A sphere of radius R on a grid of spacing h: along each edge phi = |x| - R is convex, so the
+// edge's linear zero lies inside the sphere by at most the chord's gap, L^2 / (8 min|x|) with L
+// <= sqrt(3) h the edge's length and min|x| >= R - L: every vertex has |x| in [R - gap, R]. Every
+// point of the mesh lies in a cell with an outside node, within sqrt(3) h of it: the mesh
+// encloses the ball of radius R - sqrt(3) h and lies in the sphere (convex), which bound its
+// volume on both sides.
+TEST(LevelSetSurface, SphereIsClosedOutwardAndOnTheSphere) {
+  const double R = 0.05, h = 0.01, L = std::sqrt(3.0) * h, gap = L * L / (8 * (R - L));
+  const LevelSetGrid g = analyticGrid(Vec3::Constant(-0.0713), h, 15, [R](const Vec3& x) { return sphereDistance(x, R); });
+  const io::RigidSurface s = levelSetSurface(g, 7);
+  EXPECT_EQ(s.id, 7);
+  ASSERT_GT(s.triangles.size(), 100u);
+  double lowest = R;
+  for (const auto& v : s.vertices) {
+    const double r = Vec3(v.data()).norm();
+    EXPECT_LE(r, R + 1e-15);
+    EXPECT_GE(r, R - gap - 1e-15);
+    lowest = std::min(lowest, r);
+  }
+  const double volume = closedSurfaceVolume(s);
+  std::printf("sphere R %g m, h %g m: %zu vertices, %zu triangles; vertices %.3g mm below R at most (bound %.3g mm); "
+              "volume / sphere's %.4f\n", R, h, s.vertices.size(), s.triangles.size(), 1e3 * (R - lowest), 1e3 * gap,
+              volume / (4.0 / 3 * kPi * R * R * R));
+  EXPECT_LE(volume, 4.0 / 3 * kPi * R * R * R);
+  EXPECT_GE(volume, 4.0 / 3 * kPi * std::pow(R - L, 3));
+}
+
+// A cube's distance is convex too: vertices lie in the cube, within an edge's length of its
+// surface, and on its faces exactly where phi is linear along the edge (both nodes over the
+// same face's interior). Placed in the world, each vertex is pos + R x.
+TEST(LevelSetSurface, CubeIsClosedAndPlacedByThePose) {
+  const double a = 0.02, h = 0.004, L = std::sqrt(3.0) * h;
+  const LevelSetGrid g = analyticGrid(Vec3::Constant(-0.0301), h, 16, [a](const Vec3& x) { return cubeDistance(x, a); });
+  const io::RigidSurface s = levelSetSurface(g, 3);
+  int onFace = 0;
+  for (const auto& v : s.vertices) {
+    const Vec3 x(v.data());
+    const double phi = cubeDistance(x, a);
+    EXPECT_LE(phi, 1e-15);
+    EXPECT_GE(phi, -L);
+    // over a face's interior, two cells from its edges: both nodes of the vertex's edge have
+    // phi = |x_k| - a (k across the face), linear along it
+    if ((x.cwiseAbs().array() < a - 2 * h).count() == 2) {
+      EXPECT_NEAR(x.cwiseAbs().maxCoeff(), a, 1e-15);
+      ++onFace;
+    }
+  }
+  EXPECT_GT(onFace, 50);
+  const double volume = closedSurfaceVolume(s);
+  EXPECT_LE(volume, 8 * a * a * a);
+  EXPECT_GE(volume, 8 * std::pow(a - L, 3));
+  const Vec3 pos(0.3, -0.1, 0.05);
+  const Mat3 R = Quat(Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized())).toRotationMatrix();
+  const io::RigidSurface w = placedSurface(s, pos, R);
+  ASSERT_EQ(w.vertices.size(), s.vertices.size());
+  EXPECT_EQ(w.triangles, s.triangles);
+  EXPECT_EQ(w.id, 3);
+  for (std::size_t i = 0; i < s.vertices.size(); ++i)
+    EXPECT_LT((Vec3(w.vertices[i].data()) - pos - R * Vec3(s.vertices[i].data())).norm(), 1e-16);
+}
+
+// phi of one sign everywhere: nothing to draw.
+TEST(LevelSetSurface, NoZeroCrossingGivesNoSurface) {
+  const LevelSetGrid outside = analyticGrid(Vec3::Constant(0.1), 0.01, 4, [](const Vec3& x) { return x.norm(); });
+  EXPECT_TRUE(levelSetSurface(outside, 0).triangles.empty());
+  const LevelSetGrid inside = analyticGrid(Vec3::Constant(0.0), 0.01, 4, [](const Vec3&) { return -1.0; });
+  EXPECT_TRUE(levelSetSurface(inside, 0).vertices.empty());
 }
