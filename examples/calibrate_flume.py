@@ -59,8 +59,10 @@ def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFrictio
         rotation_04, rotation_05, rotation_07 [deg], t45 [s] (first time the cube has turned
         45°; the duration if never), max_rotation_deg, tilt_04, tilt_05, tilt_07, max_tilt_deg
         (tipping: the lean of the cube's up axis) and max_yaw_deg (turning on the bed, largest
-        |yaw|) [deg] (mpmsdem.analysis.tiltAndYaw), speed_end [m/s] (the cube's at the end),
-        flip_blend, particles); the quantities at times past the duration are left out.
+        |yaw|) [deg] (mpmsdem.analysis.tiltAndYaw), speed_end [m/s] (the cube's downstream
+        speed at the end), centre_speed_end [m/s] (its centre's), rest_time [s] (from when it stays
+        at rest: mpmsdem.analysis.restTime; None if it moves at the end), flip_blend, particles);
+        the quantities at times past the duration are left out.
     """
     import mpmsdem  # noqa: F401  (before yade: it finds YADE's folder in a plain python3)
     from yade import O

@@ -137,9 +137,9 @@ def flume_block():
                        if k not in ("name", "flip_viscosity"))))
     print("  flow first touches the cube:  paper ~0.25 s (experiment 0.3 s);  here %.3f s" % e["first_touch"])
     print("  flow force on the cube at 0.4 s:  paper 0.32 N;  here %.2f N" % e["force_04"])
-    print("  the cube turns through 45 deg:  paper at 0.72 s;  here at %s, %.0f deg by %.1f s, still moving at %.2f m/s"
+    print("  the cube turns through 45 deg:  paper at 0.72 s;  here at %s, %.0f deg by %.1f s, %s"
           % ("%.3f s" % e["t45"] if e["t45"] < s["duration"] else "not by %.1f s" % s["duration"],
-             e["max_rotation_deg"], s["duration"], e["speed_end"]))
+             e["max_rotation_deg"], s["duration"], example.restText(e["rest_time"], e["centre_speed_end"])))
     print("  flow force on the cube, mean over 0.4-0.7 s:  paper ~0.20 N;  here %.2f N (%.1f x the paper's)"
           % (e["force_mean"], e["force_mean"] / 0.20))
     print("earlier results, not measured by this run (docs/coupled-results.md, \"Joint calibration\"): a 2 s run of "

@@ -227,7 +227,10 @@ def plotFaces(s, title, path):
 def blockEvents(s, duration):
     """The §3.2 targets of a cube's series (keys of Flume.series): first touch, F_t at 0.4 s and
     over 0.4–0.7 s (10 ms means), rotation (and, where the series has them, tilt and yaw) at
-    0.4/0.5/0.7 s, when the rotation reaches 45°; the keys of calibrate_flume.flumeRun."""
+    0.4/0.5/0.7 s, when the rotation reaches 45°, the speed at the end (downstream: speed_end; of
+    the centre: centre_speed_end), when it comes to rest for good (rest_time, None
+    while still moving: :func:`mpmsdem.analysis.restTime`, centre below 1 cm/s and turning below
+    1°/s); the keys of calibrate_flume.flumeRun."""
     import numpy as np
     t, ft, rot = s["t"], s["Ft"], s["rotation"]
     smooth = analysis.runningMean(t, ft, 0.01)
@@ -235,7 +238,9 @@ def blockEvents(s, duration):
     turned = np.nonzero(rot >= 45.0)[0]
     out = {"first_touch": float(t[touched[0]]) if len(touched) else duration,
            "t45": float(t[turned[0]]) if len(turned) else duration,
-           "rotation_deg": float(rot[-1]), "max_rotation_deg": float(rot.max()), "speed_end": float(abs(s["vx"][-1]))}
+           "rotation_deg": float(rot[-1]), "max_rotation_deg": float(rot.max()), "speed_end": float(abs(s["vx"][-1])),
+           "centre_speed_end": float(s["speed"][-1]),
+           "rest_time": analysis.restTime(t, s["speed"], rot) if len(t) > 1 else None}
     if "tilt" in s:
         out.update(max_tilt_deg=float(s["tilt"].max()), max_yaw_deg=float(np.abs(s["yaw"]).max()))
     for label, at in (("04", 0.4), ("05", 0.5), ("07", 0.7)):
@@ -249,6 +254,14 @@ def blockEvents(s, duration):
         window = (t >= 0.4) & (t <= 0.7)
         out["force_mean"] = float(ft[window].mean())
     return out
+
+
+def restText(restTime, speedEnd):
+    """When the cube came to rest, with the thresholds that define it, or its speed at the end."""
+    if restTime is None:
+        return "still moving at the end (centre %.3f m/s)" % speedEnd
+    return "at rest from %.2f s (centre below %g m/s, turning below %g deg/s)" % (
+        restTime, analysis.REST_SPEED, analysis.REST_TURN_RATE)
 
 
 def driverScene(dx, duration, a):
@@ -272,16 +285,17 @@ def fromDriver(a):
     peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
     summary = {"dx": scene["grid"]["dx"], "duration": float(s["t"][-1]), "travel": float(s["travel"][-1]),
                "peak_force": peak, "peak_time": tPeak, "rotation_deg": float(s["rotation"][-1]),
-               "dt": scene["run"].get("dt"), "flip_blend": blend}
+               "dt": scene["run"].get("dt"), "flip_blend": blend,
+               "rest_time": analysis.restTime(s["t"], s["speed"], s["rotation"])}
     with open(os.path.join(a.from_driver, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     if not a.no_plots:
         plot(s, "Copper cube in a glass-bead flume (paper §3.2), dx = %g m, mpmsdem-run" % summary["dx"], None,
              os.path.join(a.from_driver, "flume_block.png"))
-    print("copper cube after %.2f s (driver run in %s): travel distance %.4f m, rotation %.1f deg; peak downstream "
-          "impact force %.3f N (10 ms mean) at %.3f s; summary.json and flume_block.png written there"
-          % (summary["duration"], a.from_driver, summary["travel"], summary["rotation_deg"], summary["peak_force"],
-             summary["peak_time"]))
+    print("copper cube after %.2f s (driver run in %s): travel distance %.4f m, rotation %.1f deg, %s; peak "
+          "downstream impact force %.3f N (10 ms mean) at %.3f s; summary.json and flume_block.png written there"
+          % (summary["duration"], a.from_driver, summary["travel"], summary["rotation_deg"],
+             restText(summary["rest_time"], s["speed"][-1]), summary["peak_force"], summary["peak_time"]))
     return summary
 
 
@@ -353,9 +367,10 @@ def main(argv):
         if "faces" in s:
             plotFaces(s, "The flow's load on each face of the cube (its own frame), dx = %g m" % scene.dx,
                       os.path.join(out, "flume_block_faces.png"))
-    print("copper cube after %.2f s: travel distance %.4f m, rotation %.1f deg (tilt %.1f, yaw %.1f); peak downstream "
-          "impact force %.3f N (10 ms mean) at %.3f s%s" % (
-              duration, summary["travel"], summary["rotation_deg"], summary["tilt_deg"], summary["yaw_deg"], peak, tPeak,
+    print("copper cube after %.2f s: travel distance %.4f m, rotation %.1f deg (tilt %.1f, yaw %.1f), %s; peak "
+          "downstream impact force %.3f N (10 ms mean) at %.3f s%s" % (
+              duration, summary["travel"], summary["rotation_deg"], summary["tilt_deg"], summary["yaw_deg"],
+              restText(summary["events"]["rest_time"], s["speed"][-1]), peak, tPeak,
               "; Eq 20: %.3f N" % summary["eq20_force"] if ff else ""))
     print(resolutionNote(dx))
     print("outputs in %s (coupled.h5, scene.pvd, flume_block.png, flume_block_faces.png, summary.json); wall time "

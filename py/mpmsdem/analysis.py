@@ -356,9 +356,49 @@ def smoothedPeak(t, f, smooth=None):
     return float(f[j]), float(t[j])
 
 
+# When a block counts as at rest in docs/ and the examples' summaries: its centre slower than
+# REST_SPEED [m/s] and its whole angle turned changing slower than REST_TURN_RATE [deg/s], from
+# then on to the end of the record. A 20 mm cube turning at 1 deg/s moves its corners at
+# 0.25 mm/s, so the speed bound is the one that decides for the §3.2 cube.
+REST_SPEED = 0.01
+REST_TURN_RATE = 1.0
+
+
+def restTime(t, speed, rotation=None, speedBelow=REST_SPEED, turnRateBelow=REST_TURN_RATE):
+    """The time [s] from which a block stays at rest to the end of its record: ``speed`` [m/s]
+    (its centre's) below ``speedBelow`` at every record from then on and, with ``rotation`` (the
+    whole angle turned [deg], as :func:`driverBlockSeries` gives it), the angle's rate between
+    records below ``turnRateBelow`` [deg/s]. None when the last record is not at rest: the run
+    ended before the block stopped. Thresholds must be > 0 (ValueError naming them)."""
+    import numpy as np
+    t, speed = np.asarray(t, dtype=float), np.asarray(speed, dtype=float)
+    for name, value in (("speedBelow", speedBelow), ("turnRateBelow", turnRateBelow)):
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError("%s = %r: must be finite and > 0" % (name, value))
+    if t.ndim != 1 or speed.shape != t.shape or len(t) < 2:
+        raise ValueError("t and speed: one value per record, at least two records (got %s and %s)"
+                         % (t.shape, speed.shape))
+    moving = ~(speed < speedBelow)
+    if rotation is not None:
+        rotation = np.asarray(rotation, dtype=float)
+        if rotation.shape != t.shape:
+            raise ValueError("rotation: one value per record (got %s for %s)" % (rotation.shape, t.shape))
+        rate = np.abs(np.diff(rotation)) / np.diff(t)
+        # a record is turning when the interval before or after it turns faster than the bound
+        turning = np.zeros(len(t), dtype=bool)
+        turning[1:] |= ~(rate < turnRateBelow)
+        turning[:-1] |= ~(rate < turnRateBelow)
+        moving |= turning
+    if moving[-1]:
+        return None
+    last = np.nonzero(moving)[0]
+    return float(t[0] if len(last) == 0 else t[last[-1] + 1])
+
+
 def driverBlockSeries(folder, block=None, initial=True):
     """A block's series from the coupled.h5 that ``mpmsdem-run`` wrote in ``folder``, with the
-    keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, Ft, Ff, Fe
+    keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, speed (of its
+    centre) [m/s], Ft, Ff, Fe
     (downstream flow force: total, on faces, on edges) [N], rotation (the whole angle turned
     since the scene's start), tilt and yaw [deg], and the scene's flow_kinetic, flow_potential and
     block_kinetic [J], and flow_front [m] (the flow's most downstream point, from the mpm.h5
@@ -388,7 +428,7 @@ def driverBlockSeries(folder, block=None, initial=True):
         c = slice(3 * block, 3 * block + 3)
         # from the scene's start: a run started from another's flow records from later on
         x0 = json.loads(f.attrs["start_positions"])[block][0] if "start_positions" in f.attrs else pos[0, c][0]
-        s = {"t": t, "travel": pos[:, c][:, 0] - x0, "vx": vel[:, c][:, 0],
+        s = {"t": t, "travel": pos[:, c][:, 0] - x0, "vx": vel[:, c][:, 0], "speed": np.linalg.norm(vel[:, c], axis=1),
              "Ft": g["flow_force"][:, c][:, 0], "Ff": g["face_force"][:, c][:, 0], "Fe": g["edge_force"][:, c][:, 0],
              "rotation": np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))}
         turns = np.array([tiltAndYaw(np.linalg.norm(r), r) for r in g["rotation"][:, c]]).reshape(-1, 2)

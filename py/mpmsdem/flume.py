@@ -287,6 +287,7 @@ class Flume:
         row.append([None if i in self.levelSetIds else
                     analysis.boxFaceLoads(self.coupled.contacts(i), b.state.ori.toRotationMatrix())
                     for i, b in zip(self.blockIds, bodies)] if self.mpm.solver.name.startswith("cpu") else None)
+        row.append([b.state.vel.norm() for b in bodies])
         self.history.append(row)
 
     def run(self, duration, sampleEvery=None):
@@ -322,7 +323,8 @@ class Flume:
         return O.bodies[self.blockIds[k]].state.pos[0] - self.x0[k]
 
     def series(self, k):
-        """numpy arrays of block k: t, travel S_b, v_x, F_t, F_f, F_e (downstream, N), rotation
+        """numpy arrays of block k: t, travel S_b, v_x, speed (of its centre) [m/s], F_t, F_f, F_e
+        (downstream, N), rotation
         (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`; F_f and
         F_e are nan for a LevelSet block); and
         of the scene: flow_kinetic, flow_potential (zero at the origin: the bed under the
@@ -336,7 +338,8 @@ class Flume:
         t = np.array([r[0] for r in self.history])
         cols = [np.array([r[j][k] for r in self.history]) for j in range(1, 9)]
         scene = np.array([r[9] for r in self.history]).reshape(-1, 4)
-        out = {"t": t, "travel": cols[0] - self.x0[k], "vx": cols[1], "Ft": cols[2], "Ff": cols[3], "Fe": cols[4],
+        out = {"t": t, "travel": cols[0] - self.x0[k], "vx": cols[1], "speed": np.array([r[11][k] for r in self.history]),
+               "Ft": cols[2], "Ff": cols[3], "Fe": cols[4],
                "rotation": cols[5], "tilt": cols[6], "yaw": cols[7], "flow_kinetic": scene[:, 0],
                "flow_potential": scene[:, 1], "block_kinetic": scene[:, 2], "flow_front": scene[:, 3]}
         if self.history and self.history[0][10] is not None and self.history[0][10][k] is not None:

@@ -137,3 +137,29 @@ def test_wall_superposed_force_by_hand():
     # 1600 kg/m³, 2 m/s, 2 cm deep, 4 cm wide, 30°: 1600·4·0.02·0.04 + ½·1600·9.81·cos30°·0.02²·0.04
     f = analysis.wallSuperposedForce(1600.0, 2.0, 0.02, 0.04, 30.0)
     assert f == pytest.approx(5.12 + 0.5 * 1600 * 9.81 * math.cos(math.radians(30)) * 4e-4 * 0.04, rel=1e-12)
+
+
+def test_rest_time_of_a_block_decelerating_then_still():
+    # records every 1 ms, half a millisecond off the round times; v(t) = 0.1 (1 - t) m/s until
+    # t = 1 s, then 0: the centre is below 1 cm/s from the record at 0.9005 s on
+    import numpy as np
+    t = np.arange(1500) * 1e-3 + 5e-4
+    v = np.maximum(0.1 * (1 - t), 0.0)
+    assert analysis.restTime(t, v) == pytest.approx(0.9005, abs=1e-12)
+    assert analysis.restTime(t, v, speedBelow=0.05) == pytest.approx(0.5005, abs=1e-12)
+    # turning at 2°/s until the record at 1.1995 s keeps it moving until the next record; a
+    # quarter of that turn (0.5°/s) and a bound of 3°/s never count
+    turn = np.minimum(2.0 * t, 2.0 * 1.1995)
+    assert analysis.restTime(t, v, turn) == pytest.approx(1.2005, abs=1e-12)
+    assert analysis.restTime(t, v, 0.25 * turn) == pytest.approx(0.9005, abs=1e-12)
+    assert analysis.restTime(t, v, turn, turnRateBelow=3.0) == pytest.approx(0.9005, abs=1e-12)
+    # a kick at the end: not at rest when the record ends
+    kicked = v.copy()
+    kicked[-1] = 0.02
+    assert analysis.restTime(t, kicked) is None
+    assert analysis.restTime(t, np.zeros_like(t)) == t[0]  # at rest from the first record
+    for bad in ({"speedBelow": 0}, {"turnRateBelow": -1.0}, {"speedBelow": math.nan}):
+        with pytest.raises(ValueError, match=list(bad)[0]):
+            analysis.restTime(t, v, **bad)
+    with pytest.raises(ValueError, match="rotation"):
+        analysis.restTime(t, v, turn[:-1])
