@@ -143,7 +143,8 @@ def flume_block():
     print("  flow force on the cube, mean over 0.4-0.7 s:  paper ~0.20 N;  here %.2f N (%.1f x the paper's)"
           % (e["force_mean"], e["force_mean"] / 0.20))
     print("earlier results, not measured by this run (docs/coupled-results.md, \"Joint calibration\"): a 2 s run of "
-          "this set at the same numerics ends at 0.0003 m/s after 0.39 m, turned through 98 deg; with Table 1's own "
+          "this set at the same numerics comes to rest (no point of the cube faster than 1 cm/s) from 1.32 s after 0.39 m, "
+          "turned through 98 deg; with Table 1's own "
           "frictions (no side-wall friction) the cube tips over after 0.8 s. At this resolution the cube is two cells "
           "tall and the forces are not converged (docs/coupled-results.md)")
     return s

@@ -40,6 +40,7 @@ from mpmsdem.flume import FLUME_SETTINGS, GLASS_BEADS, Block, Flume
 from mpmsdem.mpm import PAPER_VISCOSITY
 
 HB = 0.02          # cube side h_b [m]
+CUBE_REACH = HB * 3 ** 0.5 / 2  # its corners from its centre [m] (the sweep radius rounds them within that)
 SETTING_OPTIONS = ("basal_friction", "mu_2", "flow_friction", "side_wall_friction", "flip_viscosity")
 L0 = 0.21          # from the column front (the gate) to the cube's upstream face [m] (our reading of §3.2)
 COLUMN = 0.3       # L_i [m]
@@ -229,8 +230,8 @@ def blockEvents(s, duration):
     over 0.4–0.7 s (10 ms means), rotation (and, where the series has them, tilt and yaw) at
     0.4/0.5/0.7 s, when the rotation reaches 45°, the speed at the end (downstream: speed_end; of
     the centre: centre_speed_end), when it comes to rest for good (rest_time, None
-    while still moving: :func:`mpmsdem.analysis.restTime`, centre below 1 cm/s and turning below
-    1°/s); the keys of calibrate_flume.flumeRun."""
+    while still moving: :func:`mpmsdem.analysis.restTime`, no point of the cube faster than
+    1 cm/s from then on); the keys of calibrate_flume.flumeRun."""
     import numpy as np
     t, ft, rot = s["t"], s["Ft"], s["rotation"]
     smooth = analysis.runningMean(t, ft, 0.01)
@@ -240,7 +241,7 @@ def blockEvents(s, duration):
            "t45": float(t[turned[0]]) if len(turned) else duration,
            "rotation_deg": float(rot[-1]), "max_rotation_deg": float(rot.max()), "speed_end": float(abs(s["vx"][-1])),
            "centre_speed_end": float(s["speed"][-1]),
-           "rest_time": analysis.restTime(t, s["speed"], rot) if len(t) > 1 else None}
+           "rest_time": analysis.restTime(t, s["speed"], rot, CUBE_REACH) if len(t) > 1 else None}
     if "tilt" in s:
         out.update(max_tilt_deg=float(s["tilt"].max()), max_yaw_deg=float(np.abs(s["yaw"]).max()))
     for label, at in (("04", 0.4), ("05", 0.5), ("07", 0.7)):
@@ -260,8 +261,7 @@ def restText(restTime, speedEnd):
     """When the cube came to rest, with the thresholds that define it, or its speed at the end."""
     if restTime is None:
         return "still moving at the end (centre %.3f m/s)" % speedEnd
-    return "at rest from %.2f s (centre below %g m/s, turning below %g deg/s)" % (
-        restTime, analysis.REST_SPEED, analysis.REST_TURN_RATE)
+    return "at rest from %.2f s (no point of it faster than %g m/s)" % (restTime, analysis.REST_SPEED)
 
 
 def driverScene(dx, duration, a):
@@ -286,7 +286,7 @@ def fromDriver(a):
     summary = {"dx": scene["grid"]["dx"], "duration": float(s["t"][-1]), "travel": float(s["travel"][-1]),
                "peak_force": peak, "peak_time": tPeak, "rotation_deg": float(s["rotation"][-1]),
                "dt": scene["run"].get("dt"), "flip_blend": blend,
-               "rest_time": analysis.restTime(s["t"], s["speed"], s["rotation"])}
+               "rest_time": analysis.restTime(s["t"], s["speed"], s["rotation"], CUBE_REACH)}
     with open(os.path.join(a.from_driver, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     if not a.no_plots:

@@ -356,39 +356,41 @@ def smoothedPeak(t, f, smooth=None):
     return float(f[j]), float(t[j])
 
 
-# When a block counts as at rest in docs/ and the examples' summaries: its centre slower than
-# REST_SPEED [m/s] and its whole angle turned changing slower than REST_TURN_RATE [deg/s], from
-# then on to the end of the record. A 20 mm cube turning at 1 deg/s moves its corners at
-# 0.25 mm/s, so the speed bound is the one that decides for the §3.2 cube.
+# When a block counts as at rest in docs/ and the examples' summaries: no point of it faster than
+# REST_SPEED [m/s] from then on to the end of the record (its centre's speed plus its turn rate
+# times its circumradius bound every point's speed).
 REST_SPEED = 0.01
-REST_TURN_RATE = 1.0
 
 
-def restTime(t, speed, rotation=None, speedBelow=REST_SPEED, turnRateBelow=REST_TURN_RATE):
-    """The time [s] from which a block stays at rest to the end of its record: ``speed`` [m/s]
-    (its centre's) below ``speedBelow`` at every record from then on and, with ``rotation`` (the
-    whole angle turned [deg], as :func:`driverBlockSeries` gives it), the angle's rate between
-    records below ``turnRateBelow`` [deg/s]. None when the last record is not at rest: the run
-    ended before the block stopped. Thresholds must be > 0 (ValueError naming them)."""
+def restTime(t, speed, rotation=None, radius=0.0, speedBelow=REST_SPEED):
+    """The time [s] from which a block stays at rest to the end of its record: the bound
+    ``speed`` + ω ``radius`` on the speed of its points stays below ``speedBelow`` [m/s] at every
+    record from then on. ``speed``: its centre's [m/s]; ω: the rate of ``rotation`` (the whole
+    angle turned [deg], as :func:`driverBlockSeries` gives it) over the interval before and the
+    one after the record [rad/s], 0 without it; ``radius``: the farthest point of the block from
+    its centre [m]. None when the last record is not at rest: the run ended before the block
+    stopped. ValueError naming the argument for a bound ≤ 0, a negative radius, or series of
+    different lengths."""
     import numpy as np
     t, speed = np.asarray(t, dtype=float), np.asarray(speed, dtype=float)
-    for name, value in (("speedBelow", speedBelow), ("turnRateBelow", turnRateBelow)):
-        if not (value > 0 and math.isfinite(value)):
-            raise ValueError("%s = %r: must be finite and > 0" % (name, value))
+    if not (speedBelow > 0 and math.isfinite(speedBelow)):
+        raise ValueError("speedBelow = %r m/s: must be finite and > 0" % (speedBelow,))
+    if not (radius >= 0 and math.isfinite(radius)):
+        raise ValueError("radius = %r m: must be finite and >= 0" % (radius,))
     if t.ndim != 1 or speed.shape != t.shape or len(t) < 2:
         raise ValueError("t and speed: one value per record, at least two records (got %s and %s)"
                          % (t.shape, speed.shape))
-    moving = ~(speed < speedBelow)
+    bound = speed.copy()
     if rotation is not None:
         rotation = np.asarray(rotation, dtype=float)
         if rotation.shape != t.shape:
             raise ValueError("rotation: one value per record (got %s for %s)" % (rotation.shape, t.shape))
-        rate = np.abs(np.diff(rotation)) / np.diff(t)
-        # a record is turning when the interval before or after it turns faster than the bound
-        turning = np.zeros(len(t), dtype=bool)
-        turning[1:] |= ~(rate < turnRateBelow)
-        turning[:-1] |= ~(rate < turnRateBelow)
-        moving |= turning
+        omega = np.radians(np.abs(np.diff(rotation))) / np.diff(t)
+        turning = np.zeros(len(t))
+        turning[1:] = omega
+        turning[:-1] = np.maximum(turning[:-1], omega)
+        bound += turning * radius
+    moving = ~(bound < speedBelow)
     if moving[-1]:
         return None
     last = np.nonzero(moving)[0]

@@ -147,18 +147,20 @@ def test_rest_time_of_a_block_decelerating_then_still():
     v = np.maximum(0.1 * (1 - t), 0.0)
     assert analysis.restTime(t, v) == pytest.approx(0.9005, abs=1e-12)
     assert analysis.restTime(t, v, speedBelow=0.05) == pytest.approx(0.5005, abs=1e-12)
-    # turning at 2°/s until the record at 1.1995 s keeps it moving until the next record; a
-    # quarter of that turn (0.5°/s) and a bound of 3°/s never count
-    turn = np.minimum(2.0 * t, 2.0 * 1.1995)
-    assert analysis.restTime(t, v, turn) == pytest.approx(1.2005, abs=1e-12)
-    assert analysis.restTime(t, v, 0.25 * turn) == pytest.approx(0.9005, abs=1e-12)
-    assert analysis.restTime(t, v, turn, turnRateBelow=3.0) == pytest.approx(0.9005, abs=1e-12)
+    # turning at 2 rad/s until the record at 1.1995 s: a point 1 cm out moves at 2 cm/s until the
+    # next record; at 6 mm out (1.2 cm/s) it is not below the bound either; at 4 mm (8 mm/s) the
+    # turn leaves the speed to decide (0.8 cm/s + the centre's below 0.2 cm/s from 0.9805 s)
+    turn = np.degrees(np.minimum(2.0 * t, 2.0 * 1.1995))
+    assert analysis.restTime(t, v, turn, radius=0.01) == pytest.approx(1.2005, abs=1e-12)
+    assert analysis.restTime(t, v, turn, radius=0.006) == pytest.approx(1.2005, abs=1e-12)
+    assert analysis.restTime(t, v, turn, radius=0.004) == pytest.approx(0.9805, abs=1e-12)
+    assert analysis.restTime(t, v, turn) == pytest.approx(0.9005, abs=1e-12)  # a point: the turn moves nothing
     # a kick at the end: not at rest when the record ends
     kicked = v.copy()
     kicked[-1] = 0.02
     assert analysis.restTime(t, kicked) is None
     assert analysis.restTime(t, np.zeros_like(t)) == t[0]  # at rest from the first record
-    for bad in ({"speedBelow": 0}, {"turnRateBelow": -1.0}, {"speedBelow": math.nan}):
+    for bad in ({"speedBelow": 0}, {"speedBelow": math.nan}, {"radius": -1e-3}):
         with pytest.raises(ValueError, match=list(bad)[0]):
             analysis.restTime(t, v, **bad)
     with pytest.raises(ValueError, match="rotation"):
