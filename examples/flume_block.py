@@ -302,16 +302,22 @@ def fromDriver(a):
 def resolutionNote(dx):
     """What refinement measured of the cube's force at this run's cells per block height (the
     studies of docs/coupled-results.md, "The impact under grid refinement" and the wall's, through
-    mpmsdem.tradeoffs): the plateau's error there, that the cube's peak is not converged, and how
-    far a wall's converging first blow still is from its limit at the finest spacing measured."""
+    mpmsdem.tradeoffs): the first touch's error there, which of the cube's force and motion did not
+    converge, and how far a wall's converging first blow still is from its limit at the finest
+    spacing measured."""
     from mpmsdem import tradeoffs
     cells = HB / dx
-    p = tradeoffs.nearest("plateau_force", cells_per_block_height=cells)
-    note = ("resolution: the cube is %.1f cells tall (dx %g m). Refinement of this scene (%s) measured the plateau "
-            "force %+.0f %% off its extrapolated limit at %.1f cells per block height" % (
+    p = tradeoffs.nearest("first_touch", cells_per_block_height=cells)
+    measured = sorted(q.settings["cells_per_block_height"] for q in tradeoffs.table("first_touch")
+                      if q.study["name"] == p.study["name"])
+    note = ("resolution: the cube is %.1f cells tall (dx %g m). Refinement of this scene (%s) measured the first "
+            "touch %+.0f %% off its extrapolated limit at %.1f cells per block height" % (
                 cells, dx, p.study["scene"].split("), ", 1)[-1], 100 * p.error, p.settings["cells_per_block_height"]))
-    if any("cells per block height" in w for w in tradeoffs.unconverged("peak_force")):
-        note += "; the peak (first blow) did not converge over 1 to 2.8 cells per block height"
+    names = {"plateau_force": "plateau force", "peak_force": "peak (first blow)", "tilt": "tilt"}
+    loose = [n for o, n in names.items() if any("cells per block height" in w for w in tradeoffs.unconverged(o))]
+    if loose:
+        note += "; the %s did not converge over %.1f to %.1f cells per block height" % (
+            ", ".join(loose), measured[0], measured[-1])
     try:
         wall = [q for q in tradeoffs.table("peak_force") if "cells_per_flow_depth" in q.settings]
     except ValueError:  # no study converged in it
