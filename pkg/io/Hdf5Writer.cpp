@@ -677,7 +677,7 @@ void writeMpmHeader(Hdf5Writer& w, const std::string& sceneJson, const mpm::MpmP
   w.setAttribute("flip_damping_rate", blend.perStep() ? nan : blend.dampingRate(step, params.dx));
   w.setAttribute(key("flip_alpha"), blend.setAlpha());
   w.setAttribute(key("flip_reference_dt"), blend.perStep() ? 0.0 : blend.referenceDt());
-  w.setAttribute("flip_blend", params.flip.describe(params.dx));
+  w.setAttribute("flip_blend", blend.describe(params.dx));
 }
 
 std::optional<std::string> readOptionalStringAttribute(const std::string& path, const std::string& name) {

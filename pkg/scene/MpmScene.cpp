@@ -80,12 +80,12 @@ FlipBlend parseFlipBlend(const json& root) {
   const double alpha = readNumber(root, "", sceneParameter("flip_alpha"));
   const json& v = root.at("flip_reference_dt");
   if (v.is_string() && v.get<std::string>() == "step") return FlipBlend::alphaPerStep(alpha);
-  if (!v.is_number() || !(v.get<double>() > 0) || !std::isfinite(v.get<double>()))
+  if (!v.is_number())
     throwParameter("flip_reference_dt", v.dump(), "s",
                    "a step > 0 (flip_alpha is kept per that much simulated time; the paper's blend is 0.99 per "
                    "5e-6) or \"step\" (flip_alpha per step, Eq 4 as written: the damping then changes with the "
                    "step)");
-  return FlipBlend::alphaPer(alpha, v.get<double>());
+  return FlipBlend::alphaPer(alpha, v.get<double>());  // which refuses a step <= 0
 }
 
 // A wall's or the terrain's friction: "free" (0), "noslip" (-1) or a Coulomb coefficient in the
