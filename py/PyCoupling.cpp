@@ -127,6 +127,8 @@ class PyCoupling {
   Vec3 faceForce(int i) const { return seen(i) ? coupling_.faceForce(i) : Vec3::Zero(); }
   Vec3 edgeForce(int i) const { return seen(i) ? coupling_.edgeForce(i) : Vec3::Zero(); }
   int contactCount(int i) const { return seen(i) ? coupling_.contactCount(i) : 0; }
+  Vec3 impulse(int i) const { return seen(i) ? coupling_.impulse(i) : Vec3::Zero(); }
+  Vec3 angularImpulse(int i) const { return seen(i) ? coupling_.angularImpulse(i) : Vec3::Zero(); }
   long totalContacts() const { return coupling_.totalContacts() + levelSets_.totalContacts(); }
   long historyOverflow() const { return coupling_.historyOverflow() + levelSets_.historyOverflow(); }
 
@@ -134,6 +136,8 @@ class PyCoupling {
   Vec3 levelSetForce(int i) const { return levelSets_.force(i); }
   Vec3 levelSetTorque(int i) const { return levelSets_.torque(i); }
   int levelSetContactCount(int i) const { return levelSets_.contactCount(i); }
+  Vec3 levelSetImpulse(int i) const { return levelSets_.impulse(i); }
+  Vec3 levelSetAngularImpulse(int i) const { return levelSets_.angularImpulse(i); }
   bp::dict levelSetContacts(int only) const {
     const std::vector<coupling::MpContactRecord> rec = levelSets_.contacts(only);
     return contactArrays(rec, [this](int b) { return levelSets_.externalId(b); }, false);
@@ -277,6 +281,12 @@ class PyCoupling {
     return bp::make_tuple(levelSets_.frictionDissipation(), levelSets_.dampingDissipation());
   }
   void setLevelSetDissipation(double friction, double damping) { levelSets_.setDissipation(friction, damping); }
+  // The flow's impulses on the blocks and on the LevelSet bodies since the run's start
+  // (CouplingReport::impulses, 6 a body), which coupled.h5's flow_impulse series go on from.
+  bp::list blockImpulses() const { return impulseList(coupling_); }
+  void setImpulses(const bp::object& values) { coupling_.setImpulses(doubles(values)); }
+  bp::list levelSetImpulses() const { return impulseList(levelSets_); }
+  void setLevelSetImpulses(const bp::object& values) { levelSets_.setImpulses(doubles(values)); }
   bp::list referenceOrientations() const {
     bp::list l;
     for (const Quat& q : output_ ? output_->referenceOrientations() : ori0_)
@@ -374,8 +384,20 @@ class PyCoupling {
         r.force = levelSets_.force(i);
         r.torque = levelSets_.torque(i);
         r.contacts = levelSets_.contactCount(i);
+        r.impulse = levelSets_.impulse(i);
+        r.angularImpulse = levelSets_.angularImpulse(i);
       }
     }
+    return out;
+  }
+  static bp::list impulseList(const coupling::CouplingReport& c) {
+    bp::list l;
+    for (double v : c.impulses()) l.append(v);
+    return l;
+  }
+  static std::vector<double> doubles(const bp::object& values) {
+    std::vector<double> out;
+    for (long i = 0, n = bp::len(values); i < n; ++i) out.push_back(bp::extract<double>(values[i]));
     return out;
   }
   // Tangential histories of a coupling as raw bytes (int64 keys, float64 xi: a restart is
@@ -444,11 +466,15 @@ void exportCoupling() {
             bp::arg("normalDamping"), bp::arg("tangentialDamping")))
       .add_property("numLevelSets", &PyCoupling::numLevelSets)
       .def("levelSetForce", &PyCoupling::levelSetForce)
+      .def("levelSetImpulse", &PyCoupling::levelSetImpulse)
+      .def("levelSetAngularImpulse", &PyCoupling::levelSetAngularImpulse)
       .def("levelSetTorque", &PyCoupling::levelSetTorque)
       .def("levelSetContactCount", &PyCoupling::levelSetContactCount)
       .def("levelSetContacts", &PyCoupling::levelSetContacts)
       .def("force", &PyCoupling::force)
       .def("torque", &PyCoupling::torque)
+      .def("impulse", &PyCoupling::impulse)
+      .def("angularImpulse", &PyCoupling::angularImpulse)
       .def("faceForce", &PyCoupling::faceForce)
       .def("edgeForce", &PyCoupling::edgeForce)
       .def("contactCount", &PyCoupling::contactCount)
@@ -469,6 +495,10 @@ void exportCoupling() {
       .def("setHistories", &PyCoupling::setHistories)
       .def("blockDissipation", &PyCoupling::blockDissipation)
       .def("setDissipation", &PyCoupling::setDissipation)
+      .def("blockImpulses", &PyCoupling::blockImpulses)
+      .def("setImpulses", &PyCoupling::setImpulses)
+      .def("levelSetImpulses", &PyCoupling::levelSetImpulses)
+      .def("setLevelSetImpulses", &PyCoupling::setLevelSetImpulses)
       .def("levelSetHistories", &PyCoupling::levelSetHistories)
       .def("setLevelSetHistories", &PyCoupling::setLevelSetHistories)
       .def("levelSetDissipation", &PyCoupling::levelSetDissipation)

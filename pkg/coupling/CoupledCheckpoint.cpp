@@ -135,6 +135,9 @@ CoupledCheckpoint captureCheckpoint(CoupledWorld& w, long snapshot, double lastD
   }
   c.couplingFriction = w.coupling.frictionDissipation();
   c.couplingDamping = w.coupling.dampingDissipation();
+  // (a block no coupling step has reached yet has taken no impulse)
+  c.couplingImpulse = w.coupling.impulses();
+  c.couplingImpulse.resize(CouplingReport::kImpulseValues * c.pos.size(), 0.0);
   c.referenceOrientations = referenceOrientations;
   return c;
 }
@@ -171,6 +174,11 @@ void writeCheckpoint(const std::string& path, const CoupledCheckpoint& c) {
     ch.push_back({c.historyIndex[k], c.historyKey[k], c.historyXi[3 * k], c.historyXi[3 * k + 1], c.historyXi[3 * k + 2]});
   j["coupling_histories"] = ch;
   j["coupling_dissipation"] = {c.couplingFriction, c.couplingDamping};
+  json ci = json::array();
+  const std::size_t nv = CouplingReport::kImpulseValues;
+  for (std::size_t i = 0; i + nv <= c.couplingImpulse.size(); i += nv)
+    ci.push_back(std::vector<double>(c.couplingImpulse.begin() + i, c.couplingImpulse.begin() + i + nv));
+  j["coupling_impulse"] = ci;
   json ro = json::array();
   for (const Quat& q : c.referenceOrientations) ro.push_back(quat(q));
   j["reference_orientations"] = ro;
@@ -243,6 +251,22 @@ CoupledCheckpoint readCheckpoint(const std::string& path, const std::string& opt
     const json& cd = list(member(j, "", "coupling_dissipation"), "coupling_dissipation", 2);
     c.couplingFriction = real(cd[0], "coupling_dissipation[0]");
     c.couplingDamping = real(cd[1], "coupling_dissipation[1]");
+    if (!j.contains("coupling_impulse") && !bodies.empty())
+      throw ParameterError("coupling_impulse: missing: the checkpoint is from a version of mpmsdem that did not "
+                           "keep the flow's impulse on each block, which coupled.h5's flow_impulse series goes on "
+                           "from; run the scene again from its start");
+    if (j.contains("coupling_impulse")) {
+      const json& ci = list(j["coupling_impulse"], "coupling_impulse");
+      if (ci.size() != bodies.size())
+        throwParameter("coupling_impulse", std::to_string(ci.size()) + " entries", "",
+                       "one per block of \"bodies\" (" + std::to_string(bodies.size()) + " blocks)");
+      for (std::size_t i = 0; i < ci.size(); ++i) {
+        const std::string at = "coupling_impulse[" + std::to_string(i) + "]";
+        const json& v = list(ci[i], at, CouplingReport::kImpulseValues);
+        for (int k = 0; k < CouplingReport::kImpulseValues; ++k)
+          c.couplingImpulse.push_back(real(v[k], at + "[" + std::to_string(k) + "]"));
+      }
+    }
     const json& ro = list(member(j, "", "reference_orientations"), "reference_orientations");
     for (std::size_t k = 0; k < ro.size(); ++k)
       c.referenceOrientations.push_back(toQuat(ro[k], "reference_orientations[" + std::to_string(k) + "]"));
@@ -285,6 +309,10 @@ void restoreCheckpoint(const CoupledCheckpoint& c, CoupledWorld& w) {
     w.coupling.setHistories(keys, xi);
   }
   w.coupling.setDissipation(c.couplingFriction, c.couplingDamping);
+  if (c.couplingImpulse.size() != static_cast<std::size_t>(CouplingReport::kImpulseValues) * n)
+    throwParameter("--restart: checkpoint coupling_impulse", c.couplingImpulse.size() / CouplingReport::kImpulseValues,
+                   "blocks", "the scene's " + std::to_string(n) + " blocks");
+  w.coupling.setImpulses(c.couplingImpulse);
   w.coupling.restoreParticleApproachStep(c.particleApproachStep);
   w.restoreContactSteps(c.contactStep, c.contactStepLow);
 }
@@ -385,6 +413,7 @@ void startFromFlow(CoupledWorld& w, mpm::ParticleSlices& particles, long step, d
     const CoupledWorld::ContactStepLow blocksLow = w.contactStepLow();
     CoupledCheckpoint c = *source;
     captureBlocks(w, c);
+    c.couplingImpulse.resize(CouplingReport::kImpulseValues * c.pos.size(), 0.0);  // no flow reached the new ones
     c.contactStep = std::min(c.contactStep, blocksStep);
     if (blocksLow.step < c.contactStepLow.step) c.contactStepLow = blocksLow;
     restoreCheckpoint(c, w);

@@ -1,7 +1,8 @@
 // Restart state of a coupled driver run (mpmsdem-run --restart) that an mpm.h5 snapshot does
 // not hold: the blocks' poses and motion, the angular momentum their rotation update carries,
 // the tangential histories of block–block and MP–block contacts, the cumulative dissipations,
-// the steps the automatic time step is chosen from, and the orientations the "rotation" series
+// the flow's impulses on the blocks, the steps the automatic time step is chosen from, and the
+// orientations the "rotation" series
 // is measured from. The driver writes it to <dir>/coupled.checkpoint.json after every snapshot,
 // naming that snapshot; numbers are written with round-trip precision, so a run continued from
 // it takes the same steps as the run that was not stopped, bit for bit.
@@ -12,7 +13,9 @@
 //   "sdem_histories": [[bodyA, bodyB, kindA, kindB, indexA, indexB, xi_x, xi_y, xi_z]],
 //   "sdem_dissipation": [friction, damping], "history_slots", "history_particles",
 //   "coupling_histories": [[slot, key, xi_x, xi_y, xi_z]] (occupied slots only),
-//   "coupling_dissipation": [friction, damping], "reference_orientations": [[w, x, y, z]]}.
+//   "coupling_dissipation": [friction, damping], "coupling_impulse": [[J_x, J_y, J_z, L_x, L_y, L_z]]
+//   (per block: the flow's impulse and angular impulse since the run's start, which coupled.h5's
+//   flow_impulse series go on from), "reference_orientations": [[w, x, y, z]]}.
 // A step of +inf (no contact) is written as null.
 #pragma once
 #include <string>
@@ -44,6 +47,7 @@ struct CoupledCheckpoint {
   std::vector<long long> historyKey;
   std::vector<double> historyXi;         // 3 per occupied slot
   double couplingFriction = 0, couplingDamping = 0;
+  std::vector<double> couplingImpulse;  // CouplingReport::kImpulseValues per block
   std::vector<Quat> referenceOrientations;
 };
 

@@ -43,7 +43,9 @@ CoupledOutput::CoupledOutput(const std::string& dir, bool append, const sdem::Sd
   h5_.setAttribute("units",
                    "SI: m, s, N, N m, J, rad. Per-block series are (records, 3 x blocks) in the order of the "
                    "attribute ids: pos, vel, rotation (rotation vector from the reference orientation), "
-                   "flow_force F_t, face_force F_f, edge_force F_e, flow_torque; contacts (records, blocks). "
+                   "flow_force F_t, face_force F_f, edge_force F_e, flow_torque (of the step before the record), "
+                   "flow_impulse, flow_angular_impulse (summed over the steps since the run's start: their change "
+                   "between records over the interval is the mean force between them); contacts (records, blocks). "
                    "LevelSet bodies (attribute levelset_ids) follow the blocks, with F_f and F_e NaN");
 }
 
@@ -62,7 +64,8 @@ void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, co
   const int n = nb + static_cast<int>(others.size());
   auto orientation = [&](int i) { return i < nb ? e.orientation(i) : others[i - nb].ori; };
   for (int i = static_cast<int>(ori0_.size()); i < n; ++i) ori0_.push_back(orientation(i));
-  std::vector<double> pos(3 * n), vel(3 * n), rot(3 * n), ft(3 * n), ff(3 * n), fe(3 * n), tq(3 * n), cnt(n);
+  std::vector<double> pos(3 * n), vel(3 * n), rot(3 * n), ft(3 * n), ff(3 * n), fe(3 * n), tq(3 * n), imp(3 * n),
+      angImp(3 * n), cnt(n);
   const Vec3 none = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   for (int i = 0; i < n; ++i) {
     const Eigen::AngleAxis<double> aa(orientation(i) * ori0_[i].conjugate());
@@ -73,7 +76,9 @@ void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, co
     const Vec3 f = block ? (s ? coupling.force(i) : Vec3::Zero()) : o->force,
                a = block ? (s ? coupling.faceForce(i) : Vec3::Zero()) : none,
                b = block ? (s ? coupling.edgeForce(i) : Vec3::Zero()) : none,
-               t = block ? (s ? coupling.torque(i) : Vec3::Zero()) : o->torque;
+               t = block ? (s ? coupling.torque(i) : Vec3::Zero()) : o->torque,
+               jf = block ? (s ? coupling.impulse(i) : Vec3::Zero()) : o->impulse,
+               ja = block ? (s ? coupling.angularImpulse(i) : Vec3::Zero()) : o->angularImpulse;
     for (int k = 0; k < 3; ++k) {
       pos[3 * i + k] = x[k];
       vel[3 * i + k] = v[k];
@@ -82,6 +87,8 @@ void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, co
       ff[3 * i + k] = a[k];
       fe[3 * i + k] = b[k];
       tq[3 * i + k] = t[k];
+      imp[3 * i + k] = jf[k];
+      angImp[3 * i + k] = ja[k];
     }
     cnt[i] = block ? (s ? coupling.contactCount(i) : 0) : o->contacts;
   }
@@ -94,6 +101,8 @@ void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, co
   h5_.appendVector("face_force", ff);
   h5_.appendVector("edge_force", fe);
   h5_.appendVector("flow_torque", tq);
+  h5_.appendVector("flow_impulse", imp);
+  h5_.appendVector("flow_angular_impulse", angImp);
   h5_.appendVector("contacts", cnt);
 }
 

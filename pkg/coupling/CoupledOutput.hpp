@@ -2,8 +2,11 @@
 //   <dir>/coupled.h5  append-only series (pkg/io/Hdf5Writer): time, step, and per block, in the
 //                     order of the root attribute "ids": pos, vel, rotation (rotation vector from
 //                     the block's reference orientation), flow_force F_t, face_force F_f,
-//                     edge_force F_e (§3.2.3), flow_torque (each records x 3 blocks), contacts
-//                     (records x blocks); energy series are appended by the caller. Bodies
+//                     edge_force F_e (§3.2.3), flow_torque, flow_impulse and flow_angular_impulse
+//                     (the flow's force and torque summed over every step times its dt since
+//                     the run's start: their difference over an interval between two records
+//                     is the mean force and torque between them) (each records x 3 blocks),
+//                     contacts (records x blocks); energy series are appended by the caller. Bodies
 //                     beside the SDEM blocks (YADE LevelSet bodies, root attribute
 //                     "levelset_ids") follow the blocks in "ids" and in every per-block series;
 //                     their face_force and edge_force are NaN (a level set has no faces or edges
@@ -31,11 +34,13 @@ namespace mpmsdem {
 namespace coupling {
 
 // A body beside the SDEM blocks at a record: its state (position: YADE's state.pos) and the
-// flow's action on it in the last step (zero before the body's first step).
+// flow's action on it in the last step and since the run's start (zero before the body's first
+// step).
 struct OtherBodyRecord {
   Vec3 pos = Vec3::Zero(), vel = Vec3::Zero();
   Quat ori = Quat::Identity();
   Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+  Vec3 impulse = Vec3::Zero(), angularImpulse = Vec3::Zero();
   int contacts = 0;
 };
 

@@ -31,6 +31,25 @@ void CouplingReport::setDissipation(double friction, double damping) {
   dampingWork_ = damping;
 }
 
+Vec3 CouplingReport::impulseVector(int i, int offset) const {
+  if (i < 0 || i >= reportedBodies())
+    throwParameter(indexKey_, i, "", indexWhat_ + " in [0, " + std::to_string(reportedBodies()) +
+                                         ") of the last coupling step");
+  const std::size_t at = static_cast<std::size_t>(kImpulseValues) * i + offset;
+  if (at + 3 > impulse_.size()) return Vec3::Zero();
+  return Vec3(impulse_[at], impulse_[at + 1], impulse_[at + 2]);
+}
+Vec3 CouplingReport::impulse(int i) const { return impulseVector(i, 0); }
+Vec3 CouplingReport::angularImpulse(int i) const { return impulseVector(i, 3); }
+
+void CouplingReport::setImpulses(const std::vector<double>& values) {
+  if (values.size() % kImpulseValues != 0)
+    throwParameter("impulses", values.size(), "", "6 values per body (impulse [N s], angular impulse [N m s])");
+  for (double v : values)
+    if (!std::isfinite(v)) throwParameter("impulses", v, "N s", "finite");
+  impulse_ = values;
+}
+
 std::vector<long long> currentHistoryKeys(const std::vector<long long>& keys, const std::vector<unsigned>& written,
                                           unsigned step, int slots) {
   std::vector<long long> out = keys;
@@ -53,14 +72,20 @@ int CouplingReport::contactCount(int i) const { return static_cast<int>(*sums(i,
 double CouplingReport::stiffnessSum(int i) const { return *sums(i, kSumK); }
 double CouplingReport::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }
 
-void CouplingReport::takeEnergies(const std::vector<double>& sums, int bodies) {
+void CouplingReport::takeStepTotals(const std::vector<double>& sums, int bodies, double dt) {
   barrierEnergy_ = springEnergy_ = 0;
+  if (impulse_.size() < static_cast<std::size_t>(kImpulseValues) * bodies) impulse_.resize(kImpulseValues * bodies, 0.0);
   for (int b = 0; b < bodies; ++b) {
     const double* s = sums.data() + kBlockSums * b;
     barrierEnergy_ += s[kSumBarrier];
     springEnergy_ += s[kSumSpring];
     frictionWork_ += s[kSumFriction];
     dampingWork_ += s[kSumDamping];
+    double* j = impulse_.data() + kImpulseValues * b;
+    for (int d = 0; d < 3; ++d) {
+      j[d] += s[kSumForce + d] * dt;
+      j[3 + d] += s[kSumTorque + d] * dt;
+    }
   }
 }
 

@@ -51,6 +51,18 @@ class CouplingReport {
   // Whether body i has sums of a last step (a body added since, or before the first step, has none).
   bool reported(int body) const;
 
+  // ---- impulses since the run's start, per body index: the flow's force and torque of every
+  // step times its dt, summed [N s], [N m s]. Their difference between two records over the
+  // interval is the mean force between them, which no single step's force gives: a contact
+  // force swings from step to step, and a record every few hundred steps samples one of them.
+  Vec3 impulse(int body) const;
+  Vec3 angularImpulse(int body) const;
+  // kImpulseValues per body (impulse, then angular impulse), in body order: the counters, to
+  // continue after a restart. setImpulses: finite values, kImpulseValues per body (ParameterError).
+  static constexpr int kImpulseValues = 6;
+  const std::vector<double>& impulses() const { return impulse_; }
+  void setImpulses(const std::vector<double>& values);
+
  protected:
   // indexKey, indexWhat: how a bad body index is named in the ParameterError (the parameter and
   // what it must be, e.g. "block", "a block (SDEM body) index").
@@ -64,8 +76,9 @@ class CouplingReport {
   const double* sums(int body, int offset) const;
   // The three sums of body i from `offset` as a vector (force, torque, their face and edge shares).
   Vec3 sumVector(int body, int offset) const;
-  // The step's potentials (replaced) and dissipations (added) from its per-body sums.
-  void takeEnergies(const std::vector<double>& sums, int bodies);
+  // The step's potentials (replaced), dissipations and impulses (added) from its per-body sums
+  // and its length dt [s].
+  void takeStepTotals(const std::vector<double>& sums, int bodies, double dt);
 
   double minParticleStep_ = std::numeric_limits<double>::infinity();
   double minApproachStep_ = std::numeric_limits<double>::infinity();
@@ -73,6 +86,10 @@ class CouplingReport {
   double barrierEnergy_ = 0, springEnergy_ = 0, frictionWork_ = 0, dampingWork_ = 0;
 
  private:
+  // Body i's impulse counters from `offset` (0: impulse, 3: angular impulse); zero for a body
+  // no step has reached yet.
+  Vec3 impulseVector(int body, int offset) const;
+  std::vector<double> impulse_;  // kImpulseValues per body
   std::string indexKey_, indexWhat_;
 };
 

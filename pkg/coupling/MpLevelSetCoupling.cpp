@@ -170,7 +170,7 @@ void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt,
               {g.nGP[0], g.nGP[1], g.nGP[2]}, distF_[i].data()};
     }
     run(view, B.data(), G.data(), phys.data(), xiF_, contactsF_, dt, safety, watch);
-    reduce(contactsF_, B.data());
+    reduce(contactsF_, B.data(), dt);
   } else {
     std::vector<LevelSetGridView<double>> G(grids_.size());
     for (std::size_t i = 0; i < grids_.size(); ++i) {
@@ -178,7 +178,7 @@ void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt,
       G[i] = {{g.min[0], g.min[1], g.min[2]}, g.spacing, {g.nGP[0], g.nGP[1], g.nGP[2]}, g.dist.data()};
     }
     run(view, bodies_.data(), G.data(), phys_.data(), xi_, contacts_, dt, safety, watch);
-    reduce(contacts_, bodies_.data());
+    reduce(contacts_, bodies_.data(), dt);
   }
 }
 
@@ -213,13 +213,13 @@ void MpLevelSetCoupling::run(const mpm::ParticleView& view, const BlockState<T>*
 }
 
 template <typename T>
-void MpLevelSetCoupling::reduce(const std::vector<MpContact<T>>& contacts, const BlockState<T>* B) {
+void MpLevelSetCoupling::reduce(const std::vector<MpContact<T>>& contacts, const BlockState<T>* B, double dt) {
   auto add = [](double* slot, double value) { *slot += value; };
   for (const MpContact<T>& ct : contacts) {
     addBlockShare(ct, B[ct.block], sums_.data(), add);
     minParticleStep_ = std::min(minParticleStep_, static_cast<double>(particleStepBound(ct)));
   }
-  takeEnergies(sums_, numBodies());
+  takeStepTotals(sums_, numBodies(), dt);
 }
 
 long MpLevelSetCoupling::totalContacts() const {

@@ -106,7 +106,7 @@ class MpLevelSetCoupling : public CouplingReport {
            const sdem::BarrierCoulombPhys<T>* phys, std::vector<T>& xi, std::vector<MpContact<T>>& contacts,
            double dt, double safety, double watch);
   template <typename T>
-  void reduce(const std::vector<MpContact<T>>& contacts, const BlockState<T>* B);
+  void reduce(const std::vector<MpContact<T>>& contacts, const BlockState<T>* B, double dt);
 
   std::vector<int> ids_;
   std::vector<LevelSetGrid> grids_;

@@ -323,6 +323,7 @@ void MpSdemCoupling::launchForces(mpm::MpmSolver& solver, double dt) {
   in.binsChanged = binsChanged_;
   in.particles = view;
   in.dt = dt;
+  pendingDt_ = dt;
   in.stepSafety = sdem_.timeStepSafety();
   in.historySlots = slots_;
   in.historyStep = ++historyStep_;
@@ -376,7 +377,7 @@ void MpSdemCoupling::collectForces() {
   minParticleStep_ = out.minParticleStep;
   minApproachStep_ = out.minApproachStep;
   overflow_ += out.overflow;
-  takeEnergies(out.sums, numBlocks());
+  takeStepTotals(out.sums, numBlocks(), pendingDt_);
 }
 
 // Float copies of what a float host step reads: the shape table when it grew, the blocks and

@@ -345,6 +345,38 @@ def runningMean(t, f, window):
     return np.convolve(f, np.ones(w) / w, mode="same")
 
 
+def intervalMean(t, impulse):
+    """The mean force over each interval between records, from the impulse the records carry
+    (coupled.h5's ``flow_impulse``, summed over every step since the run's start): at record i
+    (impulse_i − impulse_{i−1}) / (t_i − t_{i−1}) [N], NaN at the first record. Unlike a record's
+    own force (one step's, and a contact force swings from step to step) it holds every step."""
+    import numpy as np
+    t, j = np.asarray(t, dtype=float), np.asarray(impulse, dtype=float)
+    out = np.full(j.shape, np.nan)
+    if len(t) > 1:
+        dt = np.diff(t)
+        if not np.all(dt > 0):
+            raise ValueError("t: the record times must increase")
+        out[1:] = np.diff(j, axis=0) / (dt if j.ndim == 1 else dt[:, None])
+    return out
+
+
+def windowMean(t, impulse, window):
+    """The mean force over a window of ``window`` [s] centred on each record, from the impulse
+    summed since the run's start (coupled.h5's ``flow_impulse``): (J(t + w/2) − J(t − w/2)) / w,
+    J interpolated linearly between records (exact where the window's ends fall on records);
+    NaN where the window reaches past the first or last record."""
+    import numpy as np
+    t, j = np.asarray(t, dtype=float), np.asarray(impulse, dtype=float)
+    if not window > 0:
+        raise ValueError("window = %r: must be > 0 s" % (window,))
+    a, b = t - 0.5 * window, t + 0.5 * window
+    slack = 1e-9 * max(window, 1e-300)
+    inside = (a >= t[0] - slack) & (b <= t[-1] + slack)
+    out = (np.interp(np.clip(b, t[0], t[-1]), t, j) - np.interp(np.clip(a, t[0], t[-1]), t, j)) / window
+    return np.where(inside, out, np.nan)
+
+
 def smoothedPeak(t, f, smooth=None):
     """Largest value of the series f(t) and its time: (peak, t_peak). With ``smooth`` [s] the
     series is first averaged over that window (:func:`runningMean`)."""
@@ -401,7 +433,9 @@ def driverBlockSeries(folder, block=None, initial=True):
     """A block's series from the coupled.h5 that ``mpmsdem-run`` wrote in ``folder``, with the
     keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, speed (of its
     centre) [m/s], Ft, Ff, Fe
-    (downstream flow force: total, on faces, on edges) [N], rotation (the whole angle turned
+    (downstream flow force of the step before each record: total, on faces, on edges) [N], J
+    (the downstream impulse since the run's start [N s]) and Fmean (the mean downstream force
+    since the record before, :func:`intervalMean`; both where the file records impulses), rotation (the whole angle turned
     since the scene's start), tilt and yaw [deg], and the scene's flow_kinetic, flow_potential and
     block_kinetic [J], and flow_front [m] (the flow's most downstream point, from the mpm.h5
     beside it where there is one). ``block``: its index in the file (default: the first
@@ -433,6 +467,9 @@ def driverBlockSeries(folder, block=None, initial=True):
         s = {"t": t, "travel": pos[:, c][:, 0] - x0, "vx": vel[:, c][:, 0], "speed": np.linalg.norm(vel[:, c], axis=1),
              "Ft": g["flow_force"][:, c][:, 0], "Ff": g["face_force"][:, c][:, 0], "Fe": g["edge_force"][:, c][:, 0],
              "rotation": np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))}
+        if "flow_impulse" in g:  # files written before the impulse was recorded have none
+            s["J"] = g["flow_impulse"][:, c][:, 0]
+            s["Fmean"] = intervalMean(t, s["J"])
         turns = np.array([tiltAndYaw(np.linalg.norm(r), r) for r in g["rotation"][:, c]]).reshape(-1, 2)
         s["tilt"], s["yaw"] = turns[:, 0], turns[:, 1]
         for k in ("flow_kinetic", "flow_potential", "block_kinetic"):

@@ -80,7 +80,10 @@ class CoupledEngine(Engine, _StepControl):
         tangential history, in [1, 4] (default 2: a point between a block and the bed).
     :param output: folder for ``coupled.h5`` (per block every ``outputEvery`` s: ``pos``,
         ``vel``, ``rotation`` (rotation vector since the first record) [rad], ``flow_force``
-        F_t, ``face_force`` F_f, ``edge_force`` F_e (paper §3.2.3), ``flow_torque``,
+        F_t, ``face_force`` F_f, ``edge_force`` F_e (paper §3.2.3), ``flow_torque`` (of the step
+        before the record), ``flow_impulse`` [N s] and ``flow_angular_impulse`` [N m s] (summed
+        over every step since the run's start: their change between two records over the
+        interval is the mean force between them, :func:`mpmsdem.analysis.intervalMean`),
         ``contacts``; energies ``flow_kinetic``, ``flow_potential``, ``block_kinetic``,
         ``dissipated`` [J]) and, with ``vtkEvery``, ``scene.pvd`` (particles, blocks and the
         point–block contacts of the step in one ParaView time series; on CUDA it sets
@@ -442,7 +445,8 @@ class CoupledEngine(Engine, _StepControl):
         """Write a checkpoint of the coupled state, to go alongside ``O.save(prefix +
         ".yade.gz")``: ``prefix.sdem.json`` (:meth:`SdemEngine.save`), ``prefix.mpm.h5``
         (:meth:`MpmEngine.save`) and ``prefix.coupled.json`` (flow–block pairs, the MP–block
-        tangential histories, dissipations, each block's reference orientation; the same of the
+        tangential histories, dissipations, the flow's impulses on the blocks, each block's
+        reference orientation; the same of the
         LevelSet bodies, whose shapes and states ``O.save`` keeps). Continue with
         :meth:`CoupledEngine.restore`; the restart is bit-for-bit (CPU backend). The
         ``.coupled.json`` is written last and names the time of the other two, so a set left
@@ -466,10 +470,12 @@ class CoupledEngine(Engine, _StepControl):
                 "pairs": [{"material": _matDict(mats[k]), "pair": p} for k, p in sorted(self._pairs.items())],
                 "historyKeys": base64.b64encode(keys).decode(), "historyXi": base64.b64encode(xi).decode(),
                 "dissipation": list(self._bridge.blockDissipation()),
+                "impulse": list(self._bridge.blockImpulses()),
                 "levelSets": [{"id": bid, "pair": self._levelSetPairs[bid]} for bid in self._levelSets],
                 "levelSetHistoryKeys": base64.b64encode(lsKeys).decode(),
                 "levelSetHistoryXi": base64.b64encode(lsXi).decode(),
                 "levelSetDissipation": list(self._bridge.levelSetDissipation()),
+                "levelSetImpulse": list(self._bridge.levelSetImpulses()),
                 "referenceOrientations": [list(q) for q in self._bridge.referenceOrientations()],
                 "plotOrientations": {str(i): [q[k] for k in range(4)] for i, q in self._ori0.items()},
                 # before the first step coupled.h5 is not open yet (unless restored onto one): a
@@ -541,10 +547,16 @@ class CoupledEngine(Engine, _StepControl):
                 eng._bridge.particleApproachStep = float(data["particleApproachStep"])
         eng._bridge.setHistories(base64.b64decode(data["historyKeys"]), base64.b64decode(data["historyXi"]))
         eng._bridge.setDissipation(*data["dissipation"])
+        if "impulse" not in data:
+            raise ValueError("prefix = %r: %s.coupled.json has no \"impulse\": it is from a version of mpmsdem that "
+                             "did not keep the flow's impulse on each body, which coupled.h5's flow_impulse series "
+                             "goes on from; run the scene again from the start" % (prefix, prefix))
+        eng._bridge.setImpulses(data["impulse"])
         if data.get("levelSets"):
             eng._bridge.setLevelSetHistories(base64.b64decode(data["levelSetHistoryKeys"]),
                                              base64.b64decode(data["levelSetHistoryXi"]))
             eng._bridge.setLevelSetDissipation(*data["levelSetDissipation"])
+            eng._bridge.setLevelSetImpulses(data["levelSetImpulse"])
         eng._bridge.setReferenceOrientations(data["referenceOrientations"])
         eng._ori0 = {int(i): Quaternion(*q) for i, q in data["plotOrientations"].items()}
         eng._appendOutput = bool(appendOutput) and data.get("outputOpen", True)
@@ -578,6 +590,21 @@ class CoupledEngine(Engine, _StepControl):
         if yadeId in self._levelSets:
             return self._bridge.levelSetTorque(self._levelSets[yadeId]) if self._contactsKnown else Vector3.Zero
         return self._bridge.torque(self._index(yadeId))
+
+    def impulse(self, yadeId):
+        """Impulse of the flow on a block or LevelSet body since the run's start [N s] (world
+        frame): every step's force times its dt, summed. Its change between two times over the
+        interval is the mean force between them, which no single step's :meth:`force` gives."""
+        if yadeId in self._levelSets:
+            return self._bridge.levelSetImpulse(self._levelSets[yadeId]) if self._contactsKnown else Vector3.Zero
+        return self._bridge.impulse(self._index(yadeId))
+
+    def angularImpulse(self, yadeId):
+        """The same of the torque (:meth:`torque`) [N m s]."""
+        if yadeId in self._levelSets:
+            return (self._bridge.levelSetAngularImpulse(self._levelSets[yadeId]) if self._contactsKnown
+                    else Vector3.Zero)
+        return self._bridge.angularImpulse(self._index(yadeId))
 
     def faceForce(self, yadeId):
         """Share of F_t through the block's face interiors, F_f [N] (paper §3.2.3)."""

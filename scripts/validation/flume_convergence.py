@@ -15,7 +15,9 @@ driver mpmsdem-run in two legs (the scenes are built with YADE, then only the dr
   3 cm and two cells short of the cube (mpmsdem-run --flow-from: the same run, bit for bit,
   without the flow's way there): first touch, the first blow (the largest 10 ms mean of the
   flow's downstream force within 50 ms of the touch), the plateau (mean force over 0.4–0.5 s),
-  the cube's tilt and travel at 0.5 s.
+  the cube's tilt and travel at 0.5 s. The means are taken from the impulse coupled.h5 records
+  (every step's force; "forces_from": "impulse"); outputs written before it was recorded give
+  them from the records' own forces, one step's each ("records").
 
 The damping of the FLIP/PIC blend is a model quantity, so refinement must say which one it
 holds (``--hold``): ``viscosity`` keeps the PIC viscosity ν [m²/s] (damping rate 4ν/Δx² grows
@@ -27,7 +29,8 @@ second of the set at Δx 0.01 m (ν scales with Δx²: towards the inviscid μ(I
     /usr/bin/python3 scripts/validation/flume_convergence.py --out results/convergence --report-only --extrapolate
 
 Each spacing's numbers go to OUT/<run>.json when it ends (its scenes, logs and outputs to
-OUT/<run>/), and finished spacings are not run again: an interrupted sequence continues. The
+OUT/<run>/), and finished spacings are not run again: an interrupted sequence continues, a
+finished free leg is kept (--rerun-coupled runs the coupled legs again from it). The
 table of every finished run in OUT is printed (markdown) and written to OUT/convergence.md;
 with --extrapolate, the three finest spacings of each set, damping and width also get, per
 quantity, the observed order p and the value at Δx 0 of f = f0 + C Δx^p through the three
@@ -38,6 +41,7 @@ import glob
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -71,6 +75,9 @@ def parse(argv):
                     help="coupled run [s] > 0 (0.5; shorter runs report no plateau, tilt or travel)")
     ap.add_argument("--out", default="results/convergence", help="folder of the runs' JSON files")
     ap.add_argument("--report-only", action="store_true", help="only print and write the table of finished runs")
+    ap.add_argument("--rerun-coupled", action="store_true",
+                    help="run each spacing's coupled leg again from the free flow kept in OUT (after a change to "
+                         "what the records hold); its JSON before goes to OUT/<run>.json.previous")
     ap.add_argument("--extrapolate", action="store_true", help="Richardson estimates where the sequence allows")
     ap.add_argument("--package-data", action="store_true",
                     help="store the three finest spacings of --settings/--hold/--width as a study in "
@@ -177,13 +184,21 @@ def coupled(folder, duration):
     if not len(touched):
         return {"first_touch": None}
     t0 = float(t[touched[0]])
-    smooth = analysis.runningMean(t, ft, 0.01)
-    w = (t >= t0) & (t <= t0 + BLOW_WINDOW)
-    j = int(np.argmax(np.where(w, smooth, -np.inf)))
-    plateau = (t >= PLATEAU[0]) & (t <= PLATEAU[1])
     late = t[-1] >= AT - 2 * SERIES_EVERY  # the last record may fall just short of AT; a short run (a check's) has none
-    return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]),
-            "plateau": float(ft[plateau].mean()) if late else None,
+    if "J" in s:  # the impulse between records holds every step's force
+        smooth = analysis.windowMean(t, s["J"], 0.01)
+        end = min(PLATEAU[1], t[-1])  # (the last record may fall just short of it)
+        plateau = (np.interp(end, t, s["J"]) - np.interp(PLATEAU[0], t, s["J"])) / (end - PLATEAU[0]) if late else None
+        source = "impulse"
+    else:  # outputs written before it: the records' own forces, one step's each
+        smooth = analysis.runningMean(t, ft, 0.01)
+        window = (t >= PLATEAU[0]) & (t <= PLATEAU[1])
+        plateau = ft[window].mean() if window.any() else None
+        source = "records"
+    w = (t >= t0) & (t <= t0 + BLOW_WINDOW) & np.isfinite(smooth)
+    j = int(np.argmax(np.where(w, smooth, -np.inf)))
+    return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]), "forces_from": source,
+            "plateau": float(plateau) if late else None,
             "tilt_at": float(np.interp(AT, t, s["tilt"])) if late else None,
             "travel_at": float(np.interp(AT, t, s["travel"])) if late else None,
             "rotation_end": float(s["rotation"][-1]), "travel_end": float(s["travel"][-1]), "time_end": float(t[-1])}
@@ -222,8 +237,10 @@ def runOne(a, dx, exe):
         subprocess.run([sys.executable, os.path.abspath(__file__), "--child", "prepare", repr(dx)] + a.argv, check=True)
     with open(os.path.join(folder, "meta.json")) as f:
         meta = json.load(f)
+    if a.rerun_coupled and os.path.isdir(os.path.join(folder, "coupled")):
+        shutil.rmtree(os.path.join(folder, "coupled"))
     resume = os.path.exists(os.path.join(folder, "coupled", "coupled.checkpoint.json"))
-    free = meta.get("free_wall") if resume else None
+    free = meta.get("free_wall")  # written when the free leg ended: its outputs are whole
     started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
     if free is None:
         resume = False
@@ -417,9 +434,11 @@ def main(argv):
         exe = mpmsdem.driver.executable()
         for dx in a.dx:
             path = os.path.join(a.out, runName(a, dx) + ".json")
-            if os.path.exists(path):
+            if os.path.exists(path) and not a.rerun_coupled:
                 print("%s: done before (%s)" % (runName(a, dx), path))
                 continue
+            if a.rerun_coupled and os.path.exists(path):
+                os.replace(path, path + ".previous")  # what the rerun replaces, kept beside it
             t0 = time.time()
             print("%s: running (PIC viscosity %.4g m²/s, %s) ..." % (runName(a, dx), viscosity(a, dx), exe), flush=True)
             runOne(a, dx, exe)

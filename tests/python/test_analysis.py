@@ -165,3 +165,34 @@ def test_rest_time_of_a_block_decelerating_then_still():
             analysis.restTime(t, v, **bad)
     with pytest.raises(ValueError, match="rotation"):
         analysis.restTime(t, v, turn[:-1])
+
+
+def test_interval_and_window_means_of_an_impulse_by_hand():
+    """Records of an impulse J(t) = 2t + t^2 [N s] (force 2 + 2t): the mean between records is
+    (J_i - J_{i-1}) / (t_i - t_{i-1}), and a window centred on a record whose ends fall on
+    records gives the force at its centre exactly (J quadratic: the centred difference is
+    exact); where the window reaches past the records, NaN."""
+    np = pytest.importorskip("numpy")
+    t = np.array([0.0, 1.0, 3.0])
+    assert np.isnan(analysis.intervalMean(t, t ** 2)[0])
+    assert analysis.intervalMean(t, t ** 2)[1:].tolist() == [1.0, 4.0]
+    # per body columns: each column on its own
+    both = analysis.intervalMean(t, np.stack([t ** 2, 3 * t], axis=1))
+    assert both[1:].tolist() == [[1.0, 3.0], [4.0, 3.0]]
+    t = np.arange(0, 101) * 1e-3
+    J = 2 * t + t ** 2
+    f = analysis.windowMean(t, J, 0.01)
+    assert np.isnan(f[:5]).all() and np.isnan(f[-5:]).all() and not np.isnan(f[5:-5]).any()
+    np.testing.assert_allclose(f[5:-5], 2 + 2 * t[5:-5], rtol=0, atol=1e-12)
+    # window ends between records (h = 1 ms, w = 10.5 h): J is taken linear between them. The
+    # chord of t^3 over [x0, x1] lies s (1 - s) h^2 (x0 + x1 + x) above it at x = x0 + s h: for a
+    # quadratic the two ends' errors would cancel, for t^3 the upper end (s 1/4, x0 + x1 + x =
+    # 3t + 16.25 h) and the lower (s 3/4, 3t - 16.25 h) leave 0.1875 x 32.5 h^3 / w over the
+    # exact centred mean 3 t^2 + w^2 / 4
+    h, w = 1e-3, 0.0105
+    g = analysis.windowMean(t, t ** 3, w)
+    np.testing.assert_allclose(g[6:-6] - (3 * t[6:-6] ** 2 + w ** 2 / 4), 0.1875 * 32.5 * h ** 3 / w, rtol=1e-6)
+    with pytest.raises(ValueError, match="window"):
+        analysis.windowMean(t, J, 0)
+    with pytest.raises(ValueError, match="increase"):
+        analysis.intervalMean([0.0, 0.0], [1.0, 2.0])

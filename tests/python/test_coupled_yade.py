@@ -39,6 +39,7 @@ def test_blob_hitting_a_free_block_conserves_momentum_through_yade():
     O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
     O.dt = 1e-5
     p0 = momentum(mpm, cube)
+    v0 = np.array(O.bodies[cube].state.vel)
     hit = 0
     for _ in range(30):
         mpmsdem.run(100, coupled)
@@ -47,6 +48,10 @@ def test_blob_hitting_a_free_block_conserves_momentum_through_yade():
     assert hit > 4, "the blob never touched the block"
     assert O.bodies[cube].state.vel[0] > 0.1  # pushed downstream
     assert np.linalg.norm(p1 - p0) == pytest.approx(0, abs=1e-9 * np.linalg.norm(p0))
+    # the flow is the free block's only load: its impulse is the block's momentum change
+    J = np.array(coupled.impulse(cube))
+    dp = O.bodies[cube].state.mass * (np.array(O.bodies[cube].state.vel) - v0)
+    assert np.linalg.norm(J - dp) == pytest.approx(0, abs=1e-9 * np.linalg.norm(J))
     t = coupled.timings()
     assert t["steps"] == 3000 and t["coupling"] > 0 and t["mpm"] > 0
 
@@ -148,8 +153,14 @@ def test_outputs_h5py_paraview_and_yade_plot(tmp_path):
         n = s["time"].shape[0]
         assert n == 16  # t = 0, then every 2 ms up to 0.03 s (the state the run ended with)
         assert s["time"][0] == 0 and s["time"][-1] == pytest.approx(0.03, abs=1e-12)
-        for name in ("pos", "vel", "rotation", "flow_force", "face_force", "edge_force", "flow_torque"):
+        for name in ("pos", "vel", "rotation", "flow_force", "face_force", "edge_force", "flow_torque", "flow_impulse",
+                     "flow_angular_impulse"):
             assert s[name].shape == (n, 3), name
+        # the impulse between records is the block's momentum change over them (no other load)
+        m = O.bodies[cube].state.mass
+        np.testing.assert_allclose(np.diff(s["flow_impulse"][:], axis=0), m * np.diff(s["vel"][:], axis=0), rtol=0,
+                                   atol=1e-9 * np.abs(s["flow_impulse"][:]).max())
+        assert s["flow_impulse"][0].tolist() == [0, 0, 0] and s["flow_impulse"][-1, 0] > 0
         assert s["contacts"].shape == (n, 1)
         # F_t = F_f + F_e at every record (paper §3.2.3)
         np.testing.assert_allclose(s["flow_force"][:], s["face_force"][:] + s["edge_force"][:], rtol=0, atol=1e-12)

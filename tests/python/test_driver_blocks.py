@@ -100,7 +100,8 @@ def test_driver_matches_yade_for_the_same_coupled_scene(tmp_path):
     assert np.abs(y["flow_force"][:, 3:]).max() > 0.05
     # same trajectories, forces and energies: round-off only (measured: 5e-16 relative in
     # position, 4e-14 in velocity, rotation and force after 1200 steps)
-    for k in ("pos", "vel", "rotation", "flow_force", "face_force", "edge_force", "flow_kinetic", "block_kinetic"):
+    for k in ("pos", "vel", "rotation", "flow_force", "face_force", "edge_force", "flow_impulse", "flow_angular_impulse",
+              "flow_kinetic", "block_kinetic"):
         a, b = y[k], d[k]
         assert np.abs(a - b).max() <= 1e-11 * np.abs(a).max(), k
     # blockedDOFs 'yzXY' held in the driver: y, z fixed, rotation about z only; the bed fixed

@@ -291,6 +291,9 @@ TEST_P(CoupledCheckpointEveryBackend, RestoredWorldContinuesTheSameRunBitForBit)
   EXPECT_EQ(again.historyXi, c.historyXi);
   EXPECT_EQ(again.couplingFriction, c.couplingFriction);
   EXPECT_EQ(again.couplingDamping, c.couplingDamping);
+  ASSERT_EQ(c.couplingImpulse.size(), 2u * CouplingReport::kImpulseValues);
+  EXPECT_GT(Vec3(c.couplingImpulse[0], c.couplingImpulse[1], c.couplingImpulse[2]).norm(), 0.0);
+  EXPECT_EQ(again.couplingImpulse, c.couplingImpulse);
 
   for (int k = 0; k < 200; ++k) {
     a->step(dt);
@@ -301,6 +304,8 @@ TEST_P(CoupledCheckpointEveryBackend, RestoredWorldContinuesTheSameRunBitForBit)
   EXPECT_EQ(a->world.engine.orientation(0).coeffs(), b->world.engine.orientation(0).coeffs());
   EXPECT_EQ(a->world.engine.angularVelocity(0), b->world.engine.angularVelocity(0));
   EXPECT_EQ(a->coupling.force(0), b->coupling.force(0));
+  EXPECT_EQ(a->coupling.impulse(0), b->coupling.impulse(0));
+  EXPECT_EQ(a->coupling.angularImpulse(0), b->coupling.angularImpulse(0));
   mpm::ParticleSet pa, pb;
   a->mpm().getParticles(pa);
   b->mpm().getParticles(pb);
@@ -383,6 +388,8 @@ TEST_P(StartFromFlowEveryBackend, GoesOnAsTheRunFromTheStart) {
   EXPECT_EQ(started->world.engine.angularVelocity(1), whole->world.engine.angularVelocity(1));
   EXPECT_EQ(started->coupling.force(1), whole->coupling.force(1));
   EXPECT_EQ(started->coupling.frictionDissipation(), whole->coupling.frictionDissipation());
+  EXPECT_EQ(started->coupling.impulse(0), whole->coupling.impulse(0));  // the bed's, kept from the source
+  EXPECT_EQ(started->coupling.impulse(1), whole->coupling.impulse(1));
   EXPECT_EQ(started->contactStepLow().step, whole->contactStepLow().step);
   mpm::ParticleSet pa, pb;
   whole->mpm().getParticles(pa);
@@ -756,17 +763,25 @@ TEST_P(MpSdemCouplingInPrecision, ImpulseBalanceAndMomentumConservation) {
   const int cube = addCube(w, 0.02, 0.003, Vec3(0.125, 0.07, 0.07), 2000);
   w.coupling.setPair(0, pair(0.3));
   const Vec3 p0 = particleMomentum(w.mpm()) + w.world.engine.mass(cube) * w.world.engine.velocity(cube);
+  const Vec3 v0 = w.world.engine.velocity(cube);
   const double dt = 1e-5;
   double maxForce = 0;
+  Vec3 stepSum = Vec3::Zero();
   int steps = 0, contactSteps = 0;
   for (; steps < 4000; ++steps) {
     w.step(dt);
     if (w.coupling.contactCount(cube) > 0) ++contactSteps;
     maxForce = std::max(maxForce, w.coupling.force(cube).norm());
+    stepSum += dt * w.coupling.force(cube);
     if (w.world.engine.velocity(cube).x() > 0.5) break;
   }
   ASSERT_GT(contactSteps, 50) << "the blob never hit the block";
   EXPECT_GT(w.world.engine.velocity(cube).x(), 0.1);
+  // The impulse the coupling keeps is the flow's only action on the free cube: m (v1 - v0), both
+  // summed in double step by step (a few ulps of |J| over the steps).
+  const Vec3 J = w.coupling.impulse(cube), dp = w.world.engine.mass(cube) * (w.world.engine.velocity(cube) - v0);
+  EXPECT_NEAR((J - stepSum).norm(), 0.0, 1e-12 * J.norm());
+  EXPECT_NEAR((J - dp).norm(), 0.0, 1e-9 * J.norm()) << "J " << J.transpose() << " m dv " << dp.transpose();
   const Vec3 p1 = particleMomentum(w.mpm()) + w.world.engine.mass(cube) * w.world.engine.velocity(cube);
   // Float: each MPM step leaves every particle velocity with a rounding of at most about eps/2
   // of |v| <= 1 m/s, of the same sign for all in the worst case (the contact forces reach the

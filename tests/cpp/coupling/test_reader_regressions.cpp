@@ -31,7 +31,7 @@ nlohmann::json checkpoint() {
     "bodies": [{"pos": [0.1, 0.2, 0.3], "ori": [1, 0, 0, 0], "vel": [0.5, 0, 0], "ang_vel": [0, 0, 1], "ang_mom": null}],
     "sdem_histories": [[0, -2, 0, 2, 3, 5, 1e-6, -2e-6, 0]], "sdem_dissipation": [0.01, 0.002], "history_slots": 4,
     "history_particles": 1000, "coupling_histories": [[17, 456, 0, 2e-7, 0]], "coupling_dissipation": [0.003, 0.0004],
-    "reference_orientations": [[1, 0, 0, 0]]})");
+    "coupling_impulse": [[0.001, 0, -2e-4, 0, 1e-6, 0]], "reference_orientations": [[1, 0, 0, 0]]})");
 }
 
 }  // namespace
@@ -63,6 +63,16 @@ TEST(ReaderRegressions, CheckpointFieldsOutOfRangeAreRefusedByName) {
   refused("/bodies/0/vel/1", "fast", "bodies[0].vel[1] = a JSON string: must be a number");
   refused("/time", true, "time = a JSON boolean: must be a number");
   refused("/bodies", 5, "bodies = 5: must be an array");
+  refused("/coupling_impulse/0", nlohmann::json::array({1, 2}), "coupling_impulse[0] = 2 values: must be an array of 6");
+  refused("/coupling_impulse/0/4", "large", "coupling_impulse[0][4] = a JSON string: must be a number");
+  refused("/coupling_impulse", nlohmann::json::array(), "coupling_impulse = 0 entries: must be one per block of");
+  // a checkpoint with blocks from before the impulse was kept: a restart would break the
+  // impulse series, so it is refused, naming what is missing
+  nlohmann::json old = checkpoint();
+  old.erase("coupling_impulse");
+  std::ofstream(path) << old.dump();
+  expectRefused([&] { readCheckpoint(path); }, {path, "coupling_impulse: missing"});
+  EXPECT_EQ(c.couplingImpulse, (std::vector<double>{0.001, 0, -2e-4, 0, 1e-6, 0}));
   std::remove(path.c_str());
 }
 
