@@ -251,10 +251,7 @@ CoupledCheckpoint readCheckpoint(const std::string& path, const std::string& opt
     const json& cd = list(member(j, "", "coupling_dissipation"), "coupling_dissipation", 2);
     c.couplingFriction = real(cd[0], "coupling_dissipation[0]");
     c.couplingDamping = real(cd[1], "coupling_dissipation[1]");
-    if (!j.contains("coupling_impulse") && !bodies.empty())
-      throw ParameterError("coupling_impulse: missing: the checkpoint is from a version of mpmsdem that did not "
-                           "keep the flow's impulse on each block, which coupled.h5's flow_impulse series goes on "
-                           "from; run the scene again from its start");
+    // (absent from checkpoints written before it was kept: the impulse then counts from the restart)
     if (j.contains("coupling_impulse")) {
       const json& ci = list(j["coupling_impulse"], "coupling_impulse");
       if (ci.size() != bodies.size())
@@ -309,7 +306,7 @@ void restoreCheckpoint(const CoupledCheckpoint& c, CoupledWorld& w) {
     w.coupling.setHistories(keys, xi);
   }
   w.coupling.setDissipation(c.couplingFriction, c.couplingDamping);
-  if (c.couplingImpulse.size() != static_cast<std::size_t>(CouplingReport::kImpulseValues) * n)
+  if (!c.couplingImpulse.empty() && c.couplingImpulse.size() != static_cast<std::size_t>(CouplingReport::kImpulseValues) * n)
     throwParameter("--restart: checkpoint coupling_impulse", c.couplingImpulse.size() / CouplingReport::kImpulseValues,
                    "blocks", "the scene's " + std::to_string(n) + " blocks");
   w.coupling.setImpulses(c.couplingImpulse);

@@ -15,7 +15,8 @@
 //   "coupling_histories": [[slot, key, xi_x, xi_y, xi_z]] (occupied slots only),
 //   "coupling_dissipation": [friction, damping], "coupling_impulse": [[J_x, J_y, J_z, L_x, L_y, L_z]]
 //   (per block: the flow's impulse and angular impulse since the run's start, which coupled.h5's
-//   flow_impulse series go on from), "reference_orientations": [[w, x, y, z]]}.
+//   flow_impulse series go on from; absent from checkpoints written before they were kept, and
+//   then they count from the restart), "reference_orientations": [[w, x, y, z]]}.
 // A step of +inf (no contact) is written as null.
 #pragma once
 #include <string>
@@ -47,7 +48,7 @@ struct CoupledCheckpoint {
   std::vector<long long> historyKey;
   std::vector<double> historyXi;         // 3 per occupied slot
   double couplingFriction = 0, couplingDamping = 0;
-  std::vector<double> couplingImpulse;  // CouplingReport::kImpulseValues per block
+  std::vector<double> couplingImpulse;  // CouplingReport::kImpulseValues per block (empty: zero)
   std::vector<Quat> referenceOrientations;
 };
 

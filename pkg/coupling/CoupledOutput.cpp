@@ -38,6 +38,14 @@ CoupledOutput::CoupledOutput(const std::string& dir, bool append, const sdem::Sd
     os << "]";
     return os.str();
   };
+  // A run continued from a checkpoint written before the impulses were recorded: the records
+  // before it get NaN rows, so that every series keeps a row per record (the impulse then counts
+  // from the restart).
+  const long before = append ? h5_.seriesLength("time") : 0;
+  for (const char* name : {"flow_impulse", "flow_angular_impulse"})
+    if (before > 0 && h5_.seriesLength(name) == 0)
+      for (long r = 0; r < before; ++r)
+        h5_.appendVector(name, std::vector<double>(3 * all.size(), std::numeric_limits<double>::quiet_NaN()));
   h5_.setAttribute("ids", list(all));
   if (!otherIds.empty()) h5_.setAttribute("levelset_ids", list(otherIds));
   h5_.setAttribute("units",

@@ -5,7 +5,9 @@
 //                     edge_force F_e (§3.2.3), flow_torque, flow_impulse and flow_angular_impulse
 //                     (the flow's force and torque summed over every step times its dt since
 //                     the run's start: their difference over an interval between two records
-//                     is the mean force and torque between them) (each records x 3 blocks),
+//                     is the mean force and torque between them; NaN in the records before a
+//                     restart from a checkpoint that did not keep them, and counted from there)
+//                     (each records x 3 blocks),
 //                     contacts (records x blocks); energy series are appended by the caller. Bodies
 //                     beside the SDEM blocks (YADE LevelSet bodies, root attribute
 //                     "levelset_ids") follow the blocks in "ids" and in every per-block series;

@@ -547,16 +547,13 @@ class CoupledEngine(Engine, _StepControl):
                 eng._bridge.particleApproachStep = float(data["particleApproachStep"])
         eng._bridge.setHistories(base64.b64decode(data["historyKeys"]), base64.b64decode(data["historyXi"]))
         eng._bridge.setDissipation(*data["dissipation"])
-        if "impulse" not in data:
-            raise ValueError("prefix = %r: %s.coupled.json has no \"impulse\": it is from a version of mpmsdem that "
-                             "did not keep the flow's impulse on each body, which coupled.h5's flow_impulse series "
-                             "goes on from; run the scene again from the start" % (prefix, prefix))
-        eng._bridge.setImpulses(data["impulse"])
+        # (a checkpoint written before the impulses were kept has none: they count from here)
+        eng._bridge.setImpulses(data.get("impulse", []))
         if data.get("levelSets"):
             eng._bridge.setLevelSetHistories(base64.b64decode(data["levelSetHistoryKeys"]),
                                              base64.b64decode(data["levelSetHistoryXi"]))
             eng._bridge.setLevelSetDissipation(*data["levelSetDissipation"])
-            eng._bridge.setLevelSetImpulses(data["levelSetImpulse"])
+            eng._bridge.setLevelSetImpulses(data.get("levelSetImpulse", []))
         eng._bridge.setReferenceOrientations(data["referenceOrientations"])
         eng._ori0 = {int(i): Quaternion(*q) for i, q in data["plotOrientations"].items()}
         eng._appendOutput = bool(appendOutput) and data.get("outputOpen", True)

@@ -241,6 +241,10 @@ def runOne(a, dx, exe):
         shutil.rmtree(os.path.join(folder, "coupled"))
     resume = os.path.exists(os.path.join(folder, "coupled", "coupled.checkpoint.json"))
     free = meta.get("free_wall")  # written when the free leg ended: its outputs are whole
+    previous = os.path.join(a.out, runName(a, dx) + ".json.previous")
+    if free is None and a.rerun_coupled and os.path.exists(previous):
+        with open(previous) as f:  # a run finished before meta.json kept it
+            free = json.load(f)["wall_seconds"]["free"]
     started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
     if free is None:
         resume = False

@@ -297,6 +297,43 @@ def test_coupled_driver_restart_continues_the_same_run_bit_for_bit(tmp_path, dt,
         assert np.ptp(np.diff(d["time"])) > 0  # the contacts did set the steps
 
 
+def test_a_restart_from_a_checkpoint_without_impulses_counts_them_from_there(tmp_path):
+    """A run continued from a checkpoint (and coupled.h5) of a version that kept no impulses:
+    the restart goes on, every series keeps a row per record (NaN impulses before the restart),
+    and from there the impulse changes between records are those of the unbroken run
+    (round-off: the sums start from another origin)."""
+    exe = driver_exe()
+    coupled, _ = scene(tmp_path / "yade", stiffness=1e5, velocity=(1.0, 0, -1.0))
+    steps = 1200
+    path = driver.writeScene(str(tmp_path / "scene.json"), coupled, duration=1.0, dt=4e-5, seriesEvery=1e-9,
+                             outputEvery=2e-3, outputDir=str(tmp_path / "whole"), vtk="none")
+
+    def drive(out, n, restart=False):
+        r = subprocess.run([exe, path, "--out", str(out), "--steps", str(n)] + (["--restart"] if restart else []),
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+
+    drive(tmp_path / "whole", steps)
+    split = tmp_path / "split"
+    drive(split, steps // 2)
+    c = json.loads((split / "coupled.checkpoint.json").read_text())
+    assert np.abs(np.array(c.pop("coupling_impulse"))[:, :3]).max() > 0  # the blob had pushed the blocks
+    (split / "coupled.checkpoint.json").write_text(json.dumps(c))
+    for name in ("coupled.h5", "coupled.h5.restart"):
+        with h5py.File(split / name, "a") as f:
+            del f["series/flow_impulse"], f["series/flow_angular_impulse"]
+    drive(split, steps - steps // 2, restart=True)
+    w, _ = series(tmp_path / "whole" / "coupled.h5")
+    d, _ = series(split / "coupled.h5")
+    restart = steps // 2  # the record at the restart is the old run's
+    for k in ("flow_impulse", "flow_angular_impulse"):
+        assert d[k].shape == w[k].shape == (steps + 1, w["pos"].shape[1])
+        assert np.isnan(d[k][:restart + 1]).all() and np.isfinite(d[k][restart + 1:]).all()
+        np.testing.assert_allclose(np.diff(d[k][restart + 1:], axis=0), np.diff(w[k][restart + 1:], axis=0), rtol=0,
+                                   atol=1e-12 * np.abs(w[k]).max())
+    np.testing.assert_array_equal(d["pos"], w["pos"])
+
+
 def test_a_signal_stops_the_coupled_driver_with_its_state_saved_and_restart_goes_on_bit_for_bit(tmp_path):
     """SIGTERM (as `timeout` or a batch system sends it) stops a coupled run after the step in
     progress with exit status 4, its state saved as a snapshot with the coupled checkpoint of
