@@ -58,6 +58,7 @@ AHEAD = 0.03                 # the coupled run starts from the free flow with it
 CUBE = 0.02                  # the cube's side h_b [m] (examples/flume_block.py)
 FOREMOST = 20                # the front's tip: the 20 most downstream points (their mean height: where its edge runs)
 AT = 0.5                     # tilt and travel read at this time [s]
+WINDOWS = (0.005, 0.02, 0.03)  # the first blow is also given as the largest mean over these [s]
 
 
 def parse(argv):
@@ -75,6 +76,9 @@ def parse(argv):
                     help="coupled run [s] > 0 (0.5; shorter runs report no plateau, tilt or travel)")
     ap.add_argument("--out", default="results/convergence", help="folder of the runs' JSON files")
     ap.add_argument("--report-only", action="store_true", help="only print and write the table of finished runs")
+    ap.add_argument("--reread", action="store_true",
+                    help="read each finished run's cube numbers in OUT again from its outputs (after a change to "
+                         "what is read), without running anything")
     ap.add_argument("--rerun-coupled", action="store_true",
                     help="run each spacing's coupled leg again from the free flow kept in OUT (after a change to "
                          "what the records hold); its JSON before goes to OUT/<run>.json.previous")
@@ -197,7 +201,15 @@ def coupled(folder, duration):
         source = "records"
     w = (t >= t0) & (t <= t0 + BLOW_WINDOW) & np.isfinite(smooth)
     j = int(np.argmax(np.where(w, smooth, -np.inf)))
-    return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]), "forces_from": source,
+    extra = {}
+    if source == "impulse":
+        # the blow over other windows, and the impulse of its first 20 ms (none before the touch)
+        for window in WINDOWS:
+            m = analysis.windowMean(t, s["J"], window)
+            m = np.where(w & np.isfinite(m), m, -np.inf)
+            extra["blow_%gms" % (1e3 * window)] = float(m.max())
+        extra["impulse_20ms"] = float(np.interp(t0 + 0.02, t, s["J"]))
+    return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]), "forces_from": source, **extra,
             "plateau": float(plateau) if late else None,
             "tilt_at": float(np.interp(AT, t, s["tilt"])) if late else None,
             "travel_at": float(np.interp(AT, t, s["travel"])) if late else None,
@@ -433,7 +445,18 @@ def main(argv):
     if a.child:
         prepare(a, float(a.child[1]), os.path.join(a.out, runName(a, float(a.child[1]))))
         return
-    if not a.report_only:
+    if a.reread:
+        for path in sorted(glob.glob(os.path.join(a.out, "*.json"))):
+            with open(path) as f:
+                r = json.load(f)
+            folder = path[:-len(".json")]
+            if "same_run_as" in r or not os.path.exists(os.path.join(folder, "coupled", "coupled.h5")):
+                continue
+            r["coupled"] = coupled(folder, r["duration"])
+            with open(path + ".tmp", "w") as f:
+                json.dump(r, f, indent=1)
+            os.replace(path + ".tmp", path)
+    elif not a.report_only:
         import mpmsdem.driver
         exe = mpmsdem.driver.executable()
         for dx in a.dx:
