@@ -7,6 +7,7 @@
         print(row)
     tradeoffs.nearest("first_touch", cells_per_block_height=2)     # the error measured nearest a setting
     tradeoffs.propose(1.0, output="peak_force")     # a wall's first blow, in cells per flow depth
+    tradeoffs.propose(0.3, output="block_peak_force")   # the §3.2 cube's, in cells per block height
 
 The numbers are measurements, shipped with the package in ``tradeoffs.json`` and written by the
 scripts that made them (``scripts/bench/tradeoff_mpm.py``,
@@ -20,8 +21,8 @@ cells per block height; a rigid wall struck by the flume's flow at 2.4, 4.2 and 
 flow depth) takes the limit extrapolated through its three spacings as the reference
 (``extrapolated``: how) and lists the outputs whose sequence gave no limit under
 ``unconverged``; asking for one of those raises a ValueError that says what was measured, or,
-where another study's converged (the wall's first blow: the cube's did not), the proposal
-carries the others' findings in ``caveats`` (:func:`unconverged` lists them). Proposals come from the resolution settings (grid
+where another study's converged, the proposal carries the others' findings in ``caveats``
+(:func:`unconverged` lists them). Proposals come from the resolution settings (grid
 spacing, points per cell, precision); rows
 that change a model choice such as the FLIP/PIC alpha are listed by :func:`table` with
 ``sensitivity`` set, and not proposed. A proposal is therefore an empirical
