@@ -69,6 +69,13 @@ inline bp::object numpyArrayInt(const std::vector<long>& data) {
   return bp::object(bp::handle<>(arr));
 }
 
+// The numbers of a Python sequence of any length, as doubles.
+inline std::vector<double> sequenceOfDoubles(const bp::object& values) {
+  std::vector<double> out;
+  for (long i = 0, n = bp::len(values); i < n; ++i) out.push_back(bp::extract<double>(values[i]));
+  return out;
+}
+
 // A contiguous copy of a numpy-compatible object as doubles; checks the element count.
 inline std::vector<double> fromNumpy(const bp::object& o, std::size_t expected, const char* name) {
   PyObject* arr = PyArray_FROMANY(o.ptr(), NPY_DOUBLE, 0, 0, NPY_ARRAY_C_CONTIGUOUS | NPY_ARRAY_ALIGNED);

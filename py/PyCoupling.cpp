@@ -284,9 +284,9 @@ class PyCoupling {
   // The flow's impulses on the blocks and on the LevelSet bodies since the run's start
   // (CouplingReport::impulses, 6 a body), which coupled.h5's flow_impulse series go on from.
   bp::list blockImpulses() const { return impulseList(coupling_); }
-  void setImpulses(const bp::object& values) { coupling_.setImpulses(doubles(values)); }
+  void setImpulses(const bp::object& values) { coupling_.setImpulses(sequenceOfDoubles(values)); }
   bp::list levelSetImpulses() const { return impulseList(levelSets_); }
-  void setLevelSetImpulses(const bp::object& values) { levelSets_.setImpulses(doubles(values)); }
+  void setLevelSetImpulses(const bp::object& values) { levelSets_.setImpulses(sequenceOfDoubles(values)); }
   bp::list referenceOrientations() const {
     bp::list l;
     for (const Quat& q : output_ ? output_->referenceOrientations() : ori0_)
@@ -394,11 +394,6 @@ class PyCoupling {
     bp::list l;
     for (double v : c.impulses()) l.append(v);
     return l;
-  }
-  static std::vector<double> doubles(const bp::object& values) {
-    std::vector<double> out;
-    for (long i = 0, n = bp::len(values); i < n; ++i) out.push_back(bp::extract<double>(values[i]));
-    return out;
   }
   // Tangential histories of a coupling as raw bytes (int64 keys, float64 xi: a restart is
   // bit-for-bit) and its slots per particle, and back.

@@ -158,9 +158,7 @@ class PyMpm {
   }
   void appendVector(const std::string& name, const bp::object& values) {
     requireOutput();
-    std::vector<double> v;
-    for (long i = 0; i < bp::len(values); ++i) v.push_back(bp::extract<double>(values[i]));
-    h5_->appendVector(name, v);
+    h5_->appendVector(name, sequenceOfDoubles(values));
   }
 
  private:
