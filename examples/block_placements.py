@@ -157,7 +157,7 @@ def collect(a, dx, dt, steps, seconds, start):
     rows = []
     for k, (x, p) in enumerate(zip(a.at, probes)):
         s, _ = analysis.driverBlockSeries(os.path.join(a.out, "at_%d" % k), initial=False)
-        peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
+        peak, tPeak = analysis.peakMeanForce(s, 0.01)
         row = {"x": x, "arrival": p["arrival"], "h_f": p["h_f"], "v_f": p["v_f"], "eq20_force": None,
                "travel": float(s["travel"][-1]), "rotation_deg": float(s["rotation"][-1]),
                "peak_force": peak, "peak_time": tPeak, "speed_end": float(abs(s["vx"][-1])),

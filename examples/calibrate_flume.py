@@ -103,7 +103,7 @@ def _flumeResults(s, front, duration, particles, blend):
     [m] at the end of a run of ``duration`` [s]."""
     from mpmsdem import analysis
     from flume_block import COLUMN, blockEvents
-    peak, _ = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
+    peak, _ = analysis.peakMeanForce(s, 0.01)
     out = {"travel": float(s["travel"][-1]), "runout": front - COLUMN, "peak_force": peak, "particles": particles,
            "flip_blend": blend}
     out.update(blockEvents(s, duration))

@@ -173,7 +173,8 @@ def plot(s, title, ff, path):
     ax[0, 0].legend()
     ax[0, 0].set_title("Block kinematics")
     smooth = lambda f: analysis.runningMean(t, f, 0.01)  # noqa: E731
-    ax[0, 1].plot(t, smooth(s["Ft"]), label="F_t (flow on block, downstream)")
+    ax[0, 1].plot(t, analysis.meanForce(s, 0.01),
+                  label="F_t (flow on block, downstream; from the %s)" % analysis.forceSource(s))
     ax[0, 1].plot(t, smooth(s["Ff"]), label="F_f (faces)", alpha=0.7)
     ax[0, 1].plot(t, smooth(s["Fe"]), label="F_e (edges, vertices)", alpha=0.7)
     if ff:
@@ -184,6 +185,7 @@ def plot(s, title, ff, path):
     ax[0, 1].set_ylabel("force [N] (10 ms mean)")
     ax[0, 1].legend(fontsize=8)
     ax[0, 1].set_title("Impact force")
+    # the faces' share from the records alike (the impulse is kept for the whole block only)
     ratio = np.where(np.abs(smooth(s["Ft"])) > 1e-3, smooth(s["Ff"]) / np.where(smooth(s["Ft"]) == 0, 1, smooth(s["Ft"])),
                      np.nan)
     ax[1, 0].plot(t, ratio)
@@ -226,15 +228,14 @@ def plotFaces(s, title, path):
 
 
 def blockEvents(s, duration):
-    """The §3.2 targets of a cube's series (keys of Flume.series): first touch, F_t at 0.4 s and
-    over 0.4–0.7 s (10 ms means), rotation (and, where the series has them, tilt and yaw) at
+    """The §3.2 targets of a cube's series (keys of Flume.series): first touch, F_t at 0.4 s (its
+    mean over 0.395–0.405 s) and over 0.4–0.7 s (both from the impulse), rotation (and, where the series has them, tilt and yaw) at
     0.4/0.5/0.7 s, when the rotation reaches 45°, the speed at the end (downstream: speed_end; of
     the centre: centre_speed_end), when it comes to rest for good (rest_time, None
     while still moving: :func:`mpmsdem.analysis.restTime`, no point of the cube faster than
     1 cm/s from then on); the keys of calibrate_flume.flumeRun."""
     import numpy as np
     t, ft, rot = s["t"], s["Ft"], s["rotation"]
-    smooth = analysis.runningMean(t, ft, 0.01)
     touched = np.nonzero(np.abs(ft) > 0)[0]
     turned = np.nonzero(rot >= 45.0)[0]
     out = {"first_touch": float(t[touched[0]]) if len(touched) else duration,
@@ -249,11 +250,10 @@ def blockEvents(s, duration):
             out["rotation_" + label] = float(np.interp(at, t, rot))
             if "tilt" in s:
                 out["tilt_" + label] = float(np.interp(at, t, s["tilt"]))
-    if duration >= 0.4:
-        out["force_04"] = float(np.interp(0.4, t, smooth))
+    if duration >= 0.405:
+        out["force_04"] = analysis.meanForceBetween(s, 0.395, 0.405)
     if duration >= 0.7:
-        window = (t >= 0.4) & (t <= 0.7)
-        out["force_mean"] = float(ft[window].mean())
+        out["force_mean"] = analysis.meanForceBetween(s, 0.4, 0.7)
     return out
 
 
@@ -282,7 +282,7 @@ def fromDriver(a):
     import h5py
     with h5py.File(os.path.join(a.from_driver, "mpm.h5"), "r") as f:
         blend = f.attrs.get("flip_blend", "not recorded (written before the blend was recorded: alpha per step)")
-    peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
+    peak, tPeak = analysis.peakMeanForce(s, 0.01)
     summary = {"dx": scene["grid"]["dx"], "duration": float(s["t"][-1]), "travel": float(s["travel"][-1]),
                "peak_force": peak, "peak_time": tPeak, "rotation_deg": float(s["rotation"][-1]),
                "dt": scene["run"].get("dt"), "flip_blend": blend,

@@ -261,8 +261,9 @@ def events(s):
                      "travel": s.travel(k), "dz": float(z[-1, k] - z[0, k])}
     # after the impact transient: from 20 ms after the bottom block's peak to the end
     d = s.series(0)
-    after = d["t"] >= out["bottom"]["peak_time"] + 0.02
-    out["bottom"]["mean_force_after"] = float(d["Ft"][after].mean()) if after.any() else None
+    start = out["bottom"]["peak_time"] + 0.02
+    out["bottom"]["mean_force_after"] = analysis.meanForceBetween(d, start, d["t"][-1]) \
+        if start < d["t"][-1] else None
     fallen = np.nonzero(z[:, 1] < z[0, 1] - FALL_DROP)[0]
     out["middle"]["fall_time"] = float(t[fallen[0]]) if len(fallen) else None
     fallen = np.nonzero(z[:, 2] < z[0, 2] - FALL_DROP)[0]
@@ -279,7 +280,7 @@ def plot(s, ff, eq20, path):
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
     for k, name in enumerate(NAMES):
         d = s.series(k)
-        ax[0].plot(d["t"], analysis.runningMean(d["t"], d["Ft"], SMOOTH), label="%s block" % name)
+        ax[0].plot(d["t"], analysis.meanForce(d, SMOOTH), label="%s block" % name)
     if ff:
         ax[0].axhline(eq20, color="k", ls="--", label="Eq 20, bottom block (Fr = %.2f)" % ff["Fr"])
     ax[0].axhline(9.7, color="grey", ls=":", label="paper §3.3, computed peak 9.7 N")

@@ -183,11 +183,10 @@ def _coupledResults(out, ff, s, duration, potential0, before=None):
     flow's energies before the first record of ``s`` (t, flow_kinetic, flow_potential,
     block_kinetic), for a run that started later than the release."""
     from mpmsdem import analysis
-    peak, tPeak = analysis.smoothedPeak(s["t"], s["Ft"], 0.01)
+    peak, tPeak = analysis.peakMeanForce(s, 0.01)
     # the same over 50 ms: past the first 10-20 ms of a blow, whose size the flow's E sets
-    peakLong, _ = analysis.smoothedPeak(s["t"], s["Ft"], 0.05)
-    late = s["t"] >= s["t"][-1] - 0.1
-    static = float(s["Ft"][late].mean())
+    peakLong, _ = analysis.peakMeanForce(s, 0.05)
+    static = analysis.meanForceBetween(s, s["t"][-1] - 0.1, s["t"][-1])
     A = min(ff["h_f"], HB) * HB  # impact area: the flow's depth on the cube's face, at most its height
     travel = float(s["travel"][-1])
     # A cube carried to the flume's end, pushed back by the flow the end wall turned (a

@@ -377,6 +377,67 @@ def windowMean(t, impulse, window):
     return np.where(inside, out, np.nan)
 
 
+def impulseMean(t, impulse, start, end):
+    """The mean force between times ``start`` and ``end`` [s] from the impulse summed since the
+    run's start (coupled.h5's ``flow_impulse``): (J(end) − J(start)) / (end − start) [N], J
+    interpolated linearly between records. Unlike the mean of the records' own forces (one
+    step's each) it holds every step of the interval."""
+    import numpy as np
+    t, j = np.asarray(t, dtype=float), np.asarray(impulse, dtype=float)
+    if not end > start:
+        raise ValueError("end = %r: must be > start = %r s" % (end, start))
+    slack = 1e-9 * (end - start)
+    if len(t) < 2 or start < t[0] - slack or end > t[-1] + slack:
+        raise ValueError("[%r, %r] s: must lie within the records, [%r, %r] s" % (
+            start, end, t[0] if len(t) else None, t[-1] if len(t) else None))
+    return float((np.interp(end, t, j) - np.interp(start, t, j)) / (end - start))
+
+
+def forceSource(series):
+    """Where :func:`meanForce` and :func:`meanForceBetween` read a block's force from: "impulse"
+    where the series records one (``series["J"]``, every step's force), else "records" (files
+    written before the impulse was recorded: the records' own forces ``series["Ft"]``, one
+    step's each, noisier: a contact force swings from step to step)."""
+    import numpy as np
+    return "impulse" if "J" in series and np.isfinite(series["J"]).any() else "records"
+
+
+def meanForce(series, window):
+    """A block's downstream flow force averaged over ``window`` [s] centred on each record [N]:
+    :func:`windowMean` of its impulse, or :func:`runningMean` of its records' forces
+    (:func:`forceSource`). ``series``: a dict of :meth:`mpmsdem.flume.Flume.series` or
+    :func:`driverBlockSeries`."""
+    if forceSource(series) == "impulse":
+        return windowMean(series["t"], series["J"], window)
+    return runningMean(series["t"], series["Ft"], window)
+
+
+def meanForceBetween(series, start, end):
+    """A block's mean downstream flow force between ``start`` and ``end`` [s] [N]:
+    :func:`impulseMean` of its impulse, or the mean of its records' forces in [start, end]
+    (:func:`forceSource`)."""
+    import numpy as np
+    if forceSource(series) == "impulse":
+        return impulseMean(series["t"], series["J"], start, end)
+    t = np.asarray(series["t"])
+    inside = (t >= start) & (t <= end)
+    if not inside.any():
+        raise ValueError("[%r, %r] s: no record there" % (start, end))
+    return float(np.asarray(series["Ft"])[inside].mean())
+
+
+def peakMeanForce(series, window):
+    """The largest of :func:`meanForce` (a block's downstream flow force over ``window`` [s]) and
+    its time: (peak [N], t_peak [s]); windows that reach past the records are left out."""
+    import numpy as np
+    f = meanForce(series, window)
+    if not np.isfinite(f).any():
+        raise ValueError("window = %r s: longer than the records (%r to %r s)" % (
+            window, float(series["t"][0]), float(series["t"][-1])))
+    j = int(np.nanargmax(f))
+    return float(f[j]), float(series["t"][j])
+
+
 def smoothedPeak(t, f, smooth=None):
     """Largest value of the series f(t) and its time: (peak, t_peak). With ``smooth`` [s] the
     series is first averaged over that window (:func:`runningMean`)."""

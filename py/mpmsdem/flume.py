@@ -11,7 +11,7 @@ SDEM contacts.
 
     scene = mpmsdem.flume.Flume(dx=0.02, blocks=[mpmsdem.flume.Block(half=(0.01,) * 3, x=0.51)])
     scene.run(1.5)
-    print(scene.travel(0), scene.peakForce(0))
+    print(scene.travel(0), scene.peakForce(0, smooth=0.01))
 """
 import math
 import os
@@ -351,7 +351,10 @@ class Flume:
         return out
 
     def peakForce(self, k, smooth=None):
-        """Peak downstream flow force on block k [N] and its time [s]; with ``smooth`` [s] the
-        series is first averaged over that window (:func:`mpmsdem.analysis.smoothedPeak`)."""
+        """Peak downstream flow force on block k [N] and its time [s]: with ``smooth`` [s] the
+        largest mean force over a window that long, from the impulse (every step's force:
+        :func:`mpmsdem.analysis.peakMeanForce`); without, the largest force of one recorded step."""
         s = self.series(k)
-        return analysis.smoothedPeak(s["t"], s["Ft"], smooth)
+        if smooth:
+            return analysis.peakMeanForce(s, smooth)
+        return analysis.smoothedPeak(s["t"], s["Ft"])

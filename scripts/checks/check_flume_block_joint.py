@@ -44,10 +44,9 @@ def run(duration=0.77):
     s, common = analysis.runFlumeCheck(scene, duration)
     t, rot = s["t"], s["rotation"]
     touched = t[np.abs(s["Ft"]) > 0]
-    smooth = analysis.runningMean(t, s["Ft"], 0.01)
     turned = t[rot >= 45.0]
     return dict(common, first_touch=float(touched[0]) if len(touched) else duration,
-                force_04=float(np.interp(0.4, t, smooth)), rotation_07=float(np.interp(0.7, t, rot)),
+                force_04=analysis.meanForceBetween(s, 0.395, 0.405), rotation_07=float(np.interp(0.7, t, rot)),
                 t45=float(turned[0]) if len(turned) else float("inf"), max_rotation=float(rot.max()))
 
 

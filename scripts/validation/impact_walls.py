@@ -13,7 +13,7 @@ built with YADE):
   v_f (means over the 50 ms after the front's arrival, over a 2 cm window) and Fr = v_f/√(g h_f)
   (the paper's definition), Fr′ = v_f/√(g cosθ h_f) (the theories');
 - **wall**: a glued box across the whole width, 0.15 m tall, 2 cm thick: the flow's downstream
-  force on it (10 ms running mean) and its peak F_peak; at the end (the run lasts until 1 s after
+  force on it (10 ms means, from the recorded impulse: every step's force) and its peak F_peak; at the end (the run lasts until 1 s after
   the free flow's arrival, the deposit then at rest: the flow's kinetic energy is given) the mean
   force F_end over the last 0.1 s, the deposit's depth h_d against the wall (its highest point
   within 2 cm upstream) and the coefficient k_end = F_end / (½ ρ g cosθ h_d² w);
@@ -51,7 +51,7 @@ from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, commit, drive, 
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
-BLOW = 0.01               # running mean of the force for its peak [s]
+BLOW = 0.01               # window of the mean force for its peak [s]
 LATER = (0.03, 0.07)      # after the first blow: the mean force over this window after the first touch [s], for
                           # the reflected bore's quasi-steady load
 REST = 1.0                # the wall's run lasts this long after the free flow's arrival [s]
@@ -168,15 +168,13 @@ def readObstacle(folder, meta, free):
     from mpmsdem import analysis
     s, _ = analysis.driverBlockSeries(os.path.join(folder, "out"), block=1)  # block 0: the flume's bed
     t, f = s["t"], s["Ft"]
-    smooth = analysis.runningMean(t, f, BLOW)
-    j = int(np.argmax(smooth))
-    end = t >= t[-1] - END
+    peak, tPeak = analysis.peakMeanForce(s, BLOW)
     theta, h, v = meta["theta"], free["h_f"], free["v_f"]
     cos = math.cos(math.radians(theta))
     touch = float(t[np.nonzero(np.abs(f) > 0)[0][0]])
-    later = (t >= touch + LATER[0]) & (t <= touch + LATER[1])
-    r = {"F_peak": float(smooth[j]), "t_peak": float(t[j]), "F_end": float(f[end].mean()), "t_end": float(t[-1]),
-         "first_touch": touch, "F_later": float(f[later].mean()),
+    r = {"F_peak": peak, "t_peak": tPeak, "F_end": analysis.meanForceBetween(s, t[-1] - END, t[-1]),
+         "t_end": float(t[-1]), "first_touch": touch,
+         "F_later": analysis.meanForceBetween(s, touch + LATER[0], touch + LATER[1]), "forces_from": analysis.forceSource(s),
          "kinetic_end": float(s["flow_kinetic"][-1]), "kinetic_peak": float(s["flow_kinetic"].max()),
          "Fr_cos": v / math.sqrt(G * cos * h)}
     if meta["kind"] == "wall":

@@ -196,3 +196,39 @@ def test_interval_and_window_means_of_an_impulse_by_hand():
         analysis.windowMean(t, J, 0)
     with pytest.raises(ValueError, match="increase"):
         analysis.intervalMean([0.0, 0.0], [1.0, 2.0])
+
+
+def test_a_blocks_mean_and_peak_force_are_read_from_its_impulse_by_hand():
+    """A block pushed by F(t) = 2 + 2t - 60 (t - 0.05)^2 for t < 0.1 s, then 0.5 N, recorded
+    every 1 ms: J(t) = 2t + t^2 - 20 (t - 0.05)^3 - 20 (0.05)^3 below 0.1 s. The mean between
+    two records from J is the integral of F over the interval over its length, by hand; the
+    peak of the 10 ms means is at the window centred on the force's maximum (t = 1/60 + 0.05 s
+    to the nearest record, 0.067 s) and the records' own forces, made noisy, are not read where
+    the series has the impulse; without one (older files) they are."""
+    np = pytest.importorskip("numpy")
+    t = np.arange(0, 201) * 1e-3
+    F = np.where(t < 0.1, 2 + 2 * t - 60 * (t - 0.05) ** 2, 0.5)
+    J1 = 2 * 0.1 + 0.01 - 20 * 0.05 ** 3 - 20 * 0.05 ** 3  # J at 0.1 s
+    J = np.where(t < 0.1, 2 * t + t ** 2 - 20 * (t - 0.05) ** 3 - 20 * 0.05 ** 3, J1 + 0.5 * (t - 0.1))
+    noisy = F + np.where(np.arange(len(t)) % 2 == 0, 3.0, -3.0)  # one step's force swings
+    s = {"t": t, "Ft": noisy, "J": J}
+    # over 0.02-0.08 s: [2t + t^2 - 20 (t - 0.05)^3] / 0.06 = (0.12 + 0.006 - 2 x 20 x 0.03^3) / 0.06
+    assert analysis.meanForceBetween(s, 0.02, 0.08) == pytest.approx((0.12 + 0.006 - 40 * 0.03 ** 3) / 0.06, abs=1e-12)
+    assert analysis.meanForceBetween(s, 0.15, 0.2) == pytest.approx(0.5, abs=1e-12)
+    assert analysis.impulseMean(t, J, 0.15, 0.2) == analysis.meanForceBetween(s, 0.15, 0.2)
+    assert analysis.forceSource(s) == "impulse"
+    peak, tPeak = analysis.peakMeanForce(s, 0.01)
+    # the 10 ms mean centred on 0.067 s: 2 + 2 x 0.067 - 60 [(0.067 - 0.05)^2 + 0.01^2 / 12]
+    assert tPeak == pytest.approx(0.067, abs=1e-12)
+    assert peak == pytest.approx(2 + 2 * 0.067 - 60 * (0.017 ** 2 + 0.01 ** 2 / 12), abs=1e-12)
+    # no impulse recorded (or only NaN rows): the records' forces, noise and all
+    old = {"t": t, "Ft": noisy, "J": np.full(len(t), np.nan)}
+    assert analysis.forceSource(old) == "records" and analysis.forceSource({"t": t, "Ft": noisy}) == "records"
+    assert analysis.meanForceBetween(old, 0.15, 0.2) == pytest.approx(noisy[150:].mean(), abs=1e-12)
+    np.testing.assert_array_equal(analysis.meanForce(old, 0.01), analysis.runningMean(t, noisy, 0.01))
+    with pytest.raises(ValueError, match="within the records"):
+        analysis.meanForceBetween(s, 0.15, 0.25)
+    with pytest.raises(ValueError, match="end"):
+        analysis.impulseMean(t, J, 0.1, 0.1)
+    with pytest.raises(ValueError, match="longer than the records"):
+        analysis.peakMeanForce(s, 0.5)
