@@ -426,16 +426,35 @@ def meanForceBetween(series, start, end):
     return float(np.asarray(series["Ft"])[inside].mean())
 
 
-def peakMeanForce(series, window):
-    """The largest of :func:`meanForce` (a block's downstream flow force over ``window`` [s]) and
-    its time: (peak [N], t_peak [s]); windows that reach past the records are left out."""
+def peakWindowMean(t, impulse, window):
+    """The largest mean force over any window of ``window`` [s] within the records, from the
+    impulse summed since the run's start, and the window's centre: (peak [N], t_centre [s]). J is
+    linear between records, so the mean is linear in the window's position between the positions
+    where one of its ends meets a record, and the largest lies at one of those: every window
+    starting or ending on a record is tried (a window centred on records only would miss a short
+    blow's peak by up to half a record interval)."""
     import numpy as np
-    f = meanForce(series, window)
-    if not np.isfinite(f).any():
-        raise ValueError("window = %r s: longer than the records (%r to %r s)" % (
-            window, float(series["t"][0]), float(series["t"][-1])))
-    j = int(np.nanargmax(f))
-    return float(f[j]), float(series["t"][j])
+    t, j = np.asarray(t, dtype=float), np.asarray(impulse, dtype=float)
+    if not window > 0:
+        raise ValueError("window = %r: must be > 0 s" % (window,))
+    slack = 1e-9 * window
+    starts = np.concatenate([t, t - window])
+    starts = starts[(starts >= t[0] - slack) & (starts + window <= t[-1] + slack)]
+    if not len(starts):
+        raise ValueError("window = %r s: longer than the records (%r to %r s)" % (window, float(t[0]), float(t[-1])))
+    starts = np.clip(starts, t[0], t[-1] - window)
+    means = (np.interp(starts + window, t, j) - np.interp(starts, t, j)) / window
+    k = int(np.nanargmax(means))
+    return float(means[k]), float(starts[k] + 0.5 * window)
+
+
+def peakMeanForce(series, window):
+    """A block's largest downstream flow force over ``window`` [s] and the window's centre: (peak
+    [N], t_peak [s]). From the impulse (:func:`peakWindowMean`: any window within the records) or,
+    without one (:func:`forceSource`), the largest running mean of the records' forces."""
+    if forceSource(series) == "impulse":
+        return peakWindowMean(series["t"], series["J"], window)
+    return smoothedPeak(series["t"], series["Ft"], window)
 
 
 def smoothedPeak(t, f, smooth=None):

@@ -77,14 +77,16 @@ def forceWindows(t, J, force):
     """From the bottom block's downstream impulse J(t) since the start [N s] and its records' own
     forces (only to find the first touch, the first record with a force): the touch, the largest
     means over WINDOWS, the means 20-40 and 40-80 ms after the touch and over 0.40-0.45 s, and the
-    impulse of the first 20 ms."""
+    impulse of the first 20 ms (from the record before the touch: a record's force is the step's
+    before it, so the contact began after that record)."""
     import numpy as np
-    from mpmsdem.analysis import impulseMean, windowMean
-    touch = float(t[np.argmax(np.abs(force) > 0)])
-    return {"touch": touch, "peaks": [float(np.nanmax(windowMean(t, J, w))) for w in WINDOWS],
+    from mpmsdem.analysis import impulseMean, peakWindowMean
+    i = int(np.argmax(np.abs(force) > 0))
+    touch, start = float(t[i]), float(t[max(i - 1, 0)])
+    return {"touch": touch, "peaks": [peakWindowMean(t, J, w)[0] for w in WINDOWS],
             "after_20_40": impulseMean(t, J, touch + 0.02, touch + 0.04),
             "after_40_80": impulseMean(t, J, touch + 0.04, touch + 0.08), "late": impulseMean(t, J, 0.40, 0.45),
-            "impulse_20ms": 0.02 * impulseMean(t, J, touch, touch + 0.02)}
+            "impulse_20ms": 0.02 * impulseMean(t, J, start, start + 0.02)}
 
 
 def runOne(a, E, dx):

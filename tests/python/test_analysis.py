@@ -232,3 +232,20 @@ def test_a_blocks_mean_and_peak_force_are_read_from_its_impulse_by_hand():
         analysis.impulseMean(t, J, 0.1, 0.1)
     with pytest.raises(ValueError, match="longer than the records"):
         analysis.peakMeanForce(s, 0.5)
+
+
+def test_the_peak_window_mean_is_sought_over_every_window_not_only_those_centred_on_records():
+    """Records every 3 ms of a block pushed by 20 N from 0.300 to 0.310 s (J exact at the records,
+    linear between them): the 10 ms window from 0.300 to 0.310 s holds J(0.309) = 0.18 N s plus a
+    third of the next interval's 0.02, 0.18667 N s, a mean of 18.67 N; the best window centred on
+    a record (0.306 s: 0.301 to 0.311 s) has 17.33 N."""
+    np = pytest.importorskip("numpy")
+    t = np.round(np.arange(0, 201) * 3e-3, 12)
+    J = 20.0 * np.clip(t - 0.3, 0.0, 0.01)
+    peak, centre = analysis.peakWindowMean(t, J, 0.01)
+    assert peak == pytest.approx(20 * (0.009 + 0.001 / 3) / 0.01, abs=1e-9)
+    assert centre == pytest.approx(0.305, abs=1e-12)
+    assert np.nanmax(analysis.windowMean(t, J, 0.01)) == pytest.approx(20 * (0.008 + 0.002 / 3) / 0.01, abs=1e-9)
+    assert analysis.peakMeanForce({"t": t, "J": J, "Ft": np.zeros(len(t))}, 0.01) == (peak, centre)
+    with pytest.raises(ValueError, match="window"):
+        analysis.peakWindowMean(t, J, 0)

@@ -64,3 +64,23 @@ def test_wall_study_errors_against_the_extrapolated_limit():
     assert sorted(s["unconverged"]) == ["deposit_force", "quasi_steady_force"]
     assert "10.8 / 9.4 / 9.6 N" in s["unconverged"]["quasi_steady_force"]
     assert iw.packageStudy(runs[:2], 20.0, 0.5, 1e6, "cmd") is None   # two spacings: no study
+
+
+def test_liu2018_force_windows_of_a_known_impulse():
+    """liu2018_force.forceWindows on records every 1 ms (each record's force the one of the
+    interval before it, as coupled.h5's are) of a block first pushed at the record of 0.3 s by
+    F = 20 N for 10 ms, then 8 N: the first touch is the first record with a force, the largest
+    10 ms mean 20 N (a window on the blow), the 20 ms one (20 + 8) / 2 = 14 N, the means after the
+    touch 8 N, the first 20 ms' impulse, from the record before the touch, 0.2 + 0.08 = 0.28 N s;
+    all read from the impulse (the records' own forces, here off by 5 N, only mark the touch)."""
+    np = pytest.importorskip("numpy")
+    import liu2018_force as lf
+    t = np.arange(0, 451) * 1e-3
+    F = np.where(t < 0.3 - 1e-9, 0.0, np.where(t < 0.31 - 1e-9, 20.0, 8.0))
+    J = np.concatenate([[0.0], np.cumsum(F[1:] * np.diff(t))])
+    w = lf.forceWindows(t, J, np.where(F > 0, F + 5.0, 0.0))
+    assert w["touch"] == pytest.approx(0.3, abs=1e-12)
+    assert w["peaks"][1] == pytest.approx(20.0, abs=1e-9) and w["peaks"][2] == pytest.approx(14.0, abs=1e-9)
+    assert w["after_20_40"] == pytest.approx(8.0, abs=1e-9) and w["after_40_80"] == pytest.approx(8.0, abs=1e-9)
+    assert w["late"] == pytest.approx(8.0, abs=1e-9)
+    assert w["impulse_20ms"] == pytest.approx(0.28, abs=1e-9)
