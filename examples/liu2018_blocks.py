@@ -336,6 +336,7 @@ def main(argv):
                "blocks_kind": a.blocks, "level_set": levelSetOf(a),
                "yade_contact": lsContact(a.ls_kn) if a.blocks == "levelset" else None,
                "block_mass": [O.bodies[i].state.mass for i in s.blockIds],
+               "block_ids": list(s.blockIds), "block_half": list(HALF),
                "flow_friction": a.flow_friction, "young_modulus": a.young, "free_flow": ff, "eq20_bottom": eq20, "blocks": ev,
                "paper": {"peak_force_bottom": 9.7, "eq20_bottom": 10.6, "middle_falls": 0.4, "top_hit": 0.5},
                "wall_seconds": {"free_flow": tFree, "coupled": tCoupled}, "timings": s.coupled.timings()}
