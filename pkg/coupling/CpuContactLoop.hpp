@@ -24,7 +24,10 @@ struct ContactLoopTotals {
 // couple(p, sink, &bad, &overflow, &approach, memo) runs one particle slot p (coupleParticle or
 // coupleParticleLevelSets with the caller's tables) and returns kCoupleOk or a failure with the
 // body in bad. A failing particle does not stop the loop: it goes on to name the smallest
-// particle number, as the CUDA kernel does.
+// particle number, as the CUDA kernel does. Pass it as a lambda marked
+// __attribute__((always_inline)): left to itself the compiler keeps its ~10 kB body out of the
+// loop and calls it per particle, reloading the captured tables each time (the coupling stage of
+// the coarse §3.2 flume 1.2-1.3 times as long: docs/benchmarks.md).
 template <typename T, typename Couple>
 ContactLoopTotals runContactChunks(const CouplingParticles<T>& P, long n,
                                    std::vector<std::vector<MpContact<T>>>& chunkContacts, Couple&& couple) {

@@ -193,7 +193,8 @@ void MpLevelSetCoupling::run(const mpm::ParticleView& view, const BlockState<T>*
   std::vector<std::vector<MpContact<T>>> chunkContacts;
   const ContactLoopTotals t = runContactChunks(
       P, n, chunkContacts,
-      [&](int p, auto& sink, int* bad, int* over, T* approach, CouplingLoopMemo<T>& memo) {
+      [&](int p, auto& sink, int* bad, int* over, T* approach,
+          CouplingLoopMemo<T>& memo) __attribute__((always_inline)) {  // inlined: CpuContactLoop.hpp
         return coupleParticleLevelSets(p, P, B, nb, G, phys, H, T(dt), T(safety), T(watch), sink, bad, over, approach,
                                        memo);
       });

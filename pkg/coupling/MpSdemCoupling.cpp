@@ -407,7 +407,8 @@ void MpSdemCoupling::runCpu(const CouplingStepInput& in, const sdem::ShapeTableV
   const long n = static_cast<long>(v.n);
   const ContactLoopTotals t = runContactChunks(
       P, n, side.chunkContacts,
-      [&](int p, auto& sink, int* bad, int* over, T* approach, CouplingLoopMemo<T>& memo) {
+      [&](int p, auto& sink, int* bad, int* over, T* approach,
+          CouplingLoopMemo<T>& memo) __attribute__((always_inline)) {  // inlined: CpuContactLoop.hpp
         return coupleParticle(p, P, B, S, phys, in.bins, H, dt, safety, sink, bad, over, approach, memo);
       });
   out.overflow = t.overflow;
