@@ -104,6 +104,7 @@ def runOne(a, E, dx):
                     summary = json.load(fh)
     if summary is None:
         print("E %g Pa, Δx %g m: running liu2018_blocks.py %s ..." % (E, dx, " ".join(cmd[1:-1])), flush=True)
+        started = commit()  # the code the run starts with (the checkout may move on while it runs)
         os.makedirs(folder, exist_ok=True)
         if os.path.exists(summaryPath):
             os.remove(summaryPath)
@@ -112,7 +113,7 @@ def runOne(a, E, dx):
         if r.returncode != 0:
             sys.exit("liu2018_blocks.py failed for E %g Pa, Δx %g m: see %s" % (E, dx, os.path.join(folder, "log.txt")))
         with open(commandPath, "w") as fh:
-            json.dump({"args": cmd[1:], "commit": commit()}, fh)
+            json.dump({"args": cmd[1:], "commit": started}, fh)
         with open(summaryPath) as fh:
             summary = json.load(fh)
     import h5py
