@@ -2,8 +2,10 @@
 """Validation probe (opt-in): the §3.3 glued bottom block's force against the flow's Young's
 modulus and the grid spacing. Runs examples/liu2018_blocks.py (three stacked wooden blocks in
 the Liu et al. 2018 flume, Table 2's flow) for each modulus and spacing, 8 points per cell, with
-the paper's FLIP/PIC blend held as a PIC viscosity (0.0503 m²/s, its blend at Δx 0.01 m: the
-damping rate 4ν/Δx² grows as Δx shrinks, the model a viscous flow), and prints from each run's
+the paper's FLIP/PIC blend at Δx 0.01 m (2010 /s, a PIC viscosity of 0.0503 m²/s) held
+(``--hold``) as that viscosity (``viscosity``, the default: the damping rate 4ν/Δx² grows as Δx
+shrinks, the model a viscous flow) or as that rate (``rate``: ν scales with Δx², towards the
+inviscid μ(I) flow), and prints from each run's
 coupled.h5 the bottom block's downstream flow force, every figure read from the impulse the file
 records (every step's force, not a record's own one-step sample): the largest means over 2, 10,
 20 and 50 ms, the means 20-40 ms and 40-80 ms after the flow first touches the block and over
@@ -12,12 +14,12 @@ flow's p-wave speed c = sqrt((K + 4G/3)/rho), the cells per block height (h_b 18
 the flow gave the middle and top blocks by the end (their travel).
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/liu2018_force.py
-        [--young 5e4[,...]] [--dx 0.01[,...]] [--duration 0.45] [--extrapolate]
+        [--young 5e4[,...]] [--dx 0.01[,...]] [--hold viscosity|rate] [--duration 0.45] [--extrapolate]
         [--out results/liu2018_force]
 
 About a minute a run at Δx 0.01 m on one core, 16 times that at 0.005 m. A run whose folder
 (OUT/E<modulus>_dx<spacing>) already holds the summary of the same command is read, not run
-again. With --extrapolate and three spacings or more, each modulus's figures at the three finest
+again (with the rate held: OUT/E<modulus>_dx<spacing>_rate). With --extrapolate and three spacings or more, each modulus's figures at the three finest
 also get the observed order p and the value at Δx 0 of f = f0 + C Δx^p where the differences keep
 their sign and shrink (and say so where they do not). The table goes to OUT/force.md, the numbers
 to OUT/force.json; docs/coupled-results.md quotes it.
@@ -57,6 +59,8 @@ def parse(argv):
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--young", default="5e4", help="moduli [Pa] > 0, comma-separated (default Table 2's 5e4)")
     ap.add_argument("--dx", default="0.01", help="grid spacings [m] > 0, comma-separated (default 0.01)")
+    ap.add_argument("--hold", default="viscosity", choices=("viscosity", "rate"),
+                    help="what of the paper's blend at dx 0.01 m is held at other spacings (default viscosity)")
     ap.add_argument("--duration", type=float, default=0.45, help="coupled run [s] > 0.45 (the last window is "
                     "0.40-0.45 s; default 0.45)")
     ap.add_argument("--extrapolate", action="store_true", help="the limit Δx -> 0 through the three finest spacings")
@@ -89,11 +93,18 @@ def forceWindows(t, J, force):
             "impulse_20ms": 0.02 * impulseMean(t, J, start, start + 0.02)}
 
 
+def viscosity(hold, dx):
+    """The PIC viscosity [m²/s] at spacing dx [m] that holds the paper's blend at Δx 0.01 m as a
+    viscosity or as a damping rate 4ν/Δx²."""
+    return PAPER_VISCOSITY if hold == "viscosity" else PAPER_VISCOSITY * (dx / 0.01) ** 2
+
+
 def runOne(a, E, dx):
     """One run of the example (or the one already in its folder); its row."""
-    folder = os.path.abspath(os.path.join(a.out, "E%g_dx%g" % (E, dx)))
+    hold = getattr(a, "hold", "viscosity")
+    folder = os.path.abspath(os.path.join(a.out, "E%g_dx%g%s" % (E, dx, "" if hold == "viscosity" else "_rate")))
     cmd = [os.path.join(ROOT, "examples", "liu2018_blocks.py"), "--dx", repr(dx), "--ppc", "8",
-           "--flip-viscosity", repr(PAPER_VISCOSITY), "--young", repr(E), "--duration", repr(a.duration),
+           "--flip-viscosity", repr(viscosity(hold, dx)), "--young", repr(E), "--duration", repr(a.duration),
            "--no-plots", "--out", folder]
     summaryPath, commandPath = os.path.join(folder, "summary.json"), os.path.join(folder, "command.json")
     summary = None
@@ -124,7 +135,7 @@ def runOne(a, E, dx):
     b = summary["blocks"]
     with open(commandPath) as fh:
         ran = json.load(fh)["commit"]
-    return dict(w, young=E, dx=dx, cells=BLOCK_HEIGHT / dx, peak_10ms=w["peaks"][1], peak_20ms=w["peaks"][2],
+    return dict(w, young=E, dx=dx, hold=hold, viscosity=viscosity(hold, dx), cells=BLOCK_HEIGHT / dx, peak_10ms=w["peaks"][1], peak_20ms=w["peaks"][2],
                 free_flow=summary["free_flow"], eq20=summary["eq20_bottom"], push_middle=b["middle"]["travel"],
                 push_top=b["top"]["travel"], middle_fall=b["middle"]["fall_time"], dt_min=summary["dt_min"],
                 steps=summary["steps"], particles=summary["particles"], flip_blend=summary["flip_blend"],
@@ -172,9 +183,10 @@ def main(argv):
     os.makedirs(a.out, exist_ok=True)
     rows = [runOne(a, E, dx) for E in a.young for dx in sorted(a.dx, reverse=True)]
     text = table(rows)
-    text += "\n\n%s held at every Δx (%s at Δx 0.01 m); 8 points per cell; coupled run to %g s; runs at commit(s) %s; " \
-            "%s, %d cores, OMP_NUM_THREADS=%s" % (
-                "PIC viscosity %.4g m²/s" % PAPER_VISCOSITY, "the paper's blend", a.duration,
+    text += "\n\nThe paper's blend at Δx 0.01 m held at every Δx as %s; 8 points per cell; coupled run to %g s; " \
+            "runs at commit(s) %s; %s, %d cores, OMP_NUM_THREADS=%s" % (
+                "a PIC viscosity of %.4g m²/s" % PAPER_VISCOSITY if a.hold == "viscosity" else
+                "a PIC damping rate of %.0f /s (viscosity 4 x rate / dx²)" % (4 * PAPER_VISCOSITY / 0.01 ** 2), a.duration,
                 ", ".join(sorted({r["commit"] for r in rows})), platform.machine(), os.cpu_count() or 0,
                 os.environ.get("OMP_NUM_THREADS", "unset"))
     if a.extrapolate:
