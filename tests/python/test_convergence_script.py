@@ -84,3 +84,14 @@ def test_liu2018_force_windows_of_a_known_impulse():
     assert w["after_20_40"] == pytest.approx(8.0, abs=1e-9) and w["after_40_80"] == pytest.approx(8.0, abs=1e-9)
     assert w["late"] == pytest.approx(8.0, abs=1e-9)
     assert w["impulse_20ms"] == pytest.approx(0.28, abs=1e-9)
+
+
+def test_liu2018_force_windows_of_a_block_the_flow_never_reached():
+    """No record with a force (a flow too viscous to arrive): no touch and no window, not the
+    windows of the run's first record."""
+    np = pytest.importorskip("numpy")
+    import liu2018_force as lf
+    t = np.arange(0, 451) * 1e-3
+    w = lf.forceWindows(t, np.zeros(len(t)), np.zeros(len(t)))
+    assert w["touch"] is None and all(np.isnan(w[k]) for k in ("after_20_40", "after_40_80", "late", "impulse_20ms"))
+    assert np.isnan(w["peaks"]).all()
