@@ -229,11 +229,11 @@ def plotFaces(s, title, path):
 
 def blockEvents(s, duration):
     """The §3.2 targets of a cube's series (keys of Flume.series): first touch, F_t at 0.4 s (its
-    mean over 0.395–0.405 s) and over 0.4–0.7 s (both from the impulse), rotation (and, where the series has them, tilt and yaw) at
-    0.4/0.5/0.7 s, when the rotation reaches 45°, the speed at the end (downstream: speed_end; of
-    the centre: centre_speed_end), when it comes to rest for good (rest_time, None
-    while still moving: :func:`mpmsdem.analysis.restTime`, no point of the cube faster than
-    1 cm/s from then on); the keys of calibrate_flume.flumeRun."""
+    mean over 0.395–0.405 s) and over 0.4–0.7 s (both from the impulse), rotation (and, where the
+    series has them, tilt and yaw) at 0.4/0.5/0.7 s, when the rotation reaches 45°, the speed at
+    the end (downstream: speed_end; of the centre: centre_speed_end), when it comes to rest for
+    good (rest_time, None while still moving: :func:`mpmsdem.analysis.restTime`, no point of the
+    cube faster than 1 cm/s from then on); the keys of calibrate_flume.flumeRun."""
     import numpy as np
     t, ft, rot = s["t"], s["Ft"], s["rotation"]
     touched = np.nonzero(np.abs(ft) > 0)[0]

@@ -186,7 +186,7 @@ def _coupledResults(out, ff, s, duration, potential0, before=None):
     peak, tPeak = analysis.peakMeanForce(s, 0.01)
     # the same over 50 ms: past the first 10-20 ms of a blow, whose size the flow's E sets
     peakLong, _ = analysis.peakMeanForce(s, 0.05)
-    static = analysis.meanForceBetween(s, s["t"][-1] - 0.1, s["t"][-1])
+    static = analysis.meanForceBetween(s, max(s["t"][0], s["t"][-1] - 0.1), s["t"][-1])  # its last 0.1 s
     A = min(ff["h_f"], HB) * HB  # impact area: the flow's depth on the cube's face, at most its height
     travel = float(s["travel"][-1])
     # A cube carried to the flume's end, pushed back by the flow the end wall turned (a
