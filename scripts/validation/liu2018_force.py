@@ -111,12 +111,13 @@ def runOne(a, E, dx):
            "--flip-viscosity", repr(viscosity(hold, dx)), "--young", repr(E), "--duration", repr(a.duration),
            "--no-plots", "--out", folder]
     summaryPath, commandPath = os.path.join(folder, "summary.json"), os.path.join(folder, "command.json")
-    summary = None
+    summary = record = None
     if os.path.exists(summaryPath) and os.path.exists(commandPath):
         with open(commandPath) as fh:
-            if json.load(fh)["args"] == cmd[1:]:
-                with open(summaryPath) as fh:
-                    summary = json.load(fh)
+            record = json.load(fh)
+        if record["args"] == cmd[1:]:
+            with open(summaryPath) as fh:
+                summary = json.load(fh)
     if summary is None:
         print("E %g Pa, Δx %g m: running liu2018_blocks.py %s ..." % (E, dx, " ".join(cmd[1:-1])), flush=True)
         started = commit()  # the code the run starts with (the checkout may move on while it runs)
@@ -127,8 +128,9 @@ def runOne(a, E, dx):
             r = subprocess.run([sys.executable] + cmd, stdout=log, stderr=subprocess.STDOUT)
         if r.returncode != 0:
             sys.exit("liu2018_blocks.py failed for E %g Pa, Δx %g m: see %s" % (E, dx, os.path.join(folder, "log.txt")))
+        record = {"args": cmd[1:], "commit": started}
         with open(commandPath, "w") as fh:
-            json.dump({"args": cmd[1:], "commit": started}, fh)
+            json.dump(record, fh)
         with open(summaryPath) as fh:
             summary = json.load(fh)
     import h5py
@@ -137,13 +139,12 @@ def runOne(a, E, dx):
         t = h["series/time"][:]
         w = forceWindows(t, h["series/flow_impulse"][:, column], h["series/flow_force"][:, column])
     b = summary["blocks"]
-    with open(commandPath) as fh:
-        ran = json.load(fh)["commit"]
-    return dict(w, young=E, dx=dx, hold=hold, viscosity=viscosity(hold, dx), cells=BLOCK_HEIGHT / dx, peak_10ms=w["peaks"][1], peak_20ms=w["peaks"][2],
+    return dict(w, young=E, dx=dx, hold=hold, viscosity=viscosity(hold, dx), cells=BLOCK_HEIGHT / dx,
+                peak_10ms=w["peaks"][1], peak_20ms=w["peaks"][2],
                 free_flow=summary["free_flow"], eq20=summary["eq20_bottom"], push_middle=b["middle"]["travel"],
                 push_top=b["top"]["travel"], middle_fall=b["middle"]["fall_time"], dt_min=summary["dt_min"],
                 steps=summary["steps"], particles=summary["particles"], flip_blend=summary["flip_blend"],
-                wall=summary["wall_seconds"], commit=ran)
+                wall=summary["wall_seconds"], commit=record["commit"])
 
 
 def table(rows):
