@@ -202,33 +202,41 @@ def outline(pos, rv, half):
     return np.array(hull)
 
 
-def runState(folder, t):
-    """A run's recorded state at ``t``: (record time, points' x and z, their speeds, the blocks' outlines from
-    the bottom one up: the bodies and sizes its summary.json names)."""
+def runStates(folder, times):
+    """A run's recorded state at each of ``times`` [s]: (record time, points' x and z, their speeds, the
+    blocks' outlines from the bottom one up: the bodies and sizes its summary.json names)."""
     import h5py
     with open(os.path.join(folder, "summary.json")) as f:
         run = json.load(f)
     if "block_ids" not in run:
         raise ValueError("%s: summary.json names no blocks (a run of an older example: run it again)" % folder)
     half = np.asarray(run["block_half"], dtype=float)
+    flow = []
     with h5py.File(os.path.join(folder, "mpm", "mpm.h5"), "r") as f:
         snaps = [f["snapshots"][n] for n in sorted(f["snapshots"])]
-        try:
-            snap = snaps[recordAt([float(g.attrs["time"]) for g in snaps], t)]
-        except ValueError as e:
-            raise ValueError("%s, the flow's snapshots: %s" % (folder, e))
-        tRec, step, x, v = float(snap.attrs["time"]), int(snap.attrs["step"]), snap["x"][:], snap["v"][:]
+        recorded = [float(g.attrs["time"]) for g in snaps]
+        for t in times:
+            try:
+                snap = snaps[recordAt(recorded, t)]
+            except ValueError as e:
+                raise ValueError("%s, the flow's snapshots: %s" % (folder, e))
+            flow.append((float(snap.attrs["time"]), int(snap.attrs["step"]), snap["x"][:], snap["v"][:]))
+    states = []
     with h5py.File(os.path.join(folder, "coupled.h5"), "r") as f:
         g = f["series"]
-        same = np.nonzero(g["step"][:] == step)[0]
-        if not same.size:  # the blocks must be drawn as they were at the flow's snapshot, not near it
-            raise ValueError("%s: coupled.h5 has no record of step %d, the flow's snapshot at %.4f s"
-                             % (folder, step, tRec))
+        steps = g["step"][:]
         n = g["pos"].shape[1] // 3
-        pos, rv = g["pos"][same[0]].reshape(n, 3), g["rotation"][same[0]].reshape(n, 3)
         ids = json.loads(f.attrs["ids"])  # the columns' YADE ids, LevelSet bodies among them
-    columns = [ids.index(i) for i in run["block_ids"]]  # bottom, middle, top
-    return tRec, x[:, [0, 2]], np.linalg.norm(v, axis=1), [outline(pos[b], rv[b], half) for b in columns]
+        columns = [ids.index(i) for i in run["block_ids"]]  # bottom, middle, top
+        for tRec, step, x, v in flow:
+            same = np.nonzero(steps == step)[0]
+            if not same.size:  # the blocks must be drawn as they were at the flow's snapshot, not near it
+                raise ValueError("%s: coupled.h5 has no record of step %d, the flow's snapshot at %.4f s"
+                                 % (folder, step, tRec))
+            pos, rv = g["pos"][same[0]].reshape(n, 3), g["rotation"][same[0]].reshape(n, 3)
+            states.append((tRec, x[:, [0, 2]], np.linalg.norm(v, axis=1),
+                           [outline(pos[b], rv[b], half) for b in columns]))
+    return states
 
 
 def figure(a, folders):
@@ -238,7 +246,7 @@ def figure(a, folders):
     import matplotlib.pyplot as plt
     from matplotlib.collections import EllipseCollection
     try:
-        states = [[runState(folder, t) for t in a.snapshots] for _, folder in folders]
+        states = [runStates(folder, a.snapshots) for _, folder in folders]
     except ValueError as e:  # a time with no record: say which, without a traceback
         sys.exit("%s: %s" % (os.path.basename(__file__), e))
     for (name, _), row in zip(folders, states):
