@@ -1,5 +1,7 @@
 #include "common/Parameters.hpp"
 
+#include "common/Error.hpp"
+
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -29,6 +31,19 @@ std::string intervalText(double lo, bool loInclusive, double hi, bool hiInclusiv
     range << hi << (hiInclusive ? "]" : ")");
   return range.str();
 }
+
+void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
+                bool hiOpen) {
+  const bool ok = std::isfinite(value) && (loOpen ? value > lo : value >= lo) && (hiOpen ? value < hi : value <= hi);
+  // A bound-free entry ("any") refuses only infinities and NaN: "in [-inf, inf)" would not say so.
+  if (!ok) throwParameter(name, value, unit, std::isinf(lo) && std::isinf(hi) ? "finite" : intervalText(lo, !loOpen, hi, !hiOpen));
+}
+
+void checkParameter(const ParameterSpec& spec, const std::string& name, double value, double lo, double hi) {
+  checkRange(name, value, spec.unit, lo, !spec.loInclusive, hi, !spec.hiInclusive);
+}
+
+void checkParameter(const ParameterSpec& spec, double value) { checkParameter(spec, spec.key, value, spec.lo, spec.hi); }
 
 bool isRequired(const ParameterSpec& spec) { return std::strcmp(spec.defaultText, kRequired) == 0; }
 

@@ -3,7 +3,8 @@
 // the range and the default of a value from its entry (scenejson::readNumber), the Python package
 // names its keywords from it (mpmsdem.parameters) and docs/parameters.md is generated from it,
 // so the range a page states is the one a reader applies. The tables sit beside what they
-// describe: the flow's in pkg/scene/SceneParameters, the blocks' in pkg/coupling.
+// describe: the flow model's in pkg/mpm/MpmParameters, the scene's own in pkg/scene/SceneParameters,
+// the blocks' in pkg/coupling.
 #pragma once
 #include <string>
 #include <vector>
@@ -61,5 +62,16 @@ std::string defaultText(const ParameterSpec& spec);
 const char* kindName(ParameterKind kind);
 // "in [lo, hi)", the brackets saying which bounds are allowed; an infinite hi is "inf)".
 std::string intervalText(double lo, bool loInclusive, double hi, bool hiInclusive);
+
+// ParameterError "name = value: must be in [lo, hi)" unless value is finite and satisfies
+// lo <(=) value <(=) hi (hi may be infinite).
+void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
+                bool hiOpen);
+// `value` in [lo, hi] with the entry's open and closed ends and unit: for a bound that is
+// another parameter's value (material.mu_2 >= material.mu_s).
+void checkParameter(const ParameterSpec& spec, const std::string& name, double value, double lo, double hi);
+// `value` in the entry's own range, the message naming its key: for a value that was not read
+// from a scene (a struct filled in C++, checked by the solver it builds).
+void checkParameter(const ParameterSpec& spec, double value);
 
 }  // namespace mpmsdem

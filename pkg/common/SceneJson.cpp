@@ -74,12 +74,6 @@ std::array<double, 3> vec3(const json& v, const std::string& name) {
   return out;
 }
 
-void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
-                bool hiOpen) {
-  const bool ok = std::isfinite(value) && (loOpen ? value > lo : value >= lo) && (hiOpen ? value < hi : value <= hi);
-  if (!ok) throwParameter(name, value, unit, intervalText(lo, !loOpen, hi, !hiOpen));
-}
-
 double readNumber(const json& obj, const std::string& path, const ParameterSpec& spec) {
   return readNumberIn(obj, path, spec, spec.lo, spec.hi);
 }
@@ -97,10 +91,6 @@ double readNumber(const json& obj, const std::string& path, const ParameterSpec&
   const double v = optNumber(obj, path, key.c_str(), def);
   checkParameter(spec, join(path, key), v, spec.lo, spec.hi);
   return v;
-}
-
-void checkParameter(const ParameterSpec& spec, const std::string& name, double value, double lo, double hi) {
-  checkRange(name, value, spec.unit, lo, !spec.loInclusive, hi, !spec.hiInclusive);
 }
 
 long integer(const json& v, const std::string& name, const ParameterSpec& spec) {

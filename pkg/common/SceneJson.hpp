@@ -34,9 +34,6 @@ double number(const json& v, const std::string& name);
 double requireNumber(const json& obj, const std::string& path, const char* key);
 double optNumber(const json& obj, const std::string& path, const char* key, double def);
 std::array<double, 3> vec3(const json& v, const std::string& name);
-// value must be finite and satisfy lo <(=) value <(=) hi (hi may be infinite).
-void checkRange(const std::string& name, double value, const char* unit, double lo, bool loOpen, double hi,
-                bool hiOpen);
 
 // Reading a value through its table entry (common/Parameters.hpp): the message names
 // "path.<leaf of the key>" with the entry's unit and range.
@@ -47,9 +44,6 @@ double readNumber(const json& obj, const std::string& path, const ParameterSpec&
 // A number, required or the entry's default, in [lo, hi] with the entry's open and closed ends:
 // for a bound that is another value (gate.x in the material region).
 double readNumberIn(const json& obj, const std::string& path, const ParameterSpec& spec, double lo, double hi);
-// `value` in [lo, hi] with the entry's open and closed ends and unit: for a bound that is
-// another parameter's value (material.mu_2 >= material.mu_s).
-void checkParameter(const ParameterSpec& spec, const std::string& name, double value, double lo, double hi);
 // An integer in the entry's range (an array's element: name it with `name`).
 long integer(const json& v, const std::string& name, const ParameterSpec& spec);
 bool readBool(const json& obj, const std::string& path, const ParameterSpec& spec, bool def);

@@ -1,9 +1,11 @@
 #include "coupling/BlockParameters.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "sdem/Ip2_SdemMat_SdemMat_BarrierPhys.hpp"
-#include "sdem/SdemMaterial.hpp"
+#include "sdem/SdemParameters.hpp"
 
 namespace mpmsdem {
 namespace coupling {
@@ -13,10 +15,9 @@ namespace {
 using K = ParameterKind;
 constexpr double kInf = INFINITY, kNone = NAN;
 
-// The defaults are the structs' (sdem::SdemMaterial, sdem::BarrierPhys); the ranges those of
-// SdemMaterial::validate, which checks a material made in Python.
-ParameterTable makeTable() {
-  const sdem::SdemMaterial m{};
+// The defaults are the structs' (sdem::BarrierPhys); a block material's own keys (density,
+// friction, ...) are sdem::materialParameters(), which SdemMaterial::validate checks against.
+ParameterTable ownTable() {
   const sdem::BarrierPhys f{};
   // key, python, kind, unit, default, default in words, lo, hi, lo and hi allowed, range in
   // words, equation, meaning
@@ -31,18 +32,6 @@ ParameterTable makeTable() {
        "the keys of a block material but flow", "",
        "the blocks' contact with the flow's terrain (its laws mix with each block's, as a block pair's)"},
 
-      {"block_materials.<name>.density", "density", K::kNumber, "kg/m^3", kNone, kRequired, 0, kInf, false, false,
-       "", "", "block density; mass = density x rounded volume (not needed in terrain_material)"},
-      {"block_materials.<name>.friction", "friction", K::kNumber, "", m.friction, "", 0, kInf, true, false, "", "Eq 9",
-       "block-block Coulomb friction coefficient"},
-      {"block_materials.<name>.poisson", "poisson", K::kNumber, "", m.poisson, "", -1, 0.5, false, false, "", "Eq 11",
-       "nu of the tangential stiffness K_t = k_n / (2 (1 + nu))"},
-      {"block_materials.<name>.barrier_stiffness", "barrierStiffness", K::kNumber, "N/m", m.barrierStiffness, "", 0,
-       kInf, false, false, "", "Eq 10", "k_c of the log-barrier normal law (read as a force)"},
-      {"block_materials.<name>.normal_damping", "normalDamping", K::kNumber, "", m.normalDamping, "", 0, kInf, true,
-       false, "", "", "normal viscous damping, a fraction of critical (0: an elastic barrier)"},
-      {"block_materials.<name>.tangential_damping", "tangentialDamping", K::kNumber, "", m.tangentialDamping, "", 0,
-       kInf, true, false, "", "Eq 9", "tangential viscous damping, a fraction of critical"},
       {"block_materials.<name>.flow", "pairs", K::kObject, "", kNone, kRequired, 0, 0, false, false, "", "Eq 12",
        "the contact of the material points with blocks of this material (the pair's own physics)"},
 
@@ -82,6 +71,19 @@ ParameterTable makeTable() {
       {"blocks[].id", "", K::kInteger, "", kNone, "its position in the list", 0, 2147483647, true, true, "", "",
        "label in the outputs, unique (in Python the body's id)"},
   };
+}
+
+// The blocks, their materials' objects, a material's own keys (from pkg/sdem), then the flow pair's
+// and the blocks' keys, in the order docs/parameters.md shows them.
+ParameterTable makeTable() {
+  const ParameterTable own = ownTable(), &material = sdem::materialParameters();
+  const auto flow = std::find_if(own.begin(), own.end(), [](const ParameterSpec& e) {
+    return std::strcmp(e.key, "block_materials.<name>.flow") == 0;
+  });
+  ParameterTable table(own.begin(), flow);
+  table.insert(table.end(), material.begin(), material.end());
+  table.insert(table.end(), flow, own.end());
+  return table;
 }
 
 }  // namespace

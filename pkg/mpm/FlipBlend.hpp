@@ -13,7 +13,7 @@
 //                             same damping per second at any step (the paper's: 0.99 per 5e-6 s);
 //   alphaPerStep(alpha)       alpha per step, Eq 4 as written: the damping follows the step.
 // The scene keys and their ranges: "flip_viscosity", "flip_alpha", "flip_reference_dt" of
-// scene/SceneParameters (docs/parameters.md); the errors name those keys.
+// mpm/MpmParameters (docs/parameters.md); the errors name those keys.
 #pragma once
 #include <cmath>
 #include <string>

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 #include "common/Error.hpp"
+#include "mpm/MpmParameters.hpp"
 #ifdef MPMSDEM_WITH_CUDA
 #include "mpm/cuda/GateCuda.hpp"
 #endif
@@ -42,16 +42,14 @@ int clampIndex(double k, int nodes) { return static_cast<int>(std::min<double>(s
 void validateGate(const MpmParams& p) {
   const GateSpec& g = p.gate;
   if (!g.enabled) return;
-  const double lo = p.origin[0] + kWallLayer * p.dx, hi = p.origin[0] + (p.cells[0] - kWallLayer) * p.dx;
-  if (!(g.x >= lo && g.x <= hi)) {
-    std::ostringstream os;
-    os << "in [" << lo << ", " << hi << "] m (along x, the grid box less its " << kWallLayer << "-cell wall layers)";
-    throwParameter("gate.x", g.x, "m", os.str());
-  }
-  if (!std::isfinite(g.bottom)) throwParameter("gate.bottom", g.bottom, "m", "finite");
-  if (!(g.speed >= 0)) throwParameter("gate.speed", g.speed, "m/s", ">= 0 (0 or infinity: removed at once at gate.openAt)");
-  if (!(g.openAt >= 0) || !std::isfinite(g.openAt)) throwParameter("gate.openAt", g.openAt, "s", "finite and >= 0");
-  if (!(g.friction >= 0) || !std::isfinite(g.friction)) throwParameter("gate.friction", g.friction, "", "finite and >= 0");
+  // gate.x: in the material region, the grid box less its wall layers (the scene's bound too).
+  checkParameter(solverParameter("gate.x"), "gate.x", g.x, p.origin[0] + kWallLayer * p.dx,
+                 p.origin[0] + (p.cells[0] - kWallLayer) * p.dx);
+  checkParameter(solverParameter("gate.bottom"), g.bottom);
+  // An infinite speed is a removal at once, as 0 is (a scene says 0: JSON has no infinity).
+  if (!(std::isinf(g.speed) && g.speed > 0)) checkParameter(solverParameter("gate.speed"), g.speed);
+  checkParameter(solverParameter("gate.open_at"), g.openAt);
+  checkParameter(solverParameter("gate.friction"), g.friction);
 }
 
 Gate::Gate(const GateSpec& spec) : spec_(spec) {}

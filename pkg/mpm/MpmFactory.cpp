@@ -1,10 +1,12 @@
 // makeSolver: parameter validation, backend selection, the gate's hook. cudaAvailable.
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
 #include "common/Error.hpp"
 #include "mpm/Gate.hpp"
 #include "mpm/MpmCpu.hpp"
+#include "mpm/MpmParameters.hpp"
 #include "mpm/MpmSolver.hpp"
 #ifdef MPMSDEM_WITH_CUDA
 #include "mpm/cuda/MpmCuda.hpp"
@@ -15,48 +17,44 @@ namespace mpm {
 
 namespace {
 
-void requirePositive(const std::string& name, double v, const std::string& unit) {
-  if (!(v > 0) || !std::isfinite(v)) throwParameter(name, v, unit, "finite and > 0");
-}
-
+// An MpmParams filled in C++ is checked against the same entries the scene parser reads with
+// (mpm/MpmParameters), and the messages name the scene's keys: a value refused here is refused
+// with the same words in a scene.
 void validate(const MpmParams& p) {
-  requirePositive("dx", p.dx, "m");
+  checkParameter(solverParameter("grid.dx"), p.dx);
+  const ParameterSpec& cells = solverParameter("grid.cells");
   const char* axis[3] = {"x", "y", "z"};
   for (int d = 0; d < 3; ++d) {
-    if (p.cells[d] < 2 * kWallLayer) {
-      std::ostringstream os;
-      os << ">= " << 2 * kWallLayer << " (two wall layers of " << kWallLayer << " cells)";
-      throwParameter(std::string("cells[") + axis[d] + "]", p.cells[d], "", os.str());
-    }
-    if (!std::isfinite(p.origin[d])) throwParameter(std::string("origin[") + axis[d] + "]", p.origin[d], "m", "finite");
+    if (p.cells[d] < cells.lo || p.cells[d] > cells.hi)
+      throwParameter(std::string("grid.cells[") + axis[d] + "]", p.cells[d], "",
+                     rangeText(cells) + " (two wall layers of " + std::to_string(kWallLayer) + " cells at each end)");
+    if (!std::isfinite(p.origin[d]))
+      throwParameter(std::string("grid.origin[") + axis[d] + "]", p.origin[d], "m", "finite");
     if (!std::isfinite(p.gravity[d])) throwParameter(std::string("gravity[") + axis[d] + "]", p.gravity[d], "m/s^2", "finite");
   }
   // Node and stencil-base indices are ints; 27 stencil bases a block of 3 x 3 x 3 cells number
   // at least the nodes, so they bound both. The stored node records are addressed in 64 bits.
   const double bases = double(kBlockCells) * blocksAlong(p.cells[0]) * blocksAlong(p.cells[1]) * blocksAlong(p.cells[2]);
   if (bases > 2147483647.0)
-    throwParameter("cells", std::to_string(p.cells[0]) + "x" + std::to_string(p.cells[1]) + "x" + std::to_string(p.cells[2]),
+    throwParameter("grid.cells", std::to_string(p.cells[0]) + "x" + std::to_string(p.cells[1]) + "x" + std::to_string(p.cells[2]),
                    "", "small enough that 27 x (cells[x]/3 + 1)(cells[y]/3 + 1)(cells[z]/3 + 1) < 2^31 (about 2^31 nodes)");
-  if (!(p.cfl > 0 && p.cfl <= 1)) throwParameter("cfl", p.cfl, "", "in (0, 1]");
+  checkParameter(solverParameter("cfl"), p.cfl);
+  // In C++ a negative friction is no-slip (the scene's "noslip"): only a number that is not one is refused.
   for (int w = 0; w < 6; ++w)
     if (!std::isfinite(p.walls[w].friction))
-      throwParameter("walls[" + std::to_string(w) + "].friction", p.walls[w].friction, "",
+      throwParameter(std::string("walls.") + kWallNames[w], p.walls[w].friction, "",
                      "finite (< 0 no-slip, 0 free slip, > 0 Coulomb)");
   const GranularMaterial& m = p.material;
-  requirePositive("material.density", m.density, "kg/m^3");
-  requirePositive("material.youngModulus", m.youngModulus, "Pa");
-  if (!(m.poissonRatio >= 0 && m.poissonRatio < 0.5)) throwParameter("material.poissonRatio", m.poissonRatio, "", "in [0, 0.5)");
-  if (!(m.muS >= 0) || !std::isfinite(m.muS)) throwParameter("material.muS", m.muS, "", "finite and >= 0");
-  if (!(m.mu2 >= m.muS) || !std::isfinite(m.mu2)) {
-    std::ostringstream os;
-    os << ">= muS = " << m.muS << " and finite";
-    throwParameter("material.mu2", m.mu2, "", os.str());
-  }
-  requirePositive("material.I0", m.I0, "");
-  requirePositive("material.grainDiameter", m.grainDiameter, "m");
-  requirePositive("material.solidDensity", m.solidDensity, "kg/m^3");
-  if (!(m.criticalDensity >= 0) || !std::isfinite(m.criticalDensity))
-    throwParameter("material.criticalDensity", m.criticalDensity, "kg/m^3", ">= 0 (0 means = density)");
+  checkParameter(solverParameter("material.density"), m.density);
+  checkParameter(solverParameter("material.young_modulus"), m.youngModulus);
+  checkParameter(solverParameter("material.poisson_ratio"), m.poissonRatio);
+  checkParameter(solverParameter("material.mu_s"), m.muS);
+  const ParameterSpec& mu2 = solverParameter("material.mu_2");
+  checkParameter(mu2, mu2.key, m.mu2, std::max(m.muS, mu2.lo), mu2.hi);
+  checkParameter(solverParameter("material.I0"), m.I0);
+  checkParameter(solverParameter("material.grain_diameter"), m.grainDiameter);
+  checkParameter(solverParameter("material.solid_density"), m.solidDensity);
+  checkParameter(solverParameter("material.critical_density"), m.criticalDensity);
   validateGate(p);
   p.terrain.validate();
 }

@@ -18,7 +18,7 @@ namespace mpmsdem {
 namespace mpm {
 
 // Granular material of Appendix B (with the corrections of docs/physics.md). SI units; each
-// member's unit and range: its "material." entry in scene/SceneParameters (docs/parameters.md).
+// member's unit and range: its "material." entry in mpm/MpmParameters (docs/parameters.md).
 struct GranularMaterial {
   double density = 1600;       // rho_0, initial bulk density of the material points
   double youngModulus = 1e6;   // E (Table 1)
@@ -31,7 +31,9 @@ struct GranularMaterial {
   double criticalDensity = 0;  // rho_c; 0 means "= density" (paper §2.1). Stress-free below it.
 };
 
-// One wall of the box-shaped grid domain: index 0..5 = -x,+x,-y,+y,-z,+z.
+// One wall of the box-shaped grid domain: index 0..5 = -x,+x,-y,+y,-z,+z (kWallNames, the
+// scene's keys under "walls").
+inline constexpr const char* kWallNames[6] = {"-x", "+x", "-y", "+y", "-z", "+z"};
 // friction < 0 means no-slip; 0 = free slip; > 0 = Coulomb with mu_w (Appendix A, corrected).
 struct WallSpec {
   double friction = 0;
@@ -42,8 +44,8 @@ struct WallSpec {
 // the grid frame: for an inclined flume (gravity rotated, grid not) z is the bed normal.
 // Edge height z_g(t) = bottom + speed * max(0, t - openAt); speed 0 or infinity: the gate is
 // removed at once at openAt. Applied on the grid nodes after gravity and external forces and
-// before the walls. Range checks: makeSolver (ParameterError naming "gate.<field>"); units and
-// ranges: the "gate." entries of scene/SceneParameters (docs/parameters.md).
+// before the walls. Units and ranges: the "gate." entries of mpm/MpmParameters
+// (docs/parameters.md), against which makeSolver checks them (ParameterError naming the key).
 struct GateSpec {
   bool enabled = false;  // false: no gate
   double x = 0;          // plane position, inside the material region (inside the wall layers)
@@ -53,7 +55,7 @@ struct GateSpec {
   double friction = 0;   // Coulomb coefficient between material and gate (0 = smooth)
 };
 
-// The scene's keys, units and ranges of these members: scene/SceneParameters (docs/parameters.md).
+// The scene's keys, units and ranges of these members: mpm/MpmParameters (docs/parameters.md).
 struct MpmParams {
   double dx = 0.01;                        // grid spacing Delta x
   std::array<double, 3> origin{0, 0, 0};   // lower corner of the grid domain

@@ -103,12 +103,11 @@ void parseWalls(const json& root, MpmParams& p) {
   if (!root.contains("walls")) return;
   const json& w = root.at("walls");
   if (!w.is_object()) throwParameter("walls", w.dump(), "", "a JSON object with keys -x, +x, -y, +y, -z, +z");
-  static const char* const names[6] = {"-x", "+x", "-y", "+y", "-z", "+z"};
-  checkKeys(w, "walls", {names[0], names[1], names[2], names[3], names[4], names[5]});
+  checkKeys(w, "walls", std::vector<std::string>(std::begin(kWallNames), std::end(kWallNames)));
   for (int i = 0; i < 6; ++i) {
-    if (!w.contains(names[i])) continue;
+    if (!w.contains(kWallNames[i])) continue;
     p.walls[i].friction =
-        parseFriction(w.at(names[i]), std::string("walls.") + names[i], sceneParameter("walls.<face>"));
+        parseFriction(w.at(kWallNames[i]), std::string("walls.") + kWallNames[i], sceneParameter("walls.<face>"));
   }
 }
 

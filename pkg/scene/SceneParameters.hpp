@@ -1,6 +1,7 @@
 // The parameters of the flow's scene (pkg/scene/MpmScene.hpp), one entry each: what parseScene
-// reads and checks, the Python API's names for them and docs/parameters.md. The blocks' keys are
-// coupling::coupledSceneParameters().
+// reads and checks, the Python API's names for them and docs/parameters.md. The flow model's
+// entries are mpm::solverParameters() (pkg/mpm, where makeSolver checks against them), the
+// scene adds its own; the blocks' keys are coupling::blockParameters().
 #pragma once
 #include "common/Parameters.hpp"
 

@@ -38,18 +38,9 @@ struct SdemMaterial {
   // (the dashpot acts only while the contact sticks, never during slip).
   Real tangentialDamping = 0.1;
 
-  // Throw ParameterError naming the first parameter out of its valid range.
-  void validate() const {
-    if (!(density > 0) || !std::isfinite(density)) throwParameter("density", density, "kg/m^3", "> 0");
-    if (!(friction >= 0) || !std::isfinite(friction)) throwParameter("friction", friction, "", ">= 0");
-    if (!(poisson > -1.0 && poisson < 0.5)) throwParameter("poisson", poisson, "", "in (-1, 0.5)");
-    if (!(barrierStiffness > 0) || !std::isfinite(barrierStiffness))
-      throwParameter("barrierStiffness", barrierStiffness, "N/m", "> 0");
-    if (!(normalDamping >= 0) || !std::isfinite(normalDamping))
-      throwParameter("normalDamping", normalDamping, "", ">= 0 (fraction of critical)");
-    if (!(tangentialDamping >= 0) || !std::isfinite(tangentialDamping))
-      throwParameter("tangentialDamping", tangentialDamping, "", ">= 0 (fraction of critical)");
-  }
+  // Throw ParameterError naming the first parameter out of its valid range (the ranges of
+  // sdem/SdemParameters, docs/parameters.md).
+  void validate() const;
 };
 
 }  // namespace sdem

@@ -1,5 +1,6 @@
 """The scene's parameters, each declared once, in the C++ tables the scene readers check against
-(the flow's in pkg/scene/SceneParameters.cpp, the blocks' in pkg/coupling/BlockParameters.cpp):
+(the flow model's in pkg/mpm/MpmParameters.cpp, the scene's own in pkg/scene/SceneParameters.cpp,
+the blocks' in pkg/coupling/BlockParameters.cpp):
 its key in the JSON scene, its name in the Python API, unit, default, range, the paper's
 equation and its meaning.
 
@@ -69,8 +70,8 @@ def markdown():
            "arguments), each with its name in the Python API, unit, default, allowed range, the paper's equation "
            "and its meaning. A value out of its range is refused with a `ParameterError` (`ValueError` in Python) "
            "naming the key and the range given here.", "",
-           "Generated from the tables the scene readers check against (`pkg/scene/SceneParameters.cpp`, "
-           "`pkg/coupling/BlockParameters.cpp`) by `scripts/gen_parameters.py`; "
+           "Generated from the tables the scene readers and the solver check against (`pkg/mpm/MpmParameters.cpp`, "
+           "`pkg/scene/SceneParameters.cpp`, `pkg/coupling/BlockParameters.cpp`) by `scripts/gen_parameters.py`; "
            "do not edit by hand. The schema with examples: `pkg/scene/MpmScene.hpp`, "
            "`pkg/coupling/CoupledScene.hpp`; the Python API: [api.md](api.md).", ""]
     tables = []

@@ -66,6 +66,16 @@ def test_wall_study_errors_against_the_extrapolated_limit():
     assert iw.packageStudy(runs[:2], 20.0, 0.5, 1e6, "cmd") is None   # two spacings: no study
 
 
+def test_impact_walls_rest_must_cover_the_later_window(capsys):
+    # an obstacle's run must outlast the 30-70 ms window after the touch; the default keeps the
+    # wall's deposit (1 s)
+    assert iw.parse([]).rest == pytest.approx(iw.REST) and iw.REST == 1.0
+    assert iw.parse(["--rest", "0.3"]).rest == pytest.approx(0.3)
+    for bad in ("0.05", "0.1", "inf", "nan"):
+        with pytest.raises(SystemExit):
+            iw.parse(["--rest", bad])
+        assert "--rest" in capsys.readouterr().err
+
 def test_liu2018_force_windows_of_a_known_impulse():
     """liu2018_force.forceWindows on records every 1 ms (each record's force the one of the
     interval before it, as coupled.h5's are) of a block first pushed at the record of 0.3 s by

@@ -413,15 +413,15 @@ TEST(Gate, RejectsBadParametersNamingThem) {
   ok.gate.x = 0.05;
   EXPECT_NO_THROW(makeSolver(ok));
   MpmParams p = ok;
-  p.gate.x = 0.01; expectError(p, "gate.x", "in [0.02, 0.08] m");
-  p.gate.x = 0.09; expectError(p, "gate.x", "in [0.02, 0.08] m");
-  p.gate.x = NAN; expectError(p, "gate.x", "in [0.02, 0.08] m");
+  p.gate.x = 0.01; expectError(p, "gate.x", "in [0.02, 0.08]");
+  p.gate.x = 0.09; expectError(p, "gate.x", "in [0.02, 0.08]");
+  p.gate.x = NAN; expectError(p, "gate.x", "in [0.02, 0.08]");
   p = ok; p.gate.bottom = INFINITY; expectError(p, "gate.bottom", "finite");
-  p = ok; p.gate.speed = -1; expectError(p, "gate.speed", ">= 0");
-  p = ok; p.gate.speed = NAN; expectError(p, "gate.speed", ">= 0");
-  p = ok; p.gate.openAt = -0.1; expectError(p, "gate.openAt", ">= 0");
-  p = ok; p.gate.openAt = INFINITY; expectError(p, "gate.openAt", "finite");
-  p = ok; p.gate.friction = -0.1; expectError(p, "gate.friction", ">= 0");
+  p = ok; p.gate.speed = -1; expectError(p, "gate.speed", "in [0, inf)");
+  p = ok; p.gate.speed = NAN; expectError(p, "gate.speed", "in [0, inf)");
+  p = ok; p.gate.openAt = -0.1; expectError(p, "gate.open_at", "in [0, inf)");
+  p = ok; p.gate.openAt = INFINITY; expectError(p, "gate.open_at", "in [0, inf)");
+  p = ok; p.gate.friction = -0.1; expectError(p, "gate.friction", "in [0, inf)");
   // a disabled gate is not checked (and not installed)
   p = ok; p.gate.enabled = false; p.gate.x = -5;
   EXPECT_EQ(makeSolver(p)->findGridHook<Gate>(), nullptr);

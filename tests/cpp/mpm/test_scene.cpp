@@ -446,3 +446,52 @@ TEST(SceneParameters, TableIsConsistent) {
   EXPECT_EQ(rangeText(sceneParameter("material.poisson_ratio")), "in [0, 0.5)");
   EXPECT_THROW(sceneParameter("material.mu_3"), std::logic_error);
 }
+
+// The flow model's ranges are declared once (mpm/MpmParameters): a value the scene parser refuses
+// is refused by makeSolver in the same words when an MpmParams is filled in C++, and a value at
+// an allowed bound passes both.
+TEST(MpmScene, SolverAndSceneRefuseFromOneTable) {
+  struct Case {
+    const char* section;
+    const char* key;
+    double value;
+    void (*set)(MpmParams&, double);
+  };
+  const Case cases[] = {
+      {"material", "poisson_ratio", 0.5, [](MpmParams& p, double v) { p.material.poissonRatio = v; }},
+      {"material", "young_modulus", 0, [](MpmParams& p, double v) { p.material.youngModulus = v; }},
+      {"material", "mu_2", 0.2, [](MpmParams& p, double v) { p.material.mu2 = v; }},  // below mu_s 0.24
+      {"material", "grain_diameter", -1e-3, [](MpmParams& p, double v) { p.material.grainDiameter = v; }},
+      {"material", "critical_density", -1, [](MpmParams& p, double v) { p.material.criticalDensity = v; }},
+      {"grid", "dx", 0, [](MpmParams& p, double v) { p.dx = v; }},
+      {"gate", "friction", -0.1, [](MpmParams& p, double v) { p.gate.friction = v; }},
+      {"gate", "open_at", -1, [](MpmParams& p, double v) { p.gate.openAt = v; }},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.key);
+    json scene = goodScene();
+    scene["gate"] = {{"x", 0.33}};
+    scene[c.section][c.key] = c.value;
+    std::string fromScene, fromSolver;
+    try {
+      parseScene(scene.dump());
+    } catch (const ParameterError& e) {
+      fromScene = e.what();
+    }
+    MpmParams p = parseScene(goodScene().dump()).params;
+    p.gate.enabled = true;
+    p.gate.x = 0.33;
+    c.set(p, c.value);
+    try {
+      makeSolver(p);
+    } catch (const ParameterError& e) {
+      fromSolver = e.what();
+    }
+    EXPECT_EQ(fromSolver.rfind(std::string(c.section) + "." + c.key + " = ", 0), 0u) << fromSolver;
+    EXPECT_EQ(fromSolver, fromScene);
+  }
+  MpmParams p = parseScene(goodScene().dump()).params;
+  p.material.poissonRatio = 0;  // the closed lower bound of [0, 0.5)
+  p.material.mu2 = p.material.muS;
+  EXPECT_NO_THROW(makeSolver(p));
+}

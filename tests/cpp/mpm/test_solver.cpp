@@ -281,15 +281,15 @@ TEST(MpmSolver, RejectsBadParameters) {
     }
   };
   MpmParams p;
-  p.dx = 0; expectError(p, "dx");
-  p = MpmParams(); p.material.poissonRatio = 0.5; expectError(p, "material.poissonRatio");
-  p = MpmParams(); p.material.mu2 = 0.1; expectError(p, "material.mu2");
-  p = MpmParams(); p.cells[1] = 3; expectError(p, "cells[y]");
-  p = MpmParams(); p.cells = {2000, 2000, 600}; expectError(p, "cells");  // 27 x 667 x 667 x 201 bases >= 2^31
+  p.dx = 0; expectError(p, "grid.dx");
+  p = MpmParams(); p.material.poissonRatio = 0.5; expectError(p, "material.poisson_ratio");
+  p = MpmParams(); p.material.mu2 = 0.1; expectError(p, "material.mu_2");
+  p = MpmParams(); p.cells[1] = 3; expectError(p, "grid.cells[y]");
+  p = MpmParams(); p.cells = {2000, 2000, 600}; expectError(p, "grid.cells");  // 27 x 667 x 667 x 201 bases >= 2^31
   p = MpmParams(); p.cfl = 0; expectError(p, "cfl");
   p = MpmParams(); p.material.density = -1; expectError(p, "material.density");
-  p = MpmParams(); p.material.youngModulus = 0; expectError(p, "material.youngModulus");
-  p = MpmParams(); p.material.grainDiameter = 0; expectError(p, "material.grainDiameter");
+  p = MpmParams(); p.material.youngModulus = 0; expectError(p, "material.young_modulus");
+  p = MpmParams(); p.material.grainDiameter = 0; expectError(p, "material.grain_diameter");
   if (!cudaAvailable()) {
     EXPECT_THROW(makeSolver(MpmParams(), Backend::Cuda), RuntimeFailure);
   }
