@@ -28,7 +28,7 @@ F_peak/(ρ v_f² A) with A its face below h_f, against Eq 20 (α_f = 10.8 Fr^−
 for both with F_static = ½ ρ g h_f A (Eq 21's, k 1).
 
     OMP_NUM_THREADS=2 /usr/bin/python3 scripts/validation/impact_walls.py --out results/impact_walls \\
-        [--incline 10,20,25,30,35] [--L0 0.5] [--dx 0.01] [--width 0.04] [--young E] [--cases free,wall,block]
+        [--incline 10,20,25,30,35] [--L0 0.5] [--dx 0.01] [--width 0.04] [--young E] [--cases free,wall,block] [--rest 1]
     /usr/bin/python3 scripts/validation/impact_walls.py --out results/impact_walls --report-only
 
 Each case's numbers go to OUT/<case>.json when it ends and finished cases are not run again; a
@@ -54,7 +54,7 @@ WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half h
 BLOW = 0.01               # window of the mean force for its peak [s]
 LATER = (0.03, 0.07)      # after the first blow: the mean force over this window after the first touch [s], for
                           # the reflected bore's quasi-steady load
-REST = 1.0                # the wall's run lasts this long after the free flow's arrival [s]
+REST = 1.0                # by default an obstacle's run lasts this long after the free flow's arrival [s] (--rest)
 END = 0.1                 # F_end: mean over the run's last END seconds [s]
 DEPOSIT = 0.02            # h_d: the highest point within this distance upstream of the wall [m]
 FLUME_BEYOND = 0.3        # the flume goes on this far past the station [m]: its end wall sends nothing back
@@ -74,6 +74,10 @@ def parse(argv):
     ap.add_argument("--young", type=float, default=None,
                     help="the flow's Young's modulus E [Pa] > 0 (default: the glass beads' of Table 1, 1e6): the "
                          "elastic wave speed √(E/ρ) sets how hard a front strikes")
+    ap.add_argument("--rest", type=float, default=REST,
+                    help="an obstacle's run lasts this long after the free flow's arrival [s] > 0.1 (default %g: the "
+                         "deposit then at rest, for the wall's F_end and k_end; the first blow and the 30–70 ms "
+                         "need 0.1)" % REST)
     ap.add_argument("--cases", default="free,wall", help="which runs: free, wall, block (comma-separated; "
                     "the block needs Δx 0.01 m or finer: at 0.02 m it is one cell)")
     ap.add_argument("--out", default="results/impact_walls", help="folder of the runs")
@@ -91,6 +95,8 @@ def parse(argv):
         ap.error("--incline = %r: comma-separated angles in degrees" % a.incline)
     if not all(0 < t < 60 for t in a.incline):
         ap.error("--incline = %r: each must be in (0, 60) deg" % a.incline)
+    if not 0.1 < a.rest < float("inf"):
+        ap.error("--rest = %r: must be > 0.1 s (the 30–70 ms window after the touch) and finite" % a.rest)
     for name in ("L0", "dx", "width") + (("young",) if a.young is not None else ()):
         if not 0 < getattr(a, name) < float("inf"):
             ap.error("--%s = %r: must be > 0 and finite" % (name, getattr(a, name)))
@@ -146,7 +152,7 @@ def prepare(a, kind, theta, folder):
                           outputEvery=RESTART_EVERY, vtk="none", stopWhenProbed=True,
                           flowProbes=[{"x": station, "halfWidth": STATION_HALF, "bedZ": 0.0, "window": 0.05}])
     else:
-        meta["duration"] = a.arrival + REST
+        meta["duration"] = a.arrival + a.rest
         driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=meta["duration"], dt=dt,
                           seriesEvery=every, outputEvery=min(RESTART_EVERY, meta["duration"]), vtk="none")
     with open(os.path.join(folder, "meta.json"), "w") as f:
@@ -192,7 +198,8 @@ def readObstacle(folder, meta, free):
                  ratio=r["F_peak"] / analysis.staticImpactForce(RHO, h, h * w))
     else:
         area = min(h, CUBE) * CUBE
-        r.update(alpha_f=r["F_peak"] / (RHO * v * v * area), eq20=analysis.dynamicPressureCoefficient(free["Fr"]),
+        r.update(alpha_f=r["F_peak"] / (RHO * v * v * area), alpha_later=r["F_later"] / (RHO * v * v * area),
+                 eq20=analysis.dynamicPressureCoefficient(free["Fr"]),
                  ratio=r["F_peak"] / analysis.staticImpactForce(RHO, h, area))
     return r
 
