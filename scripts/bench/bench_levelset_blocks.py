@@ -4,8 +4,10 @@ as SDEM sphero-boxes (paper §4.2, Fig 13 style), in one command.
 
 The §3.3 flume (examples/liu2018_blocks.py: horizontal, 0.6 × 0.2 m, column 0.1 × 0.2 m at the
 upstream end, Table 2's flow, flow–block friction 0.13) with N free wooden cubes (20 mm, 500
-kg/m³, friction 0.60, barrier stiffness 1e4 N/m) resting on the bed in rows of five across the
-flume, 50 mm apart along it, the first row's upstream faces at x = 0.2 m. SDEM: sweep radius 1 mm
+kg/m³, friction 0.60, barrier stiffness 1e4 N/m) in rows of five across the flume, 50 mm apart
+along it, the first row's upstream faces at x = 0.2 m: the first 30 on the bed (six rows), the next
+ones stacked on them in layers of 30, up to four high (N ≤ 120; each cube of a layer dropped from
+0.5 mm above the one under it, at rest long before the front arrives). SDEM: sweep radius 1 mm
 (h/20). LevelSet: grid spacing ``--ls-spacing`` (2 mm), ``--ls-nodes`` boundary nodes (602),
 YADE's contacts with k_n ``--ls-kn`` (1e4 N/m, Flume's ``levelSetContact`` default). Each case runs
 ``--duration`` seconds of the coupled scene (the flow reaches the first row at about 0.18 s)
@@ -14,7 +16,7 @@ and per simulated second, the ratios LevelSet / SDEM at each N, and the fastest 
 case (how hard the front throws them: the two kinds do not move alike). The cases run one after the
 other in this process; on a shared machine their ratio is what to read, not the absolute times.
 
-    OMP_NUM_THREADS=1 /usr/bin/python3 scripts/bench/bench_levelset_blocks.py [--n 1,3,10,30]
+    OMP_NUM_THREADS=1 /usr/bin/python3 scripts/bench/bench_levelset_blocks.py [--n 1,3,10,30,100]
         [--dx 0.01] [--ppc 1] [--duration 0.3] [--ls-spacing 0.002] [--ls-nodes 602] [--ls-kn 1e4]
         [--json PATH]
 
@@ -32,6 +34,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 HALF = (0.01, 0.01, 0.01)
 ROW, ACROSS, X0, PITCH = 5, (0.03, 0.065, 0.1, 0.135, 0.17), 0.2, 0.05
+ROWS, LAYERS, LAYER_GAP = 6, 4, 5e-4  # rows along the flume, layers stacked, drop onto the layer below [m]
 GRANULAR = {"density": 1300.0, "young_modulus": 5e4, "poisson_ratio": 0.40,
             "mu_s": math.tan(math.radians(22.0)), "mu_2": 0.60}
 
@@ -39,7 +42,8 @@ GRANULAR = {"density": 1300.0, "young_modulus": 5e4, "poisson_ratio": 0.40,
 def parse(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0], epilog=__doc__.split("\n", 1)[1],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--n", default="1,3,10,30", help="numbers of blocks, comma-separated, 1 to 30")
+    ap.add_argument("--n", default="1,3,10,30,100", help="numbers of blocks, comma-separated, 1 to %d" % (
+        ROW * ROWS * LAYERS))
     ap.add_argument("--dx", type=float, default=0.01, help="grid spacing [m] > 0 (0.01)")
     ap.add_argument("--ppc", type=int, default=1, help="material points per cell (1)")
     ap.add_argument("--duration", type=float, default=0.3, help="coupled run per case [s] > 0 (0.3)")
@@ -52,8 +56,9 @@ def parse(argv):
         a.n = [int(k) for k in a.n.split(",")]
     except ValueError:
         ap.error("--n %r: must be comma-separated integers" % a.n)
-    if not all(1 <= k <= 6 * ROW for k in a.n):
-        ap.error("--n %r: each must be in 1..%d (six rows of %d)" % (a.n, 6 * ROW, ROW))
+    if not all(1 <= k <= ROW * ROWS * LAYERS for k in a.n):
+        ap.error("--n %r: each must be in 1..%d (%d rows of %d, %d layers)" % (a.n, ROW * ROWS * LAYERS, ROWS, ROW,
+                                                                              LAYERS))
     if not (a.dx > 0 and a.duration > 0 and a.ls_spacing > 0 and a.ls_kn > 0 and a.ls_nodes >= 8):
         ap.error("--dx, --duration, --ls-spacing, --ls-kn must be > 0 and --ls-nodes >= 8")
     return a
@@ -63,9 +68,10 @@ def blocks(n, levelSet):
     from mpmsdem.flume import Block
     out = []
     for k in range(n):
+        layer, k = divmod(k, ROW * ROWS)
         row, col = divmod(k, ROW)
-        out.append(Block(half=HALF, x=X0 + PITCH * row, y=ACROSS[col], density=500.0, friction=0.60,
-                         flowFriction=0.13, barrierStiffness=1e4, levelSet=levelSet))
+        out.append(Block(half=HALF, x=X0 + PITCH * row, y=ACROSS[col], z=layer * (2 * HALF[2] + LAYER_GAP),
+                         density=500.0, friction=0.60, flowFriction=0.13, barrierStiffness=1e4, levelSet=levelSet))
     return out
 
 
