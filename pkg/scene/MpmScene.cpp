@@ -31,6 +31,40 @@ using namespace scenejson;
 // The keys a section may have: its entries in the table.
 std::vector<std::string> keysOf(const char* section) { return sectionKeys(sceneParameters(), section); }
 
+// The keys of one form of a section that has two (a box or a mesh, a terrain from a file or
+// given here): the section's keys less those only the other form has. A key both forms share is
+// then in each without being listed here.
+std::vector<std::string> formKeys(const char* section, std::initializer_list<const char*> otherFormOnly) {
+  std::vector<std::string> keys = keysOf(section);
+  for (const char* k : otherFormOnly) keys.erase(std::remove(keys.begin(), keys.end(), std::string(k)), keys.end());
+  return keys;
+}
+
+// "{a, b, c}", as the messages show a form's keys.
+std::string braced(const std::vector<std::string>& keys) {
+  std::string out;
+  for (const std::string& k : keys) out += (out.empty() ? "{" : ", ") + k;
+  return out + "}";
+}
+
+// The two forms of a terrain and of a particle region.
+const std::vector<std::string>& terrainFileKeys() {
+  static const std::vector<std::string> keys = formKeys("terrain", {"nx", "ny", "x0", "y0", "spacing", "heights"});
+  return keys;
+}
+const std::vector<std::string>& terrainHeightKeys() {
+  static const std::vector<std::string> keys = formKeys("terrain", {"file", "origin"});
+  return keys;
+}
+const std::vector<std::string>& boxKeys() {
+  static const std::vector<std::string> keys = formKeys("particles[]", {"mesh", "scale", "offset"});
+  return keys;
+}
+const std::vector<std::string>& meshKeys() {
+  static const std::vector<std::string> keys = formKeys("particles[]", {"lo", "hi"});
+  return keys;
+}
+
 void parseGrid(const json& root, MpmParams& p) {
   const json& g = requireObject(root, "", "grid");
   checkKeys(g, "grid", keysOf("grid"));
@@ -132,11 +166,11 @@ void parseTerrain(const json& root, MpmParams& p, const std::string& baseDir) {
   if (!root.contains("terrain")) return;
   const json& j = root.at("terrain");
   if (!j.is_object())
-    throwParameter("terrain", j.dump(), "", "a JSON object {file, origin, friction} or {nx, ny, x0, y0, spacing, "
-                   "heights, friction}");
+    throwParameter("terrain", j.dump(), "", "a JSON object " + braced(terrainFileKeys()) + " or " +
+                                            braced(terrainHeightKeys()));
   TerrainSpec& t = p.terrain;
   if (j.contains("file")) {
-    checkKeys(j, "terrain", {"file", "origin", "friction"});
+    checkKeys(j, "terrain", terrainFileKeys());
     const json& f = j.at("file");
     if (!f.is_string() || f.get<std::string>().empty())
       throwParameter("terrain.file", f.dump(), "", "a non-empty path to an ESRI ASCII grid (.asc)");
@@ -152,7 +186,7 @@ void parseTerrain(const json& root, MpmParams& p, const std::string& baseDir) {
     t.heights = std::move(r.heights);
     for (double& z : t.heights) z -= o[2];
   } else {
-    checkKeys(j, "terrain", {"nx", "ny", "x0", "y0", "spacing", "heights", "friction"});
+    checkKeys(j, "terrain", terrainHeightKeys());
     const ParameterSpec &nxSpec = sceneParameter("terrain.nx"), &nySpec = sceneParameter("terrain.ny");
     const double nx = readNumber(j, "terrain", nxSpec), ny = readNumber(j, "terrain", nySpec);
     if (nx != std::floor(nx)) throwParameter("terrain.nx", nx, "", rangeText(nxSpec));
@@ -297,19 +331,15 @@ void parseParticles(const json& root, MpmScene& s, const std::string& baseDir) {
   // An empty array is a scene without flow: the coupled engine then moves its blocks alone.
   if (!list.is_array())
     throwParameter("particles", list.dump().substr(0, 80), "",
-                   "an array (empty for no flow) of boxes {lo, hi, ppc, velocity} or meshes {mesh, scale, offset, ppc, "
-                   "velocity}");
+                   "an array (empty for no flow) of boxes " + braced(boxKeys()) + " or meshes " + braced(meshKeys()));
   const double tol = 1e-9 * s.params.dx;
   for (std::size_t b = 0; b < list.size(); ++b) {
     const std::string path = "particles[" + std::to_string(b) + "]";
     const json& j = list[b];
     if (!j.is_object())
-      throwParameter(path, j.dump(), "", "a JSON object {lo, hi, ppc, velocity} or {mesh, scale, offset, ppc, velocity}");
+      throwParameter(path, j.dump(), "", "a JSON object " + braced(boxKeys()) + " or " + braced(meshKeys()));
     const bool isMesh = j.contains("mesh");
-    if (isMesh)
-      checkKeys(j, path, {"mesh", "scale", "offset", "ppc", "velocity"});
-    else
-      checkKeys(j, path, {"lo", "hi", "ppc", "velocity"});
+    checkKeys(j, path, isMesh ? meshKeys() : boxKeys());
     ParticleBox box;
     if (j.contains("velocity")) box.velocity = vec3(j.at("velocity"), path + ".velocity");
     if (j.contains("ppc")) box.ppc = parsePpc(j.at("ppc"), path);

@@ -43,8 +43,6 @@ ParameterTable ownTable() {
        "the raster, relative to the scene file's folder"},
       {"terrain.origin", "origin", K::kVector, "m", kNone, "[0, 0, 0]", 0, 0, false, false, "", "",
        "with file: the file's point that goes to the grid frame's zero"},
-      {"terrain.friction", "friction", K::kNumber, "", kNone, "\"free\"", 0, kInf, true, false,
-       "\"free\", \"noslip\" or in [0, inf)", "", "friction between the flow and the terrain, as for the walls"},
       {"terrain.nx", "nx", K::kNumber, "", kNone, kRequired, 2, 1e8, true, true, "a whole number in [2, 1e+08]", "",
        "without file: heights along x"},
       {"terrain.ny", "ny", K::kNumber, "", kNone, kRequired, 2, 1e8, true, true, "a whole number in [2, 1e+08]", "",
@@ -57,6 +55,8 @@ ParameterTable ownTable() {
        "without file: distance between heights"},
       {"terrain.heights", "heights", K::kVector, "m", kNone, kRequired, 0, 0, false, false, "nx * ny numbers", "",
        "without file: the heights, i-major (heights[i * ny + j])"},
+      {"terrain.friction", "friction", K::kNumber, "", kNone, "\"free\"", 0, kInf, true, false,
+       "\"free\", \"noslip\" or in [0, inf)", "", "friction between the flow and the terrain, as for the walls"},
 
       {"particles[].lo", "lo", K::kVector, "m", kNone, kRequired, 0, 0, false, false,
        "on grid lines, inside the material region", "", "a box's lower corner"},

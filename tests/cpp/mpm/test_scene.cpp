@@ -174,6 +174,22 @@ TEST(MpmScene, UnknownKeysAreNamed) {
   j = goodScene();
   j["run"]["output"] = "x";
   expectError(j, {"unknown key 'run.output'"});
+  // a key of the other form of a two-form section is refused, the message listing this form's keys
+  j = goodScene();
+  j["particles"][1]["scale"] = 2;  // a box with a mesh's key
+  expectError(j, {"unknown key 'particles[1].scale'", "are lo, hi, ppc, velocity"});
+  j = goodScene();
+  j["particles"][1] = {{"mesh", "cube.stl"}, {"lo", {0.33, 0.02, 0.02}}};  // a mesh with a box's key
+  expectError(j, {"unknown key 'particles[1].lo'", "are mesh, scale, offset, ppc, velocity"});
+  j = goodScene();
+  j["terrain"] = {{"file", "dem.asc"}, {"nx", 2}};  // a file with the raster's own key
+  expectError(j, {"unknown key 'terrain.nx'", "are file, origin, friction"});
+  j = goodScene();
+  j["terrain"] = {{"nx", 2}, {"origin", {0, 0, 0}}};
+  expectError(j, {"unknown key 'terrain.origin'", "are nx, ny, x0, y0, spacing, heights, friction"});
+  j = goodScene();
+  j["particles"] = 3;
+  expectError(j, {"boxes {lo, hi, ppc, velocity} or meshes {mesh, scale, offset, ppc, velocity}"});
 }
 
 TEST(MpmScene, MissingKeysAreNamed) {
