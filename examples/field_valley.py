@@ -266,12 +266,12 @@ def main(argv):
         target = min(O.time + sample, a.duration)
         if coupled:
             while O.time < target - 1e-9:  # dtAuto sets each step
-                mpmsdem.run(5, coupled)
+                mpmsdem.run(5, coupled, endTime=a.duration)
                 steps += 5
         else:
             O.dt = 0.5 * mpm.stableTimeStep()  # the bound falls as the flow speeds up
             n = max(1, int(round((target - O.time) / O.dt)))
-            mpmsdem.run(n, mpm)
+            mpmsdem.run(n, mpm, endTime=a.duration)
             steps += n
         p = mpm.particles()
         maps.sample(p, O.time)

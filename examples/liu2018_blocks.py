@@ -236,7 +236,7 @@ def runCoupled(s, duration, sampleEvery=0.002):
     end = O.time + duration
     nextSample = O.time + sampleEvery
     while O.time < end - 1e-12:
-        mpmsdem.run(max(1, min(CHUNK, int(math.ceil((end - O.time) / O.dt - 1e-9)))), s.coupled)
+        mpmsdem.run(max(1, min(CHUNK, int(math.ceil((end - O.time) / O.dt - 1e-9)))), s.coupled, endTime=end)
         s.extra["dtMin"] = min(s.extra["dtMin"], O.dt)
         if O.time < nextSample - 1e-12 and O.time < end - 1e-12:
             continue

@@ -20,6 +20,7 @@ Main entry points (all SI units):
 * :mod:`mpmsdem.tradeoffs` — measured settings against error and cost; ``propose(error)``.
 * :mod:`mpmsdem.parameters` — every scene key's Python name, unit, default and range.
 """
+import math
 import os
 import sys
 
@@ -87,7 +88,7 @@ def material(density, friction=0.5, poisson=0.3, barrierStiffness=1e4, normalDam
                           normalDamping=normalDamping, tangentialDamping=tangentialDamping))
 
 
-def run(steps, *engines):
+def run(steps, *engines, endTime=None):
     """Run YADE for ``steps`` steps and raise RuntimeError if one of ``engines`` (SdemEngine,
     MpmEngine, CoupledEngine) stopped the run, with the engine's message (YADE reports an error
     raised inside a PyRunner on its log and stops, but does not always raise it from ``O.run``).
@@ -98,7 +99,9 @@ def run(steps, *engines):
     ``O.pause()`` from an engine therefore does not end this call early; use ``O.run`` for that.
 
     The scene's progress line (every 10 s of wall time, when an engine is verbose) says how much
-    of the ``steps`` is done and when they will be."""
+    of the ``steps`` is done and when they will be. A script that runs in chunks (to sample its
+    scene, or with a step that changes) gives each chunk the run's ``endTime`` [s, simulated,
+    > O.time]: the line then counts down the simulated time to it over all the chunks."""
     from yade import O
     from yade.wrapper import PyRunner
     from .engine import _PROGRESS
@@ -112,7 +115,12 @@ def run(steps, *engines):
     userRunners = [r for r in O.engines if isinstance(r, PyRunner) and r.updateGlobals]
     for r in userRunners:
         r.updateGlobals = False
-    _PROGRESS.running(int(steps))
+    if endTime is not None:
+        endTime = float(endTime)
+        if not (math.isfinite(endTime) and endTime > O.time):
+            raise ValueError("endTime = %r s: must be finite and > O.time = %.9g s (the run's end, simulated)"
+                             % (endTime, O.time))
+    _PROGRESS.running(int(steps), endTime)
     try:
         for _ in range(int(steps)):
             O.step()

@@ -184,7 +184,9 @@ class _SceneProgress:
     however many mpmsdem engines step in it, each verbose one adding its fields. The first
     engine to step in a YADE step writes the line, before it changes anything: every engine's
     state is then the one the steps so far have left. Within :func:`mpmsdem.run` the line also
-    says how much of the run is done and when it will end."""
+    says how much of the run is done and when it will end: of its ``steps``, or, where a script
+    runs in chunks and gives the run's ``endTime``, of the simulated time to it, counted from the
+    first chunk with that end."""
 
     interval = 10.0
 
@@ -194,6 +196,7 @@ class _SceneProgress:
         self._engines = []     # weak references to the engines that started a step since then, in their order
         self._last = None      # (wall time, steps) of the last line, or of the first step seen
         self._run = None       # (steps done, steps at the end, wall time) of mpmsdem.run's steps
+        self._span = None      # (O.time, endTime, wall time) when chunks run to endTime began
 
     def stepping(self, engine, t, steps, dt):
         """``engine`` starts a step with ``steps`` steps done, at time ``t`` [s] after a step
@@ -219,16 +222,29 @@ class _SceneProgress:
         if not parts:
             return
         line = "mpmsdem: t = %.6g s, step %d" % (t, steps)
-        if self._run is not None and self._run[0] < steps <= self._run[1]:
+        if self._run is not None and self._span is not None and t > self._span[0]:
+            t0, end, start = self._span
+            line += " (%.1f %% of the run to t = %.6g s, ETA %s)" % (
+                100.0 * (t - t0) / (end - t0), end, _duration((now - start) / (t - t0) * max(end - t, 0.0)))
+        elif self._run is not None and self._run[0] < steps <= self._run[1]:
             first, end, start = self._run
             line += " (%.1f %% of %d steps, ETA %s)" % (100.0 * (steps - first) / (end - first), end - first,
                                                           _duration((now - start) / (steps - first) * (end - steps)))
         line += ", O.dt %.3g s, %s" % (dt, _perStep(perStep))
         print("; ".join([line] + ["%s: %s" % p for p in parts]), file=sys.stderr, flush=True)
 
-    def running(self, steps):
-        """:func:`mpmsdem.run` is about to take ``steps`` steps from O.iter (None: it is done)."""
-        self._run = None if steps is None else (O.iter, O.iter + steps, self.clock())
+    def running(self, steps, endTime=None):
+        """:func:`mpmsdem.run` is about to take ``steps`` steps from O.iter (None: it is done), as
+        a chunk of a run to ``endTime`` [s] where one is given: the span (and its rate) goes on
+        from the chunk before while the end is the same and O.time has not gone back."""
+        if steps is None:
+            self._run = None
+            return
+        self._run = (O.iter, O.iter + steps, self.clock())
+        if endTime is None:
+            self._span = None
+        elif self._span is None or self._span[1] != endTime or not self._span[0] <= O.time < endTime:
+            self._span = (O.time, endTime, self.clock())
 
 
 _PROGRESS = _SceneProgress()

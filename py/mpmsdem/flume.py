@@ -296,10 +296,12 @@ class Flume:
         from . import run as _run
         every = max(1, int(round((sampleEvery or 5 * O.dt) / O.dt)))
         steps = int(round(duration / O.dt))
+        end = O.time + (steps - 0.5) * O.dt  # the progress line's end, within the last step at this O.dt
         done = 0
         while done < steps:
             k = min(every, steps - done)
-            _run(k, self.coupled)
+            # a step the scene changes (dtAuto) can pass that end early: the count-down then stops
+            _run(k, self.coupled, endTime=end if O.time < end else None)
             done += k
             self.sample()
 

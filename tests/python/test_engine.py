@@ -107,6 +107,30 @@ def test_two_engines_in_one_scene_print_one_line_per_interval_with_the_eta_of_th
     assert not any("ETA" in line or "%" in line for line in out)
 
 
+def test_a_run_in_chunks_to_an_end_time_counts_down_the_whole_run(progress, capsys):
+    # three chunks of 10 steps to t = 30 steps: one countdown over the three (4 s a step, so at
+    # t the ETA is 4 s for each step left), not one per chunk
+    sdem, mpm, coupled = engines(sdemVerbose=True)
+    O.engines = [ForceResetter(), sdem.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    O.dt = 1e-5
+    t0, end = O.time, O.time + 30e-5
+    first = O.iter
+    for _ in range(3):
+        mpmsdem.run(10, sdem, endTime=end)
+    out = lines(capsys.readouterr().err)
+    assert len(out) == 9, out
+    for line in out:
+        k = int(re.search(r", step (\d+) ", line).group(1)) - first
+        t = float(re.search(r"t = (\S+) s", line).group(1))
+        assert t == pytest.approx(t0 + k * 1e-5, abs=1e-12)
+        expect = " (%.1f %% of the run to t = %.6g s, ETA %s), " % (100.0 * k / 30, end, engine._duration(4.0 * (30 - k)))
+        assert expect in line, line
+    # the end must lie ahead
+    with pytest.raises(ValueError, match=r"endTime = .*: must be finite and > O.time"):
+        mpmsdem.run(1, sdem, endTime=O.time)
+    with pytest.raises(ValueError, match=r"endTime = nan s"):
+        mpmsdem.run(1, sdem, endTime=float("nan"))
+
 def test_a_coupled_scene_prints_one_line_with_the_fields_of_its_verbose_engines(progress, capsys):
     sdem, mpm, coupled = engines(sdemVerbose=True, mpmVerbose=True, coupledVerbose=True)
     O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
