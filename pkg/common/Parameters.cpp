@@ -43,7 +43,14 @@ void checkParameter(const ParameterSpec& spec, const std::string& name, double v
   checkRange(name, value, spec.unit, lo, !spec.loInclusive, hi, !spec.hiInclusive);
 }
 
-void checkParameter(const ParameterSpec& spec, double value) { checkParameter(spec, spec.key, value, spec.lo, spec.hi); }
+void checkParameter(const ParameterSpec& spec, double value, const std::string& hint) {
+  if (hint.empty()) return checkParameter(spec, spec.key, value, spec.lo, spec.hi);
+  try {
+    checkParameter(spec, spec.key, value, spec.lo, spec.hi);
+  } catch (const ParameterError& e) {
+    throw ParameterError(std::string(e.what()) + " (" + hint + ")");
+  }
+}
 
 bool isRequired(const ParameterSpec& spec) { return std::strcmp(spec.defaultText, kRequired) == 0; }
 

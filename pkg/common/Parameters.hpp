@@ -71,7 +71,8 @@ void checkRange(const std::string& name, double value, const char* unit, double 
 // another parameter's value (material.mu_2 >= material.mu_s).
 void checkParameter(const ParameterSpec& spec, const std::string& name, double value, double lo, double hi);
 // `value` in the entry's own range, the message naming its key: for a value that was not read
-// from a scene (a struct filled in C++, checked by the solver it builds).
-void checkParameter(const ParameterSpec& spec, double value);
+// from a scene (a struct filled in C++, checked by the solver it builds). `hint`, where given,
+// follows the range in parentheses (what to write instead).
+void checkParameter(const ParameterSpec& spec, double value, const std::string& hint = "");
 
 }  // namespace mpmsdem

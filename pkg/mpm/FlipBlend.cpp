@@ -3,36 +3,28 @@
 #include <sstream>
 
 #include "common/Error.hpp"
+#include "mpm/MpmParameters.hpp"
 
 namespace mpmsdem {
 namespace mpm {
 
-namespace {
-
-void checkAlpha(double alpha) {
-  if (!(alpha >= 0 && alpha <= 1)) throwParameter("flip_alpha", alpha, "", "in [0, 1]");
-}
-
-}  // namespace
-
+// The ranges are the entries' of mpm/MpmParameters, the scene's own.
 FlipBlend FlipBlend::viscosity(double nu) {
-  if (!(nu > 0) || !std::isfinite(nu))
-    throwParameter("flip_viscosity", nu, "m^2/s",
-                   "finite and > 0 (pure FLIP is alpha 1 per step: flip_alpha 1 with flip_reference_dt \"step\")");
+  checkParameter(solverParameter("flip_viscosity"), nu,
+                 "pure FLIP is alpha 1 per step: flip_alpha 1 with flip_reference_dt \"step\"");
   return FlipBlend(Kind::kViscosity, nu, 0);
 }
 
 FlipBlend FlipBlend::alphaPer(double alpha, double referenceDt) {
-  checkAlpha(alpha);
-  if (!(referenceDt > 0) || !std::isfinite(referenceDt))
-    throwParameter("flip_reference_dt", referenceDt, "s",
-                   "finite and > 0 (alpha is kept per that much simulated time; the paper's blend is 0.99 per 5e-6 s), "
-                   "or \"step\" for alpha per step");
+  checkParameter(solverParameter("flip_alpha"), alpha);
+  checkParameter(solverParameter("flip_reference_dt"), referenceDt,
+                 "alpha is kept per that much simulated time; the paper's blend is 0.99 per 5e-6 s; or \"step\" "
+                 "for alpha per step");
   return FlipBlend(Kind::kAlphaPerTime, alpha, referenceDt);
 }
 
 FlipBlend FlipBlend::alphaPerStep(double alpha) {
-  checkAlpha(alpha);
+  checkParameter(solverParameter("flip_alpha"), alpha);
   return FlipBlend(Kind::kAlphaPerStep, alpha, 0);
 }
 

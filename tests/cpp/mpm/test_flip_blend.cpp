@@ -98,7 +98,8 @@ TEST(FlipBlend, ReferenceStepRule) {
   EXPECT_TRUE(FlipBlend::alphaPerStep(0.9) == FlipBlend::alphaPerStep(0.9));
 }
 
-// Each kind refuses the numbers it cannot mean, naming the scene key and the range: no blend
+// Each kind refuses the numbers it cannot mean, naming the scene key and the range (the table's,
+// mpm/MpmParameters) with a hint of what to write instead: no blend
 // can be set two ways at once, so nothing is left for the solver to check.
 TEST(FlipBlend, EachKindRefusesWhatItCannotMean) {
   const auto refused = [](const auto& make, const char* name, const char* range) {
@@ -112,13 +113,13 @@ TEST(FlipBlend, EachKindRefusesWhatItCannotMean) {
   };
   const double nan = std::nan(""), inf = INFINITY;
   for (double nu : {0.0, -1e-3, nan, inf})
-    refused([&] { return FlipBlend::viscosity(nu); }, "flip_viscosity", "finite and > 0");
+    refused([&] { return FlipBlend::viscosity(nu); }, "flip_viscosity", "in (0, inf) (pure FLIP is");
   for (double alpha : {-0.1, 1.5, nan}) {
     refused([&] { return FlipBlend::alphaPerStep(alpha); }, "flip_alpha", "in [0, 1]");
     refused([&] { return FlipBlend::alphaPer(alpha, 1e-4); }, "flip_alpha", "in [0, 1]");
   }
   for (double ref : {0.0, -1e-4, nan, inf})
-    refused([&] { return FlipBlend::alphaPer(0.99, ref); }, "flip_reference_dt", "finite and > 0");
+    refused([&] { return FlipBlend::alphaPer(0.99, ref); }, "flip_reference_dt", "in (0, inf) (alpha is kept per");
   EXPECT_NO_THROW(FlipBlend::alphaPerStep(0));
   EXPECT_NO_THROW(FlipBlend::alphaPerStep(1));
   EXPECT_NO_THROW(FlipBlend::viscosity(1e-300));
