@@ -33,7 +33,8 @@ for both with F_static = ½ ρ g h_f A (Eq 21's, k 1).
 
 Each case's numbers go to OUT/<case>.json when it ends and finished cases are not run again; a
 run that was interrupted continues from its last snapshot (every 0.1 s);
-the table of all finished cases is printed and written to OUT/impact_walls.md.
+the table of all finished cases is printed and written to OUT/impact_walls.md, the figure
+(α and F_peak/F_static against Fr, beside the models) to OUT/impact_walls.png.
 """
 import argparse
 import glob
@@ -84,6 +85,9 @@ def parse(argv):
     ap.add_argument("--package-data", action="store_true",
                     help="store the wall's refinement (three spacings of one incline, one of them 0.01 m) in "
                          "py/mpmsdem/tradeoffs.json (mpmsdem.tradeoffs: errors against the extrapolated limit)")
+    ap.add_argument("--study", default=None,
+                    help="a folder of §5 cases (examples/parametric_study.py's JSON files, e.g. docs/data/study_s5) "
+                         "drawn beside the runs on the figure's F_peak/F_static panel")
     ap.add_argument("--report-only", action="store_true",
                     help="only print and write the table of finished runs (read again from their outputs)")
     ap.add_argument("--child", nargs=3, metavar=("prepare", "KIND", "THETA"), help=argparse.SUPPRESS)
@@ -290,6 +294,72 @@ def table(out):
     return "\n".join(lines)
 
 
+def figure(out, study=None):
+    """OUT/impact_walls.png: the walls' and the cubes' α against the Froude number of their flow
+    (left), beside the models no one here produced (the reflected bore for the wall; Eq 20's α_f
+    = 10.8 Fr^-1.3 after Thibert et al. 2008 and α = 5.3 Fr^-1.5 after Cui et al. 2015 for the
+    cube), and F_peak/F_static against Fr (right) with Eq 21 at the paper's fit (α_f 0.18, k 1.6)
+    and at its bound (α_f = k = 1); ``study``: a folder of §5 cases (examples/parametric_study.py's
+    JSON files) drawn on the right as well. Each run's marker is filled by its Δx (the legend)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    from mpmsdem import analysis
+    runs = []
+    for path in sorted(glob.glob(os.path.join(out, "*.json"))):
+        with open(path) as f:
+            r = json.load(f)
+        if r["kind"] != "free":
+            runs.append(r)
+    if not runs:
+        return None
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.6))
+    fr = np.linspace(1.2, 6.5, 100)
+    dxs = sorted({r["dx"] for r in runs}, reverse=True)
+    shade = {dx: plt.cm.viridis(0.15 + 0.7 * k / max(1, len(dxs) - 1)) for k, dx in enumerate(dxs)}
+    for kind, marker, name in (("wall", "s", "wall"), ("block", "o", "cube (h_b 20 mm)")):
+        for dx in dxs:
+            rs = [r for r in runs if r["kind"] == kind and r["dx"] == dx]
+            if not rs:
+                continue
+            x = [r["free"]["Fr"] for r in rs]
+            alpha = [r["obstacle"].get("alpha", r["obstacle"].get("alpha_f")) for r in rs]
+            label = "%s, Δx %g m" % (name, dx)
+            left.plot(x, alpha, marker, color=shade[dx], label=label + ": 10 ms peak")
+            later = [r["obstacle"].get("alpha_later") for r in rs]
+            if None not in later:
+                left.plot(x, later, marker, mfc="none", color=shade[dx], label=label + ": 30–70 ms")
+            right.plot(x, [r["obstacle"]["ratio"] for r in rs], marker, color=shade[dx], label=label)
+    walls = sorted((r for r in runs if r["kind"] == "wall"), key=lambda r: r["free"]["Fr"])
+    if walls:
+        left.plot([r["free"]["Fr"] for r in walls], [r["obstacle"]["bore"] for r in walls], "k-", lw=1,
+                  label="wall: reflected bore (momentum balance)")
+    left.plot(fr, analysis.dynamicPressureCoefficient(fr), "k--", lw=1, label="Eq 20: 10.8 Fr^-1.3 (Thibert et al. 2008)")
+    left.plot(fr, 5.3 * fr ** -1.5, "k:", lw=1, label="5.3 Fr^-1.5 (Cui et al. 2015, debris flows)")
+    left.set(xlabel="Fr = v_f / sqrt(g h_f)", ylabel="α = F / (ρ v_f² A)", yscale="log")
+    left.legend(fontsize=6.5)
+    if study:
+        cases = []
+        for path in sorted(glob.glob(os.path.join(study, "*.json"))):
+            with open(path) as f:
+                c = json.load(f)
+            if c.get("force_ratio") is not None and (c.get("free_flow") or {}).get("Fr") is not None:
+                cases.append(c)
+        if cases:
+            right.plot([c["free_flow"]["Fr"] for c in cases], [c["force_ratio"] for c in cases], "^", color="tab:red",
+                       label="§5 cube (h_b 50 mm), Δx 0.01 m")
+    right.plot(fr, 1 + 2 * 0.18 * fr ** 2 / 1.6, "k--", lw=1, label="Eq 21, the paper's fit (α_f 0.18, k 1.6)")
+    right.plot(fr, 1 + 2 * fr ** 2, "k:", lw=1, label="Eq 21, α_f = k = 1")
+    right.set(xlabel="Fr = v_f / sqrt(g h_f)", ylabel="F_peak / F_static (F_static = ½ ρ g h_f A)", yscale="log")
+    right.legend(fontsize=6.5)
+    fig.tight_layout()
+    path = os.path.join(out, "impact_walls.png")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 # The outputs mpmsdem.tradeoffs offers from a wall's refinement, by the number each one is.
 WALL_OUTPUTS = {"F_peak": "peak_force", "F_later": "quasi_steady_force", "F_end": "deposit_force"}
 REFERENCE_DX = 0.01  # the spacing whose run has cost 1 (the paper's)
@@ -389,6 +459,9 @@ def main(argv):
     print(text)
     with open(os.path.join(a.out, "impact_walls.md"), "w") as f:
         f.write(text + "\n")
+    drawn = figure(a.out, a.study)
+    if drawn:
+        print("drew %s" % drawn)
     if a.package_data:
         packageData(a.out)
 

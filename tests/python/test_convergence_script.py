@@ -1,4 +1,5 @@
 """scripts/validation/flume_convergence.py and impact_walls.py: their extrapolation to Δx 0 on exact power laws."""
+import json
 import os
 import sys
 
@@ -75,6 +76,25 @@ def test_impact_walls_rest_must_cover_the_later_window(capsys):
         with pytest.raises(SystemExit):
             iw.parse(["--rest", bad])
         assert "--rest" in capsys.readouterr().err
+
+def test_impact_walls_figure_draws_what_is_there(tmp_path):
+    # no obstacle run: no figure; a wall and a cube (one free flow beside them): the figure,
+    # with the §5 cases of a study folder on its right panel
+    assert iw.figure(str(tmp_path)) is None
+    free = {"h_f": 0.04, "v_f": 1.5, "Fr": 2.4}
+
+    def put(name, kind, obstacle):
+        with open(tmp_path / (name + ".json"), "w") as f:
+            json.dump({"kind": kind, "dx": 0.01, "free": free, "obstacle": obstacle}, f)
+    put("free_t20", "free", {})
+    put("wall_t20", "wall", {"alpha": 3.7, "alpha_later": 1.5, "bore": 1.4, "ratio": 43.0})
+    put("block_t20", "block", {"alpha_f": 16.0, "alpha_later": 8.0, "ratio": 183.0})
+    study = tmp_path / "s5"
+    study.mkdir()
+    with open(study / "case.json", "w") as f:
+        json.dump({"force_ratio": 41.2, "free_flow": {"Fr": 3.1}}, f)
+    path = iw.figure(str(tmp_path), str(study))
+    assert path == str(tmp_path / "impact_walls.png") and os.path.getsize(path) > 10000
 
 def test_liu2018_force_windows_of_a_known_impulse():
     """liu2018_force.forceWindows on records every 1 ms (each record's force the one of the
