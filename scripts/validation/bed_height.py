@@ -414,17 +414,34 @@ def restTable(runs):
     return "\n".join(lines)
 
 
+def effectiveFilm(r):
+    """(x = 4νΔt/Δx², ν_eff/ν, the surface speed of the film of the blend's effective viscosity
+    on the run's depth above its profile bed) of a flow run: what the flow should show when its
+    only departures from the viscous film are the blend's share per step and where the no-slip
+    acts (docs/coupled-results.md, "Why the held viscosity does not hold")."""
+    from mpmsdem import analysis
+    nu = analysis.effectivePicViscosity(r["viscosity"], r["dt"], r["dx"])
+    bed = r["profile_bed"] if r["profile_bed"] is not None else 0.0
+    _, u = filmProfile(r["top"] - bed, r["incline"], nu)
+    return 4 * r["viscosity"] * r["dt"] / r["dx"] ** 2, nu / r["viscosity"], float(u[-1])
+
+
 def flowTable(runs):
-    cols = ("bed", "Δx [m]", "read at [s] (steady)", "surface u [m/s] (film)", "lowest layer u [m/s] (at [mm])",
+    cols = ("bed", "Δx [m]", "read at [s] (steady)", "surface u [m/s] (film)",
+            "x = 4νΔt/Δx², ν_eff/ν, film of ν_eff on the profile bed [m/s] (surface / it)",
+            "lowest layer u [m/s] (at [mm])",
             "boundary layer [mm] (/ depth) (film)", "bed from the profile, u = 0 [mm] (Δx)",
             "bed from the mass [mm] (Δx)", "bed from the stress field [mm] (Δx)", "lithostatic slope / ρg cosθ",
             "wall [s]")
     lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for r in runs:
         depth = r["top"] - r["mass_bed"]
+        x, share, film = effectiveFilm(r)
         lines.append("| " + " | ".join((
             r["bed"], "%g" % r["dx"], "%.2f (%s)" % (r["time"], "yes" if r["steady"] else "NO"),
-            "%.4f (%.4f)" % (r["surface"], r["film_surface"]), "%.4f (%s)" % (r["slip"], mm(r["layers_z"][0])),
+            "%.4f (%.4f)" % (r["surface"], r["film_surface"]),
+            "%.3f, %.3f, %.4f (%.3f)" % (x, share, film, r["surface"] / film),
+            "%.4f (%s)" % (r["slip"], mm(r["layers_z"][0])),
             "%s (%.2f) (%s)" % (mm(r["boundary_layer"]), (r["boundary_layer"] - r["mass_bed"]) / depth,
                                 mm(r["film_boundary_layer"])),
             offset(r["profile_bed"], r["dx"]), offset(r["mass_bed"], r["dx"]), offset(r["virial_bed"], r["dx"]),
