@@ -296,7 +296,7 @@ class Flume:
         from . import run as _run
         every = max(1, int(round((sampleEvery or 5 * O.dt) / O.dt)))
         steps = int(round(duration / O.dt))
-        end = O.time + (steps - 0.5) * O.dt  # the progress line's end, within the last step at this O.dt
+        end = O.time + steps * O.dt  # the progress line's end at this O.dt (each chunk starts a step or more before it)
         done = 0
         while done < steps:
             k = min(every, steps - done)
