@@ -1,7 +1,5 @@
 // makeSolver: parameter validation, backend selection, the gate's hook. cudaAvailable.
-#include <algorithm>
 #include <cmath>
-#include <sstream>
 
 #include "common/Error.hpp"
 #include "mpm/Gate.hpp"
@@ -50,7 +48,7 @@ void validate(const MpmParams& p) {
   checkParameter(solverParameter("material.poisson_ratio"), m.poissonRatio);
   checkParameter(solverParameter("material.mu_s"), m.muS);
   const ParameterSpec& mu2 = solverParameter("material.mu_2");
-  checkParameter(mu2, mu2.key, m.mu2, std::max(m.muS, mu2.lo), mu2.hi);
+  checkParameter(mu2, mu2.key, m.mu2, m.muS, mu2.hi);  // as the scene reads it: mu_s, checked above, is its bound
   checkParameter(solverParameter("material.I0"), m.I0);
   checkParameter(solverParameter("material.grain_diameter"), m.grainDiameter);
   checkParameter(solverParameter("material.solid_density"), m.solidDensity);

@@ -94,7 +94,6 @@ ParameterTable makeTable() {
        "", "", "rho_s, grain density"},
       {"material.critical_density", "critical_density", K::kNumber, "kg/m^3", m.criticalDensity, "", 0, kInf, true,
        false, "", "§2.1", "rho_c; stress-free below it; 0: rho_0"},
-
   };
 }
 

@@ -5,7 +5,6 @@
 
 #include "mpm/Diagnostics.hpp"
 #include "mpm/MpmParameters.hpp"
-#include "mpm/MpmTypes.hpp"
 #include "scene/MpmScene.hpp"
 
 namespace mpmsdem {

@@ -2,9 +2,6 @@
 // docs/physics.md). Pair properties are derived from two materials by
 // Ip2_SdemMat_SdemMat_BarrierPhys.
 #pragma once
-#include <cmath>
-
-#include "common/Error.hpp"
 #include "common/Types.hpp"
 
 namespace mpmsdem {
