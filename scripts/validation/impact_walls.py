@@ -281,12 +281,19 @@ COLUMNS = [  # (heading, value of a run); "–" where a run has none
 ]
 
 
-def table(out):
-    """The markdown table of every obstacle run in ``out``."""
+def loadRuns(folder):
+    """The JSON files of ``folder``, read, in the order of their names: the finished runs of an
+    OUT folder, or a study's cases."""
     runs = []
-    for path in sorted(glob.glob(os.path.join(out, "*.json"))):
+    for path in sorted(glob.glob(os.path.join(folder, "*.json"))):
         with open(path) as f:
             runs.append(json.load(f))
+    return runs
+
+
+def table(out):
+    """The markdown table of every obstacle run in ``out``."""
+    runs = loadRuns(out)
     lines = ["| " + " | ".join(h for h, _ in COLUMNS) + " |", "|" + "---:|" * (len(COLUMNS) - 1) + "---|"]
     for r in sorted(runs, key=lambda r: (r["kind"], r["theta"], r["L0"], -r["dx"], r["young"])):
         if r["kind"] != "free":
@@ -306,12 +313,7 @@ def figure(out, study=None):
     import matplotlib.pyplot as plt
     import numpy as np
     from mpmsdem import analysis
-    runs = []
-    for path in sorted(glob.glob(os.path.join(out, "*.json"))):
-        with open(path) as f:
-            r = json.load(f)
-        if r["kind"] != "free":
-            runs.append(r)
+    runs = [r for r in loadRuns(out) if r["kind"] != "free"]
     if not runs:
         return None
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.6))
@@ -340,17 +342,13 @@ def figure(out, study=None):
     left.set(xlabel="Fr = v_f / sqrt(g h_f)", ylabel="α = F / (ρ v_f² A)", yscale="log")
     left.legend(fontsize=6.5)
     if study:
-        cases = []
-        for path in sorted(glob.glob(os.path.join(study, "*.json"))):
-            with open(path) as f:
-                c = json.load(f)
-            if c.get("force_ratio") is not None and (c.get("free_flow") or {}).get("Fr") is not None:
-                cases.append(c)
+        cases = [c for c in loadRuns(study)
+                 if c.get("force_ratio") is not None and (c.get("free_flow") or {}).get("Fr") is not None]
         if cases:
             right.plot([c["free_flow"]["Fr"] for c in cases], [c["force_ratio"] for c in cases], "^", color="tab:red",
                        label="§5 cube (h_b 50 mm), Δx 0.01 m")
-    right.plot(fr, 1 + 2 * 0.18 * fr ** 2 / 1.6, "k--", lw=1, label="Eq 21, the paper's fit (α_f 0.18, k 1.6)")
-    right.plot(fr, 1 + 2 * fr ** 2, "k:", lw=1, label="Eq 21, α_f = k = 1")
+    right.plot(fr, analysis.impactForceRatio(fr), "k--", lw=1, label="Eq 21, the paper's fit (α_f 0.18, k 1.6)")
+    right.plot(fr, analysis.impactForceRatio(fr, k=1.0, alphaF=1.0), "k:", lw=1, label="Eq 21, α_f = k = 1")
     right.set(xlabel="Fr = v_f / sqrt(g h_f)", ylabel="F_peak / F_static (F_static = ½ ρ g h_f A)", yscale="log")
     right.legend(fontsize=6.5)
     fig.tight_layout()
@@ -411,10 +409,7 @@ def packageStudy(runs, theta, L0, young, command):
 
 def packageData(out):
     """Store the refinement of every incline, L0 and E with three spacings (one of them 0.01 m)."""
-    runs = []
-    for path in sorted(glob.glob(os.path.join(out, "*.json"))):
-        with open(path) as f:
-            runs.append(json.load(f))
+    runs = loadRuns(out)
     stored = 0
     for theta, L0, young in sorted({(r["theta"], r["L0"], r["young"]) for r in runs if r["kind"] == "wall"}):
         dxs = sorted({r["dx"] for r in runs if r["kind"] == "wall" and (r["theta"], r["L0"], r["young"]) ==
