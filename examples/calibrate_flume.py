@@ -49,7 +49,7 @@ def flumeRun(basalFriction=0.21, mu_2=0.65, mu_s=0.24, I0=0.279, sideWallFrictio
     :param duration: simulated time [s] (1.2; the cube has stopped by then in the coarse scene).
     :param backend, precision: MPM backend and precision.
     :param flipViscosity: PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0 (the paper's,
-        mpmsdem.mpm.PAPER_VISCOSITY: 0.0503, α 0.99 per its 5e-6 s step at dx 0.01 m); None:
+        mpmsdem.mpm.PAPER_VISCOSITY: 0.05, α 0.99 per its 5e-6 s step at dx 0.01 m); None:
         the scene default (0.005). docs/physics.md.
     :param flipDampingRate: instead, the PIC damping per second [1/s] > 0 at this dx (α 0.99 per
         −ln(0.99)/rate of simulated time; the paper's: 2010 /s at dx 0.01 m).
@@ -178,7 +178,7 @@ def parse(argv):
                          "Appendix C)")
     ap.add_argument("--fix", action="append", metavar="NAME=VALUE", help="a parameter held at a value, e.g. dx=0.01")
     ap.add_argument("--full", action="store_true",
-                    help="the paper's resolution (dx 0.01 m) and blend (flipViscosity 0.0503 m^2/s) for every candidate")
+                    help="the paper's resolution (dx 0.01 m) and blend (flipViscosity 0.05 m^2/s) for every candidate")
     ap.add_argument("--popsize", type=int, default=8, help="candidates per generation per fitted parameter (8)")
     ap.add_argument("--maxiter", type=int, default=20, help="generations after the first (20)")
     ap.add_argument("--threshold", type=float, default=1e-4,

@@ -77,7 +77,7 @@ def parse(argv):
     ap.add_argument("--side-wall-friction", type=float, default=None,
                     help="flow–side wall friction, >= 0 (0: smooth walls; table1: 0, joint: 0.111)")
     ap.add_argument("--flip-viscosity", type=float, default=None,
-                    help="PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0 (joint: 0.0360141; table1: the "
+                    help="PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0 (joint: 0.0347053; table1: the "
                          "paper's, %g, with --full, the scene default, 0.005, on the coarse grid; docs/physics.md)"
                          % PAPER_VISCOSITY)
     ap.add_argument("--driver-scene", metavar="JSON", default=None,
@@ -104,7 +104,7 @@ def copperCube(y=None, friction=0.67, flowFriction=0.21):
 
 def flumeKeywords(a):
     """The flow's settings as Flume keywords: its FLIP/PIC blend (--flip-viscosity; by default
-    the paper's, α 0.99 per its 5e-6 s step at dx 0.01 m, a PIC viscosity of 0.0503 m²/s that
+    the paper's, α 0.99 per its 5e-6 s step at dx 0.01 m, a PIC viscosity of 0.05 m²/s that
     keeps that flow at any --dx, with --full, and the scene default, 0.005 m²/s, on the coarse
     grid; docs/physics.md), μ₂, the basal and the side walls' friction. ValueError naming the
     option out of its range."""

@@ -118,7 +118,7 @@ def parse(argv):
                     help="the flow's Young's modulus [Pa] (default Table 2's 5e4; > 0)")
     ap.add_argument("--flip-viscosity", type=float, default=None,
                     help="PIC viscosity of the flow's FLIP/PIC blend [m^2/s] > 0 (default: the scene default, 0.005; "
-                         "with --full the paper's blend, 0.0503)")
+                         "with --full the paper's blend, 0.05)")
     ap.add_argument("--flip-alpha", type=float, default=None,
                     help="instead: the FLIP/PIC blend alpha of Eq 4, kept per --flip-reference-dt (0.99 if only that "
                          "is given)")

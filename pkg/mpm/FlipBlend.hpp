@@ -1,14 +1,18 @@
 // The FLIP/PIC blend of Eq 4 as one value. Eq 4's PIC part replaces a particle's velocity by the
 // grid's, which the quadratic B-spline transfers (P2G then G2P) smooth by (dx^2/4) lap(v):
-// blending a fraction r dt of PIC per step of length dt acts as a viscosity nu = r dx^2 / 4 on
-// the flow. So neither a blend per step (the damping then follows dt) nor one per unit time (it
-// then follows dx^2) keeps the flow when the step or the grid changes; a viscosity does
-// (docs/physics.md, "The blend as a viscosity": the column collapse and the §3.2 arrival at dx
-// 0.0125 and 0.02 m against 0.01 m).
+// handing PIC the share 1 - alpha of the velocity once per step of length dt acts as a viscosity
+// nu = (1 - alpha) dx^2 / (4 dt) on the resolved flow. So neither a blend per step (the damping
+// then follows dt) nor one per unit time (it then follows dx^2) keeps the flow when the step or
+// the grid changes; a viscosity does (docs/physics.md, "The blend as a viscosity").
 //
 // A blend is one of three kinds, each made by its own constructor that refuses what the kind
 // cannot mean, so no combination of numbers is left to check afterwards:
-//   viscosity(nu)             a step of length dt keeps exp(-4 nu dt / dx^2) of FLIP;
+//   viscosity(nu)             a step of length dt hands PIC the share x = 4 nu dt / dx^2 and keeps
+//                             1 - x of FLIP, which needs dt <= dx^2 / (4 nu) (stepLimit; the
+//                             solver's stable step respects it). Keeping exp(-x) instead, as
+//                             before 2026-11-30, gave the flow nu (1 - e^-x) / x, not nu: a
+//                             viscosity that fell under refinement (docs/coupled-results.md,
+//                             "Why the held viscosity does not hold");
 //   alphaPer(alpha, dt_ref)   alpha kept per dt_ref of simulated time: alpha^(dt / dt_ref), the
 //                             same damping per second at any step (the paper's: 0.99 per 5e-6 s);
 //   alphaPerStep(alpha)       alpha per step, Eq 4 as written: the damping follows the step.
@@ -16,6 +20,7 @@
 // mpm/MpmParameters (docs/parameters.md); the errors name those keys.
 #pragma once
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace mpmsdem {
@@ -56,13 +61,21 @@ class FlipBlend {
   // The FLIP fraction kept by a step of length dt [s] on a grid of spacing dx [m].
   double alphaFor(double dt, double dx) const {
     switch (kind_) {
-      case Kind::kViscosity: return std::exp(-4.0 * value_ * dt / (dx * dx));
+      // max: a step up to the solver's 1e-4 round-off slack past stepLimit stays pure PIC
+      case Kind::kViscosity: return std::fmax(0.0, 1.0 - 4.0 * value_ * dt / (dx * dx));
       case Kind::kAlphaPerTime: return std::pow(value_, dt / referenceDt_);
       case Kind::kAlphaPerStep: break;
     }
     return value_;
   }
-  // The PIC damping rate of such a step [1/s]: -ln(alpha)/dt (infinite for alpha 0).
+  // The longest step the blend can take on a grid of spacing dx [s]: dx^2 / (4 nu) for a viscosity
+  // (the step that hands PIC the whole velocity; a longer one would damp the flow by less than
+  // nu), infinite for the kinds given by alpha.
+  double stepLimit(double dx) const {
+    return kind_ == Kind::kViscosity ? dx * dx / (4.0 * value_) : std::numeric_limits<double>::infinity();
+  }
+  // The PIC damping rate of such a step [1/s]: the share handed to PIC per second for a
+  // viscosity (4 nu / dx^2), -ln(alpha)/dt for the kinds given by alpha (infinite for alpha 0).
   double dampingRate(double dt, double dx) const {
     return kind_ == Kind::kViscosity ? 4.0 * value_ / (dx * dx) : -std::log(alphaFor(dt, dx)) / dt;
   }

@@ -274,7 +274,7 @@ ParticleView MpmCpu<T>::forceView() {
 }
 
 template <typename T>
-double MpmCpu<T>::stableTimeStep() { return params_.cfl * params_.dx / (pWaveSpeed(params_.material) + maxSpeed_); }
+double MpmCpu<T>::cflTimeStep() { return params_.cfl * params_.dx / (pWaveSpeed(params_.material) + maxSpeed_); }
 
 template <typename T>
 std::size_t MpmCpu<T>::memoryBytes() const {

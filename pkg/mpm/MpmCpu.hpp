@@ -76,7 +76,7 @@ class MpmCpu : public StagedSolver {
   void setExternalForces(const std::vector<double>& f) override;
   ParticleView openForceBuffer() override;
   ParticleView extendForceBuffer() override;
-  double stableTimeStep() override;
+  double cflTimeStep() override;
   std::size_t memoryBytes() const override;
 
  private:

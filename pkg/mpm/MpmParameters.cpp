@@ -30,8 +30,9 @@ ParameterTable makeTable() {
        "[gx, gy, gz], or an object {g, incline_deg}", "",
        "gravity; as an object a flume inclined by incline_deg about y, descending toward +x: g (sin a, 0, -cos a)"},
       {"flip_viscosity", "flipViscosity", K::kNumber, "m^2/s", FlipBlend::kDefaultViscosity, "", 0, kInf, false, false, "", "Eq 4",
-       "PIC viscosity nu of the FLIP/PIC blend: a step of length dt blends with exp(-4 nu dt / dx^2) of FLIP, the "
-       "same flow at any step and grid (docs/physics.md, \"The blend as a viscosity\")"},
+       "PIC viscosity nu of the FLIP/PIC blend: a step of length dt hands PIC the share 4 nu dt / dx^2 (the stable "
+       "step is at most dx^2 / (4 nu)), the same flow at any step and grid (docs/physics.md, \"The blend as a "
+       "viscosity\")"},
       {"flip_alpha", "flipAlpha", K::kNumber, "", FlipBlend::kTableAlpha, "", 0, 1, true, true, "", "Eq 4, Table 1",
        "instead of flip_viscosity: the FLIP fraction alpha kept per flip_reference_dt of simulated time; needs "
        "flip_reference_dt"},

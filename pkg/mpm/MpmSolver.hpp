@@ -1,6 +1,7 @@
 // The MPM solver interface. Two backends implement it with the same formulas
 // (shared __host__ __device__ functions): CPU (OpenMP) and CUDA, each in float or double.
 #pragma once
+#include <algorithm>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -156,8 +157,16 @@ class MpmSolver {
     return nullptr;
   }
 
-  // Largest stable step: cfl * dx / (elastic wave speed + max particle speed) [s].
-  virtual double stableTimeStep() = 0;
+  // The CFL step: cfl * dx / (elastic wave speed + max particle speed) [s].
+  virtual double cflTimeStep() = 0;
+  // Largest stable step [s]: the CFL step, and no longer than the blend's stepLimit (a PIC
+  // viscosity hands PIC 4 nu dt / dx^2 of the velocity per step, at most all of it).
+  double stableTimeStep() { return std::min(cflTimeStep(), params().flip.stepLimit(params().dx)); }
+  // What sets stableTimeStep(), in words.
+  std::string stableStepName() {
+    return params().flip.stepLimit(params().dx) < cflTimeStep() ? "the blend's step dx^2/(4 nu) of its PIC viscosity"
+                                                                 : "the flow's CFL step";
+  }
 
   // Throws ParameterError unless 0 < dt <= stableTimeStep() (1e-4 relative slack for
   // round-off), e.g. "dt = 0.001 s: must be in (0, 0.0002] s (CFL 0.3 ...)". step() calls it
@@ -166,8 +175,12 @@ class MpmSolver {
     const double limit = stableTimeStep();
     if (!(dt > 0) || !(dt <= limit * 1.0001)) {
       std::ostringstream os;
-      os << "in (0, " << limit << "] s (CFL " << params().cfl
-         << " times dx over the elastic wave speed plus the largest particle speed)";
+      os << "in (0, " << limit << "] s (";
+      if (limit < cflTimeStep())
+        os << "dx^2/(4 nu) of the PIC viscosity " << params().flip.setViscosity()
+           << " m^2/s: a step hands PIC 4 nu dt/dx^2 of the velocity, at most all of it)";
+      else
+        os << "CFL " << params().cfl << " times dx over the elastic wave speed plus the largest particle speed)";
       throwParameter("dt", dt, "s", os.str());
     }
   }

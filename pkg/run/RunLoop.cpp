@@ -24,7 +24,7 @@ double nextStep(Stepper& st, const mpm::RunSettings& run, bool byTime) {
                     run.dt, stable, solver.time(), solver.steps(),
                     st.coupled && stable < solver.stableTimeStep()
                         ? "the contact step of the MP-block and block contacts, sqrt(m/k) times the safety factor"
-                        : "the MPM CFL step");
+                        : solver.stableStepName().c_str());
       throw RuntimeFailure(msg);
     }
     dt = run.dt;

@@ -42,7 +42,7 @@ struct Stepper {
   // What set the step chosen last, in words
   std::string limit() const {
     if (!automatic) return "the fixed run.dt";
-    return coupled ? terms.describe() : "the flow's CFL step";
+    return coupled ? terms.describe() : solver.stableStepName();
   }
 };
 

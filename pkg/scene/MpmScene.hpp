@@ -18,8 +18,8 @@
 //                                   inclined by incline_deg about y, descending
 //                                   toward +x: gravity = g (sin a, 0, -cos a).
 //   "flip_viscosity": 0.005,        PIC viscosity of the FLIP/PIC blend (Eq 4)
-//                                   (mpm/FlipBlend.hpp): a step of length dt blends with
-//                                   exp(-4 nu dt / dx^2), the same flow at any step and grid
+//                                   (mpm/FlipBlend.hpp): a step of length dt hands PIC the
+//                                   share 4 nu dt / dx^2, the same flow at any step and grid
 //   "flip_alpha": 0.99,             instead of flip_viscosity: alpha kept per
 //   "flip_reference_dt": 5e-6,      flip_reference_dt of simulated time, or "step":
 //                                   alpha per step, as Eq 4 is written (the damping then

@@ -140,18 +140,24 @@ def froude(v, h, g=G):
     return v / math.sqrt(g * h)
 
 
-def effectivePicViscosity(nu, dt, dx):
+def effectivePicViscosity(nu, dt, dx, share="linear"):
     """The viscosity a resolved flow feels from a FLIP/PIC blend given as the PIC viscosity ``nu``
-    [m²/s], at a step ``dt`` [s] on a grid of spacing ``dx`` [m] [m²/s]. A step keeps exp(−x) of
-    FLIP, x = 4 ν Δt/Δx², and hands PIC the share 1 − exp(−x), whose transfer diffuses a resolved
-    velocity mode by (Δx²/4)∇² once per step: ν (1 − e^(−x))/x, which is ν only while x ≪ 1
-    (docs/coupled-results.md, "Why the held viscosity does not hold"; a steady film matches it to
-    1.1–2.1 % at four spacings)."""
+    [m²/s], at a step ``dt`` [s] on a grid of spacing ``dx`` [m] [m²/s]. PIC's transfer diffuses a
+    resolved velocity mode by (Δx²/4)∇² once per step, so a step that hands PIC the share s gives
+    the flow s Δx²/(4Δt). ``share="linear"``: the blend of mpmsdem, s = x = 4 ν Δt/Δx² (at most 1:
+    the stable step is at most Δx²/(4ν)), so the flow feels ν. ``share="exponential"``: the blend
+    of runs recorded before it (docs/coupled-results.md, "Why the held viscosity does not hold"),
+    s = 1 − e^(−x), so the flow felt ν (1 − e^(−x))/x, ν only while x ≪ 1 (a steady film matched
+    it to 1.1–2.1 % at four spacings)."""
     for name, v in (("nu", nu), ("dt", dt), ("dx", dx)):
         if not (v > 0 and math.isfinite(v)):
             raise ValueError("%s = %r: must be finite and > 0" % (name, v))
     x = 4.0 * nu * dt / (dx * dx)
-    return nu * -math.expm1(-x) / x
+    if share == "linear":
+        return nu * min(1.0, x) / x
+    if share == "exponential":
+        return nu * -math.expm1(-x) / x
+    raise ValueError('share = %r: must be "linear" (the blend of mpmsdem) or "exponential" (before it)' % (share,))
 
 
 def dynamicPressureCoefficient(Fr):

@@ -33,10 +33,10 @@ _SCENE_KEYS = pythonNames("")
 # The step of the paper's coupled runs (§3.1, Appendix D) [s]: with flipReferenceDt=PAPER_STEP the
 # flow is blended as the paper blends it, alpha 0.99 once per 5e-6 s (2010 /s of PIC damping).
 PAPER_STEP = 5e-6
-# The paper's blend as a PIC viscosity [m²/s]: 2010 /s at its dx 0.01 m times dx²/4 (0.0503). With
-# flipViscosity=PAPER_VISCOSITY a scene at any dx and step has the flow of the paper's numerics
-# (docs/physics.md, "The blend as a viscosity").
-PAPER_VISCOSITY = -math.log(0.99) / PAPER_STEP * 0.01 ** 2 / 4.0
+# The paper's blend as a PIC viscosity [m²/s]: the share 1 − 0.99 handed to PIC per 5e-6 s at its
+# dx 0.01 m, times dx²/(4 Δt): 0.05. With flipViscosity=PAPER_VISCOSITY a scene at any dx and step
+# has the flow of the paper's numerics (docs/physics.md, "The blend as a viscosity").
+PAPER_VISCOSITY = (1.0 - 0.99) * 0.01 ** 2 / (4.0 * PAPER_STEP)
 
 
 def flipReferenceArg(text):
@@ -74,11 +74,12 @@ class MpmEngine(Engine):
         It acts on the grid before the walls; ``solver.gateImpulse()`` is the impulse it has
         given the flow [N s]. None (default): no gate.
     :param flipViscosity: PIC viscosity ν of the FLIP/PIC blend of Eq 4 [m²/s] > 0: a step of
-        length Δt blends with exp(−4 ν Δt/Δx²) of FLIP. The PIC part smooths the velocity by
-        (Δx²/4) ∇²v, so a blend per unit time acts as a viscosity that grows with Δx²; ν keeps
-        the flow when the step or the grid changes. None (default, with no ``flipReferenceDt``):
+        length Δt hands PIC the share 4 ν Δt/Δx² and keeps the rest of FLIP (the stable step is
+        at most Δx²/(4ν)). The PIC part smooths the velocity by (Δx²/4) ∇²v, so a blend per unit
+        time acts as a viscosity that grows with Δx²; ν keeps the flow when the step or the grid
+        changes. None (default, with no ``flipReferenceDt``):
         the scene default, 0.005 m²/s (200 /s at Δx 0.01 m; ``mpm::FlipBlend::kDefaultViscosity``, chosen
-        against the column collapse of Lube et al.); :data:`PAPER_VISCOSITY` (0.0503 m²/s): the
+        against the column collapse of Lube et al.); :data:`PAPER_VISCOSITY` (0.05 m²/s): the
         paper's blend, α 0.99 once per its 5e-6 s step at its Δx 0.01 m (§3.1, Appendix D).
     :param flipAlpha, flipReferenceDt: instead of ``flipViscosity``: α in [0, 1] (Table 1: 0.99;
         default 0.99) kept per Δt_ref [s] > 0 of simulated time (the same damping per second at

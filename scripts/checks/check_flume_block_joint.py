@@ -2,7 +2,7 @@
 """Check: the paper's §3.2 scene at its resolution (dx 0.01 m, 8 points per cell, the whole
 0.2 m flume) with the flow and friction set of our joint design that tells the paper's story
 (mpmsdem.flume.FLUME_SETTINGS["joint"], lhs02 of scripts/validation/paper_flume_design.py --lhs 20;
-docs/coupled-results.md, "Joint calibration": PIC viscosity 0.036 m²/s, basal friction 0.28, μ₂
+docs/coupled-results.md, "Joint calibration": PIC viscosity 0.0347 m²/s, basal friction 0.28, μ₂
 0.72, flow–cube friction 0.39, side-wall friction 0.11), 0.77 s, against stored reference numbers. About five minutes on one
 core: it holds the behaviour `make demo` shows.
 

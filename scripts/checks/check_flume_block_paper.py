@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Check: the paper's §3.2 scene at the paper's numerics (dx 0.01 m, 8 points per cell, the
-paper's FLIP/PIC blend as a PIC viscosity of 0.0503 m²/s) in a 0.1 m slice of the 0.2 m flume
+paper's FLIP/PIC blend as a PIC viscosity of 0.05 m²/s) in a 0.1 m slice of the 0.2 m flume
 (the copper cube on the centre line between smooth side walls: the same cube motion as the
 full width, docs/coupled-results.md), 0.5 s, against stored reference numbers. A few minutes on
 two cores: it holds the behaviour the coarse grid cannot show (at dx 0.02 m the cube is one cell

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Check: the §3.2 flume under grid refinement, on an affordable pair. The coupled scene of
-examples/flume_block.py with the joint set (its PIC viscosity 0.0360 m²/s held) in a 0.1 m
+examples/flume_block.py with the joint set (its PIC viscosity 0.0347 m²/s held) in a 0.1 m
 flume, at Δx 0.02 and 0.01 m (the cube 1 and 2 cells tall), each run through the driver as
 scripts/validation/flume_convergence.py runs it (the free flow with its probe and front
 profile, then the coupled run from the free flow's state 3 cm and two cells short of the cube)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Check: the paper's §3.3 scene (three stacked wooden blocks in the Liu et al. 2018 flume,
 Table 2, the bottom block glued) at the paper's numerics (dx 0.01 m, 8 points per cell, 32,000
-material points, the paper's FLIP/PIC blend as a PIC viscosity of 0.0503 m²/s), the first 0.35 s:
+material points, the paper's FLIP/PIC blend as a PIC viscosity of 0.05 m²/s), the first 0.35 s:
 the front's arrival and the impact on the stack, against stored reference numbers. About two
 minutes on one core: it holds what the coarse check (check_liu2018_blocks.py, 500 points at
 the scene default blend) cannot show.

@@ -252,14 +252,26 @@ def test_the_peak_window_mean_is_sought_over_every_window_not_only_those_centred
 
 
 def test_effective_pic_viscosity_of_a_blend_per_step():
-    # x = 4 nu dt / dx^2 -> nu (1 - e^-x) / x: nu at small x, nu (1 - 1/e) at x = 1 (nu 0.25 m^2/s,
-    # dt 1e-4 s, dx 0.01 m), 0.774 nu at the film's x 0.536 (Δx 0.0025 m, its step 2.327e-5 s)
-    assert analysis.effectivePicViscosity(0.036, 1e-12, 0.01) == pytest.approx(0.036, rel=1e-9)
-    assert analysis.effectivePicViscosity(0.25, 1e-4, 0.01) == pytest.approx(0.25 * (1 - math.exp(-1)), rel=1e-12)
-    assert analysis.effectivePicViscosity(0.25, 1e-4, 0.01) == pytest.approx(0.158030139, rel=1e-8)
+    # The blend before mpmsdem's (share 1 - e^-x, x = 4 nu dt / dx^2): nu (1 - e^-x) / x, nu at
+    # small x, nu (1 - 1/e) at x = 1 (nu 0.25 m^2/s, dt 1e-4 s, dx 0.01 m), 0.774 nu at the
+    # film's x 0.536 (Δx 0.0025 m, its step 2.327e-5 s)
+    old = dict(share="exponential")
+    assert analysis.effectivePicViscosity(0.036, 1e-12, 0.01, **old) == pytest.approx(0.036, rel=1e-9)
+    assert analysis.effectivePicViscosity(0.25, 1e-4, 0.01, **old) == pytest.approx(0.25 * (1 - math.exp(-1)), rel=1e-12)
+    assert analysis.effectivePicViscosity(0.25, 1e-4, 0.01, **old) == pytest.approx(0.158030139, rel=1e-8)
     x = 4 * 0.0360141 * 2.327e-5 / 0.0025 ** 2
     assert x == pytest.approx(0.5363, abs=1e-4)
-    assert analysis.effectivePicViscosity(0.0360141, 2.327e-5, 0.0025) / 0.0360141 == pytest.approx(0.7740, abs=1e-4)
+    assert analysis.effectivePicViscosity(0.0360141, 2.327e-5, 0.0025, **old) / 0.0360141 == pytest.approx(0.7740, abs=1e-4)
+    # mpmsdem's blend hands PIC the share x itself: the flow feels nu up to x = 1 (the stable
+    # step), nu / x past it (a step of pure PIC)
+    assert analysis.effectivePicViscosity(0.0360141, 2.327e-5, 0.0025) == 0.0360141
+    assert analysis.effectivePicViscosity(0.25, 1e-4, 0.01) == pytest.approx(0.25, rel=1e-15)
+    assert analysis.effectivePicViscosity(0.25, 2e-4, 0.01) == pytest.approx(0.125, rel=1e-15)
+    # the joint set's viscosity held the old way at its dx 0.01 m step is the new way's 0.0347053
+    dt = 0.5 * 0.3 * 0.01 / 29.005968  # the flume's O.dt: half the CFL step of the glass beads (E 1 MPa, ν 0.3, ρ 1600)
+    assert analysis.effectivePicViscosity(0.0360141, dt, 0.01, **old) == pytest.approx(0.0347053, abs=1e-7)
+    with pytest.raises(ValueError, match='share = .*"linear"'):
+        analysis.effectivePicViscosity(0.01, 1e-4, 0.01, share="exp")
     for bad in ((0, 1e-4, 0.01), (0.01, -1e-4, 0.01), (0.01, 1e-4, float("nan"))):
         with pytest.raises(ValueError, match="must be finite and > 0"):
             analysis.effectivePicViscosity(*bad)

@@ -281,7 +281,7 @@ def test_outputs_record_the_flip_blend_and_a_restart_across_blends_is_refused(tm
     out = tmp_path / "out"
     r = subprocess.run([exe, str(path), "--out", str(out), "--steps", "20"], capture_output=True, text=True)
     # the default: a PIC viscosity of 0.005 m^2/s, 4 nu/dx^2 = 50 /s at this dx of 0.02 m
-    assert r.returncode == 0 and "FLIP/PIC blend PIC viscosity 0.005 m^2/s (PIC damping 50 /s at dx 0.02 m)" in r.stdout, \
+    assert r.returncode == 0 and "FLIP/PIC blend PIC viscosity 0.005 m^2/s, share 4 nu dt/dx^2 (PIC damping 50 /s at dx 0.02 m)" in r.stdout, \
         r.stdout
     for name in ("mpm.h5", "mpm.h5.restart"):  # the file and the copy a restart goes back to
         with h5py.File(out / name, "r+") as f:
@@ -290,6 +290,13 @@ def test_outputs_record_the_flip_blend_and_a_restart_across_blends_is_refused(tm
             del f.attrs["flip_blend"]
     r = subprocess.run([exe, str(path), "--out", str(out), "--steps", "20", "--restart"], capture_output=True, text=True)
     assert r.returncode == 2 and "not recorded" in r.stderr and "50 /s" in r.stderr, r.stderr
+    # a run of the blend that kept exp(-4 nu dt/dx^2) of FLIP recorded these words: it is another flow
+    for name in ("mpm.h5", "mpm.h5.restart"):
+        with h5py.File(out / name, "r+") as f:
+            f.attrs["flip_blend"] = "PIC viscosity 0.005 m^2/s (PIC damping 50 /s at dx 0.02 m)"
+    r = subprocess.run([exe, str(path), "--out", str(out), "--steps", "20", "--restart"], capture_output=True, text=True)
+    assert r.returncode == 2 and "blended FLIP/PIC as PIC viscosity 0.005 m^2/s (PIC damping" in r.stderr, r.stderr
+    assert "this scene as PIC viscosity 0.005 m^2/s, share 4 nu dt/dx^2" in r.stderr, r.stderr
     # the YADE engine records the same; the paper's blend reads 2010 /s at its dx of 0.01 m, and
     # as a viscosity it is the same at any dx
     eng = mpmsdem.MpmEngine(grid=scene["grid"], material=scene["material"], particles=scene["particles"],
@@ -302,8 +309,9 @@ def test_outputs_record_the_flip_blend_and_a_restart_across_blends_is_refused(tm
         assert f.attrs["flip_viscosity"] == pytest.approx(2010.07 * 0.02 ** 2 / 4, abs=1e-5)
     eng = mpmsdem.MpmEngine(grid=scene["grid"], material=scene["material"], particles=scene["particles"],
                             flipViscosity=mpmsdem.mpm.PAPER_VISCOSITY, verbose=False)
-    assert eng.solver.flipViscosity(1e-4) == pytest.approx(0.0502517, abs=1e-7)
-    assert eng.solver.flipDampingRate(1e-4) == pytest.approx(2010.07 / 4, abs=0.01)
+    # the paper's share 0.01 per 5e-6 s at dx 0.01 m: 0.05 m^2/s, 2000 /s there, a quarter at dx 0.02 m
+    assert eng.solver.flipViscosity(1e-4) == pytest.approx(0.05, rel=1e-14)
+    assert eng.solver.flipDampingRate(1e-4) == pytest.approx(2000.0 / 4, rel=1e-14)
     with pytest.raises(ValueError, match="flip_reference_dt"):
         mpmsdem.MpmEngine(grid=scene["grid"], material=scene["material"], particles=scene["particles"],
                           flipReferenceDt=0, verbose=False)

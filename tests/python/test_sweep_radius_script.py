@@ -53,7 +53,7 @@ def test_prepared_runs_collected_equal_the_direct_driver_runs(tmp_path):
         # the cube is hit at 0.230 s (coarse flume, the default PIC viscosity: 50 /s at dx 0.02 m): the runs
         # carry a peak force and a travel to compare
         assert a[k]["peak_force"] > 1.0 and a[k]["first_touch"] == pytest.approx(0.230, abs=0.01)
-        assert a[k]["flip_blend"] == b[k]["flip_blend"] == "PIC viscosity 0.005 m^2/s (PIC damping 50 /s at dx 0.02 m)"
+        assert a[k]["flip_blend"] == b[k]["flip_blend"] == "PIC viscosity 0.005 m^2/s, share 4 nu dt/dx^2 (PIC damping 50 /s at dx 0.02 m)"
         for field in ("travel", "peak_force", "peak_time", "max_rotation_deg", "max_rise", "first_touch",
                       "contact_step_min", "steps"):
             assert b[k][field] == a[k][field], (k, field)  # same driver, same scene: same bits
@@ -99,14 +99,14 @@ def test_joint_settings_reach_the_scene_and_are_not_mixed_with_others(tmp_path):
     with open(os.path.join(out, "h20_r1-20", "prepared.json")) as f:
         prepared = json.load(f)
     joint = mpmsdem.flume.FLUME_SETTINGS["joint"]
-    assert scene["flip_viscosity"] == joint["flip_viscosity"] == 0.0360141
+    assert scene["flip_viscosity"] == joint["flip_viscosity"] == 0.0347053
     assert scene["material"]["mu_2"] == joint["mu_2"]
     assert scene["walls"]["-y"] == scene["walls"]["+y"] == joint["side_wall_friction"]
     bed, cube = (scene["block_materials"][scene["blocks"][i]["material"]] for i in (0, 1))
     assert bed["flow"]["friction"] == joint["basal_friction"] and cube["flow"]["friction"] == joint["flow_friction"]
     assert scene["blocks"][1]["sweep_radius"] == pytest.approx(0.001, rel=1e-12)  # R = h_b / 20 of the 20 mm cube
-    # nu / dx^2 scaled as at dx 0.01 m (1441 /s): a quarter at the coarse dx 0.02 m
-    assert prepared["flip_blend"] == "PIC viscosity 0.0360141 m^2/s (PIC damping 360 /s at dx 0.02 m)"
+    # nu / dx^2 scaled as at dx 0.01 m (1388 /s): a quarter at the coarse dx 0.02 m
+    assert prepared["flip_blend"] == "PIC viscosity 0.0347053 m^2/s, share 4 nu dt/dx^2 (PIC damping 347 /s at dx 0.02 m)"
     subprocess.run([os.path.join(out, "run_driver.sh")], capture_output=True, text=True,
                    env=dict(os.environ, MPMSDEM_RUN=driverExe(), OMP_NUM_THREADS="1"), check=True)
     rc, log = script(*COMMON, "--ratios", "1/20", "--collect", "--out", out)

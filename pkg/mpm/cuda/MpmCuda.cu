@@ -417,7 +417,7 @@ ParticleView MpmCuda<T>::openForceBuffer() {
 }
 
 template <typename T>
-double MpmCuda<T>::stableTimeStep() {
+double MpmCuda<T>::cflTimeStep() {
   return params_.cfl * params_.dx / (pWaveSpeed(params_.material) + maxSpeed_);
 }
 

@@ -64,7 +64,7 @@ class MpmCuda : public StagedSolver {
   void launchStep(double dt) override;
   void finishStep() override;
   void abandonStep() override;
-  double stableTimeStep() override;
+  double cflTimeStep() override;
   std::size_t memoryBytes() const override;
   void setStageTiming(bool on) override;
   std::vector<std::pair<std::string, double>> stageSeconds() const override;

@@ -77,10 +77,10 @@ def load_scene(path):
 
 def stepBlend(s, dt):
     """The blend of one step of length dt (pkg/mpm/FlipBlend.hpp, FlipBlend::alphaFor): a PIC
-    viscosity flip_viscosity [m^2/s] (default 0.005) keeps exp(-4 nu dt / dx^2) of FLIP;
-    flip_alpha per flip_reference_dt of simulated time, or per step with "step"."""
+    viscosity flip_viscosity [m^2/s] (default 0.005) hands PIC the share 4 nu dt / dx^2 and keeps
+    the rest of FLIP; flip_alpha per flip_reference_dt of simulated time, or per step with "step"."""
     if "flip_reference_dt" not in s:
-        return math.exp(-4.0 * float(s.get("flip_viscosity", 0.005)) * dt / float(s["grid"]["dx"]) ** 2)
+        return max(0.0, 1.0 - 4.0 * float(s.get("flip_viscosity", 0.005)) * dt / float(s["grid"]["dx"]) ** 2)
     alpha, ref = float(s.get("flip_alpha", 0.99)), s["flip_reference_dt"]
     return alpha if ref == "step" else alpha ** (dt / float(ref))
 

@@ -120,7 +120,7 @@ class QueuedCpuSolver : public mpm::MpmSolver {
     launchStep(dt);
     finishStep();
   }
-  double stableTimeStep() override { return inner_->stableTimeStep(); }
+  double cflTimeStep() override { return inner_->cflTimeStep(); }
   std::size_t memoryBytes() const override { return inner_->memoryBytes(); }
   bool queuesSteps() const override { return true; }
   void launchStep(double dt) override {

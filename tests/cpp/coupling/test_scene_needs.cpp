@@ -36,7 +36,7 @@ class CountingSolver : public mpm::MpmSolver {
     inner_->step(dt);
     setClock(inner_->time(), inner_->steps());
   }
-  double stableTimeStep() override { return inner_->stableTimeStep(); }
+  double cflTimeStep() override { return inner_->cflTimeStep(); }
   std::size_t memoryBytes() const override { return inner_->memoryBytes(); }
 
  private:

@@ -80,7 +80,7 @@ TEST(RunLoop, FixedStepAboveTheStableOneIsAFailure) {
   run.dt = 2 * r.solver->stableTimeStep();
   const std::string m = failureOf([&] { nextStep(r.stepper, run, true); });
   EXPECT_NE(m.find("exceeds the stable step"), std::string::npos) << m;
-  EXPECT_NE(m.find("the MPM CFL step"), std::string::npos) << m;
+  EXPECT_NE(m.find("the flow's CFL step"), std::string::npos) << m;
   run.dt = r.solver->stableTimeStep() * (1 + 0.5 * (kStepSlack - 1));  // within the slack: taken
   EXPECT_EQ(nextStep(r.stepper, run, false), run.dt);
 }
