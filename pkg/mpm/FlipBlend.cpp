@@ -32,7 +32,7 @@ std::string FlipBlend::describe(double dx) const {
   std::ostringstream s;
   switch (kind_) {
     case Kind::kViscosity:
-      // "share 4 nu dt/dx^2": a run of the exp(-4 nu dt/dx^2) blend (before 2026-11-30) recorded
+      // "share 4 nu dt/dx^2": a run of the exp(-4 nu dt/dx^2) blend (before commit 7fe22ea) recorded
       // the words without it, so a restart from one refuses rather than mix the two.
       s << "PIC viscosity " << value_ << " m^2/s, share 4 nu dt/dx^2 (PIC damping " << std::lround(dampingRate(1.0, dx))
         << " /s at dx " << dx << " m)";

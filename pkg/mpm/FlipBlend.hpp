@@ -10,7 +10,7 @@
 //   viscosity(nu)             a step of length dt hands PIC the share x = 4 nu dt / dx^2 and keeps
 //                             1 - x of FLIP, which needs dt <= dx^2 / (4 nu) (stepLimit; the
 //                             solver's stable step respects it). Keeping exp(-x) instead, as
-//                             before 2026-11-30, gave the flow nu (1 - e^-x) / x, not nu: a
+//                             before commit 7fe22ea, gave the flow nu (1 - e^-x) / x, not nu: a
 //                             viscosity that fell under refinement (docs/coupled-results.md,
 //                             "Why the held viscosity does not hold");
 //   alphaPer(alpha, dt_ref)   alpha kept per dt_ref of simulated time: alpha^(dt / dt_ref), the

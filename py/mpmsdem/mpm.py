@@ -33,10 +33,10 @@ _SCENE_KEYS = pythonNames("")
 # The step of the paper's coupled runs (§3.1, Appendix D) [s]: with flipReferenceDt=PAPER_STEP the
 # flow is blended as the paper blends it, alpha 0.99 once per 5e-6 s (2010 /s of PIC damping).
 PAPER_STEP = 5e-6
-# The paper's blend as a PIC viscosity [m²/s]: the share 1 − 0.99 handed to PIC per 5e-6 s at its
-# dx 0.01 m, times dx²/(4 Δt): 0.05. With flipViscosity=PAPER_VISCOSITY a scene at any dx and step
-# has the flow of the paper's numerics (docs/physics.md, "The blend as a viscosity").
-PAPER_VISCOSITY = (1.0 - 0.99) * 0.01 ** 2 / (4.0 * PAPER_STEP)
+# The paper's blend as a PIC viscosity [m²/s]: the share 1 − 0.99 = 0.01 handed to PIC per 5e-6 s
+# at its dx 0.01 m, times dx²/(4 Δt): 0.05. With flipViscosity=PAPER_VISCOSITY a scene at any dx
+# and step has the flow of the paper's numerics (docs/physics.md, "The blend as a viscosity").
+PAPER_VISCOSITY = 0.01 * 0.01 ** 2 / (4.0 * PAPER_STEP)
 
 
 def flipReferenceArg(text):

@@ -2,7 +2,7 @@
 """Validation probe (opt-in): the §3.3 glued bottom block's force against the flow's Young's
 modulus and the grid spacing. Runs examples/liu2018_blocks.py (three stacked wooden blocks in
 the Liu et al. 2018 flume, Table 2's flow) for each modulus and spacing, 8 points per cell, with
-the paper's FLIP/PIC blend at Δx 0.01 m (2010 /s, a PIC viscosity of 0.0503 m²/s) held
+the paper's FLIP/PIC blend at Δx 0.01 m (2000 /s, a PIC viscosity of 0.05 m²/s) held
 (``--hold``) as that viscosity (``viscosity``, the default: the damping rate 4ν/Δx² grows as Δx
 shrinks, the model a viscous flow) or as that rate (``rate``: ν scales with Δx², towards the
 inviscid μ(I) flow), and prints from each run's
@@ -38,7 +38,6 @@ from flume_convergence import commit, richardson  # noqa: E402  (same folder)
 
 RHO, NU = 1300.0, 0.40  # Table 2's flow
 BLOCK_HEIGHT = 0.018    # h_b of the §3.3 blocks [m] (examples/liu2018_blocks.py HALF)
-PAPER_VISCOSITY = -math.log(0.99) / 5e-6 * 0.01 ** 2 / 4.0  # the paper's blend at Δx 0.01 m [m²/s]
 WINDOWS = (0.002, 0.01, 0.02, 0.05)  # the peaks' averaging windows [s]
 QUANTITIES = ("touch", "peak_10ms", "peak_20ms", "after_20_40", "after_40_80", "late", "impulse_20ms", "push_middle",
               "push_top")
@@ -100,6 +99,7 @@ def forceWindows(t, J, force):
 def viscosity(hold, dx):
     """The PIC viscosity [m²/s] at spacing dx [m] that holds the paper's blend at Δx 0.01 m as a
     viscosity or as a damping rate 4ν/Δx²."""
+    from mpmsdem.mpm import PAPER_VISCOSITY
     return PAPER_VISCOSITY if hold == "viscosity" else PAPER_VISCOSITY * (dx / 0.01) ** 2
 
 
@@ -193,8 +193,9 @@ def main(argv):
     text = table(rows)
     text += "\n\nThe paper's blend at Δx 0.01 m held at every Δx as %s; 8 points per cell; coupled run to %g s; " \
             "runs at commit(s) %s; %s, %d cores, OMP_NUM_THREADS=%s" % (
-                "a PIC viscosity of %.4g m²/s" % PAPER_VISCOSITY if a.hold == "viscosity" else
-                "a PIC damping rate of %.0f /s (viscosity 4 x rate / dx²)" % (4 * PAPER_VISCOSITY / 0.01 ** 2), a.duration,
+                "a PIC viscosity of %.4g m²/s" % viscosity(a.hold, 0.01) if a.hold == "viscosity" else
+                "a PIC damping rate of %.0f /s (viscosity 4 x rate / dx²)" % (4 * viscosity(a.hold, 0.01) / 0.01 ** 2),
+                a.duration,
                 ", ".join(sorted({r["commit"] for r in rows})), platform.machine(), os.cpu_count() or 0,
                 os.environ.get("OMP_NUM_THREADS", "unset"))
     if a.extrapolate:
