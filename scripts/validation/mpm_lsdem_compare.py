@@ -9,7 +9,8 @@ mean), the coupled run's wall time, steps and wall time per step (each run in it
 one after the other, in this command), and the LevelSet runs' differences from the SDEM run.
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/validation/mpm_lsdem_compare.py
-        [--dx 0.01] [--ppc 1] [--duration 1.0] [--ls-spacing 0.002[,0.004,...]] [--ls-nodes 602]
+        [--dx 0.01] [--ppc 1] [--flip-viscosity NU] [--duration 1.0] [--ls-spacing 0.002[,0.004,...]]
+        [--ls-nodes 602]
         [--out results/mpm_lsdem_compare] [--snapshots 0.40,0.45,0.50] [--snapshots-only]
 
 The paper's §4.1 gives, against the experiment (Liu et al. 2018), the top block's travel 4.0 %
@@ -50,6 +51,9 @@ def parse(argv):
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dx", type=float, default=0.01, help="grid spacing [m] > 0 (default the example's 0.01)")
     ap.add_argument("--ppc", type=int, default=1, help="material points per cell, a cube (default 1)")
+    ap.add_argument("--flip-viscosity", type=float, default=None,
+                    help="PIC viscosity of the flow's FLIP/PIC blend [m²/s] > 0 (default: the example's at --dx; "
+                         "the paper's is mpmsdem.mpm.PAPER_VISCOSITY, 0.05)")
     ap.add_argument("--duration", type=float, default=1.0, help="coupled run [s] > 0 (default 1.0)")
     ap.add_argument("--ls-spacing", default="0.002",
                     help="level-set grid spacings [m], comma-separated, each > 0 and at most the points' radius "
@@ -72,6 +76,8 @@ def parse(argv):
         ap.error("--dx %r: must be > 0" % a.dx)
     if not a.duration > 0:
         ap.error("--duration %r: must be > 0" % a.duration)
+    if a.flip_viscosity is not None and not (a.flip_viscosity > 0 and a.flip_viscosity < float("inf")):
+        ap.error("--flip-viscosity %r: must be > 0 and finite" % a.flip_viscosity)
     if a.ls_nodes < 8:
         ap.error("--ls-nodes %r: must be >= 8" % a.ls_nodes)
     try:
@@ -102,7 +108,7 @@ def runOne(a, out, extra):
     """One run of the example in its own process, into ``out``; returns its summary.json."""
     name = os.path.basename(out)
     cmd = [sys.executable, EXAMPLE, "--dx", repr(a.dx), "--ppc", str(a.ppc), "--duration", repr(a.duration),
-           "--out", out] + extra
+           "--out", out] + extra + ([] if a.flip_viscosity is None else ["--flip-viscosity", repr(a.flip_viscosity)])
     print("running %s: %s" % (name, " ".join(cmd[1:])), flush=True)
     t0 = time.time()
     subprocess.run(cmd, check=True)

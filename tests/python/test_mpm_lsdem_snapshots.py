@@ -35,3 +35,12 @@ def test_a_box_outline_is_its_side_view_upright_and_turned_a_quarter_about_the_c
     turned = mlc.outline(np.zeros(3), np.array([0.0, math.pi / 2, 0.0]), half)  # long and flat become tall and thin
     assert np.ptp(turned[:, 0]) == pytest.approx(0.01) and np.ptp(turned[:, 1]) == pytest.approx(0.02)
     assert len(turned) == 4
+
+
+def test_the_blend_is_passed_on_or_refused_naming_the_option(capsys):
+    assert mlc.parse([]).flip_viscosity is None                      # the example's own
+    assert mlc.parse(["--flip-viscosity", "0.05"]).flip_viscosity == 0.05
+    for bad in ("0", "-0.01", "inf", "nan"):
+        with pytest.raises(SystemExit):
+            mlc.parse(["--flip-viscosity", bad])
+        assert "--flip-viscosity" in capsys.readouterr().err
