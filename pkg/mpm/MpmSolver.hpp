@@ -162,10 +162,11 @@ class MpmSolver {
   // Largest stable step [s]: the CFL step, and no longer than the blend's stepLimit (a PIC
   // viscosity hands PIC 4 nu dt / dx^2 of the velocity per step, at most all of it).
   double stableTimeStep() { return std::min(cflTimeStep(), params().flip.stepLimit(params().dx)); }
+  // Whether the blend's stepLimit, not the CFL step, sets stableTimeStep().
+  bool blendLimitsStep() { return params().flip.stepLimit(params().dx) < cflTimeStep(); }
   // What sets stableTimeStep(), in words.
   std::string stableStepName() {
-    return params().flip.stepLimit(params().dx) < cflTimeStep() ? "the blend's step dx^2/(4 nu) of its PIC viscosity"
-                                                                 : "the flow's CFL step";
+    return blendLimitsStep() ? "the blend's step dx^2/(4 nu) of its PIC viscosity" : "the flow's CFL step";
   }
 
   // Throws ParameterError unless 0 < dt <= stableTimeStep() (1e-4 relative slack for
@@ -176,7 +177,7 @@ class MpmSolver {
     if (!(dt > 0) || !(dt <= limit * 1.0001)) {
       std::ostringstream os;
       os << "in (0, " << limit << "] s (";
-      if (limit < cflTimeStep())
+      if (blendLimitsStep())
         os << "dx^2/(4 nu) of the PIC viscosity " << params().flip.setViscosity()
            << " m^2/s: a step hands PIC 4 nu dt/dx^2 of the velocity, at most all of it)";
       else
