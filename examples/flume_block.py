@@ -302,24 +302,25 @@ def fromDriver(a):
 def resolutionNote(dx):
     """What refinement measured of the cube's force at this run's cells per block height (the
     studies of docs/coupled-results.md, "The impact under grid refinement" and the wall's, through
-    mpmsdem.tradeoffs): the first touch's and the first blow's errors there, which of the cube's
-    force and motion did not converge, and how far a wall's converging first blow still is from
+    mpmsdem.tradeoffs): the first touch's error there (and the first blow's where it has a limit),
+    which of the cube's force and motion gave no limit to trust, and how far a wall's converging first blow still is from
     its limit at the finest spacing measured."""
     from mpmsdem import tradeoffs
     cells = HB / dx
     p = tradeoffs.nearest("first_touch", cells_per_block_height=cells)
     measured = sorted(q.settings["cells_per_block_height"] for q in tradeoffs.table("first_touch")
                       if q.study["name"] == p.study["name"])
-    blow = tradeoffs.nearest("block_peak_force", cells_per_block_height=cells)
     note = ("resolution: the cube is %.1f cells tall (dx %g m). Refinement of this scene (%s) measured the first "
-            "touch %+.0f %% and the first blow (10 ms mean) %+.0f %% off their extrapolated limits at %.1f cells per "
-            "block height" % (cells, dx, p.study["scene"].split("), ", 1)[-1], 100 * p.error, 100 * blow.error,
-                              p.settings["cells_per_block_height"]))
-    names = {"plateau_force": "plateau force", "tilt": "tilt"}
+            "touch %+.0f %% off its extrapolated limit at %.1f cells per block height" % (
+                cells, dx, p.study["scene"].split("), ", 1)[-1], 100 * p.error, p.settings["cells_per_block_height"]))
+    names = {"block_peak_force": "first blow (10 ms mean)", "plateau_force": "plateau force", "tilt": "tilt"}
+    if not tradeoffs.unconverged("block_peak_force"):
+        blow = tradeoffs.nearest("block_peak_force", cells_per_block_height=cells)
+        note += ", the first blow (10 ms mean) %+.0f %% off its limit" % (100 * blow.error)
     loose = [n for o, n in names.items() if any("cells per block height" in w for w in tradeoffs.unconverged(o))]
     if loose:
-        note += "; the %s did not converge over %.1f to %.1f cells per block height" % (
-            " and ".join(loose), measured[0], measured[-1])
+        note += "; the %s gave no limit to trust over %.1f to %.1f cells per block height" % (
+            " and ".join([", ".join(loose[:-1])] * (len(loose) > 1) + loose[-1:]), measured[0], measured[-1])
     try:
         wall = [q for q in tradeoffs.table("peak_force") if "cells_per_flow_depth" in q.settings]
     except ValueError:  # no study converged in it

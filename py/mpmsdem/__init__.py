@@ -88,7 +88,7 @@ def material(density, friction=0.5, poisson=0.3, barrierStiffness=1e4, normalDam
                           normalDamping=normalDamping, tangentialDamping=tangentialDamping))
 
 
-def run(steps, *engines, endTime=None):
+def run(steps, *engines, endTime=None, endIsBound=False):
     """Run YADE for ``steps`` steps and raise RuntimeError if one of ``engines`` (SdemEngine,
     MpmEngine, CoupledEngine) stopped the run, with the engine's message (YADE reports an error
     raised inside a PyRunner on its log and stops, but does not always raise it from ``O.run``).
@@ -101,7 +101,10 @@ def run(steps, *engines, endTime=None):
     The scene's progress line (every 10 s of wall time, when an engine is verbose) says how much
     of the ``steps`` is done and when they will be. A script that runs in chunks (to sample its
     scene, or with a step that changes) gives each chunk the run's ``endTime`` [s, simulated,
-    > O.time]: the line then counts down the simulated time to it over all the chunks."""
+    > O.time]: the line then counts down the simulated time to it over all the chunks. A run that
+    stops on an event (a front passing a station) with a time limit gives the limit as
+    ``endTime`` and ``endIsBound=True``: the line then gives the share and the ETA as bounds
+    ("at most")."""
     from yade import O
     from yade.wrapper import PyRunner
     from .engine import _PROGRESS
@@ -120,7 +123,7 @@ def run(steps, *engines, endTime=None):
         if not (math.isfinite(endTime) and endTime > O.time):
             raise ValueError("endTime = %r s: must be finite and > O.time = %.9g s (the run's end, simulated)"
                              % (endTime, O.time))
-    _PROGRESS.running(int(steps), endTime)
+    _PROGRESS.running(int(steps), endTime, bool(endIsBound))
     try:
         for _ in range(int(steps)):
             O.step()

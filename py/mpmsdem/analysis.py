@@ -135,6 +135,13 @@ def runoutLube(a):
     return 1.2 * a if a < 1.8 else 1.9 * a ** (2.0 / 3.0)
 
 
+def pointRadius(dx, ppc):
+    """R_p0 of Eq 13 [m]: the radius of the sphere of a material point's initial volume, dx³/ppc
+    for ``ppc`` points per cell of spacing ``dx`` [m]. What a point meets a block or a level set
+    with (a LevelSet body's grid may be no coarser than it)."""
+    return (3.0 * dx ** 3 / ppc / (4.0 * math.pi)) ** (1.0 / 3.0)
+
+
 def froude(v, h, g=G):
     """Froude number Fr = v / √(g h) (paper §3.2.3 and §5)."""
     return v / math.sqrt(g * h)

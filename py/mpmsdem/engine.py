@@ -196,7 +196,7 @@ class _SceneProgress:
         self._engines = []     # weak references to the engines that started a step since then, in their order
         self._last = None      # (wall time, steps) of the last line, or of the first step seen
         self._run = None       # (steps done, steps at the end, wall time) of mpmsdem.run's steps
-        self._span = None      # (O.time, endTime, wall time) when chunks run to endTime began
+        self._span = None      # (O.time, wall time, endTime, endTime a bound) when chunks run to endTime began
 
     def stepping(self, engine, t, steps, dt):
         """``engine`` starts a step with ``steps`` steps done, at time ``t`` [s] after a step
@@ -223,8 +223,9 @@ class _SceneProgress:
             return
         line = "mpmsdem: t = %.6g s, step %d" % (t, steps)
         if self._run is not None and self._span is not None and t > self._span[0]:
-            t0, end, start = self._span
-            line += " (%.1f %% of the run to t = %.6g s, ETA %s)" % (
+            t0, start, end, bound = self._span
+            line += (" (at least %.1f %% of the run to t = %.6g s at most, ETA at most %s)" if bound else
+                     " (%.1f %% of the run to t = %.6g s, ETA %s)") % (
                 100.0 * (t - t0) / (end - t0), end, _duration((now - start) / (t - t0) * max(end - t, 0.0)))
         elif self._run is not None and self._run[0] < steps <= self._run[1]:
             first, end, start = self._run
@@ -233,18 +234,19 @@ class _SceneProgress:
         line += ", O.dt %.3g s, %s" % (dt, _perStep(perStep))
         print("; ".join([line] + ["%s: %s" % p for p in parts]), file=sys.stderr, flush=True)
 
-    def running(self, steps, endTime=None):
+    def running(self, steps, endTime=None, endIsBound=False):
         """:func:`mpmsdem.run` is about to take ``steps`` steps from O.iter (None: it is done), as
-        a chunk of a run to ``endTime`` [s] where one is given: the span (and its rate) goes on
-        from the chunk before while the end is the same and O.time has not gone back."""
+        a chunk of a run to ``endTime`` [s] (at the latest, with ``endIsBound``) where one is
+        given: the span (and its rate) goes on from the chunk before while the end is the same and
+        O.time has not gone back."""
         if steps is None:
             self._run = None
             return
         self._run = (O.iter, O.iter + steps, self.clock())
         if endTime is None:
             self._span = None
-        elif self._span is None or self._span[1] != endTime or not self._span[0] <= O.time < endTime:
-            self._span = (O.time, endTime, self.clock())
+        elif self._span is None or self._span[2:] != (endTime, endIsBound) or not self._span[0] <= O.time < endTime:
+            self._span = (O.time, self.clock(), endTime, endIsBound)
 
 
 _PROGRESS = _SceneProgress()

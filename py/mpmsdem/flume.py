@@ -172,7 +172,7 @@ class Flume:
         n = round(ppc ** (1.0 / 3.0))
         if n ** 3 != ppc:
             raise ValueError("ppc = %r: must be a perfect cube (1, 8, 27, ...)" % (ppc,))
-        rp = (3.0 * dx ** 3 / ppc / (4.0 * math.pi)) ** (1.0 / 3.0)  # Eq 13
+        rp = analysis.pointRadius(dx, ppc)
         # The bed's outer surface is z = 0 (its core top at -bedSweep). Grid aligned so that the
         # lowest material points, at zLow + dx/(2n), touch it (centre R_p0 above it); the
         # grid's own bottom wall lies two cells lower, under the bed, so that only the SDEM bed

@@ -276,9 +276,10 @@ def mpmOnly(bed, dx, cells, height, particles, gravity, friction, ends, **blend)
 
 def restLayer(dx, bed, layer=0.16, sideCells=2, still=1e-6, maxTime=2.0):
     """Settle the layer at rest on a bed and measure it; a dict of the numbers (heights [m])."""
+    from mpmsdem import analysis
     n = sideCells
     side = n * dx
-    rp = (3.0 * dx ** 3 / 8 / (4.0 * math.pi)) ** (1.0 / 3.0)  # Eq 13, 8 points per cell
+    rp = analysis.pointRadius(dx, 8)
     pure = {"flipAlpha": 0.0, "flipReferenceDt": "step"}
     started = time.time()
     if bed == "sdem":

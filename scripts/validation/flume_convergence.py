@@ -39,7 +39,6 @@ points where the differences keep their sign and shrink, and say so where they d
 import argparse
 import glob
 import json
-import math
 import os
 import shutil
 import subprocess
@@ -173,7 +172,7 @@ def freeFlow(folder, dx):
         p = {"x": h["snapshots/%06d/x" % front["snapshot"]][()]}
     r = {k: probe[k] for k in ("arrival", "h_f", "v_f", "Fr")}
     r["front"] = dict(analysis.frontProfile(p, cell=dx, behind=(0.02, 0.05), minPoints=FOREMOST), time=front["time"])
-    r["resting_point_height"] = (3.0 * dx ** 3 / 8 / (4.0 * math.pi)) ** (1.0 / 3.0)  # Eq 13, 8 points per cell
+    r["resting_point_height"] = analysis.pointRadius(dx, 8)
     r["eq20"] = analysis.hydrodynamicForce(1600.0, r["v_f"], r["h_f"], min(r["h_f"], CUBE) * CUBE)
     return r
 
@@ -345,6 +344,28 @@ def richardson(f, h):
     return p, f3 + d2 * h3 ** p / (h2 ** p - h3 ** p)
 
 
+def limitOf(f, h):
+    """(order, limit, None) of f at three spacings h (coarsest first) where a limit can be
+    trusted, else (order or None, limit or None, why not). Beyond :func:`richardson`'s form, the
+    limit must lie no farther from the finest run than the three runs lie apart: on an exact
+    power law that asks for an order of at least ln 2 / ln(h1/h3) (first order over Δx halved,
+    one half over Δx quartered). A lower order puts the limit several measured steps past the
+    finest run, resting on the sequence going on as it went (order 0.55 over spacing ratios 1.4
+    puts it 4.6 last steps away)."""
+    e = richardson(f, h)
+    if e is None:
+        return None, None, "not monotone with shrinking steps"
+    if abs(f[2] - e[1]) > abs(f[0] - f[2]):
+        return e[0], e[1], "order %.2f: its limit %.4g lies farther from the finest run than the runs lie apart" % e
+    return e[0], e[1], None
+
+
+def limitText(f, h):
+    """One line's verdict of :func:`limitOf`."""
+    p, f0, why = limitOf(f, h)
+    return "order %.2f, extrapolated to Δx 0: %.4g" % (p, f0) if why is None else "no limit to trust (%s)" % why
+
+
 QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("front", "tipHeight"), ("coupled", "first_touch"),
               ("coupled", "blow"),
               ("coupled", "plateau"), ("coupled", "tilt_at"), ("coupled", "travel_at"))
@@ -352,7 +373,7 @@ QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("front", "
 
 def extrapolations(runs):
     """Observed order and extrapolated value of each quantity over the three finest spacings of
-    each set, damping and width (:func:`richardson`)."""
+    each set, damping and width (:func:`limitOf`)."""
     lines, groups = [], {}
     for r in runs:
         groups.setdefault((r["settings"], r["hold"], r["width"]), []).append(r)
@@ -364,11 +385,9 @@ def extrapolations(runs):
             vals = [(r["free"]["front"] if part == "front" else r[part]).get(key) for r in rs]
             if None in vals:
                 continue
-            e = richardson(vals, [r["dx"] for r in rs])
             lines.append("- %s, %s, width %g m, %s at Δx %s: %s -> %s" % (
                 g[0], g[1], g[2], key, ", ".join("%.4g" % r["dx"] for r in rs), ", ".join("%.4g" % v for v in vals),
-                "not monotone with shrinking steps: no estimate" if e is None else
-                "order %.2f, extrapolated to Δx 0: %.4g" % e))
+                limitText(vals, [r["dx"] for r in rs])))
     return "\n".join(lines)
 
 
@@ -381,7 +400,7 @@ OUTPUTS = {("free", "arrival"): "front_arrival", ("free", "h_f"): "flow_depth", 
 def packageStudy(runs, settings, hold, width, command):
     """The study of the three finest spacings of one set, damping and width for
     py/mpmsdem/tradeoffs.json: each run's relative error against the value extrapolated to
-    Δx 0 (:func:`richardson`) where the sequence gives one, the outputs where it does not under
+    Δx 0 (:func:`limitOf`) where the sequence gives one to trust, the outputs where it does not under
     ``unconverged``, and the work of each run (points x steps of the coupled run) relative to
     the run at the reference spacing. None when those runs are not all there."""
     rs = sorted([r for r in runs if (r["settings"], r["hold"], r["width"]) == (settings, hold, width)],
@@ -396,13 +415,13 @@ def packageStudy(runs, settings, hold, width, command):
         vals = [r[part].get(key) for r in rs]
         if None in vals:
             continue
-        e = richardson(vals, h)
-        if e is None:
-            unconverged[out] = "%s at %s cells per block height (Δx %s m): %s, not monotone with shrinking steps" % (
+        p, f0, why = limitOf(vals, h)
+        if why:
+            unconverged[out] = "%s at %s cells per block height (Δx %s m): %s, %s" % (
                 out, " / ".join("%.1f" % r["cells_per_block"] for r in rs), " / ".join("%.4g" % d for d in h),
-                " / ".join("%.4g" % v for v in vals))
+                " / ".join("%.4g" % v for v in vals), why)
         else:
-            limits[(part, key)] = e[1]
+            limits[(part, key)] = f0
     rows = [{"settings": {"dx": r["dx"], "cells_per_block_height": r["cells_per_block"], "ppc": 8,
                           "flip_viscosity": r["viscosity"], "precision": "double"},
              "errors": {OUTPUTS[q]: (r[q[0]][q[1]] - f0) / f0 for q, f0 in limits.items()},

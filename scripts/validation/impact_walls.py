@@ -47,7 +47,7 @@ import time
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, commit, drive, fmt, richardson,  # noqa: E402
+from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, commit, drive, fmt, limitOf,  # noqa: E402
                                storeStudy)
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
@@ -366,7 +366,7 @@ REFERENCE_DX = 0.01  # the spacing whose run has cost 1 (the paper's)
 def packageStudy(runs, theta, L0, young, command):
     """The wall's refinement at one incline, L0 and E for py/mpmsdem/tradeoffs.json: over its
     three finest spacings, each run's relative error in each force of WALL_OUTPUTS against the
-    value extrapolated to Δx 0 (Richardson) where the sequence gives one, the others under
+    value extrapolated to Δx 0 (Richardson) where the sequence gives one to trust, the others under
     ``unconverged``; the resolution as cells per flow depth (the run's own h_f over Δx); the
     work (points x steps of the wall's run) relative to the run at Δx 0.01 m. None when those
     runs are not all there."""
@@ -381,14 +381,13 @@ def packageStudy(runs, theta, L0, young, command):
     limits, unconverged, orders = {}, {}, {}
     for key, out in WALL_OUTPUTS.items():
         vals = [r["obstacle"][key] for r in rs]
-        e = richardson(vals, h)
-        if e is None:
-            unconverged[out] = "%s on a wall at %s cells per flow depth (Δx %s m): %s N, not monotone or not " \
-                               "converging with shrinking steps" % (out, " / ".join("%.1f" % c for c in cells),
-                                                                    " / ".join("%.4g" % d for d in h),
-                                                                    " / ".join("%.4g" % v for v in vals))
+        p, f0, why = limitOf(vals, h)
+        if why:
+            unconverged[out] = "%s on a wall at %s cells per flow depth (Δx %s m): %s N, %s" % (
+                out, " / ".join("%.1f" % c for c in cells), " / ".join("%.4g" % d for d in h),
+                " / ".join("%.4g" % v for v in vals), why)
         else:
-            orders[out], limits[key] = e[0], e[1]
+            orders[out], limits[key] = p, f0
     viscosity = [float(r["flip_blend"].split()[2]) for r in rs]  # "PIC viscosity NU m^2/s (...)"
     rows = [{"settings": {"dx": r["dx"], "cells_per_flow_depth": c, "ppc": 8, "flip_viscosity": nu,
                           "precision": "double"},

@@ -34,7 +34,7 @@ import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from flume_convergence import commit, richardson  # noqa: E402  (same folder)
+from flume_convergence import commit, limitOf  # noqa: E402  (same folder)
 
 RHO, NU = 1300.0, 0.40  # Table 2's flow
 BLOCK_HEIGHT = 0.018    # h_b of the §3.3 blocks [m] (examples/liu2018_blocks.py HALF)
@@ -165,7 +165,7 @@ def table(rows):
 
 
 def extrapolations(rows):
-    """Per modulus, the limit of each quantity through its three finest spacings (:func:`richardson`)."""
+    """Per modulus, the limit of each quantity through its three finest spacings (:func:`limitOf`)."""
     lines = []
     for E in sorted({r["young"] for r in rows}):
         rs = sorted((r for r in rows if r["young"] == E), key=lambda r: -r["dx"])[-3:]
@@ -177,12 +177,12 @@ def extrapolations(rows):
             if any(v is None or v != v for v in f):  # a run the flow never reached
                 lines.append("- E %g kPa, %s: not reached at every spacing" % (E / 1e3, q))
                 continue
-            e = richardson(f, h)
+            p, f0, why = limitOf(f, h)
             lines.append("- E %g kPa, %s at Δx %s: %s -> %s" % (
                 E / 1e3, q, ", ".join("%g" % x for x in h), ", ".join("%.4g" % v for v in f),
-                "not monotone with shrinking steps: no estimate" if e is None else
-                "order %.2f, limit %.4g (%+.1f %% from the finest)" % (e[0], e[1], 100 * (f[-1] / e[1] - 1)
-                                                                       if e[1] else float("nan"))))
+                "no limit to trust (%s)" % why if why else
+                "order %.2f, limit %.4g (%+.1f %% from the finest)" % (p, f0, 100 * (f[-1] / f0 - 1)
+                                                                       if f0 else float("nan"))))
     return lines
 
 

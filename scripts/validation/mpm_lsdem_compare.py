@@ -74,6 +74,12 @@ def parse(argv):
         ap.error("--ls-spacing %r: every spacing must be > 0" % (a.ls_spacing,))
     if not a.dx > 0:
         ap.error("--dx %r: must be > 0" % a.dx)
+    from mpmsdem.analysis import pointRadius
+    rp = pointRadius(a.dx, a.ppc)
+    coarse = [h for h in a.ls_spacing if h > rp]
+    if coarse:  # the example would refuse them, after the runs before them
+        ap.error("--ls-spacing %s: every spacing must be at most the points' radius R_p0 = %.4g m at --dx %g, "
+                 "--ppc %d" % (",".join("%g" % h for h in coarse), rp, a.dx, a.ppc))
     if not a.duration > 0:
         ap.error("--duration %r: must be > 0" % a.duration)
     if a.flip_viscosity is not None and not (a.flip_viscosity > 0 and a.flip_viscosity < float("inf")):

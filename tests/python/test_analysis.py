@@ -275,3 +275,10 @@ def test_effective_pic_viscosity_of_a_blend_per_step():
     for bad in ((0, 1e-4, 0.01), (0.01, -1e-4, 0.01), (0.01, 1e-4, float("nan"))):
         with pytest.raises(ValueError, match="must be finite and > 0"):
             analysis.effectivePicViscosity(*bad)
+
+
+def test_point_radius_is_the_sphere_of_a_points_volume():
+    # 8 points in a 1 cm cell: each 1.25e-7 m^3, the sphere of it 3.1018 mm (4/3 pi r^3 = 1.25e-7)
+    assert analysis.pointRadius(0.01, 8) == pytest.approx(3.1017525e-3, rel=1e-7)
+    assert 4.0 / 3.0 * math.pi * analysis.pointRadius(0.02, 27) ** 3 == pytest.approx(0.02 ** 3 / 27, rel=1e-12)
+    assert analysis.pointRadius(0.01, 1) == pytest.approx(2 * analysis.pointRadius(0.01, 8), rel=1e-12)

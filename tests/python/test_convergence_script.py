@@ -1,5 +1,6 @@
 """scripts/validation/flume_convergence.py and impact_walls.py: their extrapolation to Δx 0 on exact power laws."""
 import json
+import math
 import os
 import sys
 
@@ -23,6 +24,20 @@ def test_richardson_refuses_what_no_power_law_fits():
     assert fc.richardson([1.0, 2.0, 1.0], h) is None      # the differences change sign
     assert fc.richardson([1.0, 1.0, 2.0], h) is None      # a zero difference
     assert fc.richardson([1.0, 1.1, 1.3], h) is None      # growing steps: not converging
+
+
+@pytest.mark.parametrize("h", [(0.01, 0.2 / 28, 0.005), (0.02, 0.01, 0.005)])
+def test_a_limit_is_trusted_only_within_the_span_of_the_runs(h):
+    # on f = 1 + C h^p the limit 1 lies |C| h3^p from the finest run and the runs span
+    # |C| (h1^p - h3^p): within it exactly when (h1/h3)^p >= 2, p >= ln 2 / ln(h1/h3)
+    pmin = math.log(2) / math.log(h[0] / h[2])
+    for p in (0.9 * pmin, 1.1 * pmin, 2.0):
+        order, limit, why = fc.limitOf([1 + 40 * x ** p for x in h], list(h))
+        assert order == pytest.approx(p, rel=1e-6) and limit == pytest.approx(1.0, abs=1e-6)
+        assert (why is None) == (p > pmin)
+        if why:
+            assert why.startswith("order %.2f: its limit 1 lies farther" % p)
+    assert fc.limitOf([1.0, 2.0, 1.0], list(h)) == (None, None, "not monotone with shrinking steps")
 
 
 def test_package_study_errors_against_the_extrapolated_limit():

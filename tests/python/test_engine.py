@@ -125,6 +125,18 @@ def test_a_run_in_chunks_to_an_end_time_counts_down_the_whole_run(progress, caps
         assert t == pytest.approx(t0 + k * 1e-5, abs=1e-12)
         expect = " (%.1f %% of the run to t = %.6g s, ETA %s), " % (100.0 * k / 30, end, engine._duration(4.0 * (30 - k)))
         assert expect in line, line
+    # a run that stops on an event with endTime as its limit: the same numbers, as bounds
+    t0, end = O.time, O.time + 40e-5
+    first = O.iter
+    mpmsdem.run(20, sdem, endTime=end, endIsBound=True)
+    out = lines(capsys.readouterr().err)
+    assert len(out) == 7, out   # a line every 3 steps of 4 s: the first at the run's start, without a share
+    assert "%" not in out[0] and "at most" not in out[0]
+    for line in out[1:]:
+        k = int(re.search(r", step (\d+) ", line).group(1)) - first
+        expect = " (at least %.1f %% of the run to t = %.6g s at most, ETA at most %s), " % (
+            100.0 * k / 40, end, engine._duration(4.0 * (40 - k)))
+        assert expect in line, line
     # the end must lie ahead
     with pytest.raises(ValueError, match=r"endTime = .*: must be finite and > O.time"):
         mpmsdem.run(1, sdem, endTime=O.time)

@@ -44,3 +44,14 @@ def test_the_blend_is_passed_on_or_refused_naming_the_option(capsys):
         with pytest.raises(SystemExit):
             mlc.parse(["--flip-viscosity", bad])
         assert "--flip-viscosity" in capsys.readouterr().err
+
+
+def test_level_set_spacings_past_the_points_radius_are_refused_before_any_run(capsys):
+    # R_p0 at dx 0.01 m: (3 dx^3 / (4 pi ppc))^(1/3) = 6.204 mm with 1 point per cell, 3.102 mm with 8
+    assert mlc.parse(["--ls-spacing", "0.006,0.002"]).ls_spacing == [0.006, 0.002]
+    assert mlc.parse(["--ppc", "8", "--ls-spacing", "0.003"]).ls_spacing == [0.003]
+    for args, named in ((["--ppc", "8", "--ls-spacing", "0.002,0.004"], "0.004"), (["--ls-spacing", "0.007"], "0.007")):
+        with pytest.raises(SystemExit):
+            mlc.parse(args)
+        err = capsys.readouterr().err
+        assert "--ls-spacing %s: every spacing must be at most the points' radius R_p0 = " % named in err, err
