@@ -23,6 +23,14 @@
 #   ... --design DIR                                   # the §3.2 cases prepared in DIR
 #                                                      # (scripts/validation/paper_flume_design.py
 #                                                      # --prepare), likewise: $OUT/design.tgz
+#   ... --convergence DIR                              # the §3.2 refinement runs prepared in DIR
+#                                                      # (scripts/validation/flume_convergence.py
+#                                                      # --prepare): their two legs on CUDA, the
+#                                                      # front's profile read there (a driver
+#                                                      # with HDF5, as --study); $OUT/
+#                                                      # convergence.tgz (no snapshots) to unpack
+#                                                      # over DIR here and read with the same
+#                                                      # command without --prepare
 #   ... --field SCENE                                  # a field scene's run (examples/field_valley.py
 #                                                      # --driver-scene) on CUDA for GPU_FIELD_SECONDS
 #                                                      # (300): its simulated time against the wall
@@ -50,7 +58,7 @@
 #
 # Stages, most telling first: the whole of test_mpm and test_coupling side by side (stage
 # "tests"; the CPU-vs-CUDA agreement tests are the ones a machine without a GPU skips); the
-# prepared §3.2 design (--design); bench_mpm.py --cuda (MPM
+# prepared §3.2 design (--design) and refinement runs (--convergence); bench_mpm.py --cuda (MPM
 # updates/s at 1e5..1e7 points, against the CPU and the baseline); the flume at the paper's
 # resolution (flume_block_full.json): 4,000 steps on the CPU and on CUDA (new and baseline: the
 # coupling's share of the step is in each JSON line), then the whole 2 s on CUDA in double and
@@ -72,6 +80,7 @@ prebuilt=""
 baseline=""
 study=""
 design=""
+convergence=""
 sweep=""
 until=""
 field=""
@@ -83,6 +92,7 @@ while [ $# -gt 0 ]; do
     --baseline) baseline=${2:?"--baseline needs a folder"}; shift 2 ;;
     --study) study=${2:?"--study needs a folder of prepared cases"}; shift 2 ;;
     --design) design=${2:?"--design needs a folder of prepared cases"}; shift 2 ;;
+    --convergence) convergence=${2:?"--convergence needs a folder of prepared runs"}; shift 2 ;;
     --sweep) sweep=${2:?"--sweep needs a folder of prepared runs"}; shift 2 ;;
     --until) until=${2:?"--until needs a time [s]"}; shift 2 ;;
     --field) field=${2:?"--field needs a driver scene"}; shift 2 ;;
@@ -172,6 +182,11 @@ prepared_run() {
 }
 export -f prepared_run
 [ -n "$design" ] && stage design 420 prepared_run design 400 "$design" scripts/validation/paper_flume_design.py
+# (the §3.2 cube at Δx 0.0025 m to 0.4 s: 6,144,000 points, about 37,000 steps of 1.29e-5 s in the two legs;
+# at the rates measured on an H200 in double, 1.48e9 particle-updates/s and the coupling's 0.63 of the MPM step
+# (docs/benchmarks.md), about 4 min: an estimate, not a measurement)
+[ -n "$convergence" ] && stage convergence 560 prepared_run convergence 540 "$convergence" \
+  scripts/validation/flume_convergence.py
 # sweep_run DIR LIMIT: a prepared trade-off sweep's runs one after another on CUDA (side by side
 # they only take turns on the GPU), their logs and coupled.h5 in $out/sweep.tgz also when stopped
 sweep_run() {

@@ -28,6 +28,16 @@ second of the set at Δx 0.01 m (ν scales with Δx²: towards the inviscid μ(I
         --dx 0.01,0.0071428571,0.005 --hold viscosity --out results/convergence [--settings joint]
     /usr/bin/python3 scripts/validation/flume_convergence.py --out results/convergence --report-only --extrapolate
 
+On a machine with a GPU and no YADE, the runs are prepared here and their legs run there:
+
+    /usr/bin/python3 scripts/validation/flume_convergence.py --dx 0.0025 --duration 0.4 --out DIR --prepare
+    python3 scripts/validation/flume_convergence.py --run-prepared DIR --exe PATH/mpmsdem-run --backend cuda
+        (or scripts/bench/gpu_run.sh --convergence DIR: its outputs but the snapshots come back)
+    /usr/bin/python3 scripts/validation/flume_convergence.py --dx 0.0025 --duration 0.4 --out DIR
+
+The last call reads the legs run there (the front's profile read there too, where the whole
+flow's snapshot is) and runs nothing.
+
 Each spacing's numbers go to OUT/<run>.json when it ends (its scenes, logs and outputs to
 OUT/<run>/), and finished spacings are not run again: an interrupted sequence continues, a
 finished free leg is kept (--rerun-coupled runs the coupled legs again from it). The
@@ -71,6 +81,9 @@ def parse(argv):
     ap.add_argument("--settings", choices=("joint", "table1"), default="joint",
                     help="flow and friction set of mpmsdem.flume.FLUME_SETTINGS (joint)")
     ap.add_argument("--width", type=float, default=0.2, help="flume width [m] (0.2, the experiment's)")
+    ap.add_argument("--ppc", type=int, default=8,
+                    help="material points per cell, a cube (8, the paper's): at a fixed Δx more points shrink "
+                         "their contact radius R_p0 (Eq 13) and nothing of the grid")
     ap.add_argument("--duration", type=float, default=0.5,
                     help="coupled run [s] > 0 (0.5; shorter runs report no plateau, tilt or travel)")
     ap.add_argument("--out", default="results/convergence", help="folder of the runs' JSON files")
@@ -85,6 +98,17 @@ def parse(argv):
     ap.add_argument("--package-data", action="store_true",
                     help="store the three finest spacings of --settings/--hold/--width as a study in "
                          "py/mpmsdem/tradeoffs.json (mpmsdem.tradeoffs: errors against the extrapolated limit)")
+    ap.add_argument("--prepare", action="store_true",
+                    help="only write each spacing's scenes into OUT/<run>/ (YADE builds them), for --run-prepared "
+                         "on another machine; bring OUT back and call again without it to read the runs")
+    ap.add_argument("--run-prepared", metavar="DIR",
+                    help="run the legs of the runs prepared in DIR with the driver alone (no YADE; numpy and h5py, "
+                         "where there, read the front's profile), skipping those done")
+    ap.add_argument("--exe", default="mpmsdem-run", help="--run-prepared: the driver (mpmsdem-run on the PATH)")
+    ap.add_argument("--backend", choices=("cpu", "cuda"), help="--run-prepared: the backend (the scenes': cpu)")
+    ap.add_argument("--precision", choices=("double", "float"), help="--run-prepared: the precision (the scenes')")
+    ap.add_argument("--threads", type=int, help="--run-prepared: OMP_NUM_THREADS of the driver (as set)")
+    ap.add_argument("--workers", type=int, default=1, help="--run-prepared: runs at a time; 1 (a leg takes the device)")
     ap.add_argument("--child", nargs=2, metavar=("prepare", "DX"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     try:
@@ -97,6 +121,8 @@ def parse(argv):
         ap.error("--duration = %r s: must be > 0 (the plateau, tilt and travel need >= %g s)" % (a.duration, AT))
     if not 0 < a.width < float("inf"):
         ap.error("--width = %r m: must be > 0" % a.width)
+    if a.ppc < 1 or round(a.ppc ** (1.0 / 3.0)) ** 3 != a.ppc:
+        ap.error("--ppc = %r: must be a perfect cube (1, 8, 27, ...)" % a.ppc)
     return a
 
 
@@ -109,7 +135,13 @@ def viscosity(a, dx):
 
 
 def runName(a, dx):
-    return "%s_%s_w%g_dx%.6g" % (a.settings, a.hold, a.width, dx)
+    return "%s_%s_w%g_dx%.6g%s" % (a.settings, a.hold, a.width, dx, "" if a.ppc == 8 else "_ppc%d" % a.ppc)
+
+
+def group(r):
+    """What a refinement sequence holds fixed: set, damping held, width and points per cell (runs
+    before --ppc had 8)."""
+    return r["settings"], r["hold"], r["width"], r.get("ppc", 8)
 
 
 def example(a, dx):
@@ -131,14 +163,14 @@ def prepare(a, dx, folder):
     from yade import O
     fb, args = example(a, dx)
     station = fb.COLUMN + fb.L0
-    common = dict(dx=dx, width=a.width, verbose=False, **fb.flumeKeywords(args))
+    common = dict(dx=dx, ppc=a.ppc, width=a.width, verbose=False, **fb.flumeKeywords(args))
     scene = Flume(blocks=[fb.copperCube(flowFriction=args.flow_friction)], **common)
     dt = O.dt
     every = max(1, round(SERIES_EVERY / dt)) * dt
     driver.writeScene(os.path.join(folder, "coupled.json"), scene.coupled, duration=a.duration, dt=dt,
                       seriesEvery=every, outputEvery=a.duration, vtk="none")
-    meta = {"points": scene.mpm.numParticles, "dt": dt, "flip_blend": scene.flipBlend(), "station": station,
-            "duration": a.duration}
+    meta = {"points": scene.mpm.numParticles, "dt": dt, "dx": dx, "flip_blend": scene.flipBlend(), "station": station,
+            "duration": a.duration, "prepared_commit": commit()}
     O.reset()
     scene = Flume(**common)  # the cube's step for the free flow too: --flow-from continues it
     driver.writeScene(os.path.join(folder, "free.json"), scene.coupled, duration=2.0, dt=dt,
@@ -158,21 +190,38 @@ def drive(exe, folder, scene, out, extra=()):
     return time.time() - t0
 
 
-def freeFlow(folder, dx):
-    """The free flow's numbers at the cube's station (see the module's docstring)."""
+def analysisModule():
+    """mpmsdem.analysis, read from the checkout without importing the package (which needs YADE):
+    what the legs of a prepared run read where only numpy and h5py are."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("mpmsdem_analysis", os.path.join(ROOT, "py", "mpmsdem", "analysis.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def frontOf(folder, dx):
+    """The front's profile when it reached the station (see the module's docstring), from the free
+    flow's snapshot of that moment."""
     import h5py
+    with open(os.path.join(folder, "free", "front_snapshot_1.json")) as f:
+        front = json.load(f)
+    with h5py.File(os.path.join(folder, "free", "mpm.h5"), "r") as h:
+        p = {"x": h["snapshots/%06d/x" % front["snapshot"]][()]}
+    return dict(analysisModule().frontProfile(p, cell=dx, behind=(0.02, 0.05), minPoints=FOREMOST), time=front["time"])
+
+
+def freeFlow(folder, dx, ppc, front=None):
+    """The free flow's numbers at the cube's station (see the module's docstring); ``front`` its
+    profile where the legs read it (else from the snapshot)."""
     from mpmsdem import analysis
     with open(os.path.join(folder, "free", "flow_probes.json")) as f:
         probe = json.load(f)["probes"][0]
     if probe["arrival"] is None:
         raise RuntimeError("%s: the free flow's front never reached the cube's station" % folder)
-    with open(os.path.join(folder, "free", "front_snapshot_1.json")) as f:
-        front = json.load(f)
-    with h5py.File(os.path.join(folder, "free", "mpm.h5"), "r") as h:
-        p = {"x": h["snapshots/%06d/x" % front["snapshot"]][()]}
     r = {k: probe[k] for k in ("arrival", "h_f", "v_f", "Fr")}
-    r["front"] = dict(analysis.frontProfile(p, cell=dx, behind=(0.02, 0.05), minPoints=FOREMOST), time=front["time"])
-    r["resting_point_height"] = analysis.pointRadius(dx, 8)
+    r["front"] = front or frontOf(folder, dx)
+    r["resting_point_height"] = analysis.pointRadius(dx, ppc)
     r["eq20"] = analysis.hydrodynamicForce(1600.0, r["v_f"], r["h_f"], min(r["h_f"], CUBE) * CUBE)
     return r
 
@@ -233,51 +282,121 @@ def writeResult(a, dx, r):
     return r
 
 
-def runOne(a, dx, exe):
-    """Prepare, run and read one spacing; writes OUT/<run>.json and returns its numbers. A leg that was
+def prepareRun(a, dx):
+    """The run's folder OUT/<run>/ with its scenes and meta.json (written by a child process that
+    builds them with YADE), unless they are there."""
+    folder = os.path.join(a.out, runName(a, dx))
+    os.makedirs(folder, exist_ok=True)
+    if not os.path.exists(os.path.join(folder, "meta.json")):
+        subprocess.run([sys.executable, os.path.abspath(__file__), "--child", "prepare", repr(dx)] + a.argv, check=True)
+    return folder
+
+
+def writeMeta(folder, meta):
+    with open(os.path.join(folder, "meta.json.tmp"), "w") as f:
+        json.dump(meta, f, indent=1)
+    os.replace(os.path.join(folder, "meta.json.tmp"), os.path.join(folder, "meta.json"))
+
+
+def runLegs(folder, exe, backend=None, precision=None, threads=None):
+    """The free leg unless it ended before, then the coupled leg from the free flow's state, with
+    the driver ``exe`` (the scenes' backend and precision unless given). Needs neither YADE nor
+    numpy: a prepared run goes to a machine that has a driver and a Python alone. A leg that was
     interrupted continues from its last restart point (--restart; the free flow's probe records
-    with it, the driver reads them again from its mpm.h5)."""
+    with it, the driver reads them again from its mpm.h5). What each leg took, where it ran and
+    the front's profile (where numpy and h5py are there to read it: the snapshot is the whole
+    flow) go to meta.json; returns it."""
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    from driver_runs import runDriver
+    with open(os.path.join(folder, "meta.json")) as f:
+        meta = json.load(f)
+    started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
+    if started == "unknown":  # a copy without git (a GPU machine's): the checkout that prepared it
+        started = meta.get("prepared_commit", started)
+
+    def leg(scene, out, extra):
+        return runDriver(exe, os.path.join(folder, scene), os.path.join(folder, out), os.path.join(folder, out + ".log"),
+                         extra, backend, precision, threads)
+    resume = os.path.exists(os.path.join(folder, "coupled", "coupled.checkpoint.json"))
+    if meta.get("free_wall") is None:  # written when the free leg ended: its outputs are whole
+        resume = False
+        again = os.path.exists(os.path.join(folder, "free", "mpm.h5.restart"))
+        meta.update(free_wall=leg("free.json", "free", ["--restart"] if again else []), free_resumed=again,
+                    free_commit=started)
+        meta.pop("front", None)
+        writeMeta(folder, meta)
+    if "front" not in meta:
+        try:
+            meta["front"] = frontOf(folder, meta["dx"])
+            writeMeta(folder, meta)
+        except ImportError:  # read later, where the run is read
+            pass
+    with open(os.path.join(folder, "free", "front_snapshot_0.json")) as f:
+        start = json.load(f)["step"]
+    steps = int(round(meta["duration"] / meta["dt"])) - start
+    flowFrom = ["--restart"] if resume else ["--flow-from", os.path.join(folder, "free", "front_snapshot_0.json")]
+    meta.update(coupled_wall=leg("coupled.json", "coupled", flowFrom + ["--steps", str(steps)]), coupled_from_step=start,
+                resumed=resume, commit=started, backend=backend or "the scene's", precision=precision or "the scene's",
+                threads=str(threads) if threads else os.environ.get("OMP_NUM_THREADS", "all"))
+    writeMeta(folder, meta)
+    return meta
+
+
+def runOne(a, dx, exe):
+    """Prepare, run and read one spacing; writes OUT/<run>.json and returns its numbers. Legs run
+    before (by --run-prepared elsewhere, or by a call that stopped after them) are read, not run
+    again."""
     same = sameRunAtReference(a, dx)
     if same:
         with open(same) as f:
             r = json.load(f)
         return writeResult(a, dx, dict(r, hold=a.hold, same_run_as=os.path.basename(same)))
-    folder = os.path.join(a.out, runName(a, dx))
-    os.makedirs(folder, exist_ok=True)
-    if not os.path.exists(os.path.join(folder, "meta.json")):
-        subprocess.run([sys.executable, os.path.abspath(__file__), "--child", "prepare", repr(dx)] + a.argv, check=True)
+    folder = prepareRun(a, dx)
     with open(os.path.join(folder, "meta.json")) as f:
-        meta = json.load(f)
-    if a.rerun_coupled and os.path.isdir(os.path.join(folder, "coupled")):
-        shutil.rmtree(os.path.join(folder, "coupled"))
-    resume = os.path.exists(os.path.join(folder, "coupled", "coupled.checkpoint.json"))
-    free = meta.get("free_wall")  # written when the free leg ended: its outputs are whole
+        meta = dict(json.load(f), dx=dx)  # (runs prepared before it was kept)
     previous = os.path.join(a.out, runName(a, dx) + ".json.previous")
     before = {}
-    if a.rerun_coupled and os.path.exists(previous):
-        with open(previous) as f:
-            before = json.load(f)
-    if free is None and before:  # a run finished before meta.json kept it
-        free = before["wall_seconds"]["free"]
-    started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
-    freeCommit = meta.get("free_commit") or before.get("free_commit") or before.get("commit") or started
-    if free is None:
-        resume = False
-        again = os.path.exists(os.path.join(folder, "free", "mpm.h5.restart"))
-        free = drive(exe, folder, "free.json", "free", ["--restart"] if again else [])
-        with open(os.path.join(folder, "meta.json"), "w") as f:
-            json.dump(dict(meta, free_wall=free, free_resumed=again, free_commit=started), f, indent=1)
-        freeCommit = started
-    with open(os.path.join(folder, "free", "front_snapshot_0.json")) as f:
-        start = json.load(f)["step"]
-    steps = int(round(meta["duration"] / meta["dt"])) - start
-    flowFrom = ["--restart"] if resume else ["--flow-from", os.path.join(folder, "free", "front_snapshot_0.json")]
-    wall = drive(exe, folder, "coupled.json", "coupled", flowFrom + ["--steps", str(steps)])
-    r = dict(meta, free=freeFlow(folder, dx), coupled=coupled(folder, meta["duration"]), dx=dx, hold=a.hold,
-             settings=a.settings, width=a.width, viscosity=viscosity(a, dx), damping_rate=4 * viscosity(a, dx) / dx ** 2,
-             cells_per_block=CUBE / dx, wall_seconds={"free": free, "coupled": wall}, coupled_from_step=start,
-             threads=os.environ.get("OMP_NUM_THREADS", "all"), commit=started, free_commit=freeCommit, resumed=resume)
+    if a.rerun_coupled:
+        if os.path.isdir(os.path.join(folder, "coupled")):
+            shutil.rmtree(os.path.join(folder, "coupled"))
+        meta.pop("coupled_wall", None)
+        if os.path.exists(previous):
+            with open(previous) as f:
+                before = json.load(f)
+        if meta.get("free_wall") is None and before:  # a run finished before meta.json kept it
+            meta.update(free_wall=before["wall_seconds"]["free"],
+                        free_commit=before.get("free_commit") or before.get("commit"))
+        writeMeta(folder, meta)
+    if meta.get("coupled_wall") is None:
+        writeMeta(folder, meta)
+        meta = runLegs(folder, exe)
+    r = dict({k: v for k, v in meta.items() if k not in ("front", "coupled_wall")},
+             free=freeFlow(folder, dx, a.ppc, meta.get("front")), coupled=coupled(folder, meta["duration"]), dx=dx,
+             hold=a.hold, settings=a.settings, width=a.width, ppc=a.ppc, viscosity=viscosity(a, dx),
+             damping_rate=4 * viscosity(a, dx) / dx ** 2, cells_per_block=CUBE / dx,
+             wall_seconds={"free": meta["free_wall"], "coupled": meta["coupled_wall"]},
+             free_commit=meta.get("free_commit") or meta["commit"])
     return writeResult(a, dx, r)
+
+
+def runPrepared(a):
+    """The legs of every run prepared in a.run_prepared (``--prepare``) that has not run them, one
+    after another (``--workers`` above 1 is refused: each leg takes the whole device), without
+    YADE; a run whose legs are done is skipped, so a stopped call is taken up by the next."""
+    if a.workers != 1:
+        raise SystemExit("--workers = %d: the legs of a prepared run take a whole device; run them one at a time (1)"
+                         % a.workers)
+    folders = sorted(os.path.dirname(p) for p in glob.glob(os.path.join(a.run_prepared, "*", "meta.json")))
+    if not folders:
+        raise SystemExit("--run-prepared %s: no prepared run there (--prepare writes them)" % a.run_prepared)
+    for folder in folders:
+        with open(os.path.join(folder, "meta.json")) as f:
+            if json.load(f).get("coupled_wall") is not None:
+                print("%s: legs done before" % os.path.basename(folder))
+                continue
+        meta = runLegs(folder, a.exe, a.backend, a.precision, a.threads)
+        print("%s: free leg %.0f s, coupled leg %.0f s (%s)" % (os.path.basename(folder), meta["free_wall"],
+                                                               meta["coupled_wall"], meta["backend"]), flush=True)
 
 
 def commit():
@@ -293,7 +412,7 @@ def load(out):
     for path in sorted(glob.glob(os.path.join(out, "*.json"))):
         with open(path) as f:
             runs.append(json.load(f))
-    return sorted(runs, key=lambda r: (r["settings"], r["hold"], r["width"], -r["dx"]))
+    return sorted(runs, key=lambda r: group(r) + (-r["dx"],))
 
 
 def fmt(v, spec):
@@ -312,7 +431,8 @@ def table(runs):
     for r in runs:
         ff, cp, fr = r["free"], r["coupled"], r["free"]["front"]
         blow = cp.get("blow")
-        row = ["%s, %s" % (r["settings"], r["hold"]), "%g" % r["width"], "%.4g" % r["dx"], "%.1f" % r["cells_per_block"],
+        row = ["%s, %s%s" % (r["settings"], r["hold"], "" if r.get("ppc", 8) == 8 else ", %d per cell" % r["ppc"]),
+               "%g" % r["width"], "%.4g" % r["dx"], "%.1f" % r["cells_per_block"],
                "%.3g" % r["dt"], "%.0f" % r["damping_rate"], "%.3f" % ff["arrival"], "%.1f" % (1e3 * ff["h_f"]),
                "%.3f" % ff["v_f"], "%.2f" % ff["Fr"], "%.2f" % ff["eq20"], fmt(fr.get("tipHeight") and 1e3 * fr["tipHeight"], "%.1f"),
                "%.1f (%.1f)" % (1e3 * fr["nose"], 1e3 * ff["resting_point_height"]),
@@ -376,7 +496,7 @@ def extrapolations(runs):
     each set, damping and width (:func:`limitOf`)."""
     lines, groups = [], {}
     for r in runs:
-        groups.setdefault((r["settings"], r["hold"], r["width"]), []).append(r)
+        groups.setdefault(group(r), []).append(r)
     for g, rs in sorted(groups.items()):
         rs = sorted(rs, key=lambda r: -r["dx"])[-3:]
         if len(rs) != 3:
@@ -385,8 +505,8 @@ def extrapolations(runs):
             vals = [(r["free"]["front"] if part == "front" else r[part]).get(key) for r in rs]
             if None in vals:
                 continue
-            lines.append("- %s, %s, width %g m, %s at Δx %s: %s -> %s" % (
-                g[0], g[1], g[2], key, ", ".join("%.4g" % r["dx"] for r in rs), ", ".join("%.4g" % v for v in vals),
+            lines.append("- %s, %s, width %g m%s, %s at Δx %s: %s -> %s" % (
+                g[0], g[1], g[2], "" if g[3] == 8 else ", %d per cell" % g[3], key, ", ".join("%.4g" % r["dx"] for r in rs), ", ".join("%.4g" % v for v in vals),
                 limitText(vals, [r["dx"] for r in rs])))
     return "\n".join(lines)
 
@@ -398,12 +518,12 @@ OUTPUTS = {("free", "arrival"): "front_arrival", ("free", "h_f"): "flow_depth", 
 
 
 def packageStudy(runs, settings, hold, width, command):
-    """The study of the three finest spacings of one set, damping and width for
+    """The study of the three finest spacings of one set, damping and width (8 points per cell) for
     py/mpmsdem/tradeoffs.json: each run's relative error against the value extrapolated to
     Δx 0 (:func:`limitOf`) where the sequence gives one to trust, the outputs where it does not under
     ``unconverged``, and the work of each run (points x steps of the coupled run) relative to
     the run at the reference spacing. None when those runs are not all there."""
-    rs = sorted([r for r in runs if (r["settings"], r["hold"], r["width"]) == (settings, hold, width)],
+    rs = sorted([r for r in runs if group(r) == (settings, hold, width, 8)],
                 key=lambda r: -r["dx"])[-3:]
     default = [r for r in rs if abs(r["dx"] - REFERENCE_DX) <= 1e-12 * REFERENCE_DX]
     if len(rs) != 3 or not default:
@@ -465,9 +585,15 @@ def storeStudy(study):
 def main(argv):
     a = parse(argv)
     a.argv = argv
+    if a.run_prepared:
+        return runPrepared(a)
     os.makedirs(a.out, exist_ok=True)
     if a.child:
         prepare(a, float(a.child[1]), os.path.join(a.out, runName(a, float(a.child[1]))))
+        return
+    if a.prepare:
+        for dx in a.dx:
+            print("prepared %s" % prepareRun(a, dx), flush=True)
         return
     if a.reread:
         for path in sorted(glob.glob(os.path.join(a.out, "*.json"))):

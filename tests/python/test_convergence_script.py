@@ -140,3 +140,16 @@ def test_liu2018_force_windows_of_a_block_the_flow_never_reached():
     w = lf.forceWindows(t, np.zeros(len(t)), np.zeros(len(t)))
     assert w["touch"] is None and all(np.isnan(w[k]) for k in ("after_20_40", "after_40_80", "late", "impulse_20ms"))
     assert np.isnan(w["peaks"]).all()
+
+
+def test_run_prepared_runs_only_what_is_prepared_and_not_done(tmp_path, capsys):
+    # (the legs themselves need the driver: scripts/checks/check_flume_convergence_pair.py runs them)
+    with pytest.raises(SystemExit, match="no prepared run there"):
+        fc.runPrepared(fc.parse(["--run-prepared", str(tmp_path)]))
+    with pytest.raises(SystemExit, match="--workers = 2: the legs of a prepared run take a whole device"):
+        fc.runPrepared(fc.parse(["--run-prepared", str(tmp_path), "--workers", "2"]))
+    done = tmp_path / "joint_viscosity_w0.2_dx0.0025"
+    done.mkdir()
+    (done / "meta.json").write_text(json.dumps({"dx": 0.0025, "free_wall": 1.0, "coupled_wall": 2.0}))
+    fc.runPrepared(fc.parse(["--run-prepared", str(tmp_path), "--exe", str(tmp_path / "no-such-driver")]))
+    assert capsys.readouterr().out == "joint_viscosity_w0.2_dx0.0025: legs done before\n"
