@@ -7,6 +7,7 @@
 #include <cstring>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -49,13 +50,10 @@ class PyCoupling {
 
   // A YADE LevelSet body (id) coupled with the flow: its grid (local frame: min [m], spacing [m],
   // grid points per axis, phi as float64 bytes in distField[i][j][k] order) and the pair's
-  // contact physics. ValueError for a CUDA flow, a bad grid or physics, or a grid coarser than
-  // the flow's points allow (MpLevelSetCoupling::checkResolution).
+  // contact physics. ValueError for a bad grid or physics, or a grid coarser than the flow's
+  // points allow (MpLevelSetCoupling::checkResolution).
   void addLevelSet(int id, const Vec3& min, double spacing, int nx, int ny, int nz, const bp::object& dist,
                    double kc, double friction, double poisson, double normalDamping, double tangentialDamping) {
-    if (mpm_.solver().queuesSteps())
-      throw ParameterError("LevelSet body " + std::to_string(id) +
-                           ": LevelSet bodies are coupled with the CPU backend of the flow only");
     coupling::LevelSetGrid g;
     g.min = min;
     g.spacing = spacing;
@@ -88,13 +86,17 @@ class PyCoupling {
   void step(const bp::object& bodies, const bp::object& forces, double dt) {
     sdem_.readStates(bodies);
     readLevelSets(bodies);
-    coupling::coupledStep(mpm_.solver(), coupling_, dt, [&] {
-      sdem_.computeForces(dt);
-      coupling_.blockForces(force_, torque_);
-      sdem_.writeForces(forces, &force_, &torque_);
-      sdem_.countStep();
-      if (levelSets_.numBodies() > 0) levelSetForces(forces, dt);
-    }, stages_);
+    const bool levelSets = levelSets_.numBodies() > 0;
+    coupling::coupledStep(
+        mpm_.solver(), coupling_, dt,
+        [&] {
+          sdem_.computeForces(dt);
+          coupling_.blockForces(force_, torque_);
+          sdem_.writeForces(forces, &force_, &torque_);
+          sdem_.countStep();
+          if (levelSets) levelSetForces(forces);
+        },
+        stages_, levelSets ? std::function<void()>([&] { runLevelSetContacts(dt); }) : std::function<void()>());
     restoredApproach_ = std::numeric_limits<double>::quiet_NaN();
     ++steps_;
     const double limit = contactStep();
@@ -275,7 +277,10 @@ class PyCoupling {
   void setDissipation(double friction, double damping) { coupling_.setDissipation(friction, damping); }
   // The same for the LevelSet bodies' contacts (their dissipations kept apart, so that a restart
   // adds up the same numbers as the unbroken run).
-  bp::tuple levelSetHistories() const { return historyBytes(levelSets_); }
+  bp::tuple levelSetHistories() {
+    levelSets_.pullHistories();
+    return historyBytes(levelSets_);
+  }
   void setLevelSetHistories(const bp::object& keys, const bp::object& xi) { setHistoryBytes(levelSets_, keys, xi); }
   bp::tuple levelSetDissipation() const {
     return bp::make_tuple(levelSets_.frictionDissipation(), levelSets_.dampingDissipation());
@@ -358,11 +363,13 @@ class PyCoupling {
     }
   }
   // The LevelSet bodies' contacts, after the SDEM coupling's (their particle forces add to its),
-  // and their forces and torques to O.forces.
-  void levelSetForces(const bp::object& forces, double dt) {
+  // before the flow's step is queued; then, with the blocks, their forces and torques to O.forces.
+  void runLevelSetContacts(double dt) {
     mpm::MpmSolver& solver = mpm_.solver();
     levelSets_.computeForces(solver.numParticles() > 0 ? solver.extendForceBuffer() : mpm::ParticleView{}, dt,
                              sdem_.engine().timeStepSafety(), solver.params().dx);
+  }
+  void levelSetForces(const bp::object& forces) {
     bp::object addF = forces.attr("addF"), addT = forces.attr("addT");
     for (int i = 0; i < levelSets_.numBodies(); ++i) {
       if (levelSets_.contactCount(i) == 0) continue;

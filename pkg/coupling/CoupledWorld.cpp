@@ -30,22 +30,26 @@ void CoupledWorld::step(double dt) {
 }
 
 void coupledStep(mpm::MpmSolver& solver, MpSdemCoupling& coupling, double dt, const std::function<void()>& blocks,
-                 CoupledStageSeconds& stages) {
+                 CoupledStageSeconds& stages, const std::function<void()>& others) {
+  // work between the contacts' launch and their collection: a failure collects them first (the
+  // contacts' step is over; its own failure, if any, comes first)
+  const auto beforeCollect = [&coupling](const std::function<void()>& work) {
+    try {
+      work();
+    } catch (...) {
+      coupling.collectForces();
+      throw;
+    }
+  };
   const auto t0 = Clock::now();
   coupling.launchForces(solver, dt);
+  if (others) beforeCollect(others);
   const auto t1 = Clock::now();
   // A solver on a device runs its step while the host waits for the block sums and moves the
   // blocks: the step reads the particle forces the contacts leave on the device (queued after
   // them) and nothing the blocks' update changes.
   const bool queued = solver.queuesSteps() && solver.numParticles() > 0;
-  if (queued) {
-    try {
-      solver.launchStep(dt);
-    } catch (...) {
-      coupling.collectForces();  // the contacts' step is over; its own failure, if any, comes first
-      throw;
-    }
-  }
+  if (queued) beforeCollect([&] { solver.launchStep(dt); });
   const auto t2 = Clock::now();
   auto t3 = t2, t4 = t2;
   try {

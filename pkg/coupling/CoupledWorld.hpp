@@ -33,13 +33,15 @@ struct CoupledStageSeconds {
 };
 
 // One coupled step around its blocks' part, in the order above, for CoupledWorld and the YADE
-// bridge alike: the MP–block contacts at the blocks' states of time t, the flow's step queued
-// behind them where the solver queues steps, the contacts' block sums (coupling.force/torque),
-// blocks(), which takes them, then the flow's step or the wait for it. A failure in the contacts
-// or in blocks() abandons a queued flow step, so that the flow stays at the step's start as it
-// does on the CPU. Their wall time is added to `stages`.
+// bridge alike: the MP–block contacts at the blocks' states of time t, then `others` where given
+// (the contacts of further bodies with the flow, LevelSet bodies: they add to the force buffer
+// the MP–block contacts opened, solver.extendForceBuffer()), the flow's step queued behind them
+// where the solver queues steps, the contacts' block sums (coupling.force/torque), blocks(),
+// which takes them, then the flow's step or the wait for it. A failure in the contacts or in
+// blocks() abandons a queued flow step, so that the flow stays at the step's start as it does
+// on the CPU. Their wall time is added to `stages` (others' to the coupling's).
 void coupledStep(mpm::MpmSolver& solver, MpSdemCoupling& coupling, double dt, const std::function<void()>& blocks,
-                 CoupledStageSeconds& stages);
+                 CoupledStageSeconds& stages, const std::function<void()>& others = {});
 
 class CoupledWorld {
  public:

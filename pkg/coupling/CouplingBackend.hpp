@@ -7,12 +7,15 @@
 #include <vector>
 
 #include "coupling/CouplingKernelsCommon.hpp"
+#include "coupling/LevelSetKernelsCommon.hpp"
 #include "mpm/MpmSolver.hpp"
 
 namespace mpmsdem {
 namespace coupling {
 
 struct CouplingStepInput {
+  // The bodies are SDEM blocks (shapes, bins) or, where levelSets is set, LevelSet bodies
+  // (MpLevelSetCoupling: each body's BlockState::shape is its grid's index; shapes and bins unused).
   sdem::ShapeTableView<double> shapes;  // host arrays
   int numVertices, numFaces, numLoopEntries;
   bool shapesChanged;                   // the table grew since the last step
@@ -28,6 +31,9 @@ struct CouplingStepInput {
   double stepSafety;                    // the SDEM time-step safety factor (approachStepBound)
   int historySlots;
   unsigned historyStep;                 // HistoryView::step of this step
+  const std::vector<LevelSetGridView<double>>* levelSets = nullptr;  // host arrays
+  bool levelSetsChanged = false;        // a body was added since the last step
+  double watch = 0;                     // LevelSet bodies: how far beyond contact closing pairs are examined [m]
 };
 
 // The particles of the solver's view as the coupling reads them, in the view's precision T.
@@ -80,8 +86,8 @@ class CouplingDeviceBackend {
   // the device) and add them up: stageSeconds() by name, in seconds.
   virtual void setStageTiming(bool on) = 0;
   virtual std::vector<std::pair<std::string, double>> stageSeconds() const = 0;
-  // Largest initial particle volume of the view [m^3].
-  virtual double maxVolume0(const mpm::ParticleView& v) = 0;
+  // Smallest and largest initial particle volume of the view [m^3].
+  virtual std::pair<double, double> volume0Range(const mpm::ParticleView& v) = 0;
   // Keep each step's contacts on the device from the next step on (kContactValues doubles,
   // 120 B, per contact), for downloadContacts().
   virtual void recordContacts(bool on) = 0;

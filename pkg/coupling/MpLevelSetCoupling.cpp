@@ -44,6 +44,7 @@ int MpLevelSetCoupling::addBody(int externalId, LevelSetGrid grid, const sdem::B
   distF_.emplace_back(grid.dist.begin(), grid.dist.end());
   grids_.push_back(std::move(grid));
   phys_.push_back({phys.barrierStiffness, phys.friction, phys.poisson, phys.normalDamping, phys.tangentialDamping});
+  gridsChanged_ = true;
   bodies_.emplace_back();
   minInertia_.push_back(0);
   stateSet_.push_back(0);
@@ -115,6 +116,12 @@ void MpLevelSetCoupling::setHistorySlots(int slots) {
   }
 }
 
+void MpLevelSetCoupling::pullHistories() {
+  if (!onDevice_ || historiesToDevice_) return;  // the host copies are the current ones
+  device_->downloadHistories(key_, xi_, written_);
+  floatRun_ = false;  // (downloaded in double)
+}
+
 std::vector<long long> MpLevelSetCoupling::historyKeys() const {
   return currentHistoryKeys(key_, written_, historyStep_, slots_);
 }
@@ -131,13 +138,11 @@ void MpLevelSetCoupling::setHistories(const std::vector<long long>& keys, const 
   // the next step's precision picks its copy (computeForces keeps the one of its size)
   xi_ = xi;
   xiF_.assign(xi.begin(), xi.end());
+  historiesToDevice_ = true;  // for a step on the device
 }
 
 void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt, double safety, double watch) {
   if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
-  if (view.device)
-    throw RuntimeFailure("MP-LevelSet coupling: the solver's particles are on a CUDA device; LevelSet bodies "
-                         "are coupled with the CPU backends only");
   for (int i = 0; i < numBodies(); ++i)
     if (!stateSet_[i]) throw RuntimeFailure("LevelSet body " + std::to_string(ids_[i]) + ": no state set before the step");
   const bool isFloat = view.precision == mpm::Precision::Float;
@@ -146,7 +151,9 @@ void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt,
   contacts_.clear();
   contactsF_.clear();
   barrierEnergy_ = springEnergy_ = 0;
+  onDevice_ = false;  // (until a device step: where the histories and contacts are)
   if (numBodies() == 0 || view.n == 0) return;
+  if (view.device) return runDevice(view, dt, safety, watch);
   if (view.n != particleCount_ || (isFloat ? xiF_.size() : xi_.size()) != 3 * slots_ * view.n) {
     // a new particle set: no history yet, and its smallest radius may be below the grids'
     const double v0 = isFloat ? smallest<float>(view.volume0, view.n) : smallest<double>(view.volume0, view.n);
@@ -200,17 +207,66 @@ void MpLevelSetCoupling::run(const mpm::ParticleView& view, const BlockState<T>*
       });
   overflow_ += t.overflow;
   minApproachStep_ = t.approach;
-  if (t.firstBad < n) {
-    std::ostringstream os;
-    os << "MP-LevelSet coupling: the centre of material point " << t.firstBad << " reached the surface of LevelSet body "
-       << ids_[t.badBody] << " (distance <= 0, overlap >= R_p0); at the first step the particles were seeded inside "
-       << "the body, later the time step was too long for the barrier stiffness";
-    throw RuntimeFailure(os.str());
-  }
+  if (t.firstBad < n) centreReached(t.firstBad, t.badBody);
   for (const auto& list : chunkContacts) contacts.insert(contacts.end(), list.begin(), list.end());
   // by particle number, not storage slot: sums that do not depend on the solver's particle order
   std::stable_sort(contacts.begin(), contacts.end(),
                    [](const MpContact<T>& a, const MpContact<T>& b) { return a.particle < b.particle; });
+}
+
+void MpLevelSetCoupling::centreReached(long particle, int body) const {
+  std::ostringstream os;
+  os << "MP-LevelSet coupling: the centre of material point " << particle << " reached the surface of LevelSet body "
+     << ids_[body] << " (distance <= 0, overlap >= R_p0); at the first step the particles were seeded inside "
+     << "the body, later the time step was too long for the barrier stiffness";
+  throw RuntimeFailure(os.str());
+}
+
+// The step on the solver's device: the SDEM coupling's backend with the bodies' grids for its
+// shape table, launched and collected at once (the flow's step is queued after it).
+void MpLevelSetCoupling::runDevice(const mpm::ParticleView& view, double dt, double safety, double watch) {
+  if (!device_ || devicePrecision_ != view.precision) {
+    device_ = makeCouplingDeviceBackend(view.precision);
+    if (!device_) throw RuntimeFailure("MP-LevelSet coupling: the solver runs on CUDA but this build has no CUDA coupling");
+    device_->recordContacts(true);  // contacts() reads them: those of a few bodies
+    devicePrecision_ = view.precision;
+    gridsChanged_ = true;
+  }
+  if (view.n != particleCount_) {  // a new particle set: its smallest radius may be below the grids', no history yet
+    checkResolution(std::cbrt(3 * device_->volume0Range(view).first / (4 * kPi)));
+    particleCount_ = view.n;
+    device_->resetHistories();
+    historiesToDevice_ = false;
+  }
+  if (historiesToDevice_) device_->uploadHistories(key_, xi_, written_);
+  historiesToDevice_ = false;
+  if (gridsChanged_) {
+    gridViews_.clear();
+    for (const LevelSetGrid& g : grids_)
+      gridViews_.push_back({{g.min[0], g.min[1], g.min[2]}, g.spacing, {g.nGP[0], g.nGP[1], g.nGP[2]}, g.dist.data()});
+  }
+  CouplingStepInput in{};
+  in.blocks = &bodies_;
+  in.phys = &phys_;
+  in.particles = view;
+  in.dt = dt;
+  in.stepSafety = safety;
+  in.historySlots = slots_;
+  in.historyStep = ++historyStep_;
+  in.levelSets = &gridViews_;
+  in.levelSetsChanged = gridsChanged_;
+  in.watch = watch;
+  CouplingStepOutput out;
+  device_->launch(in);
+  device_->collect(out);
+  gridsChanged_ = false;
+  onDevice_ = true;
+  if (out.badParticle >= 0) centreReached(out.badParticle, out.badBlock);
+  overflow_ += out.overflow;
+  minApproachStep_ = out.minApproachStep;
+  minParticleStep_ = out.minParticleStep;
+  sums_ = out.sums;
+  takeStepTotals(sums_, numBodies(), dt);
 }
 
 template <typename T>
@@ -241,6 +297,7 @@ double MpLevelSetCoupling::bodyContactStep(double safety) const {
 }
 
 std::vector<MpContactRecord> MpLevelSetCoupling::contacts(int body) const {
+  if (onDevice_) return deviceContacts(*device_, body, "MP-LevelSet contacts");
   std::vector<MpContactRecord> out;
   double r[kContactValues];
   auto append = [&](const auto& list) {

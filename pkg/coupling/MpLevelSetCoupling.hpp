@@ -8,13 +8,17 @@
 // (Eqs 17–18).
 //
 // Bodies are few (boulders in a flow): every particle is tested against each body's bounding
-// sphere, without the SDEM coupling's bins. CPU solvers only, double or float; block sums in
-// double, reduced in a fixed order (results do not depend on the thread count).
+// sphere, without the SDEM coupling's bins. CPU and CUDA solvers, double or float; block sums in
+// double, reduced in a fixed order (results do not depend on the thread count). On CUDA the
+// contacts run in the SDEM coupling's device backend (its kernel over coupleParticleLevelSets,
+// its ordered sums), the grids copied to the device once, the histories kept there.
 #pragma once
 #include <array>
 #include <limits>
+#include <memory>
 #include <vector>
 
+#include "coupling/CouplingBackend.hpp"
 #include "coupling/LevelSetKernelsCommon.hpp"
 #include "coupling/MpSdemCoupling.hpp"
 #include "mpm/MpmSolver.hpp"
@@ -74,17 +78,20 @@ class MpLevelSetCoupling : public CouplingReport {
   // ---- checkpoint of the tangential histories, as MpSdemCoupling's: per particle `slots` keys
   // and 3 x slots xi values, elastic tangential forces [N] (a float run's converted to double).
   // setHistories() makes them current for the next step, for a particle set of keys.size() /
-  // slots particles.
+  // slots particles. After a step on CUDA they live on the device: pullHistories() brings them
+  // to the host before these are read (a no-op otherwise).
+  void pullHistories();
   std::vector<long long> historyKeys() const;
   std::vector<double> historyXi() const;
   void setHistories(const std::vector<long long>& keys, const std::vector<double>& xi);
 
-  // One step at the particles of `view` (host memory; they must stay put until the solver's
-  // step): adds their contact forces into view.force and sums the bodies' share. `safety` is
-  // the time-step safety of the approach bounds, `watch` [m] how far beyond contact closing
-  // pairs are examined (a grid cell). RuntimeFailure for a device view or when a particle centre
-  // reaches a body's surface; ParameterError (checkResolution) when a particle set smaller than
-  // the grids allow appears.
+  // One step at the particles of `view` (host or CUDA device memory; they must stay put until
+  // the solver's step): adds their contact forces into view.force and sums the bodies' share.
+  // `safety` is the time-step safety of the approach bounds, `watch` [m] how far beyond contact
+  // closing pairs are examined (a grid cell). On CUDA the contacts are queued on the device and
+  // waited for (the flow's step, queued after, reads their forces). RuntimeFailure when a
+  // particle centre reaches a body's surface, or for a device view in a build without CUDA;
+  // ParameterError (checkResolution) when a particle set smaller than the grids allow appears.
   void computeForces(const mpm::ParticleView& view, double dt, double safety, double watch);
 
   // ---- results of the last computeForces, per body index (world frame): force, torque (about
@@ -107,6 +114,8 @@ class MpLevelSetCoupling : public CouplingReport {
            double dt, double safety, double watch);
   template <typename T>
   void reduce(const std::vector<MpContact<T>>& contacts, const BlockState<T>* B, double dt);
+  void runDevice(const mpm::ParticleView& view, double dt, double safety, double watch);
+  [[noreturn]] void centreReached(long particle, int body) const;
 
   std::vector<int> ids_;
   std::vector<LevelSetGrid> grids_;
@@ -126,6 +135,15 @@ class MpLevelSetCoupling : public CouplingReport {
   std::vector<MpContact<float>> contactsF_;
   bool floatRun_ = false;
   std::vector<double> sums_;
+  // CUDA: the backend (made at the first device step), the grids as it reads them, whether a
+  // body was added since it last read them, whether the last step ran there (its histories and
+  // contacts are there) and whether setHistories' histories still have to go there
+  std::unique_ptr<CouplingDeviceBackend> device_;
+  mpm::Precision devicePrecision_ = mpm::Precision::Double;
+  std::vector<LevelSetGridView<double>> gridViews_;
+  bool gridsChanged_ = true;
+  bool onDevice_ = false;
+  bool historiesToDevice_ = false;
 };
 
 }  // namespace coupling

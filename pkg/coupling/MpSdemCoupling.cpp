@@ -276,7 +276,7 @@ void MpSdemCoupling::launchForces(mpm::MpmSolver& solver, double dt) {
   if (maxParticleRadius_ < 0) {
     double vmax = 0;
     if (view.device)
-      vmax = device_->maxVolume0(view);
+      vmax = device_->volume0Range(view).second;
     else
       vmax = hostFloat ? largest<float>(view.volume0, view.n) : largest<double>(view.volume0, view.n);
     maxParticleRadius_ = std::cbrt(3 * vmax / (4 * kPi));
@@ -498,6 +498,31 @@ void MpSdemCoupling::setDeviceListCapacity(unsigned int capacity) {
   deviceListCapacity_ = capacity;
 }
 
+std::vector<MpContactRecord> deviceContacts(CouplingDeviceBackend& device, int block, const char* what) {
+  std::vector<double> rec;
+  if (!device.downloadContacts(rec))
+    throw RuntimeFailure(std::string(what) +
+                         ": the last step had more contacts than the device's list held, so it recorded none; the list "
+                         "has room from the next step on");
+  // the device list holds them in the order the threads reached it: put them in the CPU loop's
+  // order, by particle number and then in the order each particle made them
+  const std::size_t n = rec.size() / kContactValues;
+  std::vector<std::size_t> order(n);
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (block < 0 || rec[kContactValues * i + kRecBlock] == block) order[kept++] = i;
+  order.resize(kept);
+  auto at = [&rec](std::size_t i, int k) { return rec[kContactValues * i + k]; };
+  std::sort(order.begin(), order.end(), [&at](std::size_t a, std::size_t b) {
+    return at(a, kRecParticle) != at(b, kRecParticle) ? at(a, kRecParticle) < at(b, kRecParticle)
+                                                      : at(a, kRecOrder) < at(b, kRecOrder);
+  });
+  std::vector<MpContactRecord> out;
+  out.reserve(kept);
+  for (std::size_t i : order) out.push_back(recordOf(rec.data() + kContactValues * i));
+  return out;
+}
+
 std::vector<MpContactRecord> MpSdemCoupling::contacts(int block) const {
   std::vector<MpContactRecord> out;
   switch (contactsIn_) {
@@ -515,25 +540,7 @@ std::vector<MpContactRecord> MpSdemCoupling::contacts(int block) const {
         throw RuntimeFailure(
             "MP-block contacts: the CUDA backend keeps a step's contacts on the device; turn their recording on "
             "before the step (recordContacts, 120 B per contact on the device) or run the CPU backend");
-      if (!device_->downloadContacts(rec))
-        throw RuntimeFailure(
-            "MP-block contacts: the last step had more contacts than the device's list held, so it recorded "
-            "none; the list has room from the next step on");
-      // the device list holds them in the order the threads reached it: put them in the CPU
-      // loop's order, by particle number and then in the order each particle made them
-      const std::size_t n = rec.size() / kContactValues;
-      std::vector<std::size_t> order(n);
-      std::size_t kept = 0;
-      for (std::size_t i = 0; i < n; ++i)
-        if (block < 0 || rec[kContactValues * i + kRecBlock] == block) order[kept++] = i;
-      order.resize(kept);
-      auto at = [&rec](std::size_t i, int k) { return rec[kContactValues * i + k]; };
-      std::sort(order.begin(), order.end(), [&at](std::size_t a, std::size_t b) {
-        return at(a, kRecParticle) != at(b, kRecParticle) ? at(a, kRecParticle) < at(b, kRecParticle)
-                                                          : at(a, kRecOrder) < at(b, kRecOrder);
-      });
-      out.reserve(kept);
-      for (std::size_t i : order) out.push_back(recordOf(rec.data() + kContactValues * i));
+      out = deviceContacts(*device_, block, "MP-block contacts");
       break;
     }
   }

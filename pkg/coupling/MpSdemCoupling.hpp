@@ -58,6 +58,12 @@ void checkPairPhys(const sdem::BarrierPhys& phys);
 // The record of a contact written by contactRecord (kContactValues doubles).
 MpContactRecord recordOf(const double* r);
 
+// The contacts of the last step that `device` ran and recorded (CouplingDeviceBackend::
+// recordContacts), those of body `block` or all (block < 0), in the CPU loop's order: by particle
+// number, then in the order each particle made them. RuntimeFailure, `what` first, when that step
+// had more contacts than the device's list held.
+std::vector<MpContactRecord> deviceContacts(CouplingDeviceBackend& device, int block, const char* what);
+
 class MpSdemCoupling : public CouplingReport {
  public:
   explicit MpSdemCoupling(const sdem::SdemEngine& sdem);

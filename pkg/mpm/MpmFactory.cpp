@@ -83,7 +83,7 @@ void MpmSolver::getParticles(ParticleSet& out, std::size_t first, std::size_t co
 
 ParticleView MpmSolver::extendForceBuffer() {
   throw RuntimeFailure(name() + ": extendForceBuffer: this solver cannot add a second coupling's forces to the "
-                       "next step's (the CPU backend can)");
+                       "next step's (the CPU and CUDA backends can)");
 }
 
 void MpmSolver::launchStep(double) {

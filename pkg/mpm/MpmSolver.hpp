@@ -118,8 +118,9 @@ class MpmSolver {
   virtual ParticleView openForceBuffer() = 0;
   // The external-force buffer of the next step with the forces already in it, for a second
   // coupling that adds to what the first put there (LevelSet bodies beside SDEM blocks); the
-  // zeroed buffer of openForceBuffer() when the next step has none yet. The CPU backend has it;
-  // elsewhere it throws RuntimeFailure.
+  // zeroed buffer of openForceBuffer() when the next step has none yet. The CPU and CUDA
+  // backends have it (on CUDA the second coupling's work is queued after the first's); elsewhere
+  // it throws RuntimeFailure.
   virtual ParticleView extendForceBuffer();
 
   // One explicit step: P2G, grid update (gravity, external forces, grid hooks, walls), G2P,

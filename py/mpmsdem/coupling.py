@@ -96,8 +96,8 @@ class CoupledEngine(Engine, _StepControl):
         ``O.dt``) to the scene's progress line on stderr, every 10 s of wall time (with time,
         step, ``O.dt`` and wall time per step, and the fields of the SDEM and MPM engines that are
         verbose themselves; :mod:`mpmsdem.engine`).
-    :param levelSets: YADE ``LevelSet`` bodies in the flow, beside the SDEM blocks (CPU backend
-        of the flow only): a dict ``{body id: {"friction": μ, "barrierStiffness": k_c [N/m],
+    :param levelSets: YADE ``LevelSet`` bodies in the flow, beside the SDEM blocks (on a CUDA
+        flow not yet run on a GPU: docs/coupling.md): a dict ``{body id: {"friction": μ, "barrierStiffness": k_c [N/m],
         "poisson": ν, "normalDamping": ζ_n, "tangentialDamping": ζ_t}}`` of the flow–body contact
         physics (a bare number is taken as μ; missing keys default to those of
         :func:`mpmsdem.material`). A material point meets such a body through the body's own

@@ -68,7 +68,8 @@ class Block:
         (``yade.utils.levelSetBody("box", ...)``, grid spacing h, default a fifth of the
         smallest half-extent, n boundary nodes, default 602; sweepRadius unused), in the flow through ``CoupledEngine(levelSets=...)`` with ``flowFriction`` and
         ``barrierStiffness``, and against the other LevelSet blocks and the bed through YADE's
-        own contacts (:class:`Flume`'s ``levelSetContact``). CPU backend of the flow only.
+        own contacts (:class:`Flume`'s ``levelSetContact``). On a CUDA flow not yet run on a GPU
+        (docs/coupling.md).
     """
 
     def __init__(self, half, x, y=None, z=0.0, sweepRadius=None, density=8900, friction=0.67, flowFriction=0.21,

@@ -1,5 +1,6 @@
 // Host control of the CUDA coupling backend: device copies of the shape table (when it
-// grows), the blocks, pair physics and bins (every step: a few kB), the tangential histories
+// grows) or of the LevelSet bodies' grids (when one is added), the blocks, pair physics and bins
+// (every step: a few kB), the tangential histories
 // (resident; copied to and from the host for checkpoints), the per-block sums (downloaded once
 // per step). Particle data never leaves the device.
 //
@@ -98,12 +99,15 @@ class CouplingCuda : public CouplingDeviceBackend {
     histParticles_ = written.size();
   }
 
-  double maxVolume0(const mpm::ParticleView& v) override {
+  std::pair<double, double> volume0Range(const mpm::ParticleView& v) override {
     std::vector<T> buf(v.n);
     if (v.n) CUDA_CHECK(cudaMemcpy(buf.data(), v.volume0, v.n * sizeof(T), cudaMemcpyDeviceToHost));
-    double m = 0;
-    for (T x : buf) m = std::max(m, static_cast<double>(x));
-    return m;
+    double lo = std::numeric_limits<double>::infinity(), hi = 0;
+    for (T x : buf) {
+      lo = std::min(lo, static_cast<double>(x));
+      hi = std::max(hi, static_cast<double>(x));
+    }
+    return {lo, hi};
   }
 
   void setFirstListCapacity(unsigned int capacity) override {
@@ -147,7 +151,9 @@ class CouplingCuda : public CouplingDeviceBackend {
     if (!done_) CUDA_CHECK(cudaEventCreateWithFlags(&done_, cudaEventDisableTiming));
     const mpm::ParticleView& v = in.particles;
     const sdem::ShapeTableView<double>& s = in.shapes;
-    if (in.shapesChanged || !vertex_.ptr) {
+    const bool levelSets = in.levelSets != nullptr;
+    if (levelSets && (in.levelSetsChanged || lsGridsHeld_ != in.levelSets->size())) uploadLevelSets(*in.levelSets);
+    if (!levelSets && (in.shapesChanged || !vertex_.ptr)) {
       const int ns = s.numShapes;
       uploadAs(vertex_, s.vertex, 3 * static_cast<std::size_t>(in.numVertices));
       uploadAs(faceNormal_, s.faceNormal, 3 * static_cast<std::size_t>(in.numFaces));
@@ -188,7 +194,7 @@ class CouplingCuda : public CouplingDeviceBackend {
     init.contacts = 0;
     std::memcpy(h + offFlags, &init, sizeof(init));
     CUDA_CHECK(cudaMemcpyAsync(staged_.ptr, h, bytes, cudaMemcpyHostToDevice));
-    if (in.binsChanged || binsHeld_ != in.numBins) {
+    if (!levelSets && (in.binsChanged || binsHeld_ != in.numBins)) {
       // The slot of every bin stays on the device: the last table's slots are cleared and the new
       // ones set, so a change costs the bins the blocks reach, not the grid.
       if (binsHeld_ != in.numBins) {
@@ -263,10 +269,16 @@ class CouplingCuda : public CouplingDeviceBackend {
     const HistoryView<T> H{histKey_.ptr, histXi_.ptr, histWritten_.ptr, in.historyStep, in.historySlots};
     const int n = static_cast<int>(v.n);
     mark(1);
-    if (n > 0) {
+    if (n > 0 && levelSets) {
+      const cudak::LevelSetBodies<T> bodies{lsGrids_.ptr, numBlocks, static_cast<T>(in.watch)};
       cudak::coupleKernel<T><<<(n + kThreads - 1) / kThreads, kThreads>>>(
-          n, P, blocksD, S, physD, bins, H, static_cast<T>(in.dt), static_cast<T>(in.stepSafety), sums_.ptr, flagsD,
+          n, P, blocksD, bodies, physD, H, static_cast<T>(in.dt), static_cast<T>(in.stepSafety), sums_.ptr, flagsD,
           list);
+      CUDA_CHECK(cudaGetLastError());
+    } else if (n > 0) {
+      cudak::coupleKernel<T><<<(n + kThreads - 1) / kThreads, kThreads>>>(
+          n, P, blocksD, cudak::BlockBodies<T>{S, bins}, physD, H, static_cast<T>(in.dt),
+          static_cast<T>(in.stepSafety), sums_.ptr, flagsD, list);
       CUDA_CHECK(cudaGetLastError());
     }
     mark(2);
@@ -360,6 +372,27 @@ class CouplingCuda : public CouplingDeviceBackend {
   static constexpr int kSumChunksInAll = 264;
   static constexpr int kMaxSumChunks = 32;
 
+  // The bodies' grids side by side in one device array, and their views into it.
+  void uploadLevelSets(const std::vector<LevelSetGridView<double>>& grids) {
+    std::vector<std::size_t> start(grids.size() + 1, 0);
+    for (std::size_t b = 0; b < grids.size(); ++b) {
+      const LevelSetGridView<double>& g = grids[b];
+      start[b + 1] = start[b] + static_cast<std::size_t>(g.nGP[0]) * g.nGP[1] * g.nGP[2];
+    }
+    std::vector<T> dist(start.back());
+    for (std::size_t b = 0; b < grids.size(); ++b)
+      std::copy(grids[b].dist, grids[b].dist + (start[b + 1] - start[b]), dist.begin() + start[b]);
+    lsDist_.upload(dist.data(), dist.size());
+    std::vector<LevelSetGridView<T>> views(grids.size());
+    for (std::size_t b = 0; b < grids.size(); ++b) {
+      const LevelSetGridView<double>& g = grids[b];
+      views[b] = {{T(g.min[0]), T(g.min[1]), T(g.min[2])}, T(g.spacing), {g.nGP[0], g.nGP[1], g.nGP[2]},
+                  lsDist_.ptr + start[b]};
+    }
+    lsGrids_.upload(views.data(), views.size());
+    lsGridsHeld_ = grids.size();
+  }
+
   void growList(unsigned long long capacity) {
     // (places are ints)
     const auto n = static_cast<unsigned int>(std::min<unsigned long long>(capacity, (1ull << 31) - 1));
@@ -402,6 +435,9 @@ class CouplingCuda : public CouplingDeviceBackend {
   DeviceArray<T> vertex_, faceNormal_, faceOffset_, sweepRadius_, boundingRadius_;
   DeviceArray<int> faceLoopStart_, loopVertex_, loopEdge_, shapeFaceStart_, shapeVertexStart_, shapeEdgeStart_;
   DeviceArray<std::uint8_t> convex_;
+  DeviceArray<T> lsDist_;  // the LevelSet bodies' distances, body after body
+  DeviceArray<LevelSetGridView<T>> lsGrids_;
+  std::size_t lsGridsHeld_ = 0;  // the bodies lsGrids_ holds
   DeviceArray<unsigned char> staged_;  // this step's blocks, pair physics and flags
   // the bin table (BinGridView), changed when the host's changes; the bin of each slot
   DeviceArray<int> binSlot_, binFirst_, binBlocks_, slotBins_;

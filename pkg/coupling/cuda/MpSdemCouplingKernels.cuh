@@ -1,7 +1,9 @@
-// CUDA kernel of the MP–SDEM coupling: a thin wrapper over the shared coupleParticle().
+// CUDA kernels of the material points' coupling with SDEM blocks and with LevelSet bodies: thin
+// wrappers over the shared coupleParticle() and coupleParticleLevelSets().
 #pragma once
 
 #include "coupling/CouplingKernelsCommon.hpp"
+#include "coupling/LevelSetKernelsCommon.hpp"
 #include "mpm/MpmKernelsCommon.hpp"
 
 namespace mpmsdem {
@@ -175,19 +177,43 @@ static __global__ void blockTotalsKernel(const CouplingFlags* flags, unsigned in
   }
 }
 
+// What one particle's thread couples it with: SDEM blocks through the bins, or every LevelSet
+// body (their bounding spheres tested in turn, as the CPU loop does).
 template <typename T>
-__global__ void coupleKernel(int n, CouplingParticles<T> P, const BlockState<T>* blocks,
-                             sdem::ShapeTableView<T> shapes, const sdem::BarrierCoulombPhys<T>* phys,
-                             BinGridView bins, HistoryView<T> hist, T dt, T safety, double* sums,
-                             CouplingFlags* flags, ContactList list) {
+struct BlockBodies {
+  sdem::ShapeTableView<T> shapes;
+  BinGridView bins;
+  __device__ int operator()(int p, const CouplingParticles<T>& P, const BlockState<T>* blocks,
+                            const sdem::BarrierCoulombPhys<T>* phys, const HistoryView<T>& hist, T dt, T safety,
+                            DeviceSink<T>& sink, int* bad, int* overflow, T* approach, CouplingLoopMemo<T>& memo) const {
+    return coupleParticle(p, P, blocks, shapes, phys, bins, hist, dt, safety, sink, bad, overflow, approach, memo);
+  }
+};
+
+template <typename T>
+struct LevelSetBodies {
+  const LevelSetGridView<T>* grids;
+  int numBodies;
+  T watch;
+  __device__ int operator()(int p, const CouplingParticles<T>& P, const BlockState<T>* blocks,
+                            const sdem::BarrierCoulombPhys<T>* phys, const HistoryView<T>& hist, T dt, T safety,
+                            DeviceSink<T>& sink, int* bad, int* overflow, T* approach, CouplingLoopMemo<T>& memo) const {
+    return coupleParticleLevelSets(p, P, blocks, numBodies, grids, phys, hist, dt, safety, watch, sink, bad, overflow,
+                                   approach, memo);
+  }
+};
+
+template <typename T, typename Bodies>
+__global__ void coupleKernel(int n, CouplingParticles<T> P, const BlockState<T>* blocks, Bodies bodies,
+                             const sdem::BarrierCoulombPhys<T>* phys, HistoryView<T> hist, T dt, T safety,
+                             double* sums, CouplingFlags* flags, ContactList list) {
   const int p = blockIdx.x * blockDim.x + threadIdx.x;
   if (p >= n) return;
   DeviceSink<T> sink{blocks, sums, flags, list};
   int badBlock = -1, overflow = 0;
   T approach = T(INFINITY);
   CouplingLoopMemo<T> memo;
-  const int status =
-      coupleParticle(p, P, blocks, shapes, phys, bins, hist, dt, safety, sink, &badBlock, &overflow, &approach, memo);
+  const int status = bodies(p, P, blocks, phys, hist, dt, safety, sink, &badBlock, &overflow, &approach, memo);
   list.count[particleNumber(P, p)] = static_cast<int>(sink.j);
   if (status != kCoupleOk)
     atomicMin(&flags->bad,

@@ -394,15 +394,32 @@ void MpmCuda<T>::setExternalForces(const std::vector<double>& f) {
 
 template <typename T>
 ParticleView MpmCuda<T>::openForceBuffer() {
+  forcesIncomplete_ = true;
+  for (int d = 0; d < 3; ++d) {
+    if (!fext_[d]) deviceAlloc(&fext_[d], n_, bytes_);
+    CUDA_CHECK(cudaMemset(fext_[d], 0, std::max<std::size_t>(n_, 1) * sizeof(T)));
+  }
+  hasFext_ = true;
+  forcesIncomplete_ = false;
+  return forceView();
+}
+
+// The buffer as the first coupling left it: a second one's kernel, queued after the first's on
+// the same stream, adds to what it wrote.
+template <typename T>
+ParticleView MpmCuda<T>::extendForceBuffer() {
+  if (!hasFext_) return openForceBuffer();
+  return forceView();
+}
+
+template <typename T>
+ParticleView MpmCuda<T>::forceView() {
   ParticleView v;
   v.precision = sizeof(T) == sizeof(float) ? Precision::Float : Precision::Double;
   v.device = true;
   v.n = n_;
   const DeviceState& s = state_[cur_];
-  forcesIncomplete_ = true;
   for (int d = 0; d < 3; ++d) {
-    if (!fext_[d]) deviceAlloc(&fext_[d], n_, bytes_);
-    CUDA_CHECK(cudaMemset(fext_[d], 0, std::max<std::size_t>(n_, 1) * sizeof(T)));
     v.x[d] = s.x[d];
     v.v[d] = s.v[d];
     v.force[d] = fext_[d];
@@ -411,8 +428,6 @@ ParticleView MpmCuda<T>::openForceBuffer() {
   v.mass = s.mass;
   v.volume0 = s.vol0;
   v.J = s.J;
-  hasFext_ = true;
-  forcesIncomplete_ = false;
   return v;
 }
 

@@ -60,6 +60,7 @@ class MpmCuda : public StagedSolver {
   std::size_t numParticles() const override { return n_; }
   void setExternalForces(const std::vector<double>& f) override;
   ParticleView openForceBuffer() override;
+  ParticleView extendForceBuffer() override;
   bool queuesSteps() const override { return true; }
   void launchStep(double dt) override;
   void finishStep() override;
@@ -72,6 +73,7 @@ class MpmCuda : public StagedSolver {
                       DiagnosticSums& sums, std::vector<ProbeSums>& probeSums) override;
 
  private:
+  ParticleView forceView();  // the force buffer and the particles as a coupling sees them
   // The stages of a step (StagedSolver holds their order): queued by launchStep, waited for by
   // finishStep in stageEnd.
   void beforeChecks() override;

@@ -262,9 +262,21 @@ TEST(LevelSetCoupling, ImpulseBalanceWithSolver) {
   }
 }
 
-// Contacts are summed per body in particle order, chunk by chunk: 1 and 2 OpenMP threads give the
-// same forces, torques and particle positions to the bit (4,704 points: two chunks of the loop).
-TEST(LevelSetCoupling, ThreadCountIndependent) {
+namespace {
+
+// A slab sliding over a turning sphere (4,704 points: two chunks of the CPU loop), its lowest
+// layer 1 mm into the barrier, three steps; each step's contacts made twice, by two couplings of
+// the same body, the second adding to the first's forces (extendForceBuffer): the body's force,
+// torque and contacts of the second, and the particles after the steps.
+struct SlabRun {
+  Vec3 force, torque;
+  std::vector<double> x;
+  std::vector<MpContactRecord> contacts;
+  std::vector<long long> keys;
+  std::vector<double> xi;
+};
+
+SlabRun slabOnSphere(mpm::Backend backend, mpm::Precision precision) {
   mpm::MpmParams prm;
   prm.dx = kDx;
   prm.cells = {20, 20, 20};
@@ -276,40 +288,79 @@ TEST(LevelSetCoupling, ThreadCountIndependent) {
   prm.material.mu2 = 0.65;
   mpm::ParticleSet ps;
   mpm::seedBox(prm, {0.03, 0.03, 0.1}, {0.17, 0.17, 0.13}, {2, 2, 2}, ps);
-  ASSERT_GT(ps.size(), 4096u);
+  EXPECT_GT(ps.size(), 4096u);
   for (std::size_t p = 0; p < ps.size(); ++p) {
     ps.x[3 * p + 2] -= 0.0025 + 0.001 - kRp;  // the lowest layer 1 mm into the sphere's barrier
     ps.v[3 * p + 0] = 0.3;
   }
   const LevelSetGrid g =
       analyticGrid(Vec3::Constant(-0.06), 0.0025, 49, [](const Vec3& x) { return sphereDistance(x, 0.05); });
-  Vec3 f[2], t[2];
-  std::vector<double> x[2];
+  auto solver = mpm::makeSolver(prm, backend, precision);
+  solver->setParticles(ps);
+  MpLevelSetCoupling first, second;
+  for (MpLevelSetCoupling* c : {&first, &second}) {
+    c->addBody(3, g, physics(1e4, 0.4));
+    c->setState(0, Vec3(0.1, 0.1, 0.05), Quat::Identity(), Vec3::Zero(), Vec3(0, 0, 1), 1.0, 1e-3, false);
+  }
+  for (int step = 0; step < 3; ++step) {
+    first.computeForces(solver->openForceBuffer(), 1e-5, 0.5, kDx);
+    second.computeForces(solver->extendForceBuffer(), 1e-5, 0.5, kDx);
+    solver->step(1e-5);
+  }
+  SlabRun r{second.force(0), second.torque(0), {}, second.contacts(), {}, {}};
+  EXPECT_GT(second.contactCount(0), 5);
+  mpm::ParticleSet out;
+  solver->getParticles(out);
+  r.x = out.x;
+  second.pullHistories();
+  r.keys = second.historyKeys();
+  r.xi = second.historyXi();
+  return r;
+}
+
+}  // namespace
+
+// Contacts are summed per body in particle order, chunk by chunk: 1 and 2 OpenMP threads give the
+// same forces, torques and particle positions to the bit.
+TEST(LevelSetCoupling, ThreadCountIndependent) {
   const int before = omp_get_max_threads();
-  for (int run = 0; run < 2; ++run) {
-    omp_set_num_threads(run + 1);
-    auto solver = mpm::makeSolver(prm);
-    solver->setParticles(ps);
-    MpLevelSetCoupling c;
-    c.addBody(3, g, physics(1e4, 0.4));
-    c.setState(0, Vec3(0.1, 0.1, 0.05), Quat::Identity(), Vec3::Zero(), Vec3(0, 0, 1), 1.0, 1e-3, false);
-    for (int step = 0; step < 3; ++step) {
-      c.computeForces(solver->openForceBuffer(), 1e-5, 0.5, kDx);
-      solver->step(1e-5);
-    }
-    ASSERT_GT(c.contactCount(0), 5);
-    f[run] = c.force(0);
-    t[run] = c.torque(0);
-    mpm::ParticleSet out;
-    solver->getParticles(out);
-    x[run] = out.x;
+  SlabRun run[2];
+  for (int k = 0; k < 2; ++k) {
+    omp_set_num_threads(k + 1);
+    run[k] = slabOnSphere(mpm::Backend::Cpu, mpm::Precision::Double);
   }
   omp_set_num_threads(before);
   for (int d = 0; d < 3; ++d) {
-    EXPECT_EQ(f[0][d], f[1][d]);
-    EXPECT_EQ(t[0][d], t[1][d]);
+    EXPECT_EQ(run[0].force[d], run[1].force[d]);
+    EXPECT_EQ(run[0].torque[d], run[1].torque[d]);
   }
-  EXPECT_EQ(x[0], x[1]);  // the particles after three steps
+  EXPECT_EQ(run[0].x, run[1].x);  // the particles after three steps
+}
+
+// The CUDA path (the SDEM backend's kernel over coupleParticleLevelSets, its ordered sums, the
+// device's extendForceBuffer) against the CPU loop on the same slab: in double the body's force
+// and torque to 1e-9 of them and the particles to 1e-12 m (sums in another order), the same
+// contacts and histories; in float to the float run of the CPU backend's bounds (2e-3).
+TEST(LevelSetCoupling, CpuAndCudaAgree) {
+  if (!mpm::cudaAvailable()) GTEST_SKIP() << "no CUDA device in this build/machine: CPU-vs-CUDA LevelSet check skipped";
+  const SlabRun cpu = slabOnSphere(mpm::Backend::Cpu, mpm::Precision::Double);
+  for (const auto& [prec, tol] : {std::make_pair(mpm::Precision::Double, 1e-9), std::make_pair(mpm::Precision::Float, 2e-3)}) {
+    const SlabRun gpu = slabOnSphere(mpm::Backend::Cuda, prec);
+    std::printf("LevelSet, cuda-%s against cpu-double: force %.3e of %.4g N, torque %.3e of %.4g N m\n",
+                ::testing::PrintToString(prec).c_str(), (gpu.force - cpu.force).norm(), cpu.force.norm(),
+                (gpu.torque - cpu.torque).norm(), cpu.torque.norm());
+    EXPECT_LT((gpu.force - cpu.force).norm(), tol * cpu.force.norm());
+    EXPECT_LT((gpu.torque - cpu.torque).norm(), tol * cpu.torque.norm());
+    ASSERT_EQ(gpu.x.size(), cpu.x.size());
+    double dx = 0;
+    for (std::size_t k = 0; k < cpu.x.size(); ++k) dx = std::max(dx, std::abs(gpu.x[k] - cpu.x[k]));
+    EXPECT_LT(dx, prec == mpm::Precision::Double ? 1e-12 : 1e-6);
+    ASSERT_EQ(gpu.contacts.size(), cpu.contacts.size());
+    for (std::size_t k = 0; k < cpu.contacts.size(); ++k) EXPECT_EQ(gpu.contacts[k].particle, cpu.contacts[k].particle);
+    EXPECT_EQ(gpu.keys, cpu.keys);
+    ASSERT_EQ(gpu.xi.size(), cpu.xi.size());
+    for (std::size_t k = 0; k < cpu.xi.size(); ++k) EXPECT_NEAR(gpu.xi[k], cpu.xi[k], tol * 1e-2 + tol * std::abs(cpu.xi[k]));
+  }
 }
 
 // A float solver meets float copies of the grid and state: the same forces to float round-off.
