@@ -31,6 +31,9 @@
 #                                                      # convergence.tgz (no snapshots) to unpack
 #                                                      # over DIR here and read with the same
 #                                                      # command without --prepare
+#   ... --walls DIR                                    # the impact cases prepared in DIR
+#                                                      # (scripts/validation/impact_walls.py
+#                                                      # --prepare), likewise: $OUT/walls.tgz
 #   ... --field SCENE                                  # a field scene's run (examples/field_valley.py
 #                                                      # --driver-scene) on CUDA for GPU_FIELD_SECONDS
 #                                                      # (300): its simulated time against the wall
@@ -58,7 +61,7 @@
 #
 # Stages, most telling first: the whole of test_mpm and test_coupling side by side (stage
 # "tests"; the CPU-vs-CUDA agreement tests are the ones a machine without a GPU skips); the
-# prepared §3.2 design (--design) and refinement runs (--convergence); bench_mpm.py --cuda (MPM
+# prepared §3.2 design (--design), refinement runs (--convergence) and impact cases (--walls); bench_mpm.py --cuda (MPM
 # updates/s at 1e5..1e7 points, against the CPU and the baseline); the flume at the paper's
 # resolution (flume_block_full.json): 4,000 steps on the CPU and on CUDA (new and baseline: the
 # coupling's share of the step is in each JSON line), then the whole 2 s on CUDA in double and
@@ -81,6 +84,7 @@ baseline=""
 study=""
 design=""
 convergence=""
+walls=""
 sweep=""
 until=""
 field=""
@@ -93,6 +97,7 @@ while [ $# -gt 0 ]; do
     --study) study=${2:?"--study needs a folder of prepared cases"}; shift 2 ;;
     --design) design=${2:?"--design needs a folder of prepared cases"}; shift 2 ;;
     --convergence) convergence=${2:?"--convergence needs a folder of prepared runs"}; shift 2 ;;
+    --walls) walls=${2:?"--walls needs a folder of prepared cases"}; shift 2 ;;
     --sweep) sweep=${2:?"--sweep needs a folder of prepared runs"}; shift 2 ;;
     --until) until=${2:?"--until needs a time [s]"}; shift 2 ;;
     --field) field=${2:?"--field needs a driver scene"}; shift 2 ;;
@@ -187,6 +192,7 @@ export -f prepared_run
 # (docs/benchmarks.md), about 4 min: an estimate, not a measurement)
 [ -n "$convergence" ] && stage convergence 560 prepared_run convergence 540 "$convergence" \
   scripts/validation/flume_convergence.py
+[ -n "$walls" ] && stage walls 420 prepared_run walls 400 "$walls" scripts/validation/impact_walls.py
 # sweep_run DIR LIMIT: a prepared trade-off sweep's runs one after another on CUDA (side by side
 # they only take turns on the GPU), their logs and coupled.h5 in $out/sweep.tgz also when stopped
 sweep_run() {

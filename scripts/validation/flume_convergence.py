@@ -70,6 +70,49 @@ AT = 0.5                     # tilt and travel read at this time [s]
 WINDOWS = (0.005, 0.02, 0.03)  # the first blow is also given as the largest mean over these [s]
 
 
+def addPreparedOptions(ap, readThere):
+    """The options of runs prepared here and run on a machine with a driver and no YADE (a GPU's):
+    --prepare, --run-prepared DIR and the driver's --exe, --backend, --precision, --threads,
+    --workers. ``readThere``: what the runs read there, where numpy and h5py are."""
+    ap.add_argument("--prepare", action="store_true",
+                    help="only write the runs' scenes into OUT/<run>/ (YADE builds them), for --run-prepared on "
+                         "another machine; bring OUT back and call again without it to read the runs")
+    ap.add_argument("--run-prepared", metavar="DIR",
+                    help="run the runs prepared in DIR with the driver alone (no YADE; numpy and h5py, where there, "
+                         "read %s), skipping those done" % readThere)
+    ap.add_argument("--exe", default="mpmsdem-run", help="--run-prepared: the driver (mpmsdem-run on the PATH)")
+    ap.add_argument("--backend", choices=("cpu", "cuda"), help="--run-prepared: the backend (the scenes': cpu)")
+    ap.add_argument("--precision", choices=("double", "float"), help="--run-prepared: the precision (the scenes')")
+    ap.add_argument("--threads", type=int, help="--run-prepared: OMP_NUM_THREADS of the driver (as set)")
+    ap.add_argument("--workers", type=int, default=1, help="--run-prepared: runs at a time; 1 (a run takes the device)")
+
+
+def runPreparedFolders(a, done, run):
+    """``run(folder)`` for every run prepared in a.run_prepared (a folder with its meta.json) for
+    which ``done(folder)`` is false, one after another (``--workers`` above 1 is refused: a run takes
+    the whole device), without YADE; a run done before is skipped, so a stopped call is taken up
+    by the next."""
+    if a.workers != 1:
+        raise SystemExit("--workers = %d: a prepared run takes a whole device; run them one at a time (1)" % a.workers)
+    folders = sorted(os.path.dirname(p) for p in glob.glob(os.path.join(a.run_prepared, "*", "meta.json")))
+    if not folders:
+        raise SystemExit("--run-prepared %s: no prepared run there (--prepare writes them)" % a.run_prepared)
+    for folder in folders:
+        if done(folder):
+            print("%s: done before" % os.path.basename(folder))
+            continue
+        run(folder)
+
+
+def driverRun(exe, folder, scene, out, extra, backend=None, precision=None, threads=None):
+    """mpmsdem-run on one of a run's scenes (examples/driver_runs.runDriver: no YADE, no numpy),
+    its output in FOLDER/OUT.log; its wall seconds."""
+    sys.path.insert(0, os.path.join(ROOT, "examples"))
+    from driver_runs import runDriver
+    return runDriver(exe, os.path.join(folder, scene), os.path.join(folder, out), os.path.join(folder, out + ".log"),
+                     extra, backend, precision, threads)
+
+
 def parse(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0], epilog=__doc__.split("\n", 1)[1],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -98,17 +141,7 @@ def parse(argv):
     ap.add_argument("--package-data", action="store_true",
                     help="store the three finest spacings of --settings/--hold/--width as a study in "
                          "py/mpmsdem/tradeoffs.json (mpmsdem.tradeoffs: errors against the extrapolated limit)")
-    ap.add_argument("--prepare", action="store_true",
-                    help="only write each spacing's scenes into OUT/<run>/ (YADE builds them), for --run-prepared "
-                         "on another machine; bring OUT back and call again without it to read the runs")
-    ap.add_argument("--run-prepared", metavar="DIR",
-                    help="run the legs of the runs prepared in DIR with the driver alone (no YADE; numpy and h5py, "
-                         "where there, read the front's profile), skipping those done")
-    ap.add_argument("--exe", default="mpmsdem-run", help="--run-prepared: the driver (mpmsdem-run on the PATH)")
-    ap.add_argument("--backend", choices=("cpu", "cuda"), help="--run-prepared: the backend (the scenes': cpu)")
-    ap.add_argument("--precision", choices=("double", "float"), help="--run-prepared: the precision (the scenes')")
-    ap.add_argument("--threads", type=int, help="--run-prepared: OMP_NUM_THREADS of the driver (as set)")
-    ap.add_argument("--workers", type=int, default=1, help="--run-prepared: runs at a time; 1 (a leg takes the device)")
+    addPreparedOptions(ap, "the front's profile")
     ap.add_argument("--child", nargs=2, metavar=("prepare", "DX"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     try:
@@ -179,15 +212,6 @@ def prepare(a, dx, folder):
                       snapshotWhenFrontAt=[station - AHEAD - 2 * dx, station])
     with open(os.path.join(folder, "meta.json"), "w") as f:
         json.dump(meta, f, indent=1)
-
-
-def drive(exe, folder, scene, out, extra=()):
-    """mpmsdem-run on one of the run's scenes; its wall seconds."""
-    t0 = time.time()
-    with open(os.path.join(folder, out + ".log"), "w") as log:
-        subprocess.run([exe, os.path.join(folder, scene), "--out", os.path.join(folder, out)] + list(extra),
-                       stdout=log, stderr=subprocess.STDOUT, check=True)
-    return time.time() - t0
 
 
 def analysisModule():
@@ -306,8 +330,6 @@ def runLegs(folder, exe, backend=None, precision=None, threads=None):
     with it, the driver reads them again from its mpm.h5). What each leg took, where it ran and
     the front's profile (where numpy and h5py are there to read it: the snapshot is the whole
     flow) go to meta.json; returns it."""
-    sys.path.insert(0, os.path.join(ROOT, "examples"))
-    from driver_runs import runDriver
     with open(os.path.join(folder, "meta.json")) as f:
         meta = json.load(f)
     started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
@@ -315,8 +337,7 @@ def runLegs(folder, exe, backend=None, precision=None, threads=None):
         started = meta.get("prepared_commit", started)
 
     def leg(scene, out, extra):
-        return runDriver(exe, os.path.join(folder, scene), os.path.join(folder, out), os.path.join(folder, out + ".log"),
-                         extra, backend, precision, threads)
+        return driverRun(exe, folder, scene, out, extra, backend, precision, threads)
     resume = os.path.exists(os.path.join(folder, "coupled", "coupled.checkpoint.json"))
     if meta.get("free_wall") is None:  # written when the free leg ended: its outputs are whole
         resume = False
@@ -380,23 +401,15 @@ def runOne(a, dx, exe):
 
 
 def runPrepared(a):
-    """The legs of every run prepared in a.run_prepared (``--prepare``) that has not run them, one
-    after another (``--workers`` above 1 is refused: each leg takes the whole device), without
-    YADE; a run whose legs are done is skipped, so a stopped call is taken up by the next."""
-    if a.workers != 1:
-        raise SystemExit("--workers = %d: the legs of a prepared run take a whole device; run them one at a time (1)"
-                         % a.workers)
-    folders = sorted(os.path.dirname(p) for p in glob.glob(os.path.join(a.run_prepared, "*", "meta.json")))
-    if not folders:
-        raise SystemExit("--run-prepared %s: no prepared run there (--prepare writes them)" % a.run_prepared)
-    for folder in folders:
-        with open(os.path.join(folder, "meta.json")) as f:
-            if json.load(f).get("coupled_wall") is not None:
-                print("%s: legs done before" % os.path.basename(folder))
-                continue
+    """The legs of every run prepared in a.run_prepared (``--prepare``) that has not run them."""
+    def run(folder):
         meta = runLegs(folder, a.exe, a.backend, a.precision, a.threads)
         print("%s: free leg %.0f s, coupled leg %.0f s (%s)" % (os.path.basename(folder), meta["free_wall"],
                                                                meta["coupled_wall"], meta["backend"]), flush=True)
+    def done(folder):
+        with open(os.path.join(folder, "meta.json")) as f:
+            return json.load(f).get("coupled_wall") is not None
+    runPreparedFolders(a, done, run)
 
 
 def commit():

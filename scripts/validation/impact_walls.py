@@ -31,6 +31,12 @@ for both with F_static = ½ ρ g h_f A (Eq 21's, k 1).
         [--incline 10,20,25,30,35] [--L0 0.5] [--dx 0.01] [--width 0.04] [--young E] [--cases free,wall,block] [--rest 1]
     /usr/bin/python3 scripts/validation/impact_walls.py --out results/impact_walls --report-only
 
+On a machine with a GPU and no YADE (scripts/bench/gpu_run.sh --walls DIR): ``--prepare`` writes
+the cases' scenes here (an obstacle's once its free flow's numbers are in OUT: it lasts until
+--rest after that flow's arrival), ``--run-prepared DIR --exe PATH --backend cuda`` runs them
+there (a wall's deposit read there, where the snapshot is), and the first command again, without
+``--prepare``, reads them here.
+
 Each case's numbers go to OUT/<case>.json when it ends and finished cases are not run again; a
 run that was interrupted continues from its last snapshot (every 0.1 s);
 the table of all finished cases is printed and written to OUT/impact_walls.md, the figure
@@ -47,8 +53,8 @@ import time
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, commit, drive, fmt, limitOf,  # noqa: E402
-                               storeStudy)
+from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, addPreparedOptions, commit, driverRun,  # noqa: E402
+                               fmt, limitOf, runPreparedFolders, storeStudy)
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
@@ -90,6 +96,7 @@ def parse(argv):
                          "drawn beside the runs on the figure's F_peak/F_static panel")
     ap.add_argument("--report-only", action="store_true",
                     help="only print and write the table of finished runs (read again from their outputs)")
+    addPreparedOptions(ap, "a wall's deposit at the end")
     ap.add_argument("--child", nargs=3, metavar=("prepare", "KIND", "THETA"), help=argparse.SUPPRESS)
     ap.add_argument("--arrival", type=float, help=argparse.SUPPRESS)  # the free flow's, for an obstacle's duration
     a = ap.parse_args(argv)
@@ -149,8 +156,8 @@ def prepare(a, kind, theta, folder):
     dt = O.dt
     every = max(1, round(SERIES_EVERY / dt)) * dt
     meta = {"kind": kind, "theta": theta, "young": granular["young_modulus"], "L0": a.L0, "dx": a.dx, "width": width,
-            "station": station, "dt": dt,
-            "points": scene.mpm.numParticles, "flip_blend": scene.flipBlend()}
+            "station": station, "dt": dt, "points": scene.mpm.numParticles, "flip_blend": scene.flipBlend(),
+            "prepared_commit": commit()}
     if kind == "free":
         driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=3.0, dt=dt, seriesEvery=every,
                           outputEvery=RESTART_EVERY, vtk="none", stopWhenProbed=True,
@@ -171,9 +178,46 @@ def readFree(folder):
     return {k: probe[k] for k in ("arrival", "h_f", "v_f", "Fr")}
 
 
-def readObstacle(folder, meta, free):
-    """The obstacle's force numbers (see the module's docstring) against the models."""
+def depositHeight(folder, meta):
+    """A wall's deposit at the end: its highest point within DEPOSIT upstream of the wall [m], from
+    the run's last snapshot (0 where no point is there)."""
     import h5py
+    with h5py.File(os.path.join(folder, "out", "mpm.h5"), "r") as hf:
+        last = sorted(hf["snapshots"].keys())[-1]
+        x = hf["snapshots"][last]["x"][:]
+    near = (x[:, 0] >= meta["station"] - DEPOSIT) & (x[:, 0] < meta["station"])
+    return float(x[near, 2].max()) if near.any() else 0.0
+
+
+def runLeg(folder, exe, backend=None, precision=None, threads=None):
+    """The case's driver run (from its last restart point where one is there), without YADE or
+    numpy: its wall time, where it ran and, for a wall where h5py is there to read it, the
+    deposit's height at the end go to FOLDER/run.json (the snapshot is the whole flow); returns
+    them."""
+    with open(os.path.join(folder, "meta.json")) as f:
+        meta = json.load(f)
+    resume = os.path.exists(os.path.join(folder, "out", "coupled.checkpoint.json" if meta["kind"] != "free"
+                                         else "mpm.h5.restart"))
+    started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
+    run = {"wall_seconds": driverRun(exe, folder, "scene.json", "out", ["--restart"] if resume else [], backend,
+                                     precision, threads),
+           "resumed": resume, "commit": meta.get("prepared_commit", started) if started == "unknown" else started,
+           "backend": backend or "the scene's", "precision": precision or "the scene's",
+           "threads": str(threads) if threads else os.environ.get("OMP_NUM_THREADS", "all")}
+    if meta["kind"] == "wall":
+        try:
+            run["h_d"] = depositHeight(folder, meta)
+        except ImportError:  # read later, where the run is read
+            pass
+    with open(os.path.join(folder, "run.json.tmp"), "w") as f:
+        json.dump(run, f, indent=1)
+    os.replace(os.path.join(folder, "run.json.tmp"), os.path.join(folder, "run.json"))
+    return run
+
+
+def readObstacle(folder, meta, free, hd=None):
+    """The obstacle's force numbers (see the module's docstring) against the models; ``hd`` a
+    wall's deposit height where its run read it (else from the last snapshot)."""
     import numpy as np
     from mpmsdem import analysis
     s, _ = analysis.driverBlockSeries(os.path.join(folder, "out"), block=1)  # block 0: the flume's bed
@@ -189,11 +233,7 @@ def readObstacle(folder, meta, free):
          "Fr_cos": v / math.sqrt(G * cos * h)}
     if meta["kind"] == "wall":
         w = meta["width"]
-        with h5py.File(os.path.join(folder, "out", "mpm.h5"), "r") as hf:
-            last = sorted(hf["snapshots"].keys())[-1]
-            x = hf["snapshots"][last]["x"][:]
-        near = (x[:, 0] >= meta["station"] - DEPOSIT) & (x[:, 0] < meta["station"])
-        hd = float(x[near, 2].max()) if near.any() else 0.0
+        hd = depositHeight(folder, meta) if hd is None else hd
         momentum = RHO * v * v * h * w
         r.update(h_d=hd, alpha=r["F_peak"] / momentum, alpha_later=r["F_later"] / momentum,
                  bore=analysis.reflectedBoreForce(RHO, v, h, w, theta) / momentum,
@@ -208,7 +248,10 @@ def readObstacle(folder, meta, free):
     return r
 
 
-def runCase(a, kind, theta, exe):
+def prepareCase(a, kind, theta):
+    """The case's folder OUT/<case>/ with its scene and meta.json (a child process builds them with
+    YADE), unless they are there; an obstacle's needs its free flow's arrival (its run's end).
+    Returns (folder, the free flow's numbers or None)."""
     name = runName(a, kind, theta)
     folder = os.path.join(a.out, name)
     os.makedirs(folder, exist_ok=True)
@@ -219,24 +262,32 @@ def runCase(a, kind, theta, exe):
             raise RuntimeError("%s: needs the free flow at %g deg first (--cases free,...)" % (name, theta))
         with open(path) as f:
             free = json.load(f)["free"]
-    # a run that was interrupted continues from its last restart point (the free flow's probe records with it:
-    # the driver reads them again from its mpm.h5)
-    resume = os.path.exists(os.path.join(folder, "meta.json")) and os.path.exists(
-        os.path.join(folder, "out", "coupled.checkpoint.json" if kind != "free" else "mpm.h5.restart"))
-    if not resume:
+    if not os.path.exists(os.path.join(folder, "meta.json")):
         child = ["--child", "prepare", kind, repr(theta)] + a.argv
         if free:
             child += ["--arrival", repr(free["arrival"])]
         subprocess.run([sys.executable, os.path.abspath(__file__)] + child, check=True)
+    return folder, free
+
+
+def runCase(a, kind, theta, exe):
+    """Prepare, run and read one case; a run done elsewhere (--run-prepared) is read, one that was
+    interrupted continues from its last restart point (the free flow's probe records with it: the
+    driver reads them again from its mpm.h5)."""
+    name = runName(a, kind, theta)
+    folder, free = prepareCase(a, kind, theta)
     with open(os.path.join(folder, "meta.json")) as f:
         meta = json.load(f)
-    started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
-    wall = drive(exe, folder, "scene.json", "out", ["--restart"] if resume else [])
-    r = dict(meta, wall_seconds=wall, resumed=resume, commit=started, threads=os.environ.get("OMP_NUM_THREADS", "all"))
+    if os.path.exists(os.path.join(folder, "run.json")):
+        with open(os.path.join(folder, "run.json")) as f:
+            run = json.load(f)
+    else:
+        run = runLeg(folder, exe)
+    r = dict(meta, **{k: v for k, v in run.items() if k != "h_d"})
     if kind == "free":
         r["free"] = readFree(folder)
     else:
-        r.update(free=free, obstacle=readObstacle(folder, meta, free))
+        r.update(free=free, obstacle=readObstacle(folder, meta, free, run.get("h_d")))
     path = os.path.join(a.out, name + ".json")
     with open(path + ".tmp", "w") as f:
         json.dump(r, f, indent=1)
@@ -428,11 +479,24 @@ def packageData(out):
 def main(argv):
     a = parse(argv)
     a.argv = argv
+    if a.run_prepared:
+        def run(folder):
+            r = runLeg(folder, a.exe, a.backend, a.precision, a.threads)
+            print("%s: %.0f s (%s)" % (os.path.basename(folder), r["wall_seconds"], r["backend"]), flush=True)
+        # done: run there, or run and read here (cases of before run.json have only their numbers)
+        return runPreparedFolders(a, lambda folder: any(os.path.exists(p) for p in (
+            os.path.join(folder, "run.json"), folder.rstrip(os.sep) + ".json")), run)
     if a.child:
         kind, theta = a.child[1], float(a.child[2])
         prepare(a, kind, theta, os.path.join(a.out, runName(a, kind, theta)))
         return
     os.makedirs(a.out, exist_ok=True)
+    if a.prepare:  # an obstacle's case needs its free flow's numbers: run or read the free flows first
+        for theta in a.incline:
+            for kind in [k for k in ("free", "wall", "block") if k in a.cases]:
+                if not os.path.exists(os.path.join(a.out, runName(a, kind, theta) + ".json")):
+                    print("prepared %s" % prepareCase(a, kind, theta)[0], flush=True)
+        return
     if not a.report_only:
         import mpmsdem.driver
         exe = mpmsdem.driver.executable()

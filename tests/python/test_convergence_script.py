@@ -146,10 +146,21 @@ def test_run_prepared_runs_only_what_is_prepared_and_not_done(tmp_path, capsys):
     # (the legs themselves need the driver: scripts/checks/check_flume_convergence_pair.py runs them)
     with pytest.raises(SystemExit, match="no prepared run there"):
         fc.runPrepared(fc.parse(["--run-prepared", str(tmp_path)]))
-    with pytest.raises(SystemExit, match="--workers = 2: the legs of a prepared run take a whole device"):
+    with pytest.raises(SystemExit, match="--workers = 2: a prepared run takes a whole device"):
         fc.runPrepared(fc.parse(["--run-prepared", str(tmp_path), "--workers", "2"]))
     done = tmp_path / "joint_viscosity_w0.2_dx0.0025"
     done.mkdir()
     (done / "meta.json").write_text(json.dumps({"dx": 0.0025, "free_wall": 1.0, "coupled_wall": 2.0}))
     fc.runPrepared(fc.parse(["--run-prepared", str(tmp_path), "--exe", str(tmp_path / "no-such-driver")]))
-    assert capsys.readouterr().out == "joint_viscosity_w0.2_dx0.0025: legs done before\n"
+    assert capsys.readouterr().out == "joint_viscosity_w0.2_dx0.0025: done before\n"
+
+
+def test_impact_cases_run_prepared_skip_those_run_or_read(tmp_path, capsys):
+    # a case run there has its run.json; one run and read here before run.json existed, its OUT/<case>.json
+    for name, marker in (("wall_t20_L0.5_dx0.005", "wall_t20_L0.5_dx0.005/run.json"),
+                         ("free_t20_L0.5_dx0.005", "free_t20_L0.5_dx0.005.json")):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "meta.json").write_text(json.dumps({"kind": name.split("_")[0]}))
+        (tmp_path / marker).write_text("{}")
+    iw.main(["--run-prepared", str(tmp_path), "--exe", str(tmp_path / "no-such-driver")])
+    assert capsys.readouterr().out == "free_t20_L0.5_dx0.005: done before\nwall_t20_L0.5_dx0.005: done before\n"
