@@ -85,6 +85,20 @@ constexpr double kDx = 0.01;
 const double kV0 = kDx * kDx * kDx / 8;
 const double kRp = std::cbrt(3 * kV0 / (4 * kPi));
 
+// Glass beads on a 20-cell cube of the 0.01 m grid, without gravity.
+mpm::MpmParams beadsWithoutGravity() {
+  mpm::MpmParams prm;
+  prm.dx = kDx;
+  prm.cells = {20, 20, 20};
+  prm.gravity = {0, 0, 0};
+  prm.material.density = 1600;
+  prm.material.youngModulus = 1e6;
+  prm.material.poissonRatio = 0.3;
+  prm.material.muS = 0.24;
+  prm.material.mu2 = 0.65;
+  return prm;
+}
+
 // A fixed body at the origin (or pos/ori), one point at x; the contact it makes.
 MpContactRecord touch(const LevelSetGrid& g, const Vec3& x, const Vec3& pos = Vec3::Zero(),
                       const Quat& ori = Quat::Identity(), double* particleForce = nullptr) {
@@ -218,15 +232,7 @@ TEST(LevelSetCoupling, ContinuationBeyondTheGrid) {
 // forces the particles take (Eqs 17–18), per step, to round-off; the particle forces reach the
 // solver's buffer on top of what was there (extendForceBuffer).
 TEST(LevelSetCoupling, ImpulseBalanceWithSolver) {
-  mpm::MpmParams prm;
-  prm.dx = kDx;
-  prm.cells = {20, 20, 20};
-  prm.gravity = {0, 0, 0};
-  prm.material.density = 1600;
-  prm.material.youngModulus = 1e6;
-  prm.material.poissonRatio = 0.3;
-  prm.material.muS = 0.24;
-  prm.material.mu2 = 0.65;
+  const mpm::MpmParams prm = beadsWithoutGravity();
   mpm::ParticleSet ps;
   // a slab whose lowest points sit 1 mm into the barrier of a sphere of radius 0.05 at (0.1, 0.1, 0.05)
   mpm::seedBox(prm, {0.07, 0.07, 0.1}, {0.13, 0.13, 0.13}, {2, 2, 2}, ps);
@@ -277,15 +283,7 @@ struct SlabRun {
 };
 
 SlabRun slabOnSphere(mpm::Backend backend, mpm::Precision precision) {
-  mpm::MpmParams prm;
-  prm.dx = kDx;
-  prm.cells = {20, 20, 20};
-  prm.gravity = {0, 0, 0};
-  prm.material.density = 1600;
-  prm.material.youngModulus = 1e6;
-  prm.material.poissonRatio = 0.3;
-  prm.material.muS = 0.24;
-  prm.material.mu2 = 0.65;
+  const mpm::MpmParams prm = beadsWithoutGravity();
   mpm::ParticleSet ps;
   mpm::seedBox(prm, {0.03, 0.03, 0.1}, {0.17, 0.17, 0.13}, {2, 2, 2}, ps);
   EXPECT_GT(ps.size(), 4096u);
