@@ -17,6 +17,7 @@
 #include <random>
 #include <tuple>
 
+#include "../mpm/GranularColumn.hpp"
 #include "common/Error.hpp"
 #include "coupling/CoupledCheckpoint.hpp"
 #include "coupling/CoupledWorld.hpp"
@@ -55,15 +56,7 @@ std::vector<std::shared_ptr<SpheroPolyhedron>> testShapes() {
 }
 
 mpm::MpmParams gridParams(std::array<int, 3> cells, double dx = 0.01) {
-  mpm::MpmParams p;
-  p.dx = dx;
-  p.cells = cells;
-  p.gravity = {0, 0, 0};
-  p.material.density = 1600;
-  p.material.youngModulus = 1e6;
-  p.material.poissonRatio = 0.3;
-  p.material.muS = 0.24;
-  p.material.mu2 = 0.65;
+  mpm::MpmParams p = mpm::testing_scenes::tableOneBeads(cells, dx, {0, 0, 0});
   for (auto& w : p.walls) w.friction = 0;
   return p;
 }

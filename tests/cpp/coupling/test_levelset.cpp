@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "../mpm/GranularColumn.hpp"
 #include "common/Error.hpp"
 #include "coupling/LevelSetSurface.hpp"
 #include "coupling/MpLevelSetCoupling.hpp"
@@ -86,18 +87,7 @@ const double kV0 = kDx * kDx * kDx / 8;
 const double kRp = std::cbrt(3 * kV0 / (4 * kPi));
 
 // Glass beads on a 20-cell cube of the 0.01 m grid, without gravity.
-mpm::MpmParams beadsWithoutGravity() {
-  mpm::MpmParams prm;
-  prm.dx = kDx;
-  prm.cells = {20, 20, 20};
-  prm.gravity = {0, 0, 0};
-  prm.material.density = 1600;
-  prm.material.youngModulus = 1e6;
-  prm.material.poissonRatio = 0.3;
-  prm.material.muS = 0.24;
-  prm.material.mu2 = 0.65;
-  return prm;
-}
+mpm::MpmParams beadsWithoutGravity() { return mpm::testing_scenes::tableOneBeads({20, 20, 20}, kDx, {0, 0, 0}); }
 
 // A fixed body at the origin (or pos/ori), one point at x; the contact it makes.
 MpContactRecord touch(const LevelSetGrid& g, const Vec3& x, const Vec3& pos = Vec3::Zero(),

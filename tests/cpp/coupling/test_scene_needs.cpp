@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "../mpm/GranularColumn.hpp"
 #include "coupling/CoupledScene.hpp"
 #include "coupling/CoupledWorld.hpp"
 #include "mpm/Seeding.hpp"
@@ -43,18 +44,7 @@ class CountingSolver : public mpm::MpmSolver {
   std::unique_ptr<mpm::MpmSolver> inner_;
 };
 
-mpm::MpmParams grid() {
-  mpm::MpmParams p;
-  p.dx = 0.01;
-  p.cells = {24, 14, 14};
-  p.gravity = {0, 0, -9.81};
-  p.material.density = 1600;
-  p.material.youngModulus = 1e6;
-  p.material.poissonRatio = 0.3;
-  p.material.muS = 0.24;
-  p.material.mu2 = 0.65;
-  return p;
-}
+mpm::MpmParams grid() { return mpm::testing_scenes::tableOneBeads({24, 14, 14}, 0.01); }
 
 // A blob of 4 x 4 x 4 cells at 8 points per cell, moving at 0.5 m/s along x.
 mpm::ParticleSet blob(const std::array<double, 3>& lo = {0.04, 0.05, 0.03}) {

@@ -1,4 +1,5 @@
-// Parameters shared by the MPM tests that collapse a granular column.
+// Flows shared by the tests: the granular column of the MPM tests, and Table 1's glass beads of
+// the flume experiments that the gate and coupling tests use.
 #pragma once
 #include <array>
 
@@ -25,6 +26,21 @@ inline MpmParams granularColumnParams(double dx, std::array<int, 3> cells, doubl
   p.material.density = 1550;
   for (auto& w : p.walls) w.friction = 0;
   p.walls[4].friction = 0.4;
+  return p;
+}
+
+// Table 1's glass beads (ρ 1600 kg/m³, E 1 MPa, ν 0.3, μ_s 0.24, μ_2 0.65) on a grid of `cells`
+// at spacing `dx` [m], with `gravity` [m/s²].
+inline MpmParams tableOneBeads(std::array<int, 3> cells, double dx, std::array<double, 3> gravity = {0, 0, -9.81}) {
+  MpmParams p;
+  p.dx = dx;
+  p.cells = cells;
+  p.gravity = gravity;
+  p.material.density = 1600;
+  p.material.youngModulus = 1e6;
+  p.material.poissonRatio = 0.3;
+  p.material.muS = 0.24;
+  p.material.mu2 = 0.65;
   return p;
 }
 

@@ -18,6 +18,7 @@
 #include "mpm/Seeding.hpp"
 
 #include "AgreementHelpers.hpp"
+#include "GranularColumn.hpp"
 
 using namespace mpmsdem;
 using namespace mpmsdem::mpm;
@@ -28,14 +29,7 @@ constexpr double kG = 9.81;
 
 // Glass beads of the flume experiments (Table 1), all walls free slip.
 MpmParams glassParams(double dx, std::array<int, 3> cells) {
-  MpmParams p;
-  p.dx = dx;
-  p.cells = cells;
-  p.material.density = 1600;
-  p.material.youngModulus = 1e6;
-  p.material.poissonRatio = 0.3;
-  p.material.muS = 0.24;
-  p.material.mu2 = 0.65;
+  MpmParams p = testing_scenes::tableOneBeads(cells, dx);
   p.material.I0 = 0.279;
   p.material.grainDiameter = 0.002;
   p.material.solidDensity = 2500;
