@@ -297,12 +297,17 @@ def sameRunAtReference(a, dx):
     return path if os.path.exists(path) else None
 
 
+def writeJson(path, data):
+    """``data`` to the JSON file ``path``, whole or not at all (through a temporary file: a killed
+    run leaves the old file)."""
+    with open(path + ".tmp", "w") as f:
+        json.dump(data, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
 def writeResult(a, dx, r):
     """OUT/<run>.json, whole or not at all; returns ``r``."""
-    path = os.path.join(a.out, runName(a, dx) + ".json")
-    with open(path + ".tmp", "w") as f:
-        json.dump(r, f, indent=1)
-    os.replace(path + ".tmp", path)
+    writeJson(os.path.join(a.out, runName(a, dx) + ".json"), r)
     return r
 
 
@@ -317,9 +322,7 @@ def prepareRun(a, dx):
 
 
 def writeMeta(folder, meta):
-    with open(os.path.join(folder, "meta.json.tmp"), "w") as f:
-        json.dump(meta, f, indent=1)
-    os.replace(os.path.join(folder, "meta.json.tmp"), os.path.join(folder, "meta.json"))
+    writeJson(os.path.join(folder, "meta.json"), meta)
 
 
 def runLegs(folder, exe, backend=None, precision=None, threads=None):
@@ -616,9 +619,7 @@ def main(argv):
             if "same_run_as" in r or not os.path.exists(os.path.join(folder, "coupled", "coupled.h5")):
                 continue
             r["coupled"] = coupled(folder, r["duration"])
-            with open(path + ".tmp", "w") as f:
-                json.dump(r, f, indent=1)
-            os.replace(path + ".tmp", path)
+            writeJson(path, r)
     elif not a.report_only:
         import mpmsdem.driver
         exe = mpmsdem.driver.executable()

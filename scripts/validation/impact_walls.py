@@ -54,7 +54,7 @@ import time
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, addPreparedOptions, commit, driverRun,  # noqa: E402
-                               fmt, limitOf, runPreparedFolders, storeStudy)
+                               fmt, limitOf, runPreparedFolders, storeStudy, writeJson)
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
@@ -209,9 +209,7 @@ def runLeg(folder, exe, backend=None, precision=None, threads=None):
             run["h_d"] = depositHeight(folder, meta)
         except ImportError:  # read later, where the run is read
             pass
-    with open(os.path.join(folder, "run.json.tmp"), "w") as f:
-        json.dump(run, f, indent=1)
-    os.replace(os.path.join(folder, "run.json.tmp"), os.path.join(folder, "run.json"))
+    writeJson(os.path.join(folder, "run.json"), run)
     return run
 
 
@@ -288,10 +286,7 @@ def runCase(a, kind, theta, exe):
         r["free"] = readFree(folder)
     else:
         r.update(free=free, obstacle=readObstacle(folder, meta, free, run.get("h_d")))
-    path = os.path.join(a.out, name + ".json")
-    with open(path + ".tmp", "w") as f:
-        json.dump(r, f, indent=1)
-    os.replace(path + ".tmp", path)
+    writeJson(os.path.join(a.out, name + ".json"), r)
 
 
 def reread(out):
@@ -302,9 +297,7 @@ def reread(out):
         folder = path[:-len(".json")]
         if r["kind"] != "free" and os.path.exists(os.path.join(folder, "out", "coupled.h5")):
             r["obstacle"] = readObstacle(folder, r, r["free"])
-            with open(path + ".tmp", "w") as f:
-                json.dump(r, f, indent=1)
-            os.replace(path + ".tmp", path)
+            writeJson(path, r)
 
 
 COLUMNS = [  # (heading, value of a run); "–" where a run has none
