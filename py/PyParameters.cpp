@@ -44,8 +44,8 @@ bp::dict entry(const ParameterSpec& s, const char* table) {
 // Every entry, the flow's table ("scene") then the blocks' ("blocks"), each in its order.
 bp::list parameters() {
   bp::list out;
-  for (const ParameterSpec& s : mpm::sceneParameters()) out.append(entry(s, "scene"));
-  for (const ParameterSpec& s : coupling::blockParameters()) out.append(entry(s, "blocks"));
+  for (const ParameterSpec& s : mpm::sceneParameter.table()) out.append(entry(s, "scene"));
+  for (const ParameterSpec& s : coupling::blockParameter.table()) out.append(entry(s, "blocks"));
   return out;
 }
 

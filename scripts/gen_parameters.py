@@ -6,6 +6,7 @@ scene readers check against (mpmsdem.parameters). Run after changing a table:
 PATH defaults to docs/parameters.md; tests/python/test_parameters.py fails while the committed
 page differs from the generated one.
 """
+import argparse
 import os
 import sys
 
@@ -15,7 +16,10 @@ ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)),
 
 
 def main(argv):
-    path = argv[1] if len(argv) > 1 else os.path.join(ROOT, "docs", "parameters.md")
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("path", nargs="?", default=os.path.join(ROOT, "docs", "parameters.md"),
+                    help="the page to write (default: docs/parameters.md)")
+    path = ap.parse_args(argv[1:]).path
     with open(path, "w", encoding="utf-8") as f:
         f.write(parameters.markdown())
     print("wrote %s (%d parameters)" % (path, len(parameters.parameters())))

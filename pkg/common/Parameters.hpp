@@ -6,6 +6,7 @@
 // describe: the flow model's in pkg/mpm/MpmParameters, the scene's own in pkg/scene/SceneParameters,
 // the blocks' in pkg/coupling.
 #pragma once
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,26 @@ bool isRequired(const ParameterSpec& spec);
 // The entry of `key` in `table`; std::logic_error when it has none (a reader asking for a key
 // its table lacks is a programming error, not a bad scene).
 const ParameterSpec& findParameter(const ParameterTable& table, const std::string& key);
+// A folder's parameters: table() lists them, built once on first use by List (the function that
+// writes the entries, beside what they describe), and (key) is the entry of a key. A folder
+// declares its own in its header:
+//   ParameterTable listSolverParameters();
+//   inline constexpr ParameterCatalog<listSolverParameters> solverParameter{};
+template <ParameterTable (*List)()>
+struct ParameterCatalog {
+  static const ParameterTable& table() {
+    static const ParameterTable built = List();
+    return built;
+  }
+  const ParameterSpec& operator()(const std::string& key) const { return findParameter(table(), key); }
+};
+
+// The shorthands the entries are written with: `using namespace parameter_entries;` in a List.
+namespace parameter_entries {
+using K = ParameterKind;
+constexpr double kInf = INFINITY, kNone = NAN;
+}  // namespace parameter_entries
+
 // The last part of the key: "mu_s" for "material.mu_s", "x" for "flow_probes[].x".
 std::string leafName(const ParameterSpec& spec);
 // The leaf names of the entries right under `section` ("run", "flow_probes[]"), in table order.

@@ -12,12 +12,10 @@ namespace coupling {
 
 namespace {
 
-using K = ParameterKind;
-constexpr double kInf = INFINITY, kNone = NAN;
-
 // The defaults are the structs' (sdem::BarrierPhys); a block material's own keys (density,
-// friction, ...) are sdem::materialParameters(), which SdemMaterial::validate checks against.
+// friction, ...) are sdem::materialParameter.table(), which SdemMaterial::validate checks against.
 ParameterTable ownTable() {
+  using namespace parameter_entries;
   const sdem::BarrierPhys f{};
   // key, python, kind, unit, default, default in words, lo, hi, lo and hi allowed, range in
   // words, equation, meaning
@@ -73,10 +71,12 @@ ParameterTable ownTable() {
   };
 }
 
+}  // namespace
+
 // The blocks, their materials' objects, a material's own keys (from pkg/sdem), then the flow pair's
 // and the blocks' keys, in the order docs/parameters.md shows them.
-ParameterTable makeTable() {
-  const ParameterTable own = ownTable(), &material = sdem::materialParameters();
+ParameterTable listBlockParameters() {
+  const ParameterTable own = ownTable(), &material = sdem::materialParameter.table();
   const auto flow = std::find_if(own.begin(), own.end(), [](const ParameterSpec& e) {
     return std::strcmp(e.key, "block_materials.<name>.flow") == 0;
   });
@@ -85,15 +85,6 @@ ParameterTable makeTable() {
   table.insert(table.end(), flow, own.end());
   return table;
 }
-
-}  // namespace
-
-const ParameterTable& blockParameters() {
-  static const ParameterTable table = makeTable();
-  return table;
-}
-
-const ParameterSpec& blockParameter(const char* key) { return findParameter(blockParameters(), key); }
 
 }  // namespace coupling
 }  // namespace mpmsdem

@@ -27,7 +27,7 @@ Vec3 optVec(const json& obj, const std::string& path, const char* key, const Vec
 }
 
 void readPhys(const json& j, const std::string& path, sdem::BarrierPhys& p) {
-  checkKeys(j, path, sectionKeys(blockParameters(), "block_materials.<name>.flow"));
+  checkKeys(j, path, sectionKeys(blockParameter.table(), "block_materials.<name>.flow"));
   const auto read = [&](const char* key) { return readNumber(j, path, blockParameter(key)); };
   p.friction = read("block_materials.<name>.flow.friction");
   p.barrierStiffness = read("block_materials.<name>.flow.barrier_stiffness");
@@ -40,7 +40,7 @@ void readPhys(const json& j, const std::string& path, sdem::BarrierPhys& p) {
 // density needed: the ground does not move).
 BlockMaterialSpec readMaterial(const json& j, const std::string& path, const std::string& name, bool withFlow = true) {
   if (!j.is_object()) throwParameter(path, j.dump(), "", "a JSON object");
-  std::vector<std::string> keys = sectionKeys(blockParameters(), "block_materials.<name>");
+  std::vector<std::string> keys = sectionKeys(blockParameter.table(), "block_materials.<name>");
   if (!withFlow) keys.erase(std::find(keys.begin(), keys.end(), "flow"));
   checkKeys(j, path, keys);
   BlockMaterialSpec m;
@@ -163,7 +163,7 @@ SceneBlocks parseBlocks(const std::string& sceneJson) {
     const std::string path = "blocks[" + std::to_string(i) + "]";
     const json& b = list[i];
     if (!b.is_object()) throwParameter(path, b.dump().substr(0, 80), "", "a JSON object");
-    checkKeys(b, path, sectionKeys(blockParameters(), "blocks[]"));
+    checkKeys(b, path, sectionKeys(blockParameter.table(), "blocks[]"));
     BlockSpec s;
     if (!b.contains("material") || !b.at("material").is_string())
       throw ParameterError(path + ".material: required, the name of one of block_materials");

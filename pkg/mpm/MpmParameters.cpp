@@ -9,14 +9,10 @@
 namespace mpmsdem {
 namespace mpm {
 
-namespace {
-
-using K = ParameterKind;
-constexpr double kInf = INFINITY, kNone = NAN;
-
 // The defaults of the keys a scene may leave out are the structs' (MpmParams, GranularMaterial,
 // GateSpec): the table names them, the structs hold them.
-ParameterTable makeTable() {
+ParameterTable listSolverParameters() {
+  using namespace parameter_entries;
   const MpmParams p{};
   const GranularMaterial& m = p.material;
   const GateSpec& g = p.gate;
@@ -97,15 +93,6 @@ ParameterTable makeTable() {
        false, "", "§2.1", "rho_c; stress-free below it; 0: rho_0"},
   };
 }
-
-}  // namespace
-
-const ParameterTable& solverParameters() {
-  static const ParameterTable table = makeTable();
-  return table;
-}
-
-const ParameterSpec& solverParameter(const char* key) { return findParameter(solverParameters(), key); }
 
 }  // namespace mpm
 }  // namespace mpmsdem

@@ -11,9 +11,8 @@ namespace mpm {
 
 // Objects first (grid, gravity, walls, gate, material) as one entry each at the top level, with
 // the blend's and the step's values; their keys then under them ("material.mu_s").
-const ParameterTable& solverParameters();
-// The entry of `key` (e.g. "material.mu_s") in solverParameters().
-const ParameterSpec& solverParameter(const char* key);
+ParameterTable listSolverParameters();
+inline constexpr ParameterCatalog<listSolverParameters> solverParameter{};
 
 }  // namespace mpm
 }  // namespace mpmsdem

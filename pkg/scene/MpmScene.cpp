@@ -29,7 +29,7 @@ using nlohmann::json;
 using namespace scenejson;
 
 // The keys a section may have: its entries in the table.
-std::vector<std::string> keysOf(const char* section) { return sectionKeys(sceneParameters(), section); }
+std::vector<std::string> keysOf(const char* section) { return sectionKeys(sceneParameter.table(), section); }
 
 // The keys of one form of a section that has two (a box or a mesh, a terrain from a file or
 // given here): the section's keys less those only the other form has. A key both forms share is

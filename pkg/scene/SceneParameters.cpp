@@ -12,13 +12,11 @@ namespace mpm {
 
 namespace {
 
-using K = ParameterKind;
-constexpr double kInf = INFINITY, kNone = NAN;
-
 // The scene's own keys (the particles' regions, the probes, the terrain's raster, the run); the
 // flow model's come from mpm/MpmParameters. Their defaults are the structs' (FlowProbeSpec,
 // RunSettings): the table names them, the structs hold them.
 ParameterTable ownTable() {
+  using namespace parameter_entries;
   const FlowProbeSpec probe{};
   const RunSettings r{};
   // key, python, kind, unit, default, default in words, lo, hi, lo and hi allowed, range in
@@ -120,10 +118,12 @@ ParameterTable ownTable() {
 
 bool topLevel(const ParameterSpec& s) { return std::strpbrk(s.key, ".[") == nullptr; }
 
+}  // namespace
+
 // In the order docs/parameters.md shows them: the description, the flow model's objects and
 // values, the scene's objects, then the keys under each object in the same order.
-ParameterTable makeTable() {
-  const ParameterTable own = ownTable(), &model = solverParameters();
+ParameterTable listSceneParameters() {
+  const ParameterTable own = ownTable(), &model = solverParameter.table();
   ParameterTable table(own.begin(), own.begin() + 1);  // "description"
   for (const bool top : {true, false})
     for (const ParameterTable* from : {&model, &own})
@@ -131,15 +131,6 @@ ParameterTable makeTable() {
         if (topLevel(s) == top && std::strcmp(s.key, "description") != 0) table.push_back(s);
   return table;
 }
-
-}  // namespace
-
-const ParameterTable& sceneParameters() {
-  static const ParameterTable table = makeTable();
-  return table;
-}
-
-const ParameterSpec& sceneParameter(const char* key) { return findParameter(sceneParameters(), key); }
 
 }  // namespace mpm
 }  // namespace mpmsdem

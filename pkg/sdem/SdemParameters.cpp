@@ -7,13 +7,9 @@
 namespace mpmsdem {
 namespace sdem {
 
-namespace {
-
-using K = ParameterKind;
-constexpr double kInf = INFINITY, kNone = NAN;
-
 // The defaults are SdemMaterial's: the table names them, the struct holds them.
-ParameterTable makeTable() {
+ParameterTable listMaterialParameters() {
+  using namespace parameter_entries;
   const SdemMaterial m{};
   // key, python, kind, unit, default, default in words, lo, hi, lo and hi allowed, range in
   // words, equation, meaning
@@ -32,15 +28,6 @@ ParameterTable makeTable() {
        kInf, true, false, "", "Eq 9", "tangential viscous damping, a fraction of critical"},
   };
 }
-
-}  // namespace
-
-const ParameterTable& materialParameters() {
-  static const ParameterTable table = makeTable();
-  return table;
-}
-
-const ParameterSpec& materialParameter(const char* key) { return findParameter(materialParameters(), key); }
 
 // A material made in C++ or Python is named by its Python keywords ("barrierStiffness"), a
 // scene's by its keys (the scene reader checks those first).

@@ -60,3 +60,71 @@ def test_the_rule_refuses_up_and_across_and_allows_down():
     assert len(violations([("common/C.hpp", "common", "input")])) == 1
     assert violations([("run/D.cpp", "run", "common"), ("scene/E.cpp", "scene", "mpm"),
                        ("mpm/F.hpp", "mpm", "mpm"), ("io/G.cpp", "io", "hdf5")]) == []
+
+
+# The Python package stacks the same way, lowest first: the C++ module; what every engine uses
+# (the runner base, the parameter tables, the terrain, analytic references); the two solvers'
+# engines; the coupled engine; the package's own entry points (__init__: run, material); the
+# scenes, drivers and studies built on them; the calibration over sweeps.
+PACKAGE = os.path.join(ROOT, "py", "mpmsdem")
+MODULE_LAYERS = [
+    ("_mpmsdem",),
+    ("_util", "engine", "parameters", "terrain", "analysis"),
+    ("sdem", "mpm"),
+    ("coupling",),
+    ("__init__",),
+    ("flume", "driver", "field", "sweep", "tradeoffs"),
+    ("calibrate",),
+]
+MODULE_RANK = {m: rank for rank, group in enumerate(MODULE_LAYERS) for m in group}
+
+
+def imports():
+    """(module, the package module it imports) for every import of the package's own modules,
+    at any depth of the file (an import inside a function is an arrow too); `from . import x`
+    of a name that is no module (`run`, `material`) is an import of __init__."""
+    import ast
+    modules = {name[:-3] for name in os.listdir(PACKAGE) if name.endswith(".py")} | {"_mpmsdem"}
+    for name in sorted(os.listdir(PACKAGE)):
+        if not name.endswith(".py"):
+            continue
+        module = name[:-3]
+        with open(os.path.join(PACKAGE, name), encoding="utf-8") as f:
+            tree = ast.parse(f.read())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and (node.level == 1 or node.module == "mpmsdem"):
+                if node.module and node.module != "mpmsdem":
+                    yield module, node.module.split(".")[0]
+                else:
+                    for alias in node.names:
+                        yield module, alias.name if alias.name in modules else "__init__"
+            elif isinstance(node, ast.Import):
+                for alias in node.names:
+                    if alias.name == "mpmsdem":
+                        yield module, "__init__"
+
+
+def module_violations(found):
+    return ["%s.py imports %s (rank %d, not below %d)" % (module, target, MODULE_RANK[target], MODULE_RANK[module])
+            for module, target in found
+            if target != module and MODULE_RANK[target] >= MODULE_RANK[module]]
+
+
+def test_every_module_has_a_layer():
+    modules = {name[:-3] for name in os.listdir(PACKAGE) if name.endswith(".py")} | {"_mpmsdem"}
+    assert modules == set(MODULE_RANK), "modules without a layer here (or layers without a module): %s" % sorted(
+        modules ^ set(MODULE_RANK))
+
+
+def test_no_import_reaches_up_or_across():
+    found = list(imports())
+    assert len(found) > 30  # the walk saw the package
+    assert ("coupling", "mpm") in found and ("flume", "__init__") in found  # imports in functions, names of __init__
+    assert not module_violations(found), "\n".join(module_violations(found))
+
+
+def test_the_module_rule_refuses_up_and_across():
+    assert len(module_violations([("sdem", "mpm")])) == 1          # across
+    assert len(module_violations([("engine", "coupling")])) == 1   # up
+    assert len(module_violations([("coupling", "__init__")])) == 1
+    assert module_violations([("calibrate", "sweep"), ("flume", "__init__"), ("mpm", "engine")]) == []

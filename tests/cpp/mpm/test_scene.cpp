@@ -443,7 +443,7 @@ TEST(SceneParameters, RangeErrorsNameTheTablesRange) {
 // Every key a section's reader allows is in the table, once, with a consistent range.
 TEST(SceneParameters, TableIsConsistent) {
   std::set<std::string> keys;
-  for (const ParameterSpec& s : sceneParameters()) {
+  for (const ParameterSpec& s : sceneParameter.table()) {
     SCOPED_TRACE(s.key);
     EXPECT_TRUE(keys.insert(s.key).second);
     EXPECT_TRUE(*s.doc);
@@ -455,7 +455,7 @@ TEST(SceneParameters, TableIsConsistent) {
       }
     }
   }
-  EXPECT_EQ(sectionKeys(sceneParameters(), "flow_probes[]"),
+  EXPECT_EQ(sectionKeys(sceneParameter.table(), "flow_probes[]"),
             (std::vector<std::string>{"x", "half_width", "bed_z", "min_points", "window"}));
   EXPECT_EQ(rangeText(sceneParameter("grid.cells")), "an integer in [4, 2^30]");
   EXPECT_EQ(rangeText(sceneParameter("run.vtk")), "one of \"raw\", \"ascii\", \"none\"");
