@@ -52,6 +52,28 @@ def run(engine, steps):
     mpmsdem.run(steps, engine)
 
 
+def momentum(mpm, body):
+    """The momentum of the flow's points and of YADE body ``body`` [kg m/s]."""
+    import numpy as np
+    p = mpm.particles()
+    s = O.bodies[body].state
+    return (p["mass"][:, None] * p["v"]).sum(axis=0) + s.mass * np.array(s.vel)
+
+
+def pushFreeBody(coupled, mpm, body, chunks=30, steps=100):
+    """Run ``coupled`` under YADE's NewtonIntegrator without gravity or damping at O.dt 1e-5 s, in
+    ``chunks`` runs of ``steps`` steps: the flow's momentum and the body's before and after, and
+    the most contacts the body had at the end of a chunk."""
+    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
+    O.dt = 1e-5
+    p0 = momentum(mpm, body)
+    hit = 0
+    for _ in range(chunks):
+        mpmsdem.run(steps, coupled)
+        hit = max(hit, coupled.contactCount(body))
+    return p0, momentum(mpm, body), hit
+
+
 def gravity(thetaDeg, g=9.81):
     """Gravity of a flume inclined by theta about y, flowing toward +x (rotate gravity, not the bed)."""
     th = math.radians(thetaDeg)

@@ -13,6 +13,8 @@ from mpmsdem import analysis
 from yade import O, plot
 from yade.wrapper import ForceResetter, NewtonIntegrator
 
+from scenes import pushFreeBody
+
 GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
 
 
@@ -28,23 +30,10 @@ def blob_and_cube(fixed=False, precision="double", **kw):
     return sdem, mpm, coupled, cube
 
 
-def momentum(mpm, body):
-    p = mpm.particles()
-    s = O.bodies[body].state
-    return (p["mass"][:, None] * p["v"]).sum(axis=0) + s.mass * np.array(s.vel)
-
-
 def test_blob_hitting_a_free_block_conserves_momentum_through_yade():
     sdem, mpm, coupled, cube = blob_and_cube()
-    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
-    O.dt = 1e-5
-    p0 = momentum(mpm, cube)
     v0 = np.array(O.bodies[cube].state.vel)
-    hit = 0
-    for _ in range(30):
-        mpmsdem.run(100, coupled)
-        hit = max(hit, coupled.contactCount(cube))
-    p1 = momentum(mpm, cube)
+    p0, p1, hit = pushFreeBody(coupled, mpm, cube)
     assert hit > 4, "the blob never touched the block"
     assert O.bodies[cube].state.vel[0] > 0.1  # pushed downstream
     assert np.linalg.norm(p1 - p0) == pytest.approx(0, abs=1e-9 * np.linalg.norm(p0))

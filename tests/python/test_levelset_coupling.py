@@ -14,7 +14,7 @@ from yade.minieigenHP import Quaternion, Vector3
 from yade.utils import levelSetBody
 from yade.wrapper import ForceResetter, FrictMat, NewtonIntegrator
 
-from scenes import forget
+from scenes import forget, momentum, pushFreeBody
 
 GLASS = {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65}
 DX, PPC = 0.01, 8
@@ -69,12 +69,6 @@ def test_contacts_read_the_grid_as_yade_does():
     assert pushed > 0  # the flow pushed the body downstream
 
 
-def momentum(mpm, body):
-    p = mpm.particles()
-    s = O.bodies[body].state
-    return (p["mass"][:, None] * p["v"]).sum(axis=0) + s.mass * np.array(s.vel)
-
-
 def test_flow_pushes_a_free_levelset_box_and_momentum_is_conserved():
     """256 points at 1 m/s hit a free LevelSet box (no gravity, walls out of reach): YADE's
     NewtonIntegrator moves the box with the flow's force, and the momentum of points and box
@@ -86,15 +80,8 @@ def test_flow_pushes_a_free_levelset_box_and_momentum_is_conserved():
     sdem = mpmsdem.SdemEngine(verbose=False)
     coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={}, levelSets={bid: 0.3}, verbose=False, plot=True,
                                     outputEvery=0.002)
-    O.engines = [ForceResetter(), coupled.runner, NewtonIntegrator(gravity=(0, 0, 0), damping=0)]
     plot.reset()
-    O.dt = 1e-5
-    p0 = momentum(mpm, bid)
-    hit = 0
-    for _ in range(30):
-        mpmsdem.run(100, coupled)
-        hit = max(hit, coupled.contactCount(bid))
-    p1 = momentum(mpm, bid)
+    p0, p1, hit = pushFreeBody(coupled, mpm, bid)
     assert hit > 4, "the flow never touched the body"
     assert O.bodies[bid].state.vel[0] > 0.1  # pushed downstream
     assert np.linalg.norm(p1 - p0) == pytest.approx(0, abs=1e-9 * np.linalg.norm(p0))

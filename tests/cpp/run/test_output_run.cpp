@@ -19,6 +19,7 @@
 #include "io/Hdf5Writer.hpp"
 #include "scene/MpmScene.hpp"
 #include "run/RunScene.hpp"
+#include "SandBox.hpp"
 
 namespace fs = std::filesystem;
 using namespace mpmsdem;
@@ -32,17 +33,11 @@ fs::path scratchDir(const std::string& name) {
   return dir;
 }
 
-// A block of sand collapsing in a box of 12 x 6 x 10 cells of 0.01 m, a fixed step of 5e-5 s:
-// a snapshot every 5 steps, a series record every step.
+// The sand collapsing, a fixed step of 5e-5 s: a snapshot every 5 steps, a series record every step.
 mpm::MpmScene collapse(const fs::path& out, const std::string& extraRun = "") {
-  return mpm::parseScene(R"({
-    "grid": {"dx": 0.01, "cells": [12, 6, 10], "origin": [0, 0, 0]},
-    "gravity": {"g": 9.81},
-    "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65,
-                 "grain_diameter": 0.001, "critical_density": 1500},
-    "particles": [{"lo": [0.02, 0.02, 0.02], "hi": [0.06, 0.04, 0.06], "ppc": 8}],
-    "run": {"duration": 1.0, "dt": 5e-5, "output_every": 2.5e-4, "series_every": 5e-5, "vtk": "raw",
-            "output_dir": ")" + out.string() + "\"" + extraRun + "}}");
+  return testing_scenes::sandInABox(
+      R"({"duration": 1.0, "dt": 5e-5, "output_every": 2.5e-4, "series_every": 5e-5, "vtk": "raw",
+          "output_dir": ")" + out.string() + "\"" + extraRun + "}");
 }
 
 RunEnd runSteps(const mpm::MpmScene& scene, long steps, bool restart = false) {

@@ -15,26 +15,16 @@
 #include "run/Progress.hpp"
 #include "run/RunLoop.hpp"
 #include "run/StopSignal.hpp"
+#include "SandBox.hpp"
 
 using namespace mpmsdem;
 using namespace mpmsdem::run;
 
 namespace {
 
-// A block of sand at rest in a box of 12 x 6 x 10 cells of 0.01 m.
-mpm::MpmScene smallScene(const std::string& runJson) {
-  return mpm::parseScene(R"({
-    "grid": {"dx": 0.01, "cells": [12, 6, 10], "origin": [0, 0, 0]},
-    "gravity": {"g": 9.81},
-    "material": {"density": 1600, "young_modulus": 1e6, "poisson_ratio": 0.3, "mu_s": 0.24, "mu_2": 0.65,
-                 "grain_diameter": 0.001, "critical_density": 1500},
-    "particles": [{"lo": [0.02, 0.02, 0.02], "hi": [0.06, 0.04, 0.06], "ppc": 8}],
-    "run": )" + runJson + "}");
-}
-
 struct SmallRun {
   explicit SmallRun(const std::string& runJson)
-      : scene(smallScene(runJson)), solver(mpm::makeSolver(scene.params)), stepper(*solver) {
+      : scene(testing_scenes::sandInABox(runJson)), solver(mpm::makeSolver(scene.params)), stepper(*solver) {
     mpm::SeededParticles seeded = mpm::seedParticleSlices(scene);
     solver->setParticles(seeded);
   }
