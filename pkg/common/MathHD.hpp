@@ -25,64 +25,28 @@
 
 namespace mpmsdem {
 
-// Scalar functions that resolve to the CUDA device overloads in device code and to
-// std:: in host code (float stays float on both sides).
-template <typename T>
-MPM_HD_INLINE T hdSqrt(T a) {
+// Scalar functions that resolve to the CUDA device overloads in device code and to std:: in
+// host code (float stays float on both sides).
 #if defined(__CUDA_ARCH__)
-  return sqrt(a);
+#define MPMSDEM_HD_MATH(f) f
 #else
-  return std::sqrt(a);
+#define MPMSDEM_HD_MATH(f) std::f
 #endif
-}
 template <typename T>
-MPM_HD_INLINE T hdAbs(T a) {
-#if defined(__CUDA_ARCH__)
-  return fabs(a);
-#else
-  return std::fabs(a);
-#endif
-}
+MPM_HD_INLINE T hdSqrt(T a) { return MPMSDEM_HD_MATH(sqrt)(a); }
 template <typename T>
-MPM_HD_INLINE T hdFloor(T a) {
-#if defined(__CUDA_ARCH__)
-  return floor(a);
-#else
-  return std::floor(a);
-#endif
-}
+MPM_HD_INLINE T hdAbs(T a) { return MPMSDEM_HD_MATH(fabs)(a); }
 template <typename T>
-MPM_HD_INLINE T hdCbrt(T a) {
-#if defined(__CUDA_ARCH__)
-  return cbrt(a);
-#else
-  return std::cbrt(a);
-#endif
-}
+MPM_HD_INLINE T hdFloor(T a) { return MPMSDEM_HD_MATH(floor)(a); }
 template <typename T>
-MPM_HD_INLINE T hdLog1p(T a) {
-#if defined(__CUDA_ARCH__)
-  return log1p(a);
-#else
-  return std::log1p(a);
-#endif
-}
+MPM_HD_INLINE T hdCbrt(T a) { return MPMSDEM_HD_MATH(cbrt)(a); }
 template <typename T>
-MPM_HD_INLINE T hdAtan2(T y, T x) {
-#if defined(__CUDA_ARCH__)
-  return atan2(y, x);
-#else
-  return std::atan2(y, x);
-#endif
-}
+MPM_HD_INLINE T hdLog1p(T a) { return MPMSDEM_HD_MATH(log1p)(a); }
 template <typename T>
-MPM_HD_INLINE bool hdIsFinite(T a) {
-#if defined(__CUDA_ARCH__)
-  return isfinite(a);
-#else
-  return std::isfinite(a);
-#endif
-}
+MPM_HD_INLINE T hdAtan2(T y, T x) { return MPMSDEM_HD_MATH(atan2)(y, x); }
+template <typename T>
+MPM_HD_INLINE bool hdIsFinite(T a) { return MPMSDEM_HD_MATH(isfinite)(a); }
+#undef MPMSDEM_HD_MATH
 
 template <typename T>
 struct Vec3T {
