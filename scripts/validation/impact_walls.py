@@ -114,6 +114,10 @@ def parse(argv):
     a.cases = a.cases.split(",")
     if not a.cases or not set(a.cases) <= {"free", "wall", "block"}:
         ap.error("--cases = %r: a comma-separated subset of free, wall, block" % ",".join(a.cases))
+    cells = a.width / a.dx  # the wall's slice and its free flow have their side walls on grid planes
+    if {"free", "wall"} & set(a.cases) and not (round(cells) >= 1 and abs(cells - round(cells)) < 1e-6 * cells):
+        ap.error("--dx = %r: must divide --width %r m into whole cells, e.g. %r or %r m"
+                 % (a.dx, a.width, a.width / max(1, math.floor(cells)), a.width / math.ceil(cells)))
     return a
 
 

@@ -92,6 +92,15 @@ def test_impact_walls_rest_must_cover_the_later_window(capsys):
             iw.parse(["--rest", bad])
         assert "--rest" in capsys.readouterr().err
 
+def test_impact_walls_spacing_must_divide_the_slice(capsys):
+    # refused before any run is prepared, naming two spacings that do divide the 0.04 m slice
+    assert iw.parse(["--dx", "0.005"]).dx == 0.005 and iw.parse(["--dx", "0.008"]).dx == 0.008
+    with pytest.raises(SystemExit):
+        iw.parse(["--dx", "0.007142857142857143"])
+    assert "must divide --width 0.04 m into whole cells, e.g. 0.008 or 0.006666666666666667 m" in capsys.readouterr().err
+    assert iw.parse(["--dx", "0.007142857142857143", "--cases", "block"]).cases == ["block"]  # the lane is rounded
+
+
 def test_impact_walls_figure_draws_what_is_there(tmp_path):
     # no obstacle run: no figure; a wall and a cube (one free flow beside them): the figure,
     # with the §5 cases of a study folder on its right panel
