@@ -49,6 +49,7 @@ points where the differences keep their sign and shrink, and say so where they d
 import argparse
 import glob
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -154,9 +155,23 @@ def parse(argv):
         ap.error("--duration = %r s: must be > 0 (the plateau, tilt and travel need >= %g s)" % (a.duration, AT))
     if not 0 < a.width < float("inf"):
         ap.error("--width = %r m: must be > 0" % a.width)
+    for d in a.dx:
+        if wholeCellsError(d, a.width):
+            ap.error("--dx = %r: %s" % (d, wholeCellsError(d, a.width)))
     if a.ppc < 1 or round(a.ppc ** (1.0 / 3.0)) ** 3 != a.ppc:
         ap.error("--ppc = %r: must be a perfect cube (1, 8, 27, ...)" % a.ppc)
     return a
+
+
+def wholeCellsError(dx, width):
+    """What is wrong with a spacing ``dx`` that does not divide ``width`` into whole cells (the
+    flume's side walls lie on grid planes, mpmsdem.flume.Flume), naming two that do; None where
+    it divides it. Checked where the options are read, before anything runs."""
+    cells = width / dx
+    if round(cells) >= 1 and abs(cells - round(cells)) < 1e-6 * cells:
+        return None
+    return "must divide the width %g m into whole cells, e.g. %.8g or %.8g m" % (
+        width, width / max(1, math.floor(cells)), width / math.ceil(cells))
 
 
 def viscosity(a, dx):

@@ -54,7 +54,7 @@ import time
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, addPreparedOptions, commit, driverRun,  # noqa: E402
-                               fmt, limitOf, runPreparedFolders, storeStudy, writeJson)
+                               fmt, limitOf, runPreparedFolders, storeStudy, wholeCellsError, writeJson)
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
@@ -114,10 +114,8 @@ def parse(argv):
     a.cases = a.cases.split(",")
     if not a.cases or not set(a.cases) <= {"free", "wall", "block"}:
         ap.error("--cases = %r: a comma-separated subset of free, wall, block" % ",".join(a.cases))
-    cells = a.width / a.dx  # the wall's slice and its free flow have their side walls on grid planes
-    if {"free", "wall"} & set(a.cases) and not (round(cells) >= 1 and abs(cells - round(cells)) < 1e-6 * cells):
-        ap.error("--dx = %r: must divide --width %r m into whole cells, e.g. %r or %r m"
-                 % (a.dx, a.width, a.width / max(1, math.floor(cells)), a.width / math.ceil(cells)))
+    if {"free", "wall"} & set(a.cases) and wholeCellsError(a.dx, a.width):  # the wall's slice
+        ap.error("--dx = %r: %s" % (a.dx, wholeCellsError(a.dx, a.width)))
     return a
 
 

@@ -97,8 +97,13 @@ def test_impact_walls_spacing_must_divide_the_slice(capsys):
     assert iw.parse(["--dx", "0.005"]).dx == 0.005 and iw.parse(["--dx", "0.008"]).dx == 0.008
     with pytest.raises(SystemExit):
         iw.parse(["--dx", "0.007142857142857143"])
-    assert "must divide --width 0.04 m into whole cells, e.g. 0.008 or 0.006666666666666667 m" in capsys.readouterr().err
+    assert "must divide the width 0.04 m into whole cells, e.g. 0.008 or 0.0066666667 m" in capsys.readouterr().err
     assert iw.parse(["--dx", "0.007142857142857143", "--cases", "block"]).cases == ["block"]  # the lane is rounded
+    # the §3.2 flume's width likewise, for every spacing of the sequence
+    assert fc.parse(["--dx", "0.01,0.007142857142857143,0.005"]).dx[1] == pytest.approx(0.2 / 28)
+    with pytest.raises(SystemExit):
+        fc.parse(["--dx", "0.01,0.007"])
+    assert "--dx = 0.007: must divide the width 0.2 m into whole cells, e.g. 0.0071428571 or 0.0068965517 m" in capsys.readouterr().err
 
 
 def test_impact_walls_figure_draws_what_is_there(tmp_path):
