@@ -1,6 +1,7 @@
 // What a coupling backend receives and returns for one step (host side), and the interface of
 // the CUDA backend. Kept free of Eigen so that the CUDA sources include only plain headers.
 #pragma once
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -51,13 +52,16 @@ CouplingParticles<T> couplingParticles(const mpm::ParticleView& v) {
   return P;
 }
 
+// What a step leaves; the defaults are a step without contact or failure.
 struct CouplingStepOutput {
   std::vector<double> sums;   // kBlockSums per block
-  double minParticleStep;     // min over contacts of sqrt(m_p / max(k_n, K_t)) [s] (inf: none)
-  double minApproachStep;     // min of approachStepBound over closing pairs not in contact [s] (inf: none)
-  long overflow;              // contacts without a free history slot
-  int badParticle;            // -1, or a particle whose centre reached block badBlock's core
-  int badBlock;
+  // min over contacts of sqrt(m_p / max(k_n, K_t)) [s] (inf: none)
+  double minParticleStep = std::numeric_limits<double>::infinity();
+  // min of approachStepBound over closing pairs not in contact [s] (inf: none)
+  double minApproachStep = std::numeric_limits<double>::infinity();
+  long overflow = 0;          // contacts without a free history slot
+  int badParticle = -1;       // -1, or a particle whose centre reached block badBlock's core
+  int badBlock = -1;
 };
 
 // The CUDA side (pkg/coupling/cuda): device copies of the tables and histories, the kernel.

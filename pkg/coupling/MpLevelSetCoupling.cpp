@@ -117,7 +117,7 @@ void MpLevelSetCoupling::setHistorySlots(int slots) {
 }
 
 void MpLevelSetCoupling::pullHistories() {
-  if (!onDevice_ || historiesToDevice_) return;  // the host copies are the current ones
+  if (!historiesOnDevice_ || historiesToDevice_) return;  // the host copies are the current ones
   device_->downloadHistories(key_, xi_, written_);
   floatRun_ = false;  // (downloaded in double)
 }
@@ -138,6 +138,8 @@ void MpLevelSetCoupling::setHistories(const std::vector<long long>& keys, const 
   // the next step's precision picks its copy (computeForces keeps the one of its size)
   xi_ = xi;
   xiF_.assign(xi.begin(), xi.end());
+  floatRun_ = false;  // historyXi() before the next step: the double copy
+  historiesOnDevice_ = false;
   historiesToDevice_ = true;  // for a step on the device
 }
 
@@ -154,6 +156,12 @@ void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt,
   onDevice_ = false;  // (until a device step: where the histories and contacts are)
   if (numBodies() == 0 || view.n == 0) return;
   if (view.device) return runDevice(view, dt, safety, watch);
+  if (historiesOnDevice_) {  // the steps before ran on the device: go on from its histories
+    pullHistories();
+    xiF_.assign(xi_.begin(), xi_.end());  // (downloaded in double; a float step reads these)
+    historiesOnDevice_ = false;
+    historiesToDevice_ = true;  // (should a later step run there again)
+  }
   if (view.n != particleCount_ || (isFloat ? xiF_.size() : xi_.size()) != 3 * slots_ * view.n) {
     // a new particle set: no history yet, and its smallest radius may be below the grids'
     const double v0 = isFloat ? smallest<float>(view.volume0, view.n) : smallest<double>(view.volume0, view.n);
@@ -226,6 +234,11 @@ void MpLevelSetCoupling::centreReached(long particle, int body) const {
 // shape table, launched and collected at once (the flow's step is queued after it).
 void MpLevelSetCoupling::runDevice(const mpm::ParticleView& view, double dt, double safety, double watch) {
   if (!device_ || devicePrecision_ != view.precision) {
+    if (historiesOnDevice_) {  // the replaced backend's histories go on in the new one
+      pullHistories();
+      historiesOnDevice_ = false;
+      historiesToDevice_ = true;
+    }
     device_ = makeCouplingDeviceBackend(view.precision);
     if (!device_) throw RuntimeFailure("MP-LevelSet coupling: the solver runs on CUDA but this build has no CUDA coupling");
     device_->recordContacts(true);  // contacts() reads them: those of a few bodies
@@ -238,7 +251,10 @@ void MpLevelSetCoupling::runDevice(const mpm::ParticleView& view, double dt, dou
     device_->resetHistories();
     historiesToDevice_ = false;
   }
-  if (historiesToDevice_) device_->uploadHistories(key_, xi_, written_);
+  if (historiesToDevice_) {
+    if (floatRun_) xi_.assign(xiF_.begin(), xiF_.end());  // a float CPU step kept its histories there
+    device_->uploadHistories(key_, xi_, written_);
+  }
   historiesToDevice_ = false;
   if (gridsChanged_) {
     gridViews_.clear();
@@ -260,7 +276,7 @@ void MpLevelSetCoupling::runDevice(const mpm::ParticleView& view, double dt, dou
   device_->launch(in);
   device_->collect(out);
   gridsChanged_ = false;
-  onDevice_ = true;
+  onDevice_ = historiesOnDevice_ = true;
   if (out.badParticle >= 0) centreReached(out.badParticle, out.badBlock);
   overflow_ += out.overflow;
   minApproachStep_ = out.minApproachStep;

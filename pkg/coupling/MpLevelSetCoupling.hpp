@@ -136,13 +136,16 @@ class MpLevelSetCoupling : public CouplingReport {
   bool floatRun_ = false;
   std::vector<double> sums_;
   // CUDA: the backend (made at the first device step), the grids as it reads them, whether a
-  // body was added since it last read them, whether the last step ran there (its histories and
-  // contacts are there) and whether setHistories' histories still have to go there
+  // body was added since it last read them, whether the last step's contacts are there, whether
+  // the current histories are there (the last step that ran anywhere ran there: a step without
+  // particles or bodies leaves them where they are) and whether the host's histories
+  // (setHistories, or those a CPU step or a replaced backend left) still have to go there
   std::unique_ptr<CouplingDeviceBackend> device_;
   mpm::Precision devicePrecision_ = mpm::Precision::Double;
   std::vector<LevelSetGridView<double>> gridViews_;
   bool gridsChanged_ = true;
   bool onDevice_ = false;
+  bool historiesOnDevice_ = false;
   bool historiesToDevice_ = false;
 };
 

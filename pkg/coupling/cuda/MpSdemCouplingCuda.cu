@@ -356,10 +356,9 @@ class CouplingCuda : public CouplingDeviceBackend {
     std::memcpy(&minStep, &res.minApproachBits, sizeof(float));
     out.minApproachStep = minStep;
     out.overflow = static_cast<long>(res.overflow);
-    if (res.bad != ~0ull) {
-      out.badParticle = static_cast<int>(res.bad >> 32);
-      out.badBlock = static_cast<int>(res.bad & 0xffffffffull);
-    }
+    const bool failed = res.bad != ~0ull;  // written either way: an output reused keeps no earlier failure
+    out.badParticle = failed ? static_cast<int>(res.bad >> 32) : -1;
+    out.badBlock = failed ? static_cast<int>(res.bad & 0xffffffffull) : -1;
   }
 
  private:
