@@ -409,6 +409,11 @@ WALL_OUTPUTS = {"F_peak": "peak_force", "F_later": "quasi_steady_force", "F_end"
 REFERENCE_DX = 0.01  # the spacing whose run has cost 1 (the paper's)
 
 
+def restAfter(r):
+    """How long an obstacle's run went on after the free flow's arrival [s] (its --rest)."""
+    return r["duration"] - r["free"]["arrival"]
+
+
 def packageStudy(runs, theta, L0, young, command):
     """The wall's refinement at one incline, L0 and E for py/mpmsdem/tradeoffs.json: over its
     three finest spacings, each run's relative error in each force of WALL_OUTPUTS against the
@@ -426,6 +431,8 @@ def packageStudy(runs, theta, L0, young, command):
     work = lambda r: r["points"] * r["duration"] / r["dt"]  # noqa: E731
     limits, unconverged, orders = {}, {}, {}
     for key, out in WALL_OUTPUTS.items():
+        if key == "F_end" and min(restAfter(r) for r in rs) < REST - 1e-9:
+            continue  # runs ended before the deposit rests (--rest below the default): no deposit's load
         vals = [r["obstacle"][key] for r in rs]
         p, f0, why = limitOf(vals, h)
         if why:
@@ -459,10 +466,13 @@ def packageData(out):
     for theta, L0, young in sorted({(r["theta"], r["L0"], r["young"]) for r in runs if r["kind"] == "wall"}):
         dxs = sorted({r["dx"] for r in runs if r["kind"] == "wall" and (r["theta"], r["L0"], r["young"]) ==
                       (theta, L0, young)}, reverse=True)[-3:]
+        rest = min(restAfter(r) for r in runs if r["kind"] == "wall" and r["dx"] in dxs and
+                   (r["theta"], r["L0"], r["young"]) == (theta, L0, young))
         study = packageStudy(runs, theta, L0, young,
                              "OMP_NUM_THREADS=1 python3 scripts/validation/impact_walls.py --out OUT --incline %g "
-                             "--L0 %g --dx D for D in %s, then --report-only --package-data" % (
-                                 theta, L0, ", ".join("%g" % d for d in dxs)))
+                             "--L0 %g%s --dx D for D in %s, then --report-only --package-data" % (
+                                 theta, L0, "" if rest >= REST - 1e-9 else " --rest %.3g" % rest,
+                                 ", ".join("%g" % d for d in dxs)))
         if study is not None:
             storeStudy(study)
             stored += 1

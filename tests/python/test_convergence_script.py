@@ -68,7 +68,8 @@ def test_wall_study_errors_against_the_extrapolated_limit():
         return {"kind": "wall", "theta": theta, "L0": 0.5, "young": young, "dx": dx, "width": 0.04,
                 "points": 2400 * (0.02 / dx) ** 2, "duration": 1.45, "dt": 1e-4 * dx / 0.02, "commit": "abc",
                 "flip_blend": "PIC viscosity 0.0360141 m^2/s (PIC damping 360 /s at dx 0.02 m)",
-                "free": {"h_f": 0.04}, "obstacle": {"F_peak": 8.0 + 700 * dx, "F_later": later, "F_end": end}}
+                "free": {"h_f": 0.04, "arrival": 0.45},
+                "obstacle": {"F_peak": 8.0 + 700 * dx, "F_later": later, "F_end": end}}
     runs = [run(d, l, e) for d, l, e in zip(h, (10.8, 9.4, 9.6), (6.3, 6.4, 7.0))]
     runs += [run(0.01, 1, 1, theta=35.0), run(0.01, 1, 1, young=4e6), dict(run(0.01, 1, 1), kind="free")]
     s = iw.packageStudy(runs, 20.0, 0.5, 1e6, "cmd")
@@ -80,6 +81,10 @@ def test_wall_study_errors_against_the_extrapolated_limit():
     assert sorted(s["unconverged"]) == ["deposit_force", "quasi_steady_force"]
     assert "10.8 / 9.4 / 9.6 N" in s["unconverged"]["quasi_steady_force"]
     assert iw.packageStudy(runs[:2], 20.0, 0.5, 1e6, "cmd") is None   # two spacings: no study
+    # runs of --rest 0.12 end before the deposit rests: the first blow is packaged, no deposit's load
+    short = [dict(r, duration=0.57) for r in runs[:3]]
+    s = iw.packageStudy(short, 20.0, 0.5, 1e6, "cmd")
+    assert sorted(s["unconverged"]) == ["quasi_steady_force"] and "peak_force 1.00" in s["extrapolated"]
 
 
 def test_impact_walls_rest_must_cover_the_later_window(capsys):
