@@ -47,20 +47,30 @@
 #   GPU_PROFILE_BASELINE=0 bash ...                    # --profile-scene without the baseline's run
 #   GPU_BENCH_ARGS='--no-cpu --sizes 1e6,1e7' bash ... # bench_mpm.py's arguments after the stage's
 #                                                      # own (a later one wins: a shorter stage)
-#   ... --workers N                                    # prepared cases N at a time (small scenes
-#                                                      # leave most of a GPU idle; default 1)
+#   ... --workers N                                    # §5 cases and design cases N at a time
+#                                                      # (small scenes leave most of a GPU idle;
+#                                                      # default 1; refinement runs and impact
+#                                                      # cases take the device one at a time)
 #   ... --baseline DIR                                 # an older mpmsdem-run in DIR: the MPM
 #                                                      # benchmark and the flume's first 4,000
 #                                                      # steps run with it too (new/old speed)
-#   GPU_RUN_BUDGET=400 bash scripts/bench/gpu_run.sh   # seconds: a stage that would start later
-#                                                      # is skipped (and says so)
+#   GPU_RUN_BUDGET=400 bash scripts/bench/gpu_run.sh   # seconds the whole call may take (default
+#                                                      # 560): each stage is cut to what is left of
+#                                                      # it and one that would start later is
+#                                                      # skipped (and says so), so that the prepared
+#                                                      # runs are archived before it ends; give the
+#                                                      # call an outer limit of the budget + 30 s
+#                                                      # (a call stopped from outside during a stage
+#                                                      # archives only when that stage returns)
 #   GPU_RUN_STAGES='test_|coarse' bash ...             # only the stages whose names match this
-#                                                      # extended regular expression
+#                                                      # extended regular expression (a call for
+#                                                      # prepared runs alone: '^walls$' and so on)
 #
 # The outputs end up in one archive, $OUT/gpu-run.tgz (also when the command is stopped).
 #
-# Stages, most telling first: the whole of test_mpm and test_coupling side by side (stage
-# "tests"; the CPU-vs-CUDA agreement tests are the ones a machine without a GPU skips); the
+# Stages, most telling first: the whole of test_mpm and test_coupling, one after the other (stages
+# test_mpm, test_coupling; the CPU-vs-CUDA agreement tests are the ones a machine without a GPU
+# skips); the
 # prepared §3.2 design (--design), refinement runs (--convergence) and impact cases (--walls); bench_mpm.py --cuda (MPM
 # updates/s at 1e5..1e7 points, against the CPU and the baseline); the flume at the paper's
 # resolution (flume_block_full.json): 4,000 steps on the CPU and on CUDA (new and baseline: the
@@ -77,7 +87,7 @@
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 out=${OUT:-gpu-out}
-budget=${GPU_RUN_BUDGET:-100000}
+budget=${GPU_RUN_BUDGET:-560}
 only=${GPU_RUN_STAGES:-.}
 prebuilt=""
 baseline=""
@@ -145,17 +155,20 @@ else
     || { tail -40 "$out/build.log"; exit 1; }
 fi
 
-# stage NAME SECONDS CMD...: runs CMD under a time limit unless the budget is spent.
+# stage NAME SECONDS CMD...: runs CMD under a time limit, SECONDS or what is left of the budget
+# (less 10 s to archive), unless less than 20 s is left; CMD finds its limit in STAGE_LIMIT.
 stage() {
   local name=$1 limit=$2
   shift 2
   [[ $name =~ $only ]] || return 0
-  if (( SECONDS - start + 5 > budget )); then
+  local left=$(( budget - (SECONDS - start) - 10 ))
+  if (( left < 20 )); then
     echo "== $name: skipped (budget of ${budget} s spent)"
     return
   fi
-  echo "== $name ($(( SECONDS - start )) s in)"
-  timeout "$limit" bash -c '"$@"' "$name" "$@"
+  (( limit > left )) && limit=$left
+  echo "== $name ($(( SECONDS - start )) s in, at most $limit s)"
+  STAGE_LIMIT=$limit timeout "$limit" bash -c '"$@"' "$name" "$@"
   local rc=$?
   (( rc == 0 )) || echo "== $name: exit $rc$( (( rc == 124 )) && echo ' (time limit)')"
 }
@@ -169,16 +182,17 @@ for t in test_mpm test_coupling; do
 done
 export bin out workers baseline
 
-# prepared cases through the CUDA driver, --workers at a time (a case run before is skipped: a
+# prepared cases through the CUDA driver, WORKERS at a time (a case run before is skipped: a
 # second call goes on), their outputs but the particle snapshots and restart points in
-# $out/NAME.tgz, written also when the runs are stopped at LIMIT seconds (the cases not finished
-# have no done.json/run.json and are run again by the next call): prepared_run NAME LIMIT DIR
+# $out/NAME.tgz, written also when the runs are stopped 15 s before the stage's limit (the cases
+# not finished have no done.json/run.json and are run again by the next call; a refinement run
+# whose free leg's state did not come back runs that leg again): prepared_run NAME WORKERS DIR
 # SCRIPT [OPTION...]
 prepared_run() {
-  local name=$1 limit=$2 dir=$3 script=$4
+  local name=$1 n=$2 dir=$3 script=$4 limit=$(( STAGE_LIMIT - 15 ))
   shift 4
   timeout -k 5 "$limit" python3 "$script" --run-prepared "$dir" --backend cuda --exe "$bin/mpmsdem-run" \
-    --workers "$workers" --threads "$(( $(nproc) / workers > 0 ? $(nproc) / workers : 1 ))" "$@" 2>&1 | tee "$out/$name.log"
+    --workers "$n" --threads "$(( $(nproc) / n > 0 ? $(nproc) / n : 1 ))" "$@" 2>&1 | tee "$out/$name.log"
   local rc=${PIPESTATUS[0]}
   (( rc == 124 )) && echo "$name: stopped at its ${limit} s; the cases above that say so are done"
   tar czf "$out/$name.tgz" --exclude=mpm.snapshots --exclude='*.restart' --exclude='*.checkpoint.json' \
@@ -186,25 +200,27 @@ prepared_run() {
   return "$rc"
 }
 export -f prepared_run
-[ -n "$design" ] && stage design 420 prepared_run design 400 "$design" scripts/validation/paper_flume_design.py
+[ -n "$design" ] && stage design 420 prepared_run design "$workers" "$design" scripts/validation/paper_flume_design.py
 # (the §3.2 cube at Δx 0.0025 m to 0.4 s: 6,144,000 points, about 37,000 steps of 1.29e-5 s in the two legs;
 # at the rates measured on an H200 in double, 1.48e9 particle-updates/s and the coupling's 0.63 of the MPM step
 # (docs/benchmarks.md), about 4 min: an estimate, not a measurement)
-[ -n "$convergence" ] && stage convergence 560 prepared_run convergence 540 "$convergence" \
+[ -n "$convergence" ] && stage convergence 550 prepared_run convergence 1 "$convergence" \
   scripts/validation/flume_convergence.py
-[ -n "$walls" ] && stage walls 420 prepared_run walls 400 "$walls" scripts/validation/impact_walls.py
-# sweep_run DIR LIMIT: a prepared trade-off sweep's runs one after another on CUDA (side by side
-# they only take turns on the GPU), their logs and coupled.h5 in $out/sweep.tgz also when stopped
+[ -n "$walls" ] && stage walls 420 prepared_run walls 1 "$walls" scripts/validation/impact_walls.py
+# sweep_run DIR: a prepared trade-off sweep's runs one after another on CUDA (side by side they
+# only take turns on the GPU), their logs and coupled.h5 in $out/sweep.tgz also when stopped
+# (15 s before the stage's limit)
 sweep_run() {
   local dir=$1 rc
-  MPMSDEM_RUN="$bin/mpmsdem-run" JOBS=1 OMP_NUM_THREADS=$(nproc) timeout -k 5 "$2" bash "$dir/run_driver.sh" 2>&1 |
+  MPMSDEM_RUN="$bin/mpmsdem-run" JOBS=1 OMP_NUM_THREADS=$(nproc) timeout -k 5 $(( STAGE_LIMIT - 15 )) \
+    bash "$dir/run_driver.sh" 2>&1 |
     tee "$out/sweep.log"
   rc=${PIPESTATUS[0]}
   tar czf "$out/sweep.tgz" --exclude='*.snapshots' --exclude='*.restart' -C "$(dirname "$dir")" "$(basename "$dir")"
   return "$rc"
 }
 export -f sweep_run
-[ -n "$sweep" ] && stage sweep 420 sweep_run "$sweep" 400
+[ -n "$sweep" ] && stage sweep 420 sweep_run "$sweep"
 
 # flume_run NAME SCENE BACKEND PRECISION [ARGS...]: one --bench run, its JSON line in $out/NAME.json
 # (FLUME_EXE: another mpmsdem-run)
@@ -411,9 +427,6 @@ export -f field_run
 
 # the §5 cases last: they take what is left of the budget (a case not finished by then is run
 # again from its start by the next call)
-if [ -n "$study" ]; then
-  left=$(( budget - (SECONDS - start) - 20 ))
-  (( left > 60 )) || left=60
-  stage study $(( left + 15 )) prepared_run study "$left" "$study" examples/parametric_study.py ${until:+--until "$until"}
-fi
+[ -n "$study" ] && stage study "$budget" prepared_run study "$workers" "$study" examples/parametric_study.py \
+  ${until:+--until "$until"}
 echo "== done in $(( SECONDS - start )) s"

@@ -340,6 +340,18 @@ def writeMeta(folder, meta):
     writeJson(os.path.join(folder, "meta.json"), meta)
 
 
+def flowFromThere(free):
+    """Whether the free leg's folder holds the state the coupled leg starts from (--flow-from
+    front_snapshot_0.json: its checkpoint and the snapshot it names)."""
+    marker = os.path.join(free, "front_snapshot_0.json")
+    if not os.path.exists(marker):
+        return False
+    with open(marker) as f:
+        m = json.load(f)
+    return (os.path.exists(os.path.join(free, m["checkpoint"])) and
+            os.path.exists(os.path.join(free, "mpm.snapshots", "%06d.h5" % m["snapshot"])))
+
+
 def runLegs(folder, exe, backend=None, precision=None, threads=None):
     """The free leg unless it ended before, then the coupled leg from the free flow's state, with
     the driver ``exe`` (the scenes' backend and precision unless given). Needs neither YADE nor
@@ -356,10 +368,19 @@ def runLegs(folder, exe, backend=None, precision=None, threads=None):
 
     def leg(scene, out, extra):
         return driverRun(exe, folder, scene, out, extra, backend, precision, threads)
+    free = os.path.join(folder, "free")
     resume = os.path.exists(os.path.join(folder, "coupled", "coupled.checkpoint.json"))
+    if meta.get("free_wall") is not None and not resume and not flowFromThere(free):
+        # the free leg ended elsewhere and its state did not come back (the archives of prepared
+        # runs leave snapshots and restart points out): the coupled leg cannot start from it
+        print("%s: the free leg's state to start the coupled leg from is not here: the free leg again"
+              % os.path.basename(folder), flush=True)
+        meta.pop("free_wall", None)
     if meta.get("free_wall") is None:  # written when the free leg ended: its outputs are whole
         resume = False
-        again = os.path.exists(os.path.join(folder, "free", "mpm.h5.restart"))
+        again = all(os.path.exists(os.path.join(free, f)) for f in ("mpm.h5.restart", "coupled.checkpoint.json"))
+        if not again and os.path.isdir(free):
+            shutil.rmtree(free)  # what a stopped or returned leg left: a fresh start
         meta.update(free_wall=leg("free.json", "free", ["--restart"] if again else []), free_resumed=again,
                     free_commit=started)
         meta.pop("front", None)
@@ -367,9 +388,12 @@ def runLegs(folder, exe, backend=None, precision=None, threads=None):
     if "front" not in meta:
         try:
             meta["front"] = frontOf(folder, meta["dx"])
-            writeMeta(folder, meta)
+            meta.pop("front_error", None)
         except ImportError:  # read later, where the run is read
             pass
+        except Exception as e:  # noqa: BLE001  (the coupled leg still runs; the report says what failed)
+            meta["front_error"] = "%s: %s" % (type(e).__name__, e)
+        writeMeta(folder, meta)
     with open(os.path.join(folder, "free", "front_snapshot_0.json")) as f:
         start = json.load(f)["step"]
     steps = int(round(meta["duration"] / meta["dt"])) - start

@@ -174,6 +174,23 @@ def test_run_prepared_runs_only_what_is_prepared_and_not_done(tmp_path, capsys):
     assert capsys.readouterr().out == "joint_viscosity_w0.2_dx0.0025: done before\n"
 
 
+def test_the_coupled_leg_starts_only_from_a_free_state_that_is_there(tmp_path):
+    # an archive of prepared runs comes back without snapshots and checkpoints: runLegs then runs
+    # the free leg again instead of a coupled leg the driver would refuse
+    free = tmp_path / "free"
+    free.mkdir()
+    assert not fc.flowFromThere(str(free))
+    (free / "front_snapshot_0.json").write_text(json.dumps({"checkpoint": "front_snapshot_0.checkpoint.json",
+                                                             "snapshot": 6, "step": 2470}))
+    (free / "front_snapshot_0.checkpoint.json").write_text("{}")
+    assert not fc.flowFromThere(str(free))  # the snapshot it names is missing
+    (free / "mpm.snapshots").mkdir()
+    (free / "mpm.snapshots" / "000006.h5").write_bytes(b"")
+    assert fc.flowFromThere(str(free))
+    (free / "front_snapshot_0.checkpoint.json").unlink()
+    assert not fc.flowFromThere(str(free))
+
+
 def test_impact_cases_run_prepared_skip_those_run_or_read(tmp_path, capsys):
     # a case run there has its run.json; one run and read here before run.json existed, its OUT/<case>.json
     for name, marker in (("wall_t20_L0.5_dx0.005", "wall_t20_L0.5_dx0.005/run.json"),
