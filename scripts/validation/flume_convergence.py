@@ -88,14 +88,15 @@ def addPreparedOptions(ap, readThere):
     ap.add_argument("--workers", type=int, default=1, help="--run-prepared: runs at a time; 1 (a run takes the device)")
 
 
-def runPreparedFolders(a, done, run):
+def runPreparedFolders(a, done, run, first=lambda folder: False):
     """``run(folder)`` for every run prepared in a.run_prepared (a folder with its meta.json) for
-    which ``done(folder)`` is false, one after another (``--workers`` above 1 is refused: a run takes
-    the whole device), without YADE; a run done before is skipped, so a stopped call is taken up
-    by the next."""
+    which ``done(folder)`` is false, one after another, those for which ``first(folder)`` holds
+    first, then by name (``--workers`` above 1 is refused: a run takes the whole device), without
+    YADE; a run done before is skipped, so a stopped call is taken up by the next."""
     if a.workers != 1:
         raise SystemExit("--workers = %d: a prepared run takes a whole device; run them one at a time (1)" % a.workers)
-    folders = sorted(os.path.dirname(p) for p in glob.glob(os.path.join(a.run_prepared, "*", "meta.json")))
+    folders = sorted((os.path.dirname(p) for p in glob.glob(os.path.join(a.run_prepared, "*", "meta.json"))),
+                     key=lambda folder: (not first(folder), folder))
     if not folders:
         raise SystemExit("--run-prepared %s: no prepared run there (--prepare writes them)" % a.run_prepared)
     for folder in folders:

@@ -32,10 +32,10 @@ for both with F_static = ½ ρ g h_f A (Eq 21's, k 1).
     /usr/bin/python3 scripts/validation/impact_walls.py --out results/impact_walls --report-only
 
 On a machine with a GPU and no YADE (scripts/bench/gpu_run.sh --walls DIR): ``--prepare`` writes
-the cases' scenes here (an obstacle's once its free flow's numbers are in OUT: it lasts until
---rest after that flow's arrival), ``--run-prepared DIR --exe PATH --backend cuda`` runs them
-there (a wall's deposit read there, where the snapshot is), and the first command again, without
-``--prepare``, reads them here.
+the cases' scenes here, ``--run-prepared DIR --exe PATH --backend cuda`` runs them there (the free
+flows first; a wall's deposit read there, where the snapshot is), and the first command again,
+without ``--prepare``, reads them here. An obstacle's run lasts until --rest after its free flow's
+arrival: prepared with its free flow in the same call, it takes that arrival where both run.
 
 Each case's numbers go to OUT/<case>.json when it ends and finished cases are not run again; a
 run that was interrupted continues from its last snapshot (every 0.1 s);
@@ -67,6 +67,7 @@ DEPOSIT = 0.02            # h_d: the highest point within this distance upstream
 FLUME_BEYOND = 0.3        # the flume goes on this far past the station [m]: its end wall sends nothing back
                           # into the probe's 50 ms
 RESTART_EVERY = 0.1       # a run saves a snapshot (a restart point) this often [s]
+FREE_DURATION = 3.0       # the free flow's run at most [s] (it stops when the probe has read the front)
 RHO = 1600.0              # the flow's bulk density [kg/m³] (the glass beads' of Table 1)
 G = 9.81
 
@@ -161,13 +162,17 @@ def prepare(a, kind, theta, folder):
             "station": station, "dt": dt, "points": scene.mpm.numParticles, "flip_blend": scene.flipBlend(),
             "prepared_commit": commit()}
     if kind == "free":
-        driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=3.0, dt=dt, seriesEvery=every,
+        driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=FREE_DURATION, dt=dt,
+                          seriesEvery=every,
                           outputEvery=RESTART_EVERY, vtk="none", stopWhenProbed=True,
                           flowProbes=[{"x": station, "halfWidth": STATION_HALF, "bedZ": 0.0, "window": 0.05}])
     else:
-        meta["duration"] = a.arrival + a.rest
-        driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=meta["duration"], dt=dt,
-                          seriesEvery=every, outputEvery=min(RESTART_EVERY, meta["duration"]), vtk="none")
+        # without the free flow's arrival yet (prepared beside it): a duration runLeg sets where they run
+        meta["duration"] = None if a.arrival is None else a.arrival + a.rest
+        meta.update(rest=a.rest, free_case=runName(a, "free", theta))
+        duration = FREE_DURATION if a.arrival is None else meta["duration"]
+        driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=duration, dt=dt,
+                          seriesEvery=every, outputEvery=min(RESTART_EVERY, duration), vtk="none")
     with open(os.path.join(folder, "meta.json"), "w") as f:
         json.dump(meta, f, indent=1)
 
@@ -191,6 +196,26 @@ def depositHeight(folder, meta):
     return float(x[near, 2].max()) if near.any() else 0.0
 
 
+def settleDuration(folder, meta):
+    """An obstacle prepared beside its free flow: its run's duration, the free flow's arrival (read
+    from the free case's folder beside it, run before it) + --rest, into its scene and meta.json."""
+    if meta.get("duration") is not None:
+        return meta
+    free = os.path.join(os.path.dirname(os.path.abspath(folder)), meta["free_case"])
+    if not os.path.exists(os.path.join(free, "out", "flow_probes.json")):
+        raise RuntimeError("%s: its free flow %s has not run (it runs first: --run-prepared over both)"
+                           % (os.path.basename(folder), meta["free_case"]))
+    duration = readFree(free)["arrival"] + meta["rest"]
+    path = os.path.join(folder, "scene.json")
+    with open(path) as f:
+        scene = json.load(f)
+    scene["run"].update(duration=duration, output_every=min(RESTART_EVERY, duration))
+    writeJson(path, scene)
+    meta = dict(meta, duration=duration)
+    writeJson(os.path.join(folder, "meta.json"), meta)
+    return meta
+
+
 def runLeg(folder, exe, backend=None, precision=None, threads=None):
     """The case's driver run (from its last restart point where one is there), without YADE or
     numpy: its wall time, where it ran and, for a wall where h5py is there to read it, the
@@ -198,6 +223,8 @@ def runLeg(folder, exe, backend=None, precision=None, threads=None):
     them."""
     with open(os.path.join(folder, "meta.json")) as f:
         meta = json.load(f)
+    if meta["kind"] != "free":
+        meta = settleDuration(folder, meta)
     resume = os.path.exists(os.path.join(folder, "out", "coupled.checkpoint.json" if meta["kind"] != "free"
                                          else "mpm.h5.restart"))
     started = commit()  # the checkout the driver starts from (HEAD may move during a run of hours)
@@ -248,20 +275,22 @@ def readObstacle(folder, meta, free, hd=None):
     return r
 
 
-def prepareCase(a, kind, theta):
+def prepareCase(a, kind, theta, beside=False):
     """The case's folder OUT/<case>/ with its scene and meta.json (a child process builds them with
-    YADE), unless they are there; an obstacle's needs its free flow's arrival (its run's end).
+    YADE), unless they are there; an obstacle's needs its free flow's arrival (its run's end), or
+    with ``beside`` its free flow prepared in OUT too (the duration is then set where they run).
     Returns (folder, the free flow's numbers or None)."""
     name = runName(a, kind, theta)
     folder = os.path.join(a.out, name)
-    os.makedirs(folder, exist_ok=True)
     free = None
     if kind != "free":
         path = os.path.join(a.out, runName(a, "free", theta) + ".json")
-        if not os.path.exists(path):
+        if os.path.exists(path):
+            with open(path) as f:
+                free = json.load(f)["free"]
+        elif not (beside and os.path.exists(os.path.join(a.out, runName(a, "free", theta), "meta.json"))):
             raise RuntimeError("%s: needs the free flow at %g deg first (--cases free,...)" % (name, theta))
-        with open(path) as f:
-            free = json.load(f)["free"]
+    os.makedirs(folder, exist_ok=True)
     if not os.path.exists(os.path.join(folder, "meta.json")):
         child = ["--child", "prepare", kind, repr(theta)] + a.argv
         if free:
@@ -490,7 +519,8 @@ def main(argv):
             print("%s: %.0f s (%s)" % (os.path.basename(folder), r["wall_seconds"], r["backend"]), flush=True)
         # done: run there, or run and read here (cases of before run.json have only their numbers)
         return runPreparedFolders(a, lambda folder: any(os.path.exists(p) for p in (
-            os.path.join(folder, "run.json"), folder.rstrip(os.sep) + ".json")), run)
+            os.path.join(folder, "run.json"), folder.rstrip(os.sep) + ".json")), run,
+            first=lambda folder: os.path.basename(folder.rstrip(os.sep)).startswith("free_"))
     if a.child:
         kind, theta = a.child[1], float(a.child[2])
         prepare(a, kind, theta, os.path.join(a.out, runName(a, kind, theta)))
@@ -500,7 +530,7 @@ def main(argv):
         for theta in a.incline:
             for kind in [k for k in ("free", "wall", "block") if k in a.cases]:
                 if not os.path.exists(os.path.join(a.out, runName(a, kind, theta) + ".json")):
-                    print("prepared %s" % prepareCase(a, kind, theta)[0], flush=True)
+                    print("prepared %s" % prepareCase(a, kind, theta, beside=True)[0], flush=True)
         return
     if not a.report_only:
         import mpmsdem.driver

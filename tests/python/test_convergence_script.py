@@ -200,3 +200,30 @@ def test_impact_cases_run_prepared_skip_those_run_or_read(tmp_path, capsys):
         (tmp_path / marker).write_text("{}")
     iw.main(["--run-prepared", str(tmp_path), "--exe", str(tmp_path / "no-such-driver")])
     assert capsys.readouterr().out == "free_t20_L0.5_dx0.005: done before\nwall_t20_L0.5_dx0.005: done before\n"
+
+
+def test_an_obstacle_prepared_beside_its_free_flow_takes_its_arrival_where_they_run(tmp_path, capsys):
+    # the free flows run first whatever the names' order; an obstacle's duration is then the free
+    # flow's arrival + its --rest, in its scene and meta.json; without the free flow's outputs it
+    # is refused, naming the free case
+    free, wall = tmp_path / "free_t20_L0.5_dx0.0025", tmp_path / "block_t20_L0.5_dx0.0025"
+    for folder, kind in ((free, "free"), (wall, "block")):
+        folder.mkdir()
+        (folder / "meta.json").write_text(json.dumps({"kind": kind}))
+    order = []
+    fc.runPreparedFolders(iw.parse(["--run-prepared", str(tmp_path)]), lambda f: False, order.append,
+                          first=lambda f: os.path.basename(f).startswith("free_"))
+    assert [os.path.basename(f) for f in order] == [free.name, wall.name]
+    meta = {"kind": "block", "duration": None, "rest": 0.12, "free_case": free.name}
+    (wall / "scene.json").write_text(json.dumps({"run": {"duration": 3.0, "dt": 1e-5, "output_every": 0.1}}))
+    with pytest.raises(RuntimeError, match="its free flow free_t20_L0.5_dx0.0025 has not run"):
+        iw.settleDuration(str(wall), meta)
+    (free / "out").mkdir()
+    (free / "out" / "flow_probes.json").write_text(json.dumps(
+        {"probes": [{"arrival": 0.4559, "h_f": 0.0416, "v_f": 1.53, "Fr": 2.40}]}))
+    settled = iw.settleDuration(str(wall), meta)
+    assert settled["duration"] == pytest.approx(0.5759, abs=1e-12)
+    assert json.loads((wall / "meta.json").read_text())["duration"] == pytest.approx(0.5759, abs=1e-12)
+    run = json.loads((wall / "scene.json").read_text())["run"]
+    assert run["duration"] == pytest.approx(0.5759, abs=1e-12) and run["output_every"] == 0.1 and run["dt"] == 1e-5
+    assert iw.settleDuration(str(wall), settled) is settled  # set before: left alone
