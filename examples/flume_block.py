@@ -327,8 +327,8 @@ def resolutionNote(dx):
         wall = []
     if wall:
         finest = max(wall, key=lambda q: q.settings["cells_per_flow_depth"])
-        note += ("; a wall's first blow converges at about first order from above, still %+.0f %% off its limit at "
-                 "%.1f cells per flow depth" % (100 * finest.error, finest.settings["cells_per_flow_depth"]))
+        note += ("; a wall's first blow converges from above, still %+.0f %% off its limit at %.1f cells per flow "
+                 "depth" % (100 * finest.error, finest.settings["cells_per_flow_depth"]))
     return note + " (docs/coupled-results.md)"
 
 
