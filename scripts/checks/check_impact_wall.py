@@ -10,10 +10,12 @@ the bore that it sends upstream: mass and momentum across the bore (analysis.ref
 give α = F/(ρ v² h w) = 1.46 for the arriving flow; ours is 1.60 here, 1.50 at Δx 0.01 m
 (docs/coupled-results.md, "The impact on a wall across the flume"). The band held here, 0.90–1.25
 times the bore's, is left by a coupling that passes a fifth too much or too little of the flow's
-momentum to the wall (1.32 or 0.88 times). The first blow (its largest 10 ms mean, 3.8 times the bore's at this spacing and 2.6
-at 0.01 m: the discretisation's) and the deposit's load at the end are held as regression values
-against scripts/checks/reference/impact_wall.json: F_peak 15 %, the quasi-steady and the end
-force 10 %, the arriving flow's h_f and v_f 5 %.
+momentum to the wall (1.32 or 0.88 times). The first blow (its largest 10 ms mean, 3.9 times the
+bore's at this spacing, 2.4 at 0.01 m and 1.9 at the limit of the refinement: docs/coupled-results.md)
+and the deposit's load at the end are held as regression values against
+scripts/checks/reference/impact_wall.json: the three forces to 3 %, the arriving flow's h_f and v_f
+to 2 % (a run gives the same digits every time; the bands let through what another compiler's
+rounding moves, not a change of the model: the blend that holds ν moved h_f by 1.5 %).
 
     OMP_NUM_THREADS=1 /usr/bin/python3 scripts/checks/check_impact_wall.py [--regenerate]
 
@@ -34,7 +36,7 @@ from mpmsdem import analysis  # noqa: E402
 REF = os.path.join(HERE, "reference", "impact_wall.json")
 THETA, DX = 20.0, 0.02
 BAND = (0.90, 1.25)  # the quasi-steady α over the reflected bore's
-TOL = {"F_peak": 0.15, "F_later": 0.10, "F_end": 0.10, "h_f": 0.05, "v_f": 0.05}
+TOL = {"F_peak": 0.03, "F_later": 0.03, "F_end": 0.03, "h_f": 0.02, "v_f": 0.02}
 
 
 def main():
