@@ -122,6 +122,13 @@ void MpLevelSetCoupling::pullHistories() {
   floatRun_ = false;  // (downloaded in double)
 }
 
+void MpLevelSetCoupling::historiesToHost() {
+  pullHistories();
+  xiF_.assign(xi_.begin(), xi_.end());  // (downloaded in double; a float step reads these)
+  historiesOnDevice_ = false;
+  historiesToDevice_ = true;  // (should a later step run on a device)
+}
+
 std::vector<long long> MpLevelSetCoupling::historyKeys() const {
   return currentHistoryKeys(key_, written_, historyStep_, slots_);
 }
@@ -156,12 +163,7 @@ void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt,
   onDevice_ = false;  // (until a device step: where the histories and contacts are)
   if (numBodies() == 0 || view.n == 0) return;
   if (view.device) return runDevice(view, dt, safety, watch);
-  if (historiesOnDevice_) {  // the steps before ran on the device: go on from its histories
-    pullHistories();
-    xiF_.assign(xi_.begin(), xi_.end());  // (downloaded in double; a float step reads these)
-    historiesOnDevice_ = false;
-    historiesToDevice_ = true;  // (should a later step run there again)
-  }
+  if (historiesOnDevice_) historiesToHost();  // the steps before ran on the device: go on from its histories
   if (view.n != particleCount_ || (isFloat ? xiF_.size() : xi_.size()) != 3 * slots_ * view.n) {
     // a new particle set: no history yet, and its smallest radius may be below the grids'
     const double v0 = isFloat ? smallest<float>(view.volume0, view.n) : smallest<double>(view.volume0, view.n);
@@ -234,11 +236,7 @@ void MpLevelSetCoupling::centreReached(long particle, int body) const {
 // shape table, launched and collected at once (the flow's step is queued after it).
 void MpLevelSetCoupling::runDevice(const mpm::ParticleView& view, double dt, double safety, double watch) {
   if (!device_ || devicePrecision_ != view.precision) {
-    if (historiesOnDevice_) {  // the replaced backend's histories go on in the new one
-      pullHistories();
-      historiesOnDevice_ = false;
-      historiesToDevice_ = true;
-    }
+    if (historiesOnDevice_) historiesToHost();  // the replaced backend's histories go on in the new one
     device_ = makeCouplingDeviceBackend(view.precision);
     if (!device_) throw RuntimeFailure("MP-LevelSet coupling: the solver runs on CUDA but this build has no CUDA coupling");
     device_->recordContacts(true);  // contacts() reads them: those of a few bodies

@@ -115,6 +115,8 @@ class MpLevelSetCoupling : public CouplingReport {
   template <typename T>
   void reduce(const std::vector<MpContact<T>>& contacts, const BlockState<T>* B, double dt);
   void runDevice(const mpm::ParticleView& view, double dt, double safety, double watch);
+  // The device's histories become the host's current ones (those a later device step uploads).
+  void historiesToHost();
   [[noreturn]] void centreReached(long particle, int body) const;
 
   std::vector<int> ids_;

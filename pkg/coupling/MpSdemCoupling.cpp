@@ -328,11 +328,8 @@ void MpSdemCoupling::launchForces(mpm::MpmSolver& solver, double dt) {
   in.historySlots = slots_;
   in.historyStep = ++historyStep_;
   CouplingStepOutput& out = last_;
+  out = CouplingStepOutput{std::move(out.sums)};  // a step without contact or failure; the sums' buffer kept
   out.sums.assign(static_cast<std::size_t>(kBlockSums) * blocks_.size(), 0.0);
-  out.minParticleStep = out.minApproachStep = std::numeric_limits<double>::infinity();
-  out.overflow = 0;
-  out.badParticle = -1;
-  out.badBlock = -1;
   if (view.device) {
     device_->launch(in);
   } else if (hostFloat) {

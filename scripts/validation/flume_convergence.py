@@ -157,8 +157,9 @@ def parse(argv):
     if not 0 < a.width < float("inf"):
         ap.error("--width = %r m: must be > 0" % a.width)
     for d in a.dx:
-        if wholeCellsError(d, a.width):
-            ap.error("--dx = %r: %s" % (d, wholeCellsError(d, a.width)))
+        why = wholeCellsError(d, a.width)
+        if why:
+            ap.error("--dx = %r: %s" % (d, why))
     if a.ppc < 1 or round(a.ppc ** (1.0 / 3.0)) ** 3 != a.ppc:
         ap.error("--ppc = %r: must be a perfect cube (1, 8, 27, ...)" % a.ppc)
     return a
@@ -226,8 +227,7 @@ def prepare(a, dx, folder):
                       flowProbes=[{"x": station, "halfWidth": STATION_HALF, "bedZ": 0.0, "window": 0.05}],
                       seriesEvery=every, outputEvery=RESTART_EVERY, vtk="none", stopWhenProbed=True,
                       snapshotWhenFrontAt=[station - AHEAD - 2 * dx, station])
-    with open(os.path.join(folder, "meta.json"), "w") as f:
-        json.dump(meta, f, indent=1)
+    writeMeta(folder, meta)
 
 
 def analysisModule():

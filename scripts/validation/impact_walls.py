@@ -115,8 +115,9 @@ def parse(argv):
     a.cases = a.cases.split(",")
     if not a.cases or not set(a.cases) <= {"free", "wall", "block"}:
         ap.error("--cases = %r: a comma-separated subset of free, wall, block" % ",".join(a.cases))
-    if {"free", "wall"} & set(a.cases) and wholeCellsError(a.dx, a.width):  # the wall's slice
-        ap.error("--dx = %r: %s" % (a.dx, wholeCellsError(a.dx, a.width)))
+    why = wholeCellsError(a.dx, a.width)
+    if {"free", "wall"} & set(a.cases) and why:  # the wall's slice
+        ap.error("--dx = %r: %s" % (a.dx, why))
     return a
 
 
@@ -163,18 +164,16 @@ def prepare(a, kind, theta, folder):
             "prepared_commit": commit()}
     if kind == "free":
         driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=FREE_DURATION, dt=dt,
-                          seriesEvery=every,
-                          outputEvery=RESTART_EVERY, vtk="none", stopWhenProbed=True,
+                          seriesEvery=every, outputEvery=RESTART_EVERY, vtk="none", stopWhenProbed=True,
                           flowProbes=[{"x": station, "halfWidth": STATION_HALF, "bedZ": 0.0, "window": 0.05}])
     else:
-        # without the free flow's arrival yet (prepared beside it): a duration runLeg sets where they run
-        meta["duration"] = None if a.arrival is None else a.arrival + a.rest
-        meta.update(rest=a.rest, free_case=runName(a, "free", theta))
-        duration = FREE_DURATION if a.arrival is None else meta["duration"]
+        # without the free flow's arrival yet (prepared beside it): settleDuration sets it where they run
+        meta.update(duration=None if a.arrival is None else a.arrival + a.rest, rest=a.rest,
+                    free_case=runName(a, "free", theta))
+        duration = meta["duration"] or FREE_DURATION
         driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=duration, dt=dt,
                           seriesEvery=every, outputEvery=min(RESTART_EVERY, duration), vtk="none")
-    with open(os.path.join(folder, "meta.json"), "w") as f:
-        json.dump(meta, f, indent=1)
+    writeJson(os.path.join(folder, "meta.json"), meta)
 
 
 def readFree(folder):
