@@ -11,11 +11,11 @@ Asserts:
 - symmetry: the scene is symmetric about the centre line, so the cube must not turn on the bed
   (|yaw| < 1e-6 deg);
 - the story: the flow reaches the cube at the reference time (0.319 s; paper ~0.25 s,
-  experiment 0.3 s) within 5 %; F_t at 0.4 s (its mean over 0.395-0.405 s from the impulse,
-  0.27 N; paper 0.32 N) within 30 %; the cube turns
-  slowly (rotation at 0.7 s, 36° stored, within 25 %) through 45° at the reference time (0.752 s;
-  paper 0.72 s) within 5 %, and has not tumbled: its largest rotation by 0.77 s stays below 100°
-  (a cube thrown over at the impact, or one that tumbles, fails; so does one that never turns).
+  experiment 0.3 s); F_t at 0.4 s (its mean over 0.395-0.405 s from the impulse, 0.27 N; paper
+  0.32 N); the cube turns slowly (rotation at 0.7 s, 36° stored) through 45° at the reference
+  time (0.752 s; paper 0.72 s), each within 1 % of the stored reference (docs/validation.md, "What the checks' bands let through"), and has not
+  tumbled: its largest rotation by 0.77 s stays below 100° (a cube thrown over at the impact, or
+  one that tumbles, fails; so does one that never turns).
 
     /usr/bin/python3 scripts/checks/check_flume_block_joint.py [--regenerate]
 
@@ -32,7 +32,7 @@ from mpmsdem.flume import FLUME_SETTINGS, GLASS_BEADS, Block, Flume
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REF = os.path.join(HERE, "reference", "flume_block_joint.json")
-TOL = {"first_touch": 0.05, "force_04": 0.30, "rotation_07": 0.25, "t45": 0.05}
+TOL = {"first_touch": 0.01, "force_04": 0.01, "rotation_07": 0.01, "t45": 0.01}
 MAX_TURN = 100.0  # [deg] past its next face a cube has tumbled
 
 

@@ -15,8 +15,9 @@ from the recorded impulse) falls at every step (7.09, 5.87, 5.21, 4.64 N, not ye
 pair holds those orderings and their size, so a change that breaks the convergence fails: from
 0.02 to 0.01 m the first touch comes earlier, the flow's depth h_f falls and the first blow
 falls, each by the stored amount within a third of it. Each number of the pair is also held
-against the stored reference (scripts/checks/reference/flume_convergence_pair.json): first touch
-3 %, the first blow 15 %, h_f and v_f 5 %.
+to 1 % of the stored reference (scripts/checks/reference/flume_convergence_pair.json; docs/validation.md, "What the checks' bands let through"):
+the change of the blend in 7fe22ea moved the coarse blow by 2.3 %, which the 15 % band of
+before let through.
 
     OMP_NUM_THREADS=2 /usr/bin/python3 scripts/checks/check_flume_convergence_pair.py [--regenerate]
 
@@ -37,8 +38,8 @@ from mpmsdem import analysis  # noqa: E402
 REF = os.path.join(HERE, "reference", "flume_convergence_pair.json")
 PAIR = (0.02, 0.01)
 WIDTH, DURATION = 0.1, 0.38
-TOL = {"touch_coarse": 0.03, "touch_fine": 0.03, "blow_coarse": 0.15, "blow_fine": 0.15, "h_f_coarse": 0.05,
-       "h_f_fine": 0.05, "v_f_fine": 0.05}
+TOL = {"touch_coarse": 0.01, "touch_fine": 0.01, "blow_coarse": 0.01, "blow_fine": 0.01, "h_f_coarse": 0.01,
+       "h_f_fine": 0.01, "v_f_fine": 0.01}
 ORDERED = ("touch_gain", "h_f_drop", "blow_drop")  # coarse minus fine, > 0, held to a third of the stored value
 ORDER_TOL = 1 / 3
 

@@ -14,13 +14,12 @@ Asserts (physics that cannot drift):
 - every block's position, velocity and orientation stay finite;
 - the flow reaches the stack and pushes the loose blocks downstream (travel > 0).
 
-Against the stored reference (scripts/checks/reference/liu2018_blocks.json), two-sided
-relative tolerances: peak downstream force on the bottom block (the largest 10 ms mean, from
-the impulse) 25 %, the travel of the middle block 25 % (±31 mm), of the top block 35 %
-(±30 mm): the push itself, not the position (0.21 m at the start), so a stack that is not
-pushed fails. The impact of a 500-point
-flow on thin blocks is chaotic: compiler flags or thread counts move these by a few per cent
-of the position (about 10 mm); a change of the method moves them by more.
+Against the stored reference (scripts/checks/reference/liu2018_blocks.json), each within 1 %
+(two-sided): the peak downstream force on the bottom block (the largest 10 ms mean, from the
+impulse), the travel of the middle and the top block (the push itself, not the position, 0.21 m
+at the start, so a stack that is not pushed fails). A run gives the same digits on any thread
+count, and a build that rounds otherwise moves them by 1e-10 (docs/validation.md, "What the checks' bands let through"); the change of the blend in
+7fe22ea moved the middle block's travel by 2 %, which the 25 % band of before let through.
 
     /usr/bin/python3 scripts/checks/check_liu2018_blocks.py [--regenerate]
 
@@ -37,7 +36,7 @@ from yade import O
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REF = os.path.join(HERE, "reference", "liu2018_blocks.json")
-TOL = {"peak_force_bottom": 0.25, "travel_middle": 0.25, "travel_top": 0.35}
+TOL = {"peak_force_bottom": 0.01, "travel_middle": 0.01, "travel_top": 0.01}
 HALF, SWEEP, KC, RHO = (0.010, 0.099, 0.009), 0.0009, 1e4, 500.0
 GRANULAR = {"density": 1300, "young_modulus": 5e4, "poisson_ratio": 0.40, "mu_s": math.tan(math.radians(22.0)),
             "mu_2": 0.60}
