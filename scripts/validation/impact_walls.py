@@ -17,8 +17,9 @@ built with YADE):
   the free flow's arrival, the deposit then at rest: the flow's kinetic energy is given) the mean
   force F_end over the last 0.1 s, the deposit's depth h_d against the wall (its highest point
   within 2 cm upstream) and the coefficient k_end = F_end / (½ ρ g cosθ h_d² w);
-- **block** (not by default): the §3.2 copper cube (h_b 0.02 m) glued at the same station on the
-  centre line of a lane five cubes wide (frictionless sides: a row of cubes 0.1 m apart): its F_peak.
+- **block** (not by default): the §3.2 copper cube (h_b 0.02 m; another size with --block-size)
+  glued at the same station on the centre line of a lane five cubes wide (frictionless sides: a row
+  of cubes 0.1 m apart; another width with --lane): its F_peak.
 
 The numbers set beside them: α = F_peak/(ρ v_f² h_f w) for the wall, against the reflected
 bore that a wall sends into a steady flow (mass and momentum across a jump, material at rest
@@ -88,6 +89,12 @@ def parse(argv):
                          "need 0.1)" % REST)
     ap.add_argument("--cases", default="free,wall", help="which runs: free, wall, block (comma-separated; "
                     "the block needs Δx 0.01 m or finer: at 0.02 m it is one cell)")
+    ap.add_argument("--block-size", type=float, default=CUBE,
+                    help="the glued cube's edge h_b [m] > 0 (default %g: the §3.2 cube); a bigger cube has more "
+                         "cells per block height at the same Δx" % CUBE)
+    ap.add_argument("--lane", type=float, default=None,
+                    help="the block's lane: width [m], at least twice --block-size (default: five cubes wide, "
+                         "rounded up to whole cells)")
     ap.add_argument("--out", default="results/impact_walls", help="folder of the runs")
     ap.add_argument("--package-data", action="store_true",
                     help="store the wall's refinement (three spacings of one incline, one of them 0.01 m) in "
@@ -109,28 +116,38 @@ def parse(argv):
         ap.error("--incline = %r: each must be in (0, 60) deg" % a.incline)
     if not 0.1 < a.rest < float("inf"):
         ap.error("--rest = %r: must be > 0.1 s (the 30–70 ms window after the touch) and finite" % a.rest)
-    for name in ("L0", "dx", "width") + (("young",) if a.young is not None else ()):
+    for name in ("L0", "dx", "width", "block_size") + tuple(n for n in ("young", "lane") if getattr(a, n) is not None):
         if not 0 < getattr(a, name) < float("inf"):
-            ap.error("--%s = %r: must be > 0 and finite" % (name, getattr(a, name)))
+            ap.error("--%s = %r: must be > 0 and finite" % (name.replace("_", "-"), getattr(a, name)))
     a.cases = a.cases.split(",")
     if not a.cases or not set(a.cases) <= {"free", "wall", "block"}:
         ap.error("--cases = %r: a comma-separated subset of free, wall, block" % ",".join(a.cases))
     why = wholeCellsError(a.dx, a.width)
     if {"free", "wall"} & set(a.cases) and why:  # the wall's slice
         ap.error("--dx = %r: %s" % (a.dx, why))
+    if a.lane is not None:
+        if a.lane < 2 * a.block_size:
+            ap.error("--lane = %r: must be at least twice --block-size (%g m): the flow passes the cube"
+                     % (a.lane, a.block_size))
+        why = wholeCellsError(a.dx, a.lane)
+        if "block" in a.cases and why:
+            ap.error("--dx = %r: %s (--lane)" % (a.dx, why))
     return a
 
 
 def runName(a, kind, theta):
-    return "%s_t%g_L%g_dx%g%s" % (kind, theta, a.L0, a.dx, "" if a.young is None else "_E%g" % a.young)
+    name = "%s_t%g_L%g_dx%g%s" % (kind, theta, a.L0, a.dx, "" if a.young is None else "_E%g" % a.young)
+    if kind == "block":  # the §3.2 cube in its five-cube lane keeps the name its runs always had
+        name += ("" if a.block_size == CUBE else "_hb%g" % a.block_size) + ("" if a.lane is None else "_lane%g" % a.lane)
+    return name
 
 
 def laneWidth(a, kind):
-    """The flume's width for a run: the wall's slice, or for the block a lane five cubes wide
-    (the flow passes two cubes' width either side of it: in a lane of three, at Δx 0.02 m, the
-    flow jammed beside the cube and loaded it as a wall), rounded up to whole cells."""
+    """The flume's width for a run: the wall's slice, or for the block --lane or by default a lane
+    five cubes wide (the flow passes two cubes' width either side of it: in a lane of three, at Δx
+    0.02 m, the flow jammed beside the cube and loaded it as a wall), rounded up to whole cells."""
     if kind == "block":
-        return math.ceil(5 * CUBE / a.dx - 1e-9) * a.dx
+        return a.lane if a.lane is not None else math.ceil(5 * a.block_size / a.dx - 1e-9) * a.dx
     return a.width
 
 
@@ -151,7 +168,7 @@ def prepare(a, kind, theta, folder):
         blocks = [Block(half=(WALL[0], width / 2, WALL[1]), x=station, density=2500, friction=0.0,
                         flowFriction=joint["flow_friction"], blockedDOFs="xyzXYZ")]
     elif kind == "block":
-        blocks = [Block(half=(CUBE / 2,) * 3, x=station, density=8900, friction=0.67,
+        blocks = [Block(half=(a.block_size / 2,) * 3, x=station, density=8900, friction=0.67,
                         flowFriction=joint["flow_friction"], blockedDOFs="xyzXYZ")]
     scene = Flume(blocks=blocks, dx=a.dx, width=width, inclineDeg=theta, length=station + FLUME_BEYOND,
                   columnLength=COLUMN, columnHeight=0.2, granular=granular,
@@ -162,6 +179,8 @@ def prepare(a, kind, theta, folder):
     meta = {"kind": kind, "theta": theta, "young": granular["young_modulus"], "L0": a.L0, "dx": a.dx, "width": width,
             "station": station, "dt": dt, "points": scene.mpm.numParticles, "flip_blend": scene.flipBlend(),
             "prepared_commit": commit()}
+    if kind == "block":
+        meta["block_size"] = a.block_size
     if kind == "free":
         driver.writeScene(os.path.join(folder, "scene.json"), scene.coupled, duration=FREE_DURATION, dt=dt,
                           seriesEvery=every, outputEvery=RESTART_EVERY, vtk="none", stopWhenProbed=True,
@@ -267,7 +286,8 @@ def readObstacle(folder, meta, free, hd=None):
                  k_end=r["F_end"] / (0.5 * RHO * G * cos * hd * hd * w) if hd > 0 else None,
                  ratio=r["F_peak"] / analysis.staticImpactForce(RHO, h, h * w))
     else:
-        area = min(h, CUBE) * CUBE
+        hb = blockSize(meta)
+        area = min(h, hb) * hb
         r.update(alpha_f=r["F_peak"] / (RHO * v * v * area), alpha_later=r["F_later"] / (RHO * v * v * area),
                  eq20=analysis.dynamicPressureCoefficient(free["Fr"]),
                  ratio=r["F_peak"] / analysis.staticImpactForce(RHO, h, area))
@@ -340,7 +360,8 @@ COLUMNS = [  # (heading, value of a run); "–" where a run has none
     ("v_f [m/s]", lambda r, f, o: "%.2f" % f["v_f"]),
     ("Fr", lambda r, f, o: "%.2f" % f["Fr"]),
     ("Fr′", lambda r, f, o: "%.2f" % o["Fr_cos"]),
-    ("obstacle", lambda r, f, o: ("wall %g m wide" if r["kind"] == "wall" else "cube in a %g m lane") % r["width"]),
+    ("obstacle", lambda r, f, o: "wall %g m wide" % r["width"] if r["kind"] == "wall" else
+     "cube %g mm (%.1f cells) in a %g m lane" % (1e3 * blockSize(r), blockSize(r) / r["dx"], r["width"])),
     ("F_peak [N]", lambda r, f, o: "%.3g" % o["F_peak"]),
     ("α peak", lambda r, f, o: "%.2f" % o.get("alpha", o.get("alpha_f"))),
     ("α 30–70 ms", lambda r, f, o: fmt(o.get("alpha_later"), "%.2f")),
@@ -353,6 +374,11 @@ COLUMNS = [  # (heading, value of a run); "–" where a run has none
     ("KE end/peak", lambda r, f, o: "%.1e" % (o["kinetic_end"] / o["kinetic_peak"])),
     ("commit", lambda r, f, o: r["commit"]),
 ]
+
+
+def blockSize(r):
+    """A block run's cube edge h_b [m] (runs before --block-size: the §3.2 cube's)."""
+    return r.get("block_size", CUBE)
 
 
 def loadRuns(folder):
@@ -394,9 +420,12 @@ def figure(out, study=None):
     fr = np.linspace(1.2, 6.5, 100)
     dxs = sorted({r["dx"] for r in runs}, reverse=True)
     shade = {dx: plt.cm.viridis(0.15 + 0.7 * k / max(1, len(dxs) - 1)) for k, dx in enumerate(dxs)}
-    for kind, marker, name in (("wall", "s", "wall"), ("block", "o", "cube (h_b 20 mm)")):
+    obstacles = [("wall", None, "s", "wall")] + [
+        ("block", hb, marker, "cube (h_b %g mm)" % (1e3 * hb))
+        for hb, marker in zip(sorted({blockSize(r) for r in runs if r["kind"] == "block"}), "oDv^")]
+    for kind, hb, marker, name in obstacles:
         for dx in dxs:
-            rs = [r for r in runs if r["kind"] == kind and r["dx"] == dx]
+            rs = [r for r in runs if r["kind"] == kind and r["dx"] == dx and (hb is None or blockSize(r) == hb)]
             if not rs:
                 continue
             x = [r["free"]["Fr"] for r in rs]

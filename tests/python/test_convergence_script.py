@@ -4,6 +4,7 @@ import math
 import os
 import sys
 
+import numpy as np
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts", "validation"))
@@ -110,6 +111,41 @@ def test_impact_walls_spacing_must_divide_the_slice(capsys):
         fc.parse(["--dx", "0.01,0.007"])
     assert "--dx = 0.007: must divide the width 0.2 m into whole cells, e.g. 0.0071428571 or 0.0068965517 m" in capsys.readouterr().err
 
+
+def test_impact_walls_block_size_and_lane(capsys):
+    # the §3.2 cube in its five-cube lane keeps its runs' names; another cube or lane is named by them
+    a = iw.parse(["--cases", "free,block", "--dx", "0.005"])
+    assert (iw.runName(a, "block", 20.0), iw.laneWidth(a, "block")) == ("block_t20_L0.5_dx0.005", pytest.approx(0.1))
+    a = iw.parse(["--cases", "block", "--dx", "0.005", "--block-size", "0.04", "--lane", "0.1"])
+    assert iw.runName(a, "block", 20.0) == "block_t20_L0.5_dx0.005_hb0.04_lane0.1"
+    assert iw.runName(a, "free", 20.0) == "free_t20_L0.5_dx0.005"  # the same free flow
+    assert iw.laneWidth(a, "block") == 0.1 and iw.laneWidth(a, "wall") == 0.04
+    # five cubes of 0.03 m at 0.007 m: 21.43 cells, rounded up to 22
+    a = iw.parse(["--cases", "block", "--dx", "0.007", "--block-size", "0.03"])
+    assert iw.laneWidth(a, "block") == pytest.approx(0.154)
+    for bad, why in ((["--lane", "0.07", "--block-size", "0.04"], "--lane = 0.07: must be at least twice"),
+                     (["--lane", "0.1", "--dx", "0.007"], "must divide the width 0.1 m into whole cells"),
+                     (["--block-size", "0"], "--block-size = 0.0: must be > 0"),
+                     (["--lane", "-1"], "--lane = -1.0: must be > 0")):
+        with pytest.raises(SystemExit):
+            iw.parse(["--cases", "block"] + bad)
+        assert why in capsys.readouterr().err
+
+
+def test_impact_walls_block_area_is_its_face_below_the_flow(tmp_path, monkeypatch):
+    # α_f = F/(ρ v² A), A = min(h_f, h_b) h_b: a 40 mm cube in a 41.6 mm flow takes its whole face,
+    # the 20 mm cube of an older run (no block_size) its own
+    from mpmsdem import analysis
+    t = np.arange(201) * 0.001  # 10 N from the touch at 0.1 s on, in the records as the driver's
+    force = np.where(t > 0.1 + 1e-9, 10.0, 0.0)
+    series = {"t": t, "Ft": force, "J": 10.0 * np.maximum(t - 0.1, 0.0), "flow_kinetic": np.ones(t.size)}
+    monkeypatch.setattr(analysis, "driverBlockSeries", lambda folder, block: (series, None))
+    free = {"h_f": 0.0416, "v_f": 1.5, "Fr": 2.35}
+    for meta, area in (({"kind": "block", "theta": 20.0, "block_size": 0.04}, 0.04 * 0.04),
+                       ({"kind": "block", "theta": 20.0}, 0.02 * 0.02)):
+        r = iw.readObstacle(str(tmp_path), meta, free)
+        assert r["alpha_f"] == pytest.approx(10.0 / (iw.RHO * 1.5 ** 2 * area), rel=1e-12)
+        assert r["ratio"] == pytest.approx(10.0 / (0.5 * iw.RHO * iw.G * 0.0416 * area), rel=1e-12)
 
 def test_impact_walls_figure_draws_what_is_there(tmp_path):
     # no obstacle run: no figure; a wall and a cube (one free flow beside them): the figure,
