@@ -88,7 +88,7 @@ def parse(argv):
                          "deposit then at rest, for the wall's F_end and k_end; the first blow and the 30–70 ms "
                          "need 0.1)" % REST)
     ap.add_argument("--cases", default="free,wall", help="which runs: free, wall, block (comma-separated; "
-                    "the block needs Δx 0.01 m or finer: at 0.02 m it is one cell)")
+                    "the block needs two cells per --block-size or more: the §3.2 cube Δx 0.01 m or finer)")
     ap.add_argument("--block-size", type=float, default=CUBE,
                     help="the glued cube's edge h_b [m] > 0 (default %g: the §3.2 cube); a bigger cube has more "
                          "cells per block height at the same Δx" % CUBE)
@@ -125,6 +125,9 @@ def parse(argv):
     why = wholeCellsError(a.dx, a.width)
     if {"free", "wall"} & set(a.cases) and why:  # the wall's slice
         ap.error("--dx = %r: %s" % (a.dx, why))
+    if "block" in a.cases and a.block_size / a.dx < 2 - 1e-9:
+        ap.error("--dx = %r: the block (--block-size %g m) would be %.1f cells tall; it needs two or more "
+                 "(a cube one cell tall is thrown about as a point)" % (a.dx, a.block_size, a.block_size / a.dx))
     if a.lane is not None:
         if a.lane < 2 * a.block_size:
             ap.error("--lane = %r: must be at least twice --block-size (%g m): the flow passes the cube"

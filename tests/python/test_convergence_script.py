@@ -121,12 +121,14 @@ def test_impact_walls_block_size_and_lane(capsys):
     assert iw.runName(a, "free", 20.0) == "free_t20_L0.5_dx0.005"  # the same free flow
     assert iw.laneWidth(a, "block") == 0.1 and iw.laneWidth(a, "wall") == 0.04
     # five cubes of 0.03 m at 0.007 m: 21.43 cells, rounded up to 22
+    assert iw.parse(["--cases", "block", "--dx", "0.02", "--block-size", "0.04"]).dx == 0.02  # two cells
     a = iw.parse(["--cases", "block", "--dx", "0.007", "--block-size", "0.03"])
     assert iw.laneWidth(a, "block") == pytest.approx(0.154)
     for bad, why in ((["--lane", "0.07", "--block-size", "0.04"], "--lane = 0.07: must be at least twice"),
                      (["--lane", "0.1", "--dx", "0.007"], "must divide the width 0.1 m into whole cells"),
                      (["--block-size", "0"], "--block-size = 0.0: must be > 0"),
-                     (["--lane", "-1"], "--lane = -1.0: must be > 0")):
+                     (["--lane", "-1"], "--lane = -1.0: must be > 0"),
+                     (["--dx", "0.02"], "--dx = 0.02: the block (--block-size 0.02 m) would be 1.0 cells tall")):
         with pytest.raises(SystemExit):
             iw.parse(["--cases", "block"] + bad)
         assert why in capsys.readouterr().err
