@@ -13,7 +13,8 @@ built with YADE):
   v_f (means over the 50 ms after the front's arrival, over a 2 cm window) and Fr = v_f/√(g h_f)
   (the paper's definition), Fr′ = v_f/√(g cosθ h_f) (the theories');
 - **wall**: a glued box across the whole width, 0.15 m tall, 2 cm thick: the flow's downstream
-  force on it (10 ms means, from the recorded impulse: every step's force) and its peak F_peak; at the end (the run lasts until 1 s after
+  force on it (10 ms means, from the recorded impulse: every step's force) and its peak F_peak (and
+  the largest 20 ms mean, as §3.3's blow is read); at the end (the run lasts until 1 s after
   the free flow's arrival, the deposit then at rest: the flow's kinetic energy is given) the mean
   force F_end over the last 0.1 s, the deposit's depth h_d against the wall (its highest point
   within 2 cm upstream) and the coefficient k_end = F_end / (½ ρ g cosθ h_d² w);
@@ -60,6 +61,8 @@ from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, addPreparedOpti
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
 BLOW = 0.01               # window of the mean force for its peak [s]
+BLOW_LONG = 0.02          # a longer one, as §3.3's blow is read (liu2018_force.py): the 10 ms peak of a cube
+                          # falls with Δx where its 20 ms one converges [s]
 LATER = (0.03, 0.07)      # after the first blow: the mean force over this window after the first touch [s], for
                           # the reflected bore's quasi-steady load
 REST = 1.0                # by default an obstacle's run lasts this long after the free flow's arrival [s] (--rest)
@@ -274,7 +277,8 @@ def readObstacle(folder, meta, free, hd=None):
     theta, h, v = meta["theta"], free["h_f"], free["v_f"]
     cos = math.cos(math.radians(theta))
     touch = float(t[np.nonzero(np.abs(f) > 0)[0][0]])
-    r = {"F_peak": peak, "t_peak": tPeak, "F_end": analysis.meanForceBetween(s, t[-1] - END, t[-1]),
+    r = {"F_peak": peak, "t_peak": tPeak, "F_peak_20ms": analysis.peakMeanForce(s, BLOW_LONG)[0],
+         "F_end": analysis.meanForceBetween(s, t[-1] - END, t[-1]),
          "t_end": float(t[-1]), "first_touch": touch,
          "F_later": analysis.meanForceBetween(s, touch + LATER[0], touch + LATER[1]), "forces_from": analysis.forceSource(s),
          "kinetic_end": float(s["flow_kinetic"][-1]), "kinetic_peak": float(s["flow_kinetic"].max()),
@@ -366,6 +370,7 @@ COLUMNS = [  # (heading, value of a run); "–" where a run has none
     ("obstacle", lambda r, f, o: "wall %g m wide" % r["width"] if r["kind"] == "wall" else
      "cube %g mm (%.1f cells) in a %g m lane" % (1e3 * blockSize(r), blockSize(r) / r["dx"], r["width"])),
     ("F_peak [N]", lambda r, f, o: "%.3g" % o["F_peak"]),
+    ("F_peak 20 ms [N]", lambda r, f, o: fmt(o.get("F_peak_20ms"), "%.3g")),
     ("α peak", lambda r, f, o: "%.2f" % o.get("alpha", o.get("alpha_f"))),
     ("α 30–70 ms", lambda r, f, o: fmt(o.get("alpha_later"), "%.2f")),
     ("α bore", lambda r, f, o: fmt(o.get("bore"), "%.2f") if "bore" in o else "Eq 20: %.2f" % o["eq20"]),

@@ -146,6 +146,7 @@ def test_impact_walls_block_area_is_its_face_below_the_flow(tmp_path, monkeypatc
     for meta, area in (({"kind": "block", "theta": 20.0, "block_size": 0.04}, 0.04 * 0.04),
                        ({"kind": "block", "theta": 20.0}, 0.02 * 0.02)):
         r = iw.readObstacle(str(tmp_path), meta, free)
+        assert (r["F_peak"], r["F_peak_20ms"], r["first_touch"]) == pytest.approx((10.0, 10.0, 0.101), rel=1e-9)
         assert r["alpha_f"] == pytest.approx(10.0 / (iw.RHO * 1.5 ** 2 * area), rel=1e-12)
         assert r["ratio"] == pytest.approx(10.0 / (0.5 * iw.RHO * iw.G * 0.0416 * area), rel=1e-12)
 
