@@ -120,8 +120,8 @@ def test_impact_walls_block_size_and_lane(capsys):
     assert iw.runName(a, "block", 20.0) == "block_t20_L0.5_dx0.005_hb0.04_lane0.1"
     assert iw.runName(a, "free", 20.0) == "free_t20_L0.5_dx0.005"  # the same free flow
     assert iw.laneWidth(a, "block") == 0.1 and iw.laneWidth(a, "wall") == 0.04
-    # five cubes of 0.03 m at 0.007 m: 21.43 cells, rounded up to 22
     assert iw.parse(["--cases", "block", "--dx", "0.02", "--block-size", "0.04"]).dx == 0.02  # two cells
+    # five cubes of 0.03 m at 0.007 m: 21.43 cells, rounded up to 22
     a = iw.parse(["--cases", "block", "--dx", "0.007", "--block-size", "0.03"])
     assert iw.laneWidth(a, "block") == pytest.approx(0.154)
     for bad, why in ((["--lane", "0.07", "--block-size", "0.04"], "--lane = 0.07: must be at least twice"),
@@ -149,6 +149,7 @@ def test_impact_walls_block_area_is_its_face_below_the_flow(tmp_path, monkeypatc
         assert (r["F_peak"], r["F_peak_20ms"], r["first_touch"]) == pytest.approx((10.0, 10.0, 0.101), rel=1e-9)
         assert r["alpha_f"] == pytest.approx(10.0 / (iw.RHO * 1.5 ** 2 * area), rel=1e-12)
         assert r["ratio"] == pytest.approx(10.0 / (0.5 * iw.RHO * iw.G * 0.0416 * area), rel=1e-12)
+
 
 def test_impact_walls_figure_draws_what_is_there(tmp_path):
     # no obstacle run: no figure; a wall and a cube (one free flow beside them): the figure,

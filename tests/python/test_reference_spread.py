@@ -20,7 +20,7 @@ def test_every_reference_check_declares_its_tolerances():
         assert set(tol) <= set(rs.readJson(os.path.join(rs.CHECKS, "reference", ref))), ref
 
 
-def test_spread_of_two_builds_against_the_tolerances(tmp_path, capsys):
+def test_spread_of_two_builds_against_the_tolerances(tmp_path):
     checks, ours, other = (tmp_path / d for d in ("checks", "ours", "other"))
     for d in (checks, ours, other):
         d.mkdir()
@@ -32,7 +32,7 @@ def test_spread_of_two_builds_against_the_tolerances(tmp_path, capsys):
     assert [r[:2] for r in rows] == [("wall", "F"), ("wall", "h")]
     assert rows[0][4] == pytest.approx(0.01, rel=1e-12) and rows[1][4] == 0.0
     assert rs.margin(rows[0][4], 0.03) == "3" and rs.margin(0.0, 0.02) == "exact"
-    # a difference past its tolerance: exit status 1
+    # a difference past its tolerance (what makes main's exit status 1)
     (other / "wall.json").write_text(json.dumps({"F": 10.5, "h": 0.05}))
     rows = rs.spread(str(ours), str(other), str(checks))
     assert rows[0][4] == pytest.approx(0.05, rel=1e-12) and abs(rows[0][4]) > rows[0][5]
