@@ -11,7 +11,7 @@ the spread between two builds of one commit that round differently, e.g. this tr
 check run with ``--regenerate`` in its own tree; a band no wider than a few times that spread
 still lets a deliberate change of the model fail.
 
-    python3 tools/reference_spread.py OTHER_TREE/scripts/checks/reference [--ref DIR] [--markdown]
+    python3 tools/reference_spread.py OTHER_TREE/scripts/checks/reference [--ref DIR] [--checks DIR] [--markdown]
 
 Prints, per compared key, this tree's value, the other's, their relative difference (a fraction)
 and the tolerance over it (the margin); the exit status is 1 where a difference exceeds its tolerance.
@@ -68,9 +68,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("other", help="the other build's reference folder (its checks run with --regenerate)")
     ap.add_argument("--ref", default=os.path.join(CHECKS, "reference"), help="this tree's reference folder")
+    ap.add_argument("--checks", default=CHECKS, help="the folder of the check scripts whose TOL are read")
     ap.add_argument("--markdown", action="store_true", help="a markdown table")
     a = ap.parse_args(argv)
-    rows = spread(a.ref, a.other)
+    rows = spread(a.ref, a.other, a.checks)
     if not rows:
         ap.error("no check has a reference in both %s and %s" % (a.ref, a.other))
     if a.markdown:
