@@ -56,13 +56,14 @@ import time
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, addPreparedOptions, commit, driverRun,  # noqa: E402
-                               fmt, limitOf, runPreparedFolders, storeStudy, wholeCellsError, writeJson)
+                               fmt, limitOf, runPreparedFolders, storeStudy, wholeCellsError, windowLimits, writeJson)
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
 BLOW = 0.01               # window of the mean force for its peak [s]
 BLOW_LONG = 0.02          # a longer one, as §3.3's blow is read (liu2018_force.py): the 10 ms peak of a cube
                           # falls with Δx where its 20 ms one converges [s]
+WINDOWS = (0.002, 0.005, 0.01, 0.02, 0.04)  # the blow read over each of these too, for the refinement report [s]
 LATER = (0.03, 0.07)      # after the first blow: the mean force over this window after the first touch [s], for
                           # the reflected bore's quasi-steady load
 REST = 1.0                # by default an obstacle's run lasts this long after the free flow's arrival [s] (--rest)
@@ -98,6 +99,9 @@ def parse(argv):
     ap.add_argument("--lane", type=float, default=None,
                     help="the block's lane: width [m], at least twice --block-size (default: five cubes wide, "
                          "rounded up to whole cells)")
+    ap.add_argument("--step-factor", type=float, default=1.0,
+                    help="the step as a fraction of the flume's own at --dx, in (0, 1] (default 1): at one Δx, "
+                         "whether a number follows the step or the grid (the flume's step shrinks with Δx)")
     ap.add_argument("--out", default="results/impact_walls", help="folder of the runs")
     ap.add_argument("--package-data", action="store_true",
                     help="store the wall's refinement (three spacings of one incline, one of them 0.01 m) in "
@@ -122,6 +126,8 @@ def parse(argv):
     for name in ("L0", "dx", "width", "block_size") + tuple(n for n in ("young", "lane") if getattr(a, n) is not None):
         if not 0 < getattr(a, name) < float("inf"):
             ap.error("--%s = %r: must be > 0 and finite" % (name.replace("_", "-"), getattr(a, name)))
+    if not 0 < a.step_factor <= 1:
+        ap.error("--step-factor = %r: must be in (0, 1] (a longer step than the flume's is not stable)" % a.step_factor)
     a.cases = a.cases.split(",")
     if not a.cases or not set(a.cases) <= {"free", "wall", "block"}:
         ap.error("--cases = %r: a comma-separated subset of free, wall, block" % ",".join(a.cases))
@@ -142,7 +148,8 @@ def parse(argv):
 
 
 def runName(a, kind, theta):
-    name = "%s_t%g_L%g_dx%g%s" % (kind, theta, a.L0, a.dx, "" if a.young is None else "_E%g" % a.young)
+    name = "%s_t%g_L%g_dx%g%s%s" % (kind, theta, a.L0, a.dx, "" if a.young is None else "_E%g" % a.young,
+                                    "" if a.step_factor == 1 else "_dtf%g" % a.step_factor)
     if kind == "block":  # the §3.2 cube in its five-cube lane keeps the name its runs always had
         name += ("" if a.block_size == CUBE else "_hb%g" % a.block_size) + ("" if a.lane is None else "_lane%g" % a.lane)
     return name
@@ -180,11 +187,11 @@ def prepare(a, kind, theta, folder):
                   columnLength=COLUMN, columnHeight=0.2, granular=granular,
                   basalFriction=joint["basal_friction"], sideWallFriction=0.0, flipViscosity=joint["flip_viscosity"],
                   verbose=False)
-    dt = O.dt
+    dt = O.dt * a.step_factor
     every = max(1, round(SERIES_EVERY / dt)) * dt
     meta = {"kind": kind, "theta": theta, "young": granular["young_modulus"], "L0": a.L0, "dx": a.dx, "width": width,
             "station": station, "dt": dt, "points": scene.mpm.numParticles, "flip_blend": scene.flipBlend(),
-            "prepared_commit": commit()}
+            "prepared_commit": commit(), "step_factor": a.step_factor}
     if kind == "block":
         meta["block_size"] = a.block_size
     if kind == "free":
@@ -278,6 +285,7 @@ def readObstacle(folder, meta, free, hd=None):
     cos = math.cos(math.radians(theta))
     touch = float(t[np.nonzero(np.abs(f) > 0)[0][0]])
     r = {"F_peak": peak, "t_peak": tPeak, "F_peak_20ms": analysis.peakMeanForce(s, BLOW_LONG)[0],
+         "F_windows": {"%g" % (1e3 * w): analysis.peakMeanForce(s, w)[0] for w in WINDOWS},
          "F_end": analysis.meanForceBetween(s, t[-1] - END, t[-1]),
          "t_end": float(t[-1]), "first_touch": touch,
          "F_later": analysis.meanForceBetween(s, touch + LATER[0], touch + LATER[1]), "forces_from": analysis.forceSource(s),
@@ -407,6 +415,48 @@ def table(out):
         if r["kind"] != "free":
             lines.append("| " + " | ".join(v(r, r["free"], r["obstacle"]) for _, v in COLUMNS) + " |")
     return "\n".join(lines)
+
+
+def obstacleOf(r):
+    """What an obstacle run is, but for its spacing: its kind, incline, L0, E, cube edge, flume
+    width and step factor (runs of one obstacle at several Δx share it; a lane rounded up to whole
+    cells may differ in its last digits)."""
+    return (r["kind"], r["theta"], r["L0"], r["young"], blockSize(r) if r["kind"] == "block" else None, round(r["width"], 9),
+            r.get("step_factor", 1.0))
+
+
+def refinement(out):
+    """The blow of each obstacle with three or more spacings, read over every window of WINDOWS,
+    against Δx: the three finest spacings' order and limit per window (:func:`windowLimits`: a
+    limit to trust, or why not and, where it gives one, a bracket). Markdown, with the
+    cells per block height (a cube) or per flow depth (a wall) of each spacing."""
+    groups = {}
+    for r in loadRuns(out):
+        if r["kind"] != "free" and "F_windows" in r["obstacle"]:
+            groups.setdefault(obstacleOf(r), []).append(r)
+    lines = []
+    for key, rs in sorted(groups.items(), key=lambda kv: tuple(-1 if v is None else v for v in kv[0][1:])):
+        rs = sorted(rs, key=lambda r: -r["dx"])
+        if len(rs) < 3:
+            continue
+        kind, theta, L0, young, hb, width, factor = key
+        cells = ["%.1f" % ((hb if hb else r["free"]["h_f"]) / r["dx"]) for r in rs]
+        lines += ["", "%s, %g°, L0 %g m, E %g MPa%s: Δx %s m (%s cells per %s); limits over the three finest" % (
+            "wall %g m wide" % width if kind == "wall" else "cube %g mm in a %g m lane" % (1e3 * hb, width),
+            theta, L0, young / 1e6, "" if factor == 1 else ", step x%g" % factor, " / ".join("%g" % r["dx"] for r in rs),
+            " / ".join(cells), "block height" if hb else "flow depth"), "",
+            "| window [ms] | largest mean [N] | order | limit [N] | bracket [N] | note |", "|---:|---|---:|---:|---|---|"]
+        finest = rs[-3:]
+        rows = windowLimits({float(w) / 1e3: [r["obstacle"]["F_windows"][w] for r in finest]
+                             for w in finest[-1]["obstacle"]["F_windows"]}, [r["dx"] for r in finest])
+        for row in rows:
+            w = "%g" % (1e3 * row["window"])
+            note = row["why"] or ""
+            lines.append("| %s | %s | %s | %s | %s | %s |" % (
+                w, " / ".join("%.3g" % r["obstacle"]["F_windows"][w] for r in rs), fmt(row["order"], "%.2f"),
+                fmt(row["limit"], "%.3g") if row["why"] is None else "–",
+                "%.3g–%.3g" % row["bracket"] if row["bracket"] else "–", note))
+    return "\n".join(lines[1:])
 
 
 def figure(out, study=None):
@@ -588,6 +638,11 @@ def main(argv):
     print(text)
     with open(os.path.join(a.out, "impact_walls.md"), "w") as f:
         f.write(text + "\n")
+    text = refinement(a.out)
+    if text:
+        print(text)
+        with open(os.path.join(a.out, "impact_walls_refinement.md"), "w") as f:
+            f.write(text + "\n")
     drawn = figure(a.out, a.study)
     if drawn:
         print("drew %s" % drawn)

@@ -147,6 +147,7 @@ def test_impact_walls_block_area_is_its_face_below_the_flow(tmp_path, monkeypatc
                        ({"kind": "block", "theta": 20.0}, 0.02 * 0.02)):
         r = iw.readObstacle(str(tmp_path), meta, free)
         assert (r["F_peak"], r["F_peak_20ms"], r["first_touch"]) == pytest.approx((10.0, 10.0, 0.101), rel=1e-9)
+        assert r["F_windows"] == pytest.approx({"2": 10.0, "5": 10.0, "10": 10.0, "20": 10.0, "40": 10.0}, rel=1e-9)
         assert r["alpha_f"] == pytest.approx(10.0 / (iw.RHO * 1.5 ** 2 * area), rel=1e-12)
         assert r["ratio"] == pytest.approx(10.0 / (0.5 * iw.RHO * iw.G * 0.0416 * area), rel=1e-12)
 
@@ -169,6 +170,80 @@ def test_impact_walls_figure_draws_what_is_there(tmp_path):
         json.dump({"force_ratio": 41.2, "free_flow": {"Fr": 3.1}}, f)
     path = iw.figure(str(tmp_path), str(study))
     assert path == str(tmp_path / "impact_walls.png") and os.path.getsize(path) > 10000
+
+
+H = [0.01, 0.2 / 28, 0.005]
+
+
+def law(f0, c, p):
+    """f0 + c Δx^p at the spacings H."""
+    return [f0 + c * x ** p for x in H]
+
+
+def test_window_limits_keep_ordered_limits_and_bracket_the_rest():
+    # 40 and 20 ms: exact power laws, limits 10 and 12 N (ordered); 10 ms: first order, its limit
+    # 13 N farther from the finest run than the runs lie apart (not trusted), bracketed by the 20 ms
+    # limit and the 5 ms one; 5 ms: limit 16 N; 2 ms: an exact law whose limit 11 N lies below the
+    # 5 ms limit, so it is dropped and bracketed by 16 N and its finest value
+    rows = fc.windowLimits({0.04: law(10, 400, 2), 0.02: law(12, 900, 2), 0.01: law(13, 4e3, 0.8),
+                            0.005: law(16, 3e4, 2), 0.002: law(11, 5e4, 1.5)}, H)
+    by = {r["window"]: r for r in rows}
+    assert [r["window"] for r in rows] == [0.002, 0.005, 0.01, 0.02, 0.04]
+    for w, f0 in ((0.04, 10), (0.02, 12), (0.005, 16)):
+        assert by[w]["why"] is None and by[w]["limit"] == pytest.approx(f0, rel=1e-6) and by[w]["bracket"] is None
+    assert by[0.01]["why"].startswith("order 0.80") and by[0.01]["bracket"] == pytest.approx((12, 16), rel=1e-6)
+    short = by[0.002]
+    assert short["limit"] == pytest.approx(11, rel=1e-6) and short["out_of_order"] == 0.005
+    assert short["why"].startswith("limit 11 below the 5 ms window's 16")
+    assert short["bracket"] == pytest.approx((16, short["values"][2]), rel=1e-6)
+
+
+def test_window_limits_bracket_a_rising_sequence_and_refuse_crossed_sides():
+    # a rising 10 ms sequence (limit 20 N, order 0.6: not trusted) above a kept 20 ms limit of
+    # 18 N: at or above its finest value, at or below nothing: no bracket; with a kept 5 ms limit
+    # of 25 N above it: from its finest value to 25 N. A falling one whose finest value lies
+    # under the longer window's limit: the sides cross, no bracket
+    rising = law(20, -40, 0.6)
+    rows = fc.windowLimits({0.01: rising, 0.02: law(18, 900, 2)}, H)
+    assert rows[0]["why"].startswith("order 0.60") and rows[0]["bracket"] is None
+    rows = fc.windowLimits({0.005: law(25, 3e4, 2), 0.01: rising, 0.02: law(18, 900, 2)}, H)
+    assert rows[1]["bracket"] == pytest.approx((rising[2], 25), rel=1e-9)
+    rows = fc.windowLimits({0.01: law(10, 40, 0.6), 0.02: law(18, 900, 2)}, H)
+    assert rows[0]["values"][2] < 18 and rows[0]["bracket"] is None
+
+
+def test_impact_walls_refinement_reads_each_obstacle_over_its_windows(tmp_path):
+    # a cube at three spacings (its lane rounded to whole cells differs in the last digits) whose
+    # 20 ms blow follows 12 + 900 Δx², and a wall at two spacings (too few: not in the report)
+    for dx, width in zip(H, (0.1, 0.09999999999999999, 0.1)):
+        windows = {"10": 13 + 4e3 * dx ** 0.8, "20": 12 + 900 * dx ** 2}
+        run = {"kind": "block", "theta": 20.0, "L0": 0.5, "young": 1e6, "dx": dx, "width": width, "block_size": 0.04,
+               "free": {"h_f": 0.04}, "obstacle": {"F_windows": windows}}
+        with open(tmp_path / ("block_dx%g.json" % dx), "w") as f:
+            json.dump(run, f)
+    for dx in (0.01, 0.005):
+        with open(tmp_path / ("wall_dx%g.json" % dx), "w") as f:
+            json.dump({"kind": "wall", "theta": 20.0, "L0": 0.5, "young": 1e6, "dx": dx, "width": 0.04,
+                       "free": {"h_f": 0.04}, "obstacle": {"F_windows": {"10": 20.0}}}, f)
+    text = iw.refinement(str(tmp_path))
+    assert text.startswith("cube 40 mm in a 0.1 m lane, 20°, L0 0.5 m, E 1 MPa: Δx 0.01 / 0.00714286 / 0.005 m "
+                           "(4.0 / 5.6 / 8.0 cells per block height)")
+    lines = text.splitlines()
+    assert len(lines) == 6 and "wall" not in text
+    f10 = [13 + 4e3 * dx ** 0.8 for dx in H]
+    assert lines[4].startswith("| 10 | %.3g / %.3g / %.3g | 0.80 | – | 12–%.3g |" % (*f10, f10[2]))
+    assert lines[5].startswith("| 20 | ") and "| 2.00 | 12 | – |  |" in lines[5]
+
+
+def test_impact_walls_step_factor_names_the_run_and_is_bounded(capsys):
+    a = iw.parse(["--dx", "0.01", "--step-factor", "0.5"])
+    assert a.step_factor == 0.5 and iw.runName(a, "wall", 20.0) == "wall_t20_L0.5_dx0.01_dtf0.5"
+    assert iw.runName(iw.parse(["--dx", "0.01"]), "wall", 20.0) == "wall_t20_L0.5_dx0.01"
+    for bad in ("0", "1.5", "nan"):
+        with pytest.raises(SystemExit):
+            iw.parse(["--step-factor", bad])
+        assert "--step-factor = %s: must be in (0, 1]" % float(bad) in capsys.readouterr().err
+
 
 def test_liu2018_force_windows_of_a_known_impulse():
     """liu2018_force.forceWindows on records every 1 ms (each record's force the one of the
