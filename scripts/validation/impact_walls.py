@@ -42,7 +42,10 @@ arrival: prepared with its free flow in the same call, it takes that arrival whe
 Each case's numbers go to OUT/<case>.json when it ends and finished cases are not run again; a
 run that was interrupted continues from its last snapshot (every 0.1 s);
 the table of all finished cases is printed and written to OUT/impact_walls.md, the figure
-(α and F_peak/F_static against Fr, beside the models) to OUT/impact_walls.png.
+(α and F_peak/F_static against Fr, beside the models) to OUT/impact_walls.png, and for each
+obstacle run at three spacings or more its blow over windows of 2 to 40 ms against Δx (each
+window's limit where one is to trust, else a bracket: :func:`refinement`) to
+OUT/impact_walls_refinement.md.
 """
 import argparse
 import glob
