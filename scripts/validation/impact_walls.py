@@ -107,8 +107,9 @@ def parse(argv):
                          "whether a number follows the step or the grid (the flume's step shrinks with Δx)")
     ap.add_argument("--out", default="results/impact_walls", help="folder of the runs")
     ap.add_argument("--package-data", action="store_true",
-                    help="store the wall's refinement (three spacings of one incline, one of them 0.01 m) in "
-                         "py/mpmsdem/tradeoffs.json (mpmsdem.tradeoffs: errors against the extrapolated limit)")
+                    help="store the refinement of each wall and glued cube (three spacings of one obstacle, one of "
+                         "them 0.01 m) in py/mpmsdem/tradeoffs.json (mpmsdem.tradeoffs: errors against the "
+                         "extrapolated limit, or a cube's against its bracket)")
     ap.add_argument("--study", default=None,
                     help="a folder of §5 cases (examples/parametric_study.py's JSON files, e.g. docs/data/study_s5) "
                          "drawn beside the runs on the figure's F_peak/F_static panel")
@@ -577,8 +578,70 @@ def packageStudy(runs, theta, L0, young, command):
             "rows": rows, "unconverged": unconverged}
 
 
+BLOCK_OUTPUTS = {"10": "glued_block_peak_force", "20": "glued_block_peak_force_20ms"}  # a cube's windows [ms]
+
+
+def packageBlockStudy(rs, command):
+    """A glued cube's refinement (one obstacle, three spacings or more, one of them 0.01 m) for
+    py/mpmsdem/tradeoffs.json: every run's relative error in its blow over the windows of
+    BLOCK_OUTPUTS against the limit kept through the three finest spacings
+    (:func:`windowLimits`), or, where only a bracket is known, against its ends (``error_ranges``;
+    the error is the end farthest from zero); a window with neither under ``unconverged``. The
+    resolution as cells per block height and per flow depth (the run's own h_f over Δx); the
+    work (points x steps per simulated second: the runs may go on for different times after the
+    blow) relative to the run at Δx 0.01 m. None when those runs are not there."""
+    rs = sorted(rs, key=lambda r: -r["dx"])
+    default = [r for r in rs if abs(r["dx"] - REFERENCE_DX) <= 1e-12 * REFERENCE_DX]
+    if len(rs) < 3 or not default:
+        return None
+    finest = rs[-3:]
+    limits = {"%g" % (1e3 * row["window"]): row for row in windowLimits(
+        {float(w) / 1e3: [r["obstacle"]["F_windows"][w] for r in finest] for w in BLOCK_OUTPUTS},
+        [r["dx"] for r in finest])}
+    hb, cells = blockSize(rs[0]), ["%.1f" % (blockSize(r) / r["dx"]) for r in rs]
+    errors, ranges, unconverged, how = [{} for _ in rs], [{} for _ in rs], {}, []
+    for w, out in BLOCK_OUTPUTS.items():
+        row, values = limits[w], [r["obstacle"]["F_windows"][w] for r in rs]
+        if row["why"] is None:
+            for e, f in zip(errors, values):
+                e[out] = (f - row["limit"]) / row["limit"]
+            how.append("%s: the limit %.4g N (order %.2f)" % (out, row["limit"], row["order"]))
+        elif row["bracket"]:
+            lo, hi = row["bracket"]
+            for e, g, f in zip(errors, ranges, values):
+                g[out] = [(f - hi) / hi, (f - lo) / lo]
+                e[out] = max(g[out], key=abs)
+            how.append("%s: no limit kept (%s), bracketed at %.4g to %.4g N" % (out, row["why"], lo, hi))
+        else:
+            unconverged[out] = "%s of a glued %g mm cube at %s cells per block height (Δx %s m): %s N, %s" % (
+                out, 1e3 * hb, " / ".join(cells), " / ".join("%.4g" % r["dx"] for r in rs),
+                " / ".join("%.4g" % v for v in values), row["why"])
+    work = lambda r: r["points"] / r["dt"]  # noqa: E731
+    rows = []
+    for r, e, g in zip(rs, errors, ranges):
+        row = {"settings": {"dx": r["dx"], "cells_per_block_height": blockSize(r) / r["dx"],
+                            "cells_per_flow_depth": r["free"]["h_f"] / r["dx"], "ppc": 8,
+                            "flip_viscosity": float(r["flip_blend"].split()[2]), "precision": "double"},
+               "errors": e, "cost": work(r) / work(default[0]), "cpu_cost": None, "reference": False,
+               "sensitivity": False}
+        if g:
+            row["error_ranges"] = g
+        rows.append(row)
+    return {"name": "glued_cube_%gmm_t%g_L%g_lane%g" % (1e3 * hb, rs[0]["theta"], rs[0]["L0"], round(rs[0]["width"], 9)),
+            "scene": "scripts/validation/impact_walls.py (the §3.2 flume at %g°, a glued %g mm cube on the centre line "
+                     "of a %g m lane %g m from the column, E %g Pa, PIC viscosity held)" % (
+                         rs[0]["theta"], 1e3 * hb, round(rs[0]["width"], 9), rs[0]["L0"], rs[0]["young"]),
+            "commit": ", ".join(sorted({r["commit"] for r in rs})),
+            "machine": "2-core x86_64 VM, one or two threads, shared (cpu_cost not measured)",
+            "command": command, "reference": {"dx": 0.0},
+            "extrapolated": "through Δx %s m, the largest mean force over each window (flume_convergence.windowLimits): "
+                            "%s" % (" / ".join("%.4g" % r["dx"] for r in finest), "; ".join(how)),
+            "rows": rows, "unconverged": unconverged}
+
+
 def packageData(out):
-    """Store the refinement of every incline, L0 and E with three spacings (one of them 0.01 m)."""
+    """Store the refinement of every wall (incline, L0 and E) and every glued cube with three
+    spacings (one of them 0.01 m)."""
     runs = loadRuns(out)
     stored = 0
     for theta, L0, young in sorted({(r["theta"], r["L0"], r["young"]) for r in runs if r["kind"] == "wall"}):
@@ -594,9 +657,22 @@ def packageData(out):
         if study is not None:
             storeStudy(study)
             stored += 1
+    cubes = {}
+    for r in runs:
+        if r["kind"] == "block" and "F_windows" in r["obstacle"] and r.get("step_factor", 1.0) == 1.0:
+            cubes.setdefault(obstacleOf(r), []).append(r)
+    for (_, theta, L0, young, hb, width, _), rs in sorted(cubes.items()):
+        study = packageBlockStudy(rs, "OMP_NUM_THREADS=1 python3 scripts/validation/impact_walls.py --out OUT --cases "
+                                      "free,block --incline %g --L0 %g --block-size %g --lane %g --rest %.3g --dx D for "
+                                      "D in %s, then --report-only --package-data" % (
+                                          theta, L0, hb, width, min(restAfter(r) for r in rs),
+                                          ", ".join("%g" % r["dx"] for r in sorted(rs, key=lambda r: -r["dx"]))))
+        if study is not None:
+            storeStudy(study)
+            stored += 1
     if not stored:
-        raise SystemExit("--package-data: no wall has three finished spacings at one incline, L0 and E, one of "
-                         "them %g m" % REFERENCE_DX)
+        raise SystemExit("--package-data: no wall or cube has three finished spacings at one incline, L0 and E, one "
+                         "of them %g m" % REFERENCE_DX)
 
 
 def main(argv):

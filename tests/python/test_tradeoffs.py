@@ -138,6 +138,28 @@ def test_the_wall_study_answers_the_peak_force_in_cells_per_flow_depth():
         tradeoffs.table("deposit_force")
 
 
+def test_a_glued_cube_s_first_blow_against_its_bracket():
+    # docs/coupled-results.md, "A glued cube in the same flows": the 20 mm cube's 10 ms blow
+    # 23.976 / 19.402 / 15.657 N at Δx 0.01 / 0.00714 / 0.005 m (2 / 2.8 / 4 cells per block
+    # height) keeps no limit (order 0.75); its 20 ms blow's limit (11.83 N, order 2.13) and its
+    # finest run bracket it, so at each spacing the error lies between F / 15.657 - 1 and
+    # F / 11.83 - 1, and the error offered is the larger: +102.7 / +64.0 / +32.4 %
+    rows = {round(p.settings["cells_per_block_height"], 1): p for p in tradeoffs.table("glued_block_peak_force")
+            if p.study["name"] == "glued_cube_20mm_t20_L0.5_lane0.1"}
+    assert sorted(rows) == [2.0, 2.8, 4.0]
+    for cells, f in ((2.0, 23.976), (2.8, 19.402), (4.0, 15.657)):
+        lo, hi = rows[cells].errorRange
+        assert lo == pytest.approx(f / 15.657 - 1, abs=1e-4) and hi == pytest.approx(f / 11.83 - 1, abs=2e-3)
+        assert rows[cells].error == hi
+    assert "error +0.0 to +32.4 % (the limit bracketed)" in repr(rows[4.0])
+    # the work per simulated second against the run at 0.01 m: 48,000 / 131,712 / 384,000 points
+    # at steps 5.17e-5 / 3.69e-5 / 2.59e-5 s
+    assert [rows[c].cost for c in (2.0, 2.8, 4.0)] == pytest.approx([1, 3.842, 16.0], abs=1e-3)
+    # its 20 ms blow converges: errors against 11.83 N (13.749 N at 4 cells: +16.2 %)
+    blow20 = tradeoffs.nearest("glued_block_peak_force_20ms", cells_per_block_height=4, cells_per_flow_depth=7.85)
+    assert blow20.errorRange is None and blow20.error == pytest.approx(13.749 / 11.83 - 1, abs=2e-3)
+
+
 def test_nearest_measured_setting(table):
     assert tradeoffs.nearest("runout", path=table, dx=0.011).settings == {"dx": 0.01}
     assert tradeoffs.nearest("runout", path=table, dx=0.02).settings == {"dx": 0.025}   # 0.025/0.02 < 0.02/0.0125
