@@ -187,5 +187,9 @@ def test_the_flume_example_states_what_its_resolution_gives():
     note = example.resolutionNote(0.01)
     assert "the cube is 2.0 cells tall (dx 0.01 m)" in note and "first touch +3 % off" in note
     assert "the first blow (10 ms mean), plateau force and tilt gave no limit to trust over 2.0 to 4.0" in note
+    # the glued 20 mm cube at 2 cells: 23.976 N against the bracket 11.83-15.657 N
+    assert ("held in place in a 20 deg flow, a cube of this size took a first blow (10 ms mean) +53 to +103 % off "
+            "its limit at 2.0 cells per block height (the limit bracketed)") in note
     # the wall's finest run from its study: 17.294 N against the limit 16.06 N at 7.9 cells per flow depth
     assert "a wall's first blow converges from above, still +8 % off its limit at 7.9 cells per flow depth" in note
+    assert "at 4.0 cells per block height (the limit bracketed)" in example.resolutionNote(0.005)
