@@ -29,7 +29,6 @@ backend) and ``summary.json``.
 """
 import argparse
 import json
-import math
 import os
 import sys
 import time
@@ -304,9 +303,9 @@ def resolutionNote(dx):
     """What refinement measured of the cube's force at this run's cells per block height (the
     studies of docs/coupled-results.md, "The impact under grid refinement" and the wall's, through
     mpmsdem.tradeoffs): the first touch's error there (and the first blow's where it has a limit),
-    which of the cube's force and motion gave no limit to trust, where a glued cube of its size
-    took its first blow against that blow's bracketed limit, and how far a wall's converging first
-    blow still is from its limit at the finest spacing measured."""
+    which of the cube's force and motion gave no limit to trust, how far a glued cube's converging
+    first blow is from its limit at the nearest cells per block height measured, and how far a
+    wall's converging first blow still is from its limit at the finest spacing measured."""
     from mpmsdem import tradeoffs
     cells = HB / dx
     p = tradeoffs.nearest("first_touch", cells_per_block_height=cells)
@@ -323,14 +322,15 @@ def resolutionNote(dx):
     if loose:
         note += "; the %s gave no limit to trust over %.1f to %.1f cells per block height" % (
             " and ".join([", ".join(loose[:-1])] * (len(loose) > 1) + loose[-1:]), measured[0], measured[-1])
-    # a glued cube of this size under refinement (cells per block height times Δx: its edge)
-    glued = [q for q in tradeoffs.table("glued_block_peak_force") if q.errorRange is not None and
-             abs(q.settings["cells_per_block_height"] * q.settings["dx"] - HB) < 1e-9 * HB]
+    try:  # a glued cube whose first blow converged, at the row nearest this run's cells per block height
+        glued = tradeoffs.nearest("glued_block_peak_force", cells_per_block_height=cells)
+    except ValueError:  # no study converged in it
+        glued = None
     if glued:
-        q = min(glued, key=lambda q: abs(math.log(q.settings["cells_per_block_height"] / cells)))
-        note += ("; held in place in a 20 deg flow, a cube of this size took a first blow (10 ms mean) %+.0f to "
-                 "%+.0f %% off its limit at %.1f cells per block height (the limit bracketed)" % (
-                     100 * q.errorRange[0], 100 * q.errorRange[1], q.settings["cells_per_block_height"]))
+        note += ("; a glued cube %g mm tall in a 20 deg flow took a first blow (10 ms mean) that converges, %+.0f %% "
+                 "off its limit at %.1f cells per block height" % (
+                     1e3 * glued.settings["cells_per_block_height"] * glued.settings["dx"], 100 * glued.error,
+                     glued.settings["cells_per_block_height"]))
     try:
         wall = [q for q in tradeoffs.table("peak_force") if "cells_per_flow_depth" in q.settings]
     except ValueError:  # no study converged in it

@@ -8,7 +8,7 @@
     tradeoffs.nearest("first_touch", cells_per_block_height=2)     # the error measured nearest a setting
     tradeoffs.propose(1.0, output="peak_force")     # a wall's first blow, in cells per flow depth
     tradeoffs.propose(0.3, output="block_peak_force")   # the §3.2 cube's, in cells per block height
-    tradeoffs.propose(0.5, output="glued_block_peak_force")  # a glued cube's, against a bracket
+    tradeoffs.propose(0.1, output="glued_block_peak_force")  # a glued 40 mm cube's, in cells per block height
 
 The numbers are measurements, shipped with the package in ``tradeoffs.json`` and written by the
 scripts that made them (``scripts/bench/tradeoff_mpm.py``,
@@ -21,12 +21,9 @@ A study refined towards a limit it could not run (the §3.2 cube's impact at 2, 
 cells per block height; a rigid wall struck by the flume's flow at 2.4, 4.2 and 7.7 cells per
 flow depth) takes the limit extrapolated through its three spacings as the reference
 (``extrapolated``: how) and lists the outputs whose sequence gave no limit under
-``unconverged``. Where the limit is only known to lie in a range (a glued cube's first blow,
-bracketed by the limit of a longer window and by its finest run), a row's error is the end of
-its range farthest from zero, the range beside it (``errorRange``), so a proposal meets the
-target wherever in the range the limit lies. Asking for an unconverged output raises a
-ValueError that says what was measured, or, where another study's converged, the proposal
-carries the others' findings in ``caveats`` (:func:`unconverged` lists them). Proposals come
+``unconverged``. Asking for an unconverged output raises a ValueError that says what was
+measured, or, where another study's converged, the proposal carries the others' findings in
+``caveats`` (:func:`unconverged` lists them). Proposals come
 from the resolution settings (grid spacing, points per cell, precision); rows that change a
 model choice such as the FLIP/PIC alpha are listed by :func:`table` with ``sensitivity`` set,
 and not proposed. A proposal is therefore an empirical guide for scenes like the measured one
@@ -41,9 +38,7 @@ _DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "tradeoffs.json
 
 class Proposal:
     """A measured setting: ``settings`` (dict), ``error`` (signed relative error of ``output``
-    against the study's reference; where the reference is a range, the error at its end farthest
-    from zero), ``errorRange`` (the errors at the range's two ends, lowest first, or None),
-    ``cost`` (work relative to the study's default setting;
+    against the study's reference), ``cost`` (work relative to the study's default setting;
     ``cpuCost``: CPU time relative to it, None where the runs shared the machine), ``reference`` /
     ``sensitivity`` flags, and where it
     was measured (``study``: name, scene, commit, machine, command, reference settings). The
@@ -54,8 +49,6 @@ class Proposal:
         self.output = output
         self.settings = dict(row["settings"])
         self.error = row["errors"][output]
-        bounds = row.get("error_ranges", {}).get(output)
-        self.errorRange = None if bounds is None else (min(bounds), max(bounds))
         self.cost = row["cost"]
         self.cpuCost = row.get("cpu_cost")
         self.reference = bool(row.get("reference", False))
@@ -66,10 +59,8 @@ class Proposal:
         self.caveats = list(caveats)
 
     def __repr__(self):
-        error = "%+.2f %%" % (100 * self.error) if self.errorRange is None else \
-            "%+.1f to %+.1f %% (the limit bracketed)" % tuple(100 * e for e in self.errorRange)
-        return "Proposal(%s: %s, error %s, cost %.3g x default; measured on %s, commit %s%s)" % (
-            self.output, ", ".join("%s=%s" % kv for kv in sorted(self.settings.items())), error,
+        return "Proposal(%s: %s, error %+.2f %%, cost %.3g x default; measured on %s, commit %s%s)" % (
+            self.output, ", ".join("%s=%s" % kv for kv in sorted(self.settings.items())), 100 * self.error,
             self.cost, self.study["scene"], self.study["commit"],
             "".join("; not converged elsewhere: " + c for c in self.caveats))
 

@@ -138,26 +138,22 @@ def test_the_wall_study_answers_the_peak_force_in_cells_per_flow_depth():
         tradeoffs.table("deposit_force")
 
 
-def test_a_glued_cube_s_first_blow_against_its_bracket():
-    # docs/coupled-results.md, "A glued cube in the same flows": the 20 mm cube's 10 ms blow
-    # 23.976 / 19.402 / 15.657 N at Δx 0.01 / 0.00714 / 0.005 m (2 / 2.8 / 4 cells per block
-    # height) keeps no limit (order 0.75); its 20 ms blow's limit (11.83 N, order 2.13) and its
-    # finest run bracket it, so at each spacing the error lies between F / 15.657 - 1 and
-    # F / 11.83 - 1, and the error offered is the larger: +102.7 / +64.0 / +32.4 %
-    rows = {round(p.settings["cells_per_block_height"], 1): p for p in tradeoffs.table("glued_block_peak_force")
-            if p.study["name"] == "glued_cube_20mm_t20_L0.5_lane0.1"}
-    assert sorted(rows) == [2.0, 2.8, 4.0]
-    for cells, f in ((2.0, 23.976), (2.8, 19.402), (4.0, 15.657)):
-        lo, hi = rows[cells].errorRange
-        assert lo == pytest.approx(f / 15.657 - 1, abs=1e-4) and hi == pytest.approx(f / 11.83 - 1, abs=2e-3)
-        assert rows[cells].error == hi
-    assert "error +0.0 to +32.4 % (the limit bracketed)" in repr(rows[4.0])
-    # the work per simulated second against the run at 0.01 m: 48,000 / 131,712 / 384,000 points
-    # at steps 5.17e-5 / 3.69e-5 / 2.59e-5 s
-    assert [rows[c].cost for c in (2.0, 2.8, 4.0)] == pytest.approx([1, 3.842, 16.0], abs=1e-3)
-    # its 20 ms blow converges: errors against 11.83 N (13.749 N at 4 cells: +16.2 %)
-    blow20 = tradeoffs.nearest("glued_block_peak_force_20ms", cells_per_block_height=4, cells_per_flow_depth=7.85)
-    assert blow20.errorRange is None and blow20.error == pytest.approx(13.749 / 11.83 - 1, abs=2e-3)
+def test_a_glued_cube_s_first_blow_in_cells_per_block_height():
+    # docs/coupled-results.md, "A glued cube in the same flows": the 40 mm cube's 10 ms blow
+    # 36.666 / 29.884 / 24.568 / 23.769 N at Δx 0.01 / 0.00714 / 0.005 / 0.004 m (4 / 5.6 / 8 / 10
+    # cells per block height); through the three finest, differences 5.316 and 0.799 N over
+    # spacings 1/140, 1/200, 1/250 m: order 4.69, limit 23.34 N; the runs +57 / +28 / +5.3 / +1.8 %
+    rows = {round(p.settings["cells_per_block_height"], 1): p for p in tradeoffs.table("glued_block_peak_force")}
+    assert sorted(rows) == [4.0, 5.6, 8.0, 10.0]
+    for cells, f in ((4.0, 36.666), (5.6, 29.884), (8.0, 24.568), (10.0, 23.769)):
+        assert rows[cells].error == pytest.approx(f / 23.34 - 1, abs=1e-3)
+    # the work per simulated second against the run at 0.01 m: 48,000 / 131,712 / 384,000 / 750,000
+    # points at steps 5.171e-5 / 3.694e-5 / 2.586e-5 / 2.069e-5 s: (0.01 / Δx)^4
+    assert [rows[c].cost for c in (4.0, 5.6, 8.0, 10.0)] == pytest.approx([1, 3.8416, 16, 39.0625], rel=1e-4)
+    assert tradeoffs.propose(0.1, output="glued_block_peak_force").settings["dx"] == 0.005
+    # its 20 ms blow: 23.245 N at 10 cells against the limit 22.14 N
+    blow20 = tradeoffs.nearest("glued_block_peak_force_20ms", cells_per_block_height=10)
+    assert blow20.error == pytest.approx(23.245 / 22.14 - 1, abs=1e-3)
 
 
 def test_nearest_measured_setting(table):
@@ -187,9 +183,9 @@ def test_the_flume_example_states_what_its_resolution_gives():
     note = example.resolutionNote(0.01)
     assert "the cube is 2.0 cells tall (dx 0.01 m)" in note and "first touch +3 % off" in note
     assert "the first blow (10 ms mean), plateau force and tilt gave no limit to trust over 2.0 to 4.0" in note
-    # the glued 20 mm cube at 2 cells: 23.976 N against the bracket 11.83-15.657 N
-    assert ("held in place in a 20 deg flow, a cube of this size took a first blow (10 ms mean) +53 to +103 % off "
-            "its limit at 2.0 cells per block height (the limit bracketed)") in note
+    # the glued 40 mm cube's row nearest 2 cells per block height: 36.666 N at 4 cells against 23.34 N
+    assert ("a glued cube 40 mm tall in a 20 deg flow took a first blow (10 ms mean) that converges, +57 % off its "
+            "limit at 4.0 cells per block height") in note
     # the wall's finest run from its study: 17.294 N against the limit 16.06 N at 7.9 cells per flow depth
     assert "a wall's first blow converges from above, still +8 % off its limit at 7.9 cells per flow depth" in note
-    assert "at 4.0 cells per block height (the limit bracketed)" in example.resolutionNote(0.005)
+    assert "+28 % off its limit at 5.6 cells per block height" in example.resolutionNote(0.004)
