@@ -284,12 +284,13 @@ def readObstacle(folder, meta, free, hd=None):
     from mpmsdem import analysis
     s, _ = analysis.driverBlockSeries(os.path.join(folder, "out"), block=1)  # block 0: the flume's bed
     t, f = s["t"], s["Ft"]
-    peak, tPeak = analysis.peakMeanForce(s, BLOW)
+    peaks = {w: analysis.peakMeanForce(s, w) for w in WINDOWS}  # (peak, its centre); BLOW and BLOW_LONG among them
+    peak, tPeak = peaks[BLOW]
     theta, h, v = meta["theta"], free["h_f"], free["v_f"]
     cos = math.cos(math.radians(theta))
     touch = float(t[np.nonzero(np.abs(f) > 0)[0][0]])
-    r = {"F_peak": peak, "t_peak": tPeak, "F_peak_20ms": analysis.peakMeanForce(s, BLOW_LONG)[0],
-         "F_windows": {"%g" % (1e3 * w): analysis.peakMeanForce(s, w)[0] for w in WINDOWS},
+    r = {"F_peak": peak, "t_peak": tPeak, "F_peak_20ms": peaks[BLOW_LONG][0],
+         "F_windows": {"%g" % (1e3 * w): p for w, (p, _) in peaks.items()},
          "F_end": analysis.meanForceBetween(s, t[-1] - END, t[-1]),
          "t_end": float(t[-1]), "first_touch": touch,
          "F_later": analysis.meanForceBetween(s, touch + LATER[0], touch + LATER[1]), "forces_from": analysis.forceSource(s),
