@@ -303,8 +303,9 @@ def resolutionNote(dx):
     """What refinement measured of the cube's force at this run's cells per block height (the
     studies of docs/coupled-results.md, "The impact under grid refinement" and the wall's, through
     mpmsdem.tradeoffs): the first touch's error there (and the first blow's where it has a limit),
-    which of the cube's force and motion gave no limit to trust, how far a glued cube's converging
-    first blow is from its limit at the nearest cells per block height measured, and how far a
+    which of the cube's force and motion gave no limit to trust, how far a glued cube of this
+    cube's height (the row nearest in height and cells per block height) is from its converged
+    first blow at the nearest cells per block height measured, and how far a
     wall's converging first blow still is from its limit at the finest spacing measured."""
     from mpmsdem import tradeoffs
     cells = HB / dx
@@ -322,15 +323,14 @@ def resolutionNote(dx):
     if loose:
         note += "; the %s gave no limit to trust over %.1f to %.1f cells per block height" % (
             " and ".join([", ".join(loose[:-1])] * (len(loose) > 1) + loose[-1:]), measured[0], measured[-1])
-    try:  # a glued cube whose first blow converged, at the row nearest this run's cells per block height
-        glued = tradeoffs.nearest("glued_block_peak_force", cells_per_block_height=cells)
+    try:  # a glued cube whose first blow converged: of this cube's height, at its nearest cells per block height
+        glued = tradeoffs.nearest("glued_block_peak_force", block_height=HB, cells_per_block_height=cells)
     except ValueError:  # no study converged in it
         glued = None
     if glued:
         note += ("; a glued cube %g mm tall in a 20 deg flow took a first blow (10 ms mean) that converges, %+.0f %% "
                  "off its limit at %.1f cells per block height" % (
-                     1e3 * glued.settings["cells_per_block_height"] * glued.settings["dx"], 100 * glued.error,
-                     glued.settings["cells_per_block_height"]))
+                     1e3 * glued.settings["block_height"], 100 * glued.error, glued.settings["cells_per_block_height"]))
     try:
         wall = [q for q in tradeoffs.table("peak_force") if "cells_per_flow_depth" in q.settings]
     except ValueError:  # no study converged in it

@@ -589,7 +589,9 @@ def packageBlockStudy(rs, command):
     (:func:`windowLimits`); a window without one under ``unconverged`` (a bracket is not offered
     as a reference: the 40 mm cube's fourth spacing fell outside the one its first three gave,
     docs/coupled-results.md). The
-    resolution as cells per block height and per flow depth (the run's own h_f over Δx); the
+    cube's height [m] (cubes of two sizes in one flow differ at the same cells per block height:
+    a setting to select by) and the resolution as cells per block height and per flow depth (the
+    run's own h_f over Δx); the
     work (points x steps per simulated second: the runs may go on for different times after the
     blow) relative to the run at Δx 0.01 m. None when those runs are not there."""
     rs = sorted(rs, key=lambda r: -r["dx"])
@@ -615,7 +617,7 @@ def packageBlockStudy(rs, command):
     work = lambda r: r["points"] / r["dt"]  # noqa: E731
     rows = []
     for r, e in zip(rs, errors):
-        rows.append({"settings": {"dx": r["dx"], "cells_per_block_height": blockSize(r) / r["dx"],
+        rows.append({"settings": {"dx": r["dx"], "block_height": hb, "cells_per_block_height": blockSize(r) / r["dx"],
                                   "cells_per_flow_depth": r["free"]["h_f"] / r["dx"], "ppc": 8,
                                   "flip_viscosity": float(r["flip_blend"].split()[2]), "precision": "double"},
                      "errors": e, "cost": work(r) / work(default[0]), "cpu_cost": None, "reference": False,

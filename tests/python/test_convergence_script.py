@@ -256,6 +256,7 @@ def test_package_block_study_errors_against_the_kept_limits():
     rows = study["rows"]
     assert [r["settings"]["dx"] for r in rows] == dxs
     assert [r["settings"]["cells_per_block_height"] for r in rows] == pytest.approx([2, 4, 5.6, 8])
+    assert {r["settings"]["block_height"] for r in rows} == {0.04}
     assert [r["cost"] for r in rows] == pytest.approx([0.5 ** 4, 1, 1.4 ** 4, 16])
     for r, b in zip(rows, f20):
         assert list(r["errors"]) == ["glued_block_peak_force_20ms"]

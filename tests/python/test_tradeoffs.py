@@ -138,22 +138,46 @@ def test_the_wall_study_answers_the_peak_force_in_cells_per_flow_depth():
         tradeoffs.table("deposit_force")
 
 
+def _glued(output, height):
+    """The rows of the glued cube ``height`` [m] tall, by cells per block height."""
+    rows = [p for p in tradeoffs.table(output) if p.settings.get("block_height") == height]
+    assert {p.study["name"] for p in rows} == {"glued_cube_%dmm_t20_L0.5_lane0.1" % round(1e3 * height)}
+    return {round(p.settings["cells_per_block_height"], 1): p for p in rows}
+
+
 def test_a_glued_cube_s_first_blow_in_cells_per_block_height():
     # docs/coupled-results.md, "A glued cube in the same flows": the 40 mm cube's 10 ms blow
     # 36.666 / 29.884 / 24.568 / 23.769 N at Δx 0.01 / 0.00714 / 0.005 / 0.004 m (4 / 5.6 / 8 / 10
     # cells per block height); through the three finest, differences 5.316 and 0.799 N over
     # spacings 1/140, 1/200, 1/250 m: order 4.69, limit 23.34 N; the runs +57 / +28 / +5.3 / +1.8 %
-    rows = {round(p.settings["cells_per_block_height"], 1): p for p in tradeoffs.table("glued_block_peak_force")}
+    rows = _glued("glued_block_peak_force", 0.04)
     assert sorted(rows) == [4.0, 5.6, 8.0, 10.0]
     for cells, f in ((4.0, 36.666), (5.6, 29.884), (8.0, 24.568), (10.0, 23.769)):
         assert rows[cells].error == pytest.approx(f / 23.34 - 1, abs=1e-3)
     # the work per simulated second against the run at 0.01 m: 48,000 / 131,712 / 384,000 / 750,000
     # points at steps 5.171e-5 / 3.694e-5 / 2.586e-5 / 2.069e-5 s: (0.01 / Δx)^4
     assert [rows[c].cost for c in (4.0, 5.6, 8.0, 10.0)] == pytest.approx([1, 3.8416, 16, 39.0625], rel=1e-4)
+    # the 20 mm cube in the same flows, Δx 0.01 / 0.00714 / 0.005 / 0.004 m (2 / 2.8 / 4 / 5 cells):
+    # 23.976 / 19.402 / 15.657 / 14.542 N; differences 3.745 and 1.116 N over the same spacings:
+    # order 2.49, limit 13.04 N; the runs +84 / +49 / +20 / +12 %
+    small = _glued("glued_block_peak_force", 0.02)
+    assert sorted(small) == [2.0, 2.8, 4.0, 5.0]
+    for cells, f in ((2.0, 23.976), (2.8, 19.402), (4.0, 15.657), (5.0, 14.542)):
+        assert small[cells].error == pytest.approx(f / 13.04 - 1, abs=1e-3)
+    # a 10 % target: the 40 mm cube's 8 cells (+5.3 %, 16 x) is the cheapest row within it; the
+    # 20 mm cube's finest (+12 % at 39 x) is not
+    assert tradeoffs.propose(0.1, output="glued_block_peak_force").settings["block_height"] == 0.04
     assert tradeoffs.propose(0.1, output="glued_block_peak_force").settings["dx"] == 0.005
-    # its 20 ms blow: 23.245 N at 10 cells against the limit 22.14 N
-    blow20 = tradeoffs.nearest("glued_block_peak_force_20ms", cells_per_block_height=10)
+    # at the same cells per block height the smaller cube is the nearer to its limit (4 cells: +20 %
+    # against +57 %), at the same Δx the farther (0.004 m: +12 % against +1.8 %): neither measure
+    # of the resolution alone says the error
+    assert small[4.0].error < rows[4.0].error and small[5.0].error > rows[10.0].error
+    # the row for a cube's size: by its height with the cells; the 20 mm cube's 20 ms blow 13.154 N
+    # at 5 cells against its limit 12.46 N (order 2.77 through 15.930 / 13.749 / 13.154 N)
+    blow20 = tradeoffs.nearest("glued_block_peak_force_20ms", block_height=0.04, cells_per_block_height=10)
     assert blow20.error == pytest.approx(23.245 / 22.14 - 1, abs=1e-3)
+    blow20 = tradeoffs.nearest("glued_block_peak_force_20ms", block_height=0.02, cells_per_block_height=5)
+    assert blow20.error == pytest.approx(13.154 / 12.46 - 1, abs=1e-3)
 
 
 def test_nearest_measured_setting(table):
@@ -183,9 +207,11 @@ def test_the_flume_example_states_what_its_resolution_gives():
     note = example.resolutionNote(0.01)
     assert "the cube is 2.0 cells tall (dx 0.01 m)" in note and "first touch +3 % off" in note
     assert "the first blow (10 ms mean), plateau force and tilt gave no limit to trust over 2.0 to 4.0" in note
-    # the glued 40 mm cube's row nearest 2 cells per block height: 36.666 N at 4 cells against 23.34 N
-    assert ("a glued cube 40 mm tall in a 20 deg flow took a first blow (10 ms mean) that converges, +57 % off its "
-            "limit at 4.0 cells per block height") in note
+    # the glued cube of the example's height (20 mm) at 2 cells: 23.976 N against its limit 13.04 N
+    assert ("a glued cube 20 mm tall in a 20 deg flow took a first blow (10 ms mean) that converges, +84 % off its "
+            "limit at 2.0 cells per block height") in note
     # the wall's finest run from its study: 17.294 N against the limit 16.06 N at 7.9 cells per flow depth
     assert "a wall's first blow converges from above, still +8 % off its limit at 7.9 cells per flow depth" in note
-    assert "+28 % off its limit at 5.6 cells per block height" in example.resolutionNote(0.004)
+    # at Δx 0.004 m (5 cells) its row at 5 cells, 14.542 N: not the 40 mm cube's 5.6 cells (+28 %)
+    assert "20 mm tall in a 20 deg flow took a first blow (10 ms mean) that converges, +12 % off its limit at 5.0 " \
+           "cells per block height" in example.resolutionNote(0.004)
