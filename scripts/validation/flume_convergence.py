@@ -540,28 +540,24 @@ def windowLimits(byWindow, h):
     """A blow read over several windows, each at three spacings h (coarsest first): ``byWindow``
     maps a window [s] to its three values (the largest mean force over that window in each run).
     Returns, per window (shortest first), a dict of its values, order, limit and why
-    (:func:`limitOf`), and:
-
-    - ``out_of_order``: the longer window whose kept limit exceeds this window's limit, which is
-      then not kept (``why`` says so). Run by run the largest mean over a shorter window is never
-      below that over a longer one, so neither can their limits be. The longest windows are kept
-      first: a window the flow crosses in a few cells is the worst resolved;
-    - ``bracket`` (lo, hi) for a window without a kept limit: the limit lies at or above the kept
-      limits of longer windows and at or below those of shorter ones and, on the assumption that a
-      sequence that fell (rose) at every refinement goes on doing so, at or below (above) the
-      finest run's value. None where one side is missing or the sides cross."""
+    (:func:`limitOf`; also not kept where a longer window's kept limit exceeds this window's
+    limit: run by run the largest mean over a shorter window is never below that over a longer
+    one, so neither can their limits be. The longest windows are kept first: a window the flow
+    crosses in a few cells is the worst resolved), and ``bracket`` (lo, hi) for a window without
+    a kept limit: the limit lies at or above the kept limits of longer windows and at or below
+    those of shorter ones and, on the assumption that a sequence that fell (rose) at every
+    refinement goes on doing so, at or below (above) the finest run's value; None where one side
+    is missing or the sides cross."""
     rows = []
     for w in sorted(byWindow):
         p, f0, why = limitOf(byWindow[w], h)
-        rows.append({"window": w, "values": list(byWindow[w]), "order": p, "limit": f0, "why": why,
-                     "out_of_order": None, "bracket": None})
+        rows.append({"window": w, "values": list(byWindow[w]), "order": p, "limit": f0, "why": why, "bracket": None})
     kept = {}
     for r in reversed(rows):
         if r["why"] is not None:
             continue
         above = [v for v, lim in kept.items() if lim > r["limit"]]
         if above:
-            r["out_of_order"] = min(above)
             r["why"] = "limit %.4g below the %g ms window's %.4g" % (r["limit"], 1e3 * min(above), kept[min(above)])
         else:
             kept[r["window"]] = r["limit"]
