@@ -104,6 +104,7 @@ RunEnd OutputRun::run(long maxSteps) {
   // next record and snapshot times: the first multiples of their intervals after now
   OutputCadence series(run.seriesEvery, solver_.time()), output(run.outputEvery, solver_.time());
   const auto t0 = Clock::now();
+  const double tStart = solver_.time();
   ProgressSchedule progress(ProgressSchedule::markAfter(progressFraction(solver_, run, maxSteps, firstStep)),
                             run.progressEvery);
   const bool byTime = maxSteps == 0;
@@ -149,10 +150,11 @@ RunEnd OutputRun::run(long maxSteps) {
       }
       if (report) {
         const double el = since(t0);
-        std::printf("[%5.1f%%] t=%.5g s step=%ld dt=%.3g s (%s) KE=%.5g J front=%.5g m rate=%.3g upd/s ETA=%s\n",
+        std::printf("[%5.1f%%] t=%.5g s step=%ld dt=%.3g s (%s) KE=%.5g J front=%.5g m rate=%.3g upd/s ETA=%s%s\n",
                     100 * f, t, solver_.steps(), dt, stepper_.limit().c_str(), d->kineticEnergy, d->frontX,
                     n * double(solver_.steps() - firstStep) / el,
-                    formatDuration(f > 0 ? el * (1 - f) / f : 0).c_str());
+                    formatDuration(f > 0 ? el * (1 - f) / f : 0).c_str(),
+                    probesEta(*d, t, t > tStart ? el / (t - tStart) : NAN).c_str());
         std::fflush(stdout);
         progress.reported(f);
       }
@@ -253,6 +255,17 @@ void OutputRun::recordProbes(const mpm::Diagnostics& d, double t) {
     stopReason_ = "probes";
   else if (scene_.run.stopWhenFrontStill > 0 && t - frontAt_ > scene_.run.stopWhenFrontStill)
     stopReason_ = "front_still";
+}
+
+std::string OutputRun::probesEta(const mpm::Diagnostics& d, double t, double wallPerSimSecond) {
+  const double speed = t > lineTime_ ? (d.frontX - lineFront_) / (t - lineTime_) : NAN;
+  lineFront_ = d.frontX, lineTime_ = t;
+  if (!scene_.run.stopWhenProbed || !std::isfinite(wallPerSimSecond)) return "";
+  std::vector<ProbeProgress> probes;
+  for (const mpm::FlowProbeRecord& r : probes_)
+    probes.push_back({r.spec().x - r.spec().halfWidth, r.spec().window, r.arrival()});
+  const std::optional<double> left = probesTimeLeft(t, d.frontX, speed, probes);
+  return left ? " (stops at its probes in ~" + formatDuration(*left * wallPerSimSecond) + ")" : "";
 }
 
 void OutputRun::writeProbeResults(const std::string& stopped) {

@@ -80,6 +80,10 @@ class OutputRun {
   void replayProbes();
   // flow_probes.json: why the run stopped and each probe's result (scenes with flow_probes).
   void writeProbeResults(const std::string& stopped);
+  // A progress line's estimate of when run.stop_when_probed ends the run, from the front's speed
+  // since the last line and the wall time per simulated second so far: " (stops at its probes in
+  // ~3.5min)", or "" (no such rule, or no estimate yet). Advances the front's last line.
+  std::string probesEta(const mpm::Diagnostics& d, double t, double wallPerSimSecond);
   void recordSeries(const mpm::Diagnostics& d, double dt = 0);
   // One coupled.h5 record: block series and energies (§5.4) at the solver's time; d: the
   // particles' diagnostics at that time.
@@ -112,6 +116,7 @@ class OutputRun {
   std::vector<mpm::FlowProbeRecord> probes_;
   double front_ = -INFINITY, frontAt_ = 0;  // the front's largest x so far and when it got there [m, s]
   std::string stopReason_;                  // a stop rule that ended the run ("probes", "front_still")
+  double lineFront_ = NAN, lineTime_ = NAN;  // the front at the last progress line, and when [m, s]
 };
 
 }  // namespace run

@@ -1,5 +1,6 @@
 #include "run/Progress.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace mpmsdem {
@@ -14,6 +15,20 @@ std::string formatDuration(double s) {
   else
     std::snprintf(buf, sizeof buf, "%.1fh", s / 3600);
   return buf;
+}
+
+std::optional<double> probesTimeLeft(double t, double front, double frontSpeed,
+                                     const std::vector<ProbeProgress>& probes) {
+  double left = 0;
+  for (const ProbeProgress& p : probes) {
+    if (p.arrival) {
+      left = std::max(left, *p.arrival + p.window - t);
+    } else {
+      if (!(frontSpeed > 0)) return std::nullopt;
+      left = std::max(left, std::max(0.0, p.arriveAt - front) / frontSpeed + p.window);
+    }
+  }
+  return left;
 }
 
 std::string stageSplit(const coupling::CoupledWorld& world, double loopSeconds, double recordSeconds,

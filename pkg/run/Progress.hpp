@@ -10,7 +10,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "coupling/CoupledWorld.hpp"
 
@@ -23,6 +25,22 @@ inline double since(Clock::time_point t0) { return std::chrono::duration<double>
 
 // A duration for an ETA [s]: "42s", "3.5min" (from 2 min), "2.1h" (from 2 h).
 std::string formatDuration(double s);
+
+// A flow probe as a run that stops when every probe's record is complete (run.stop_when_probed)
+// sees it: where the front arrives (its station less its half width) and how long after the
+// arrival its record lasts [m, s], and the arrival once the front has come [s].
+struct ProbeProgress {
+  double arriveAt = 0, window = 0;
+  std::optional<double> arrival;
+};
+
+// The simulated time [s] such a run has left at time t, read from its front at x = front moving
+// at frontSpeed [m/s]: a probe the front has not reached needs it to cover the distance at that
+// speed, then the probe's window; a reached one what is left of its window. The largest over
+// the probes; none while a probe is not reached and the front does not advance. An estimate: a
+// front that speeds up (a collapsing column) arrives sooner.
+std::optional<double> probesTimeLeft(double t, double front, double frontSpeed,
+                                     const std::vector<ProbeProgress>& probes);
 
 // When the next progress line is due: at the first multiple of 5 % of the run above the fraction
 // of the last line, or when progress_every seconds of wall time have passed since it.

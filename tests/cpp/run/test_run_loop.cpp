@@ -3,10 +3,13 @@
 // are due, and how SIGINT and SIGTERM are caught.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <limits>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "common/Error.hpp"
 #include "scene/MpmScene.hpp"
@@ -148,6 +151,26 @@ TEST(Progress, DurationsOfAnEta) {
   EXPECT_EQ(formatDuration(120), "2.0min");
   EXPECT_EQ(formatDuration(5400), "90.0min");
   EXPECT_EQ(formatDuration(7200), "2.0h");
+}
+
+// A run that stops on its probes: two probes whose records start at 0.5 and 1.0 m and last
+// 0.05 s after the arrival, a front at 2 m/s. By hand: at t 0.1 s with the front at 0.3 m the far
+// probe decides, 0.7 / 2 + 0.05 = 0.4 s; once the near one has its arrival (0.2 s), at 0.22 s with
+// the front at 0.6 m: 0.4 / 2 + 0.05 = 0.25 s; both arrived (0.2, 0.45 s), at 0.47 s: 0.03 s.
+TEST(Progress, ProbesTimeLeftFromTheFront) {
+  std::vector<ProbeProgress> probes{{0.5, 0.05, std::nullopt}, {1.0, 0.05, std::nullopt}};
+  EXPECT_NEAR(*probesTimeLeft(0.1, 0.3, 2.0, probes), 0.4, 1e-15);
+  probes[0].arrival = 0.2;
+  EXPECT_NEAR(*probesTimeLeft(0.22, 0.6, 2.0, probes), 0.25, 1e-15);
+  // a front past a station whose probe has not yet its points: the window alone
+  EXPECT_NEAR(*probesTimeLeft(0.3, 1.01, 2.0, probes), 0.05, 1e-15);
+  // a front that stands still or backs (a surge): no estimate while a probe waits for it
+  EXPECT_FALSE(probesTimeLeft(0.22, 0.6, 0.0, probes).has_value());
+  EXPECT_FALSE(probesTimeLeft(0.22, 0.6, -0.1, probes).has_value());
+  EXPECT_FALSE(probesTimeLeft(0.22, 0.6, NAN, probes).has_value());
+  probes[1].arrival = 0.45;
+  EXPECT_NEAR(*probesTimeLeft(0.47, 1.1, 0.0, probes), 0.03, 1e-15);
+  EXPECT_DOUBLE_EQ(*probesTimeLeft(0.6, 1.2, 0.0, probes), 0.0);  // complete: nothing left
 }
 
 TEST(StopSignal, Names) {
