@@ -14,7 +14,8 @@ driver mpmsdem-run in two legs (the scenes are built with YADE, then only the dr
 - the coupled run with the cube, started from the free flow's state saved when its front was
   3 cm and two cells short of the cube (mpmsdem-run --flow-from: the same run, bit for bit,
   without the flow's way there): first touch, the first blow (the largest 10 ms mean of the
-  flow's downstream force within 50 ms of the touch), the plateau (mean force over 0.4–0.5 s),
+  flow's downstream force within 50 ms of the touch) and the blow by parts (the mean force over
+  0–2, 2–5 and 5–25 ms after the touch), the plateau (mean force over 0.4–0.5 s),
   the cube's tilt and travel at 0.5 s. The means are taken from the impulse coupled.h5 records
   (every step's force; "forces_from": "impulse"); outputs written before it was recorded give
   them from the records' own forces, one step's each ("records").
@@ -69,6 +70,9 @@ CUBE = 0.02                  # the cube's side h_b [m] (examples/flume_block.py)
 FOREMOST = 20                # the front's tip: the 20 most downstream points (their mean height: where its edge runs)
 AT = 0.5                     # tilt and travel read at this time [s]
 WINDOWS = (0.005, 0.02, 0.03)  # the first blow is also given as the largest mean over these [s]
+# The blow by parts: the mean force over these spans after the first touch [s]. The first 5 ms
+# are the contact's onset, which the grid resolves last; after them the load the flow keeps up.
+PARTS = ((0.0, 0.002), (0.002, 0.005), (0.005, 0.025))
 
 
 def addPreparedOptions(ap, readThere):
@@ -266,6 +270,19 @@ def freeFlow(folder, dx, ppc, front=None):
     return r
 
 
+def partName(span):
+    return "load_%g_%gms" % (1e3 * span[0], 1e3 * span[1])
+
+
+def blowParts(t, impulse, t0):
+    """The mean force over each span of PARTS after the first touch t0 [s], from the impulse
+    summed since the run's start (records at times t): {"load_0_2ms": ..., ...} [N]; a span the
+    records do not reach is left out."""
+    from mpmsdem import analysis
+    return {partName((a, b)): float(analysis.impulseMean(t, impulse, t0 + a, t0 + b))
+            for a, b in PARTS if t0 + b <= t[-1]}
+
+
 def coupled(folder, duration):
     """The coupled run's numbers (see the module's docstring)."""
     import numpy as np
@@ -297,6 +314,7 @@ def coupled(folder, duration):
             m = np.where(w & np.isfinite(m), m, -np.inf)
             extra["blow_%gms" % (1e3 * window)] = float(m.max())
         extra["impulse_20ms"] = float(np.interp(t0 + 0.02, t, s["J"]))
+        extra.update(blowParts(t, s["J"], t0))
     return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]), "forces_from": source, **extra,
             "plateau": float(plateau) if late else None,
             "tilt_at": float(np.interp(AT, t, s["tilt"])) if late else None,
@@ -479,6 +497,7 @@ COLUMNS = ("set, damping held", "width [m]", "Δx [m]", "cells per h_b", "O.dt [
            "front at station [s]", "h_f [mm]", "v_f [m/s]", "Fr", "Eq 20 [N]", "tip height [mm]",
            "nose above bed [mm] (resting point)",
            "depth 2 / 5 cm behind tip [mm]", "first touch [s]", "first blow, 10 ms [N]", "blow / Eq 20",
+           "mean force 0–2 / 2–5 / 5–25 ms after the touch [N]",
            "plateau 0.4–0.5 s [N]", "tilt at 0.5 s [°]", "travel at 0.5 s [m]", "wall free + coupled [s]")
 
 
@@ -494,7 +513,8 @@ def table(runs):
                "%.1f (%.1f)" % (1e3 * fr["nose"], 1e3 * ff["resting_point_height"]),
                "%.0f / %.0f" % (1e3 * fr["depth"][0], 1e3 * fr["depth"][1]),
                fmt(cp.get("first_touch"), "%.3f"), fmt(blow, "%.2f"),
-               fmt(blow / ff["eq20"] if blow is not None else None, "%.2f"), fmt(cp.get("plateau"), "%.2f"),
+               fmt(blow / ff["eq20"] if blow is not None else None, "%.2f"),
+               " / ".join(fmt(cp.get(partName(span)), "%.2f") for span in PARTS), fmt(cp.get("plateau"), "%.2f"),
                fmt(cp.get("tilt_at"), "%.1f"), fmt(cp.get("travel_at"), "%.3f"),
                "%.0f + %.0f" % (r["wall_seconds"]["free"], r["wall_seconds"]["coupled"])]
         lines.append("| " + " | ".join(row) + " |")
@@ -583,7 +603,7 @@ def limitText(f, h):
 
 
 QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("front", "tipHeight"), ("coupled", "first_touch"),
-              ("coupled", "blow"),
+              ("coupled", "blow")) + tuple(("coupled", partName(span)) for span in PARTS) + (
               ("coupled", "plateau"), ("coupled", "tilt_at"), ("coupled", "travel_at"))
 
 
