@@ -58,8 +58,9 @@ import time
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, addPreparedOptions, commit, driverRun,  # noqa: E402
-                               fmt, limitOf, runPreparedFolders, storeStudy, wholeCellsError, windowLimits, writeJson)
+from flume_convergence import (CUBE, PARTS, SERIES_EVERY, STATION_HALF, addPreparedOptions, blowParts,  # noqa: E402
+                               commit, driverRun, fmt, limitOf, partName, runPreparedFolders, storeStudy,
+                               wholeCellsError, windowLimits, writeJson)
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
@@ -296,6 +297,8 @@ def readObstacle(folder, meta, free, hd=None):
          "F_later": analysis.meanForceBetween(s, touch + LATER[0], touch + LATER[1]), "forces_from": analysis.forceSource(s),
          "kinetic_end": float(s["flow_kinetic"][-1]), "kinetic_peak": float(s["flow_kinetic"].max()),
          "Fr_cos": v / math.sqrt(G * cos * h)}
+    if "J" in s:  # the blow by parts after the touch, from the impulse (every step's force)
+        r["F_parts"] = blowParts(t, s["J"], touch)
     if meta["kind"] == "wall":
         w = meta["width"]
         hd = depositHeight(folder, meta) if hd is None else hd
@@ -433,8 +436,10 @@ def obstacleOf(r):
 def refinement(out):
     """The blow of each obstacle with three or more spacings, read over every window of WINDOWS,
     against Δx: the three finest spacings' order and limit per window (:func:`windowLimits`: a
-    limit to trust, or why not and, where it gives one, a bracket). Markdown, with the
-    cells per block height (a cube) or per flow depth (a wall) of each spacing."""
+    limit to trust, or why not and, where it gives one, a bracket), and where every run has them
+    its blow by parts (the mean force over each span of PARTS after the touch: order and limit,
+    :func:`limitOf`). Markdown, with the cells per block height (a cube) or per flow depth (a
+    wall) of each spacing."""
     groups = {}
     for r in loadRuns(out):
         if r["kind"] != "free" and "F_windows" in r["obstacle"]:
@@ -461,6 +466,15 @@ def refinement(out):
                 w, " / ".join("%.3g" % r["obstacle"]["F_windows"][w] for r in rs), fmt(row["order"], "%.2f"),
                 fmt(row["limit"], "%.3g") if row["why"] is None else "–",
                 "%.3g–%.3g" % row["bracket"] if row["bracket"] else "–", note))
+        spans = [partName(span) for span in PARTS if all(partName(span) in r["obstacle"].get("F_parts", {}) for r in rs)]
+        if spans:
+            lines += ["", "| after the touch [ms] | mean force [N] | order | limit [N] | note |", "|---|---|---:|---:|---|"]
+        for name in spans:
+            values = [r["obstacle"]["F_parts"][name] for r in rs]
+            p, f0, why = limitOf(values[-3:], [r["dx"] for r in finest])
+            lines.append("| %s | %s | %s | %s | %s |" % (
+                name[len("load_"):-len("ms")].replace("_", "–"), " / ".join("%.3g" % v for v in values),
+                fmt(p, "%.2f"), fmt(f0, "%.3g") if why is None else "–", why or ""))
     return "\n".join(lines[1:])
 
 

@@ -233,6 +233,18 @@ def test_impact_walls_refinement_reads_each_obstacle_over_its_windows(tmp_path):
     f10 = [13 + 4e3 * dx ** 0.8 for dx in H]
     assert lines[4].startswith("| 10 | %.3g / %.3g / %.3g | 0.80 | – | 12–%.3g |" % (*f10, f10[2]))
     assert lines[5].startswith("| 20 | ") and "| 2.00 | 12 | – |  |" in lines[5]
+    # with the blow by parts in every run: their table after the windows', each span's limit
+    for dx, width in zip(H, (0.1, 0.09999999999999999, 0.1)):
+        path = tmp_path / ("block_dx%g.json" % dx)
+        run = json.loads(path.read_text())
+        run["obstacle"]["F_parts"] = {"load_0_2ms": 30 + 2e3 * dx ** 1.5, "load_2_5ms": 20 + 4e3 * dx ** 0.8,
+                                      "load_5_25ms": 9 + 900 * dx ** 2}
+        path.write_text(json.dumps(run))
+    lines = iw.refinement(str(tmp_path)).splitlines()
+    assert len(lines) == 12 and lines[7].startswith("| after the touch [ms] | mean force [N] |")
+    assert lines[9].startswith("| 0–2 | ") and "| 1.50 | 30 |" in lines[9]
+    assert lines[10].startswith("| 2–5 | ") and lines[10].endswith("lies farther from the finest run than the runs lie apart |")
+    assert lines[11].startswith("| 5–25 | %.3g / " % (9 + 900 * H[0] ** 2)) and "| 2.00 | 9 |" in lines[11]
 
 
 def test_package_block_study_errors_against_the_kept_limits():
