@@ -283,7 +283,7 @@ def prepareCase(AR, L0_hb, folder, full=0, dx=None, ppc=None, settle=1.5, margin
     driver.writeScene(os.path.join(folder, "coupled.json"), scene.coupled, duration=maxFreeTime + settle, dt=O.dt,
                       seriesEvery=stepsOf(SAMPLE_EVERY, O.dt) * O.dt, outputEvery=0.5, vtk="none")
     with open(os.path.join(folder, "case.json"), "w") as f:
-        json.dump({"name": caseName(AR, L0_hb, full), "settle": settle, "dt": O.dt, "result": result}, f,
+        json.dump({"name": caseName(AR, L0_hb, full, dx), "settle": settle, "dt": O.dt, "result": result}, f,
                   indent=1)
     return folder
 
@@ -481,8 +481,10 @@ def collectCase(case):
     return out
 
 
-def caseName(AR, L0_hb, full=0):
-    return "AR=%g_L0hb=%g%s" % (AR, L0_hb, "_full" if full else "")
+def caseName(AR, L0_hb, full=0, dx=None):
+    """A case's name: AR, L0/h_b, the paper's resolution, and a spacing given apart from it (a
+    refinement's runs of one case side by side in one folder)."""
+    return "AR=%g_L0hb=%g%s%s" % (AR, L0_hb, "_full" if full else "", "_dx%g" % dx if dx else "")
 
 
 def readTable(path):
@@ -599,7 +601,8 @@ def prepareMain(a):
         c = dict(c, full=1 if a.full else c.get("full", 0))
         if a.margin and "margin" not in c:
             c["margin"] = a.margin
-        folder = prepareCase(folder=os.path.join(a.prepare, caseName(c["AR"], c["L0_hb"], c["full"])), **c)
+        name = caseName(c["AR"], c["L0_hb"], c["full"], c.get("dx"))
+        folder = prepareCase(folder=os.path.join(a.prepare, name), **c)
         print("prepared %s" % folder)
         with open(os.path.join(folder, "case.json")) as f:
             length = json.load(f)["result"]["flume_length"]
@@ -657,10 +660,11 @@ def main(argv):
     r = runCase(table.AR, table.L0_hb, full=table.full, dx=table.dx or None, ppc=table.ppc or None,
                 settle=table.settle, margin=table.margin, until=table.until or None, verbose=True)
     os.makedirs(a.out, exist_ok=True)
-    path = os.path.join(a.out, caseName(table.AR, table.L0_hb, table.full) + ".json")
+    name = caseName(table.AR, table.L0_hb, table.full, table.dx or None)
+    path = os.path.join(a.out, name + ".json")
     with open(path, "w") as f:
         json.dump(r, f, indent=1)
-    print("%s %s; %s" % (caseName(table.AR, table.L0_hb, table.full), _describe(r), path))
+    print("%s %s; %s" % (name, _describe(r), path))
 
 
 if __name__ == "__main__":  # also under `yade -x` and yade-batch, which run scripts as __main__

@@ -114,6 +114,18 @@ def assertSameCase(got, ref):
         assert got[k] == ref[k], k
 
 
+def test_a_refinement_table_names_each_spacing_s_case_apart():
+    # examples/parametric_study_refinement.table: two cases at the paper's resolution and at half
+    # of it, four names; a case without a spacing of its own keeps its name
+    ps = study()
+    rows = ps.readTable(os.path.join(ROOT, "examples", "parametric_study_refinement.table"))
+    names = [ps.caseName(r["AR"], r["L0_hb"], r["full"], r.get("dx")) for r in rows]
+    assert names == ["AR=1.3_L0hb=4_full_dx0.01", "AR=1.3_L0hb=4_full_dx0.005", "AR=1.3_L0hb=14_full_dx0.01",
+                     "AR=1.3_L0hb=14_full_dx0.005"]
+    assert all(r["settle"] == 0.3 for r in rows)
+    assert ps.caseName(1.3, 4, 1) == "AR=1.3_L0hb=4_full" and ps.caseName(2, 54) == "AR=2_L0hb=54"
+
+
 def test_a_case_stopped_part_way_resumes_where_it_stopped(tmp_path):
     """A machine that goes away mid-case: --run-prepared keeps the finished free flow and goes on
     with the coupled run from its last snapshot; the results are those of one unbroken run."""
