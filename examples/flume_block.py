@@ -236,9 +236,9 @@ def blockEvents(s, duration):
     cube faster than 1 cm/s from then on); the keys of calibrate_flume.flumeRun."""
     import numpy as np
     t, ft, rot = s["t"], s["Ft"], s["rotation"]
-    touched = np.nonzero(np.abs(ft) > 0)[0]
+    touch = analysis.firstTouch(t, ft)
     turned = np.nonzero(rot >= 45.0)[0]
-    out = {"first_touch": float(t[touched[0]]) if len(touched) else duration,
+    out = {"first_touch": duration if touch is None else touch,
            "t45": float(t[turned[0]]) if len(turned) else duration,
            "rotation_deg": float(rot[-1]), "max_rotation_deg": float(rot.max()), "speed_end": float(abs(s["vx"][-1])),
            "centre_speed_end": float(s["speed"][-1]),

@@ -420,6 +420,34 @@ def impulseMean(t, impulse, start, end):
     return float((np.interp(end, t, j) - np.interp(start, t, j)) / (end - start))
 
 
+# A blow by parts: the spans after the first touch [s] whose mean forces :func:`blowParts` gives.
+# The first 5 ms are the contact's onset, which the grid resolves last; after them the load the
+# flow keeps up (docs/coupled-results.md, "The impact under grid refinement").
+BLOW_PARTS = ((0.0, 0.002), (0.002, 0.005), (0.005, 0.025))
+
+
+def blowPartName(span):
+    """The key of a span of :data:`BLOW_PARTS` [s]: "load_0_2ms" for (0, 0.002)."""
+    return "load_%g_%gms" % (1e3 * span[0], 1e3 * span[1])
+
+
+def firstTouch(t, force):
+    """When the flow first touched a block: the time [s] of the first record ``t`` whose flow
+    force ``force`` is not zero (a record holds the step before it, so the contact began within
+    the record interval before), or None where no record has one (the flow never came)."""
+    import numpy as np
+    touched = np.nonzero(np.abs(np.asarray(force, dtype=float)) > 0)[0]
+    return float(np.asarray(t, dtype=float)[touched[0]]) if len(touched) else None
+
+
+def blowParts(t, impulse, touch, spans=BLOW_PARTS):
+    """The mean force over each span after the first touch ``touch`` [s], from the impulse summed
+    since the run's start (records at times ``t``; :func:`impulseMean`): {"load_0_2ms": ...,
+    "load_2_5ms": ..., "load_5_25ms": ...} [N]; a span the records do not reach is left out."""
+    return {blowPartName((a, b)): impulseMean(t, impulse, touch + a, touch + b)
+            for a, b in spans if touch + b <= t[-1]}
+
+
 def forceSource(series):
     """Where :func:`meanForce` and :func:`meanForceBetween` read a block's force from: "impulse"
     where the series records one (``series["J"]``, every step's force), else "records" (files

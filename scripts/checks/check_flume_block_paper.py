@@ -38,8 +38,8 @@ def run(duration=0.5):
     cube = Block(half=(0.01,) * 3, x=0.51, density=8900, friction=0.67, flowFriction=0.21)
     scene = Flume(width=0.1, dx=0.01, blocks=[cube], flipViscosity=PAPER_VISCOSITY, verbose=False)
     s, common = analysis.runFlumeCheck(scene, duration)
-    touched = [t for t, f in zip(s["t"], s["Ft"]) if abs(f) > 0]
-    return dict(common, first_touch=touched[0] if touched else duration, tilt_05=float(s["tilt"][-1]),
+    touch = analysis.firstTouch(s["t"], s["Ft"])
+    return dict(common, first_touch=duration if touch is None else touch, tilt_05=float(s["tilt"][-1]),
                 travel_05=scene.travel(0))
 
 

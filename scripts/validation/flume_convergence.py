@@ -70,9 +70,6 @@ CUBE = 0.02                  # the cube's side h_b [m] (examples/flume_block.py)
 FOREMOST = 20                # the front's tip: the 20 most downstream points (their mean height: where its edge runs)
 AT = 0.5                     # tilt and travel read at this time [s]
 WINDOWS = (0.005, 0.02, 0.03)  # the first blow is also given as the largest mean over these [s]
-# The blow by parts: the mean force over these spans after the first touch [s]. The first 5 ms
-# are the contact's onset, which the grid resolves last; after them the load the flow keeps up.
-PARTS = ((0.0, 0.002), (0.002, 0.005), (0.005, 0.025))
 
 
 def addPreparedOptions(ap, readThere):
@@ -270,29 +267,15 @@ def freeFlow(folder, dx, ppc, front=None):
     return r
 
 
-def partName(span):
-    return "load_%g_%gms" % (1e3 * span[0], 1e3 * span[1])
-
-
-def blowParts(t, impulse, t0):
-    """The mean force over each span of PARTS after the first touch t0 [s], from the impulse
-    summed since the run's start (records at times t): {"load_0_2ms": ..., ...} [N]; a span the
-    records do not reach is left out."""
-    from mpmsdem import analysis
-    return {partName((a, b)): float(analysis.impulseMean(t, impulse, t0 + a, t0 + b))
-            for a, b in PARTS if t0 + b <= t[-1]}
-
-
 def coupled(folder, duration):
     """The coupled run's numbers (see the module's docstring)."""
     import numpy as np
     from mpmsdem import analysis
     s, _ = analysis.driverBlockSeries(os.path.join(folder, "coupled"))
     t, ft = s["t"], s["Ft"]
-    touched = np.nonzero(np.abs(ft) > 0)[0]
-    if not len(touched):
+    t0 = analysis.firstTouch(t, ft)
+    if t0 is None:
         return {"first_touch": None}
-    t0 = float(t[touched[0]])
     late = t[-1] >= AT - 2 * SERIES_EVERY  # the last record may fall just short of AT; a short run (a check's) has none
     if "J" in s:  # the impulse between records holds every step's force
         smooth = analysis.windowMean(t, s["J"], 0.01)
@@ -314,7 +297,7 @@ def coupled(folder, duration):
             m = np.where(w & np.isfinite(m), m, -np.inf)
             extra["blow_%gms" % (1e3 * window)] = float(m.max())
         extra["impulse_20ms"] = float(np.interp(t0 + 0.02, t, s["J"]))
-        extra.update(blowParts(t, s["J"], t0))
+        extra.update(analysis.blowParts(t, s["J"], t0))
     return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]), "forces_from": source, **extra,
             "plateau": float(plateau) if late else None,
             "tilt_at": float(np.interp(AT, t, s["tilt"])) if late else None,
@@ -503,6 +486,7 @@ COLUMNS = ("set, damping held", "width [m]", "Δx [m]", "cells per h_b", "O.dt [
 
 def table(runs):
     lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
+    parts = partNames()
     for r in runs:
         ff, cp, fr = r["free"], r["coupled"], r["free"]["front"]
         blow = cp.get("blow")
@@ -514,7 +498,7 @@ def table(runs):
                "%.0f / %.0f" % (1e3 * fr["depth"][0], 1e3 * fr["depth"][1]),
                fmt(cp.get("first_touch"), "%.3f"), fmt(blow, "%.2f"),
                fmt(blow / ff["eq20"] if blow is not None else None, "%.2f"),
-               " / ".join(fmt(cp.get(partName(span)), "%.2f") for span in PARTS), fmt(cp.get("plateau"), "%.2f"),
+               " / ".join(fmt(cp.get(name), "%.2f") for name in parts), fmt(cp.get("plateau"), "%.2f"),
                fmt(cp.get("tilt_at"), "%.1f"), fmt(cp.get("travel_at"), "%.3f"),
                "%.0f + %.0f" % (r["wall_seconds"]["free"], r["wall_seconds"]["coupled"])]
         lines.append("| " + " | ".join(row) + " |")
@@ -603,13 +587,21 @@ def limitText(f, h):
 
 
 QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("front", "tipHeight"), ("coupled", "first_touch"),
-              ("coupled", "blow")) + tuple(("coupled", partName(span)) for span in PARTS) + (
+              ("coupled", "blow"),
               ("coupled", "plateau"), ("coupled", "tilt_at"), ("coupled", "travel_at"))
 
 
+def partNames():
+    """The keys of the blow by parts in a run's coupled numbers (mpmsdem.analysis.BLOW_PARTS)."""
+    analysis = analysisModule()
+    return [analysis.blowPartName(span) for span in analysis.BLOW_PARTS]
+
+
 def extrapolations(runs):
-    """Observed order and extrapolated value of each quantity over the three finest spacings of
-    each set, damping and width (:func:`limitOf`)."""
+    """Observed order and extrapolated value of each quantity (the blow by parts after the blow)
+    over the three finest spacings of each set, damping and width (:func:`limitOf`)."""
+    blow = QUANTITIES.index(("coupled", "blow")) + 1
+    quantities = QUANTITIES[:blow] + tuple(("coupled", name) for name in partNames()) + QUANTITIES[blow:]
     lines, groups = [], {}
     for r in runs:
         groups.setdefault(group(r), []).append(r)
@@ -617,7 +609,7 @@ def extrapolations(runs):
         rs = sorted(rs, key=lambda r: -r["dx"])[-3:]
         if len(rs) != 3:
             continue
-        for part, key in QUANTITIES:
+        for part, key in quantities:
             vals = [(r["free"]["front"] if part == "front" else r[part]).get(key) for r in rs]
             if None in vals:
                 continue

@@ -58,9 +58,9 @@ import time
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from flume_convergence import (CUBE, PARTS, SERIES_EVERY, STATION_HALF, addPreparedOptions, blowParts,  # noqa: E402
-                               commit, driverRun, fmt, limitOf, partName, runPreparedFolders, storeStudy,
-                               wholeCellsError, windowLimits, writeJson)
+from flume_convergence import (CUBE, SERIES_EVERY, STATION_HALF, addPreparedOptions, commit, driverRun,  # noqa: E402
+                               fmt, limitOf, partNames, runPreparedFolders, storeStudy, wholeCellsError,
+                               windowLimits, writeJson)
 
 COLUMN = 0.3              # the column's length along the flume [m] (§3.2)
 WALL = (0.01, 0.075)      # the wall's half thickness along the flume and half height [m]
@@ -281,7 +281,6 @@ def runLeg(folder, exe, backend=None, precision=None, threads=None):
 def readObstacle(folder, meta, free, hd=None):
     """The obstacle's force numbers (see the module's docstring) against the models; ``hd`` a
     wall's deposit height where its run read it (else from the last snapshot)."""
-    import numpy as np
     from mpmsdem import analysis
     s, _ = analysis.driverBlockSeries(os.path.join(folder, "out"), block=1)  # block 0: the flume's bed
     t, f = s["t"], s["Ft"]
@@ -289,7 +288,7 @@ def readObstacle(folder, meta, free, hd=None):
     peak, tPeak = peaks[BLOW]
     theta, h, v = meta["theta"], free["h_f"], free["v_f"]
     cos = math.cos(math.radians(theta))
-    touch = float(t[np.nonzero(np.abs(f) > 0)[0][0]])
+    touch = analysis.firstTouch(t, f)
     r = {"F_peak": peak, "t_peak": tPeak, "F_peak_20ms": peaks[BLOW_LONG][0],
          "F_windows": {"%g" % (1e3 * w): p for w, (p, _) in peaks.items()},
          "F_end": analysis.meanForceBetween(s, t[-1] - END, t[-1]),
@@ -298,7 +297,7 @@ def readObstacle(folder, meta, free, hd=None):
          "kinetic_end": float(s["flow_kinetic"][-1]), "kinetic_peak": float(s["flow_kinetic"].max()),
          "Fr_cos": v / math.sqrt(G * cos * h)}
     if "J" in s:  # the blow by parts after the touch, from the impulse (every step's force)
-        r["F_parts"] = blowParts(t, s["J"], touch)
+        r["F_parts"] = analysis.blowParts(t, s["J"], touch)
     if meta["kind"] == "wall":
         w = meta["width"]
         hd = depositHeight(folder, meta) if hd is None else hd
@@ -437,8 +436,8 @@ def refinement(out):
     """The blow of each obstacle with three or more spacings, read over every window of WINDOWS,
     against Δx: the three finest spacings' order and limit per window (:func:`windowLimits`: a
     limit to trust, or why not and, where it gives one, a bracket), and where every run has them
-    its blow by parts (the mean force over each span of PARTS after the touch: order and limit,
-    :func:`limitOf`). Markdown, with the cells per block height (a cube) or per flow depth (a
+    its blow by parts (the mean force over each span of mpmsdem.analysis.BLOW_PARTS after the
+    touch: order and limit, :func:`limitOf`). Markdown, with the cells per block height (a cube) or per flow depth (a
     wall) of each spacing."""
     groups = {}
     for r in loadRuns(out):
@@ -466,7 +465,7 @@ def refinement(out):
                 w, " / ".join("%.3g" % r["obstacle"]["F_windows"][w] for r in rs), fmt(row["order"], "%.2f"),
                 fmt(row["limit"], "%.3g") if row["why"] is None else "–",
                 "%.3g–%.3g" % row["bracket"] if row["bracket"] else "–", note))
-        spans = [partName(span) for span in PARTS if all(partName(span) in r["obstacle"].get("F_parts", {}) for r in rs)]
+        spans = [name for name in partNames() if all(name in r["obstacle"].get("F_parts", {}) for r in rs)]
         if spans:
             lines += ["", "| after the touch [ms] | mean force [N] | order | limit [N] | note |", "|---|---|---:|---:|---|"]
         for name in spans:

@@ -282,3 +282,19 @@ def test_point_radius_is_the_sphere_of_a_points_volume():
     assert analysis.pointRadius(0.01, 8) == pytest.approx(3.1017525e-3, rel=1e-7)
     assert 4.0 / 3.0 * math.pi * analysis.pointRadius(0.02, 27) ** 3 == pytest.approx(0.02 ** 3 / 27, rel=1e-12)
     assert analysis.pointRadius(0.01, 1) == pytest.approx(2 * analysis.pointRadius(0.01, 8), rel=1e-12)
+
+
+def test_the_blow_by_parts_of_a_known_impulse():
+    """analysis.blowParts on records every 1 ms of a cube struck at 0.3 s by 30 N for
+    3 ms, then 6 N: by hand, 30 N over 0-2 ms, (30 + 2 x 6) / 3 = 14 N over 2-5 ms, 6 N over 5-25
+    ms; a span past the last record is left out."""
+    np = pytest.importorskip("numpy")
+    t = np.arange(0, 451) * 1e-3
+    F = np.where(t < 0.3 + 1e-9, 0.0, np.where(t < 0.303 + 1e-9, 30.0, 6.0))
+    J = np.concatenate([[0.0], np.cumsum(F[1:] * np.diff(t))])
+    parts = analysis.blowParts(t, J, 0.3)
+    assert sorted(parts) == ["load_0_2ms", "load_2_5ms", "load_5_25ms"]
+    assert parts["load_0_2ms"] == pytest.approx(30.0, abs=1e-9)
+    assert parts["load_2_5ms"] == pytest.approx(14.0, abs=1e-9)
+    assert parts["load_5_25ms"] == pytest.approx(6.0, abs=1e-9)
+    assert list(analysis.blowParts(t, J, 0.44)) == ["load_0_2ms", "load_2_5ms"]

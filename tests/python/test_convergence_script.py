@@ -292,22 +292,6 @@ def test_impact_walls_step_factor_names_the_run_and_is_bounded(capsys):
         assert "--step-factor = %s: must be in (0, 1]" % float(bad) in capsys.readouterr().err
 
 
-def test_the_blow_by_parts_of_a_known_impulse():
-    """flume_convergence.blowParts on records every 1 ms of a cube struck at 0.3 s by 30 N for
-    3 ms, then 6 N: by hand, 30 N over 0-2 ms, (30 + 2 x 6) / 3 = 14 N over 2-5 ms, 6 N over 5-25
-    ms; a span past the last record is left out."""
-    np = pytest.importorskip("numpy")
-    t = np.arange(0, 451) * 1e-3
-    F = np.where(t < 0.3 + 1e-9, 0.0, np.where(t < 0.303 + 1e-9, 30.0, 6.0))
-    J = np.concatenate([[0.0], np.cumsum(F[1:] * np.diff(t))])
-    parts = fc.blowParts(t, J, 0.3)
-    assert sorted(parts) == ["load_0_2ms", "load_2_5ms", "load_5_25ms"]
-    assert parts["load_0_2ms"] == pytest.approx(30.0, abs=1e-9)
-    assert parts["load_2_5ms"] == pytest.approx(14.0, abs=1e-9)
-    assert parts["load_5_25ms"] == pytest.approx(6.0, abs=1e-9)
-    assert list(fc.blowParts(t, J, 0.44)) == ["load_0_2ms", "load_2_5ms"]
-
-
 def test_liu2018_force_windows_of_a_known_impulse():
     """liu2018_force.forceWindows on records every 1 ms (each record's force the one of the
     interval before it, as coupled.h5's are) of a block first pushed at the record of 0.3 s by
