@@ -296,7 +296,7 @@ def readObstacle(folder, meta, free, hd=None):
          "F_later": analysis.meanForceBetween(s, touch + LATER[0], touch + LATER[1]), "forces_from": analysis.forceSource(s),
          "kinetic_end": float(s["flow_kinetic"][-1]), "kinetic_peak": float(s["flow_kinetic"].max()),
          "Fr_cos": v / math.sqrt(G * cos * h)}
-    if "J" in s:  # the blow by parts after the touch, from the impulse (every step's force)
+    if analysis.forceSource(s) == "impulse":  # the blow by parts after the touch (every step's force)
         r["F_parts"] = analysis.blowParts(t, s["J"], touch)
     if meta["kind"] == "wall":
         w = meta["width"]
@@ -437,8 +437,8 @@ def refinement(out):
     against Δx: the three finest spacings' order and limit per window (:func:`windowLimits`: a
     limit to trust, or why not and, where it gives one, a bracket), and where every run has them
     its blow by parts (the mean force over each span of mpmsdem.analysis.BLOW_PARTS after the
-    touch: order and limit, :func:`limitOf`). Markdown, with the cells per block height (a cube) or per flow depth (a
-    wall) of each spacing."""
+    touch: order and limit, :func:`limitOf`). Markdown, with the cells per block height (a cube)
+    or per flow depth (a wall) of each spacing."""
     groups = {}
     for r in loadRuns(out):
         if r["kind"] != "free" and "F_windows" in r["obstacle"]:
@@ -465,7 +465,8 @@ def refinement(out):
                 w, " / ".join("%.3g" % r["obstacle"]["F_windows"][w] for r in rs), fmt(row["order"], "%.2f"),
                 fmt(row["limit"], "%.3g") if row["why"] is None else "–",
                 "%.3g–%.3g" % row["bracket"] if row["bracket"] else "–", note))
-        spans = [name for name in partNames() if all(name in r["obstacle"].get("F_parts", {}) for r in rs)]
+        spans = [name for name in partNames()
+                 if all(name in r["obstacle"].get("F_parts", {}) for r in rs)]
         if spans:
             lines += ["", "| after the touch [ms] | mean force [N] | order | limit [N] | note |", "|---|---|---:|---:|---|"]
         for name in spans:
