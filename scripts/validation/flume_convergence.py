@@ -142,8 +142,8 @@ def parse(argv):
                          "what the records hold); its JSON before goes to OUT/<run>.json.previous")
     ap.add_argument("--extrapolate", action="store_true", help="Richardson estimates where the sequence allows")
     ap.add_argument("--package-data", action="store_true",
-                    help="store the three finest spacings of --settings/--hold/--width as a study in "
-                         "py/mpmsdem/tradeoffs.json (mpmsdem.tradeoffs: errors against the extrapolated limit)")
+                    help="store the spacings of --settings/--hold/--width as a study in py/mpmsdem/tradeoffs.json "
+                         "(mpmsdem.tradeoffs: errors against the limit extrapolated through the three finest)")
     addPreparedOptions(ap, "the front's profile")
     ap.add_argument("--child", nargs=2, metavar=("prepare", "DX"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
@@ -626,33 +626,35 @@ OUTPUTS = {("free", "arrival"): "front_arrival", ("free", "h_f"): "flow_depth", 
 
 
 def packageStudy(runs, settings, hold, width, command):
-    """The study of the three finest spacings of one set, damping and width (8 points per cell) for
-    py/mpmsdem/tradeoffs.json: each run's relative error against the value extrapolated to
-    Δx 0 (:func:`limitOf`) where the sequence gives one to trust, the outputs where it does not under
-    ``unconverged``, and the work of each run (points x steps of the coupled run) relative to
-    the run at the reference spacing. None when those runs are not all there."""
-    rs = sorted([r for r in runs if group(r) == (settings, hold, width, 8)],
-                key=lambda r: -r["dx"])[-3:]
+    """The study of the spacings of one set, damping and width (8 points per cell) for
+    py/mpmsdem/tradeoffs.json: each run's relative error against the value extrapolated to Δx 0
+    through the three finest (:func:`limitOf`) where they give one to trust, the outputs where
+    they do not under ``unconverged``, and the work of each run per simulated second (points /
+    step: the runs may end at different times) relative to the run at the reference spacing.
+    None without three spacings or without that run."""
+    rs = sorted([r for r in runs if group(r) == (settings, hold, width, 8)], key=lambda r: -r["dx"])
+    finest = rs[-3:]
     default = [r for r in rs if abs(r["dx"] - REFERENCE_DX) <= 1e-12 * REFERENCE_DX]
-    if len(rs) != 3 or not default:
+    if len(rs) < 3 or not default:
         return None
-    h = [r["dx"] for r in rs]
-    work = lambda r: r["points"] * r["duration"] / r["dt"]  # noqa: E731
+    h = [r["dx"] for r in finest]
+    work = lambda r: r["points"] / r["dt"]  # noqa: E731
     limits, unconverged = {}, {}
     for (part, key), out in OUTPUTS.items():
-        vals = [r[part].get(key) for r in rs]
+        vals = [r[part].get(key) for r in finest]
         if None in vals:
             continue
         p, f0, why = limitOf(vals, h)
         if why:
             unconverged[out] = "%s at %s cells per block height (Δx %s m): %s, %s" % (
-                out, " / ".join("%.1f" % r["cells_per_block"] for r in rs), " / ".join("%.4g" % d for d in h),
+                out, " / ".join("%.1f" % r["cells_per_block"] for r in finest), " / ".join("%.4g" % d for d in h),
                 " / ".join("%.4g" % v for v in vals), why)
         else:
             limits[(part, key)] = f0
     rows = [{"settings": {"dx": r["dx"], "cells_per_block_height": r["cells_per_block"], "ppc": 8,
                           "flip_viscosity": r["viscosity"], "precision": "double"},
-             "errors": {OUTPUTS[q]: (r[q[0]][q[1]] - f0) / f0 for q, f0 in limits.items()},
+             "errors": {OUTPUTS[q]: (r[q[0]][q[1]] - f0) / f0 for q, f0 in limits.items()
+                        if r[q[0]].get(q[1]) is not None},
              "cost": work(r) / work(default[0]), "cpu_cost": None, "reference": False, "sensitivity": False}
             for r in rs]
     return {"name": "coupled_cube_impact_%s_held" % hold,

@@ -57,6 +57,19 @@ def test_package_study_errors_against_the_extrapolated_limit():
     assert list(s["unconverged"]) == ["block_peak_force"]
     assert "7 / 5.8 / 6, not monotone" in s["unconverged"]["block_peak_force"]
     assert fc.packageStudy(runs[:2], "joint", "viscosity", 0.2, "cmd") is None   # two spacings: no study
+    # a fourth, finer spacing: the limits through the three finest, a row for every run (the
+    # coarsest's error against them too), the cost per simulated second against the 0.01 m run
+    # whatever each ran for; its zigzag over the three finest (5.8 / 6 / 5.9) still unconverged
+    runs.append(dict(run(0.005, 5.9), duration=0.4))
+    s = fc.packageStudy(runs, "joint", "viscosity", 0.2, "cmd")
+    assert [r["settings"]["dx"] for r in s["rows"]] == [0.02, 0.01, 0.2 / 28, 0.005]
+    assert [r["errors"]["plateau_force"] for r in s["rows"]] == pytest.approx(
+        [-100 * d ** 2 / 0.5 for d in h + [0.005]], rel=1e-6)
+    assert [r["cost"] for r in s["rows"]] == pytest.approx([1 / 16, 1.0, 1.4 ** 4, 16.0], rel=1e-9)
+    assert "Δx 0.01 / 0.007143 / 0.005" in s["extrapolated"] and list(s["unconverged"]) == ["block_peak_force"]
+    assert "5.8 / 6 / 5.9" in s["unconverged"]["block_peak_force"]
+    # without the run at 0.01 m there is nothing to state the cost against
+    assert fc.packageStudy([r for r in runs if r["dx"] != 0.01], "joint", "viscosity", 0.2, "cmd") is None
 
 
 def test_wall_study_errors_against_the_extrapolated_limit():
