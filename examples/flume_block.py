@@ -302,27 +302,29 @@ def fromDriver(a):
 def resolutionNote(dx):
     """What refinement measured of the cube's force at this run's cells per block height (the
     studies of docs/coupled-results.md, "The impact under grid refinement" and the wall's, through
-    mpmsdem.tradeoffs): the first touch's error there (and the first blow's where it has a limit),
-    which of the cube's force and motion gave no limit to trust, how far a glued cube of this
+    mpmsdem.tradeoffs): the arriving flow's depth error there (and the cube's touch, blow, plateau
+    and tilt where they have a limit), which of them gave no limit to trust, how far a glued cube of this
     cube's height (the row nearest in height and cells per block height) is from its converged
     first blow at the nearest cells per block height measured, and how far a
     wall's converging first blow still is from its limit at the finest spacing measured."""
     from mpmsdem import tradeoffs
     cells = HB / dx
-    p = tradeoffs.nearest("first_touch", cells_per_block_height=cells)
-    measured = sorted(q.settings["cells_per_block_height"] for q in tradeoffs.table("first_touch")
+    p = tradeoffs.nearest("flow_depth", cells_per_block_height=cells)
+    measured = sorted(q.settings["cells_per_block_height"] for q in tradeoffs.table("flow_depth")
                       if q.study["name"] == p.study["name"])
-    note = ("resolution: the cube is %.1f cells tall (dx %g m). Refinement of this scene (%s) measured the first "
-            "touch %+.0f %% off its extrapolated limit at %.1f cells per block height" % (
+    note = ("resolution: the cube is %.1f cells tall (dx %g m). Refinement of this scene (%s) measured the arriving "
+            "flow's depth %+.0f %% off its extrapolated limit at %.1f cells per block height" % (
                 cells, dx, p.study["scene"].split("), ", 1)[-1], 100 * p.error, p.settings["cells_per_block_height"]))
-    names = {"block_peak_force": "first blow (10 ms mean)", "plateau_force": "plateau force", "tilt": "tilt"}
-    if not tradeoffs.unconverged("block_peak_force"):
-        blow = tradeoffs.nearest("block_peak_force", cells_per_block_height=cells)
-        note += ", the first blow (10 ms mean) %+.0f %% off its limit" % (100 * blow.error)
+    names = {"first_touch": "first touch", "block_peak_force": "first blow (10 ms mean)",
+             "plateau_force": "plateau force", "tilt": "tilt"}
     loose = [n for o, n in names.items() if any("cells per block height" in w for w in tradeoffs.unconverged(o))]
-    if loose:
+    for output, name in names.items():
+        if name not in loose and output in tradeoffs.outputs():
+            q = tradeoffs.nearest(output, cells_per_block_height=cells)
+            note += ", the %s %+.0f %% off its limit" % (name, 100 * q.error)
+    if loose:  # the limits come from the three finest spacings
         note += "; the %s gave no limit to trust over %.1f to %.1f cells per block height" % (
-            " and ".join([", ".join(loose[:-1])] * (len(loose) > 1) + loose[-1:]), measured[0], measured[-1])
+            " and ".join([", ".join(loose[:-1])] * (len(loose) > 1) + loose[-1:]), measured[-3], measured[-1])
     try:  # a glued cube whose first blow converged: of this cube's height, at its nearest cells per block height
         glued = tradeoffs.nearest("glued_block_peak_force", block_height=HB, cells_per_block_height=cells)
     except ValueError:  # no study converged in it

@@ -5,7 +5,7 @@
     print(p)                                        # its settings, measured error and cost
     for row in tradeoffs.table("runout"):           # every measured setting for that output
         print(row)
-    tradeoffs.nearest("first_touch", cells_per_block_height=2)     # the error measured nearest a setting
+    tradeoffs.nearest("flow_depth", cells_per_block_height=2)      # the error measured nearest a setting
     tradeoffs.propose(1.0, output="peak_force")     # a wall's first blow, in cells per flow depth
     tradeoffs.propose(0.3, output="block_peak_force")   # the §3.2 cube's, in cells per block height
     tradeoffs.propose(0.1, output="glued_block_peak_force")  # a glued 20 or 40 mm cube's, in cells per block height
@@ -18,9 +18,9 @@ scripts that made them (``scripts/bench/tradeoff_mpm.py``,
 ran one scene at many settings, took the finest setting as the converged reference and
 recorded every output's relative error against it and the run's cost relative to the default
 setting (the work, points x steps, and the CPU time of one thread, all runs in one command).
-A study refined towards a limit it could not run (the §3.2 cube's impact at 2, 2.8 and 4
-cells per block height; a rigid wall struck by the flume's flow at 2.4, 4.2 and 7.7 cells per
-flow depth) takes the limit extrapolated through its three spacings as the reference
+A study refined towards a limit it could not run (the §3.2 cube's impact at 1 to 5 cells per
+block height; a rigid wall struck by the flume's flow at 2.4, 4.2 and 7.9 cells per flow depth)
+takes the limit extrapolated through its three finest spacings as the reference
 (``extrapolated``: how) and lists the outputs whose sequence gave no limit under
 ``unconverged``. Asking for an unconverged output raises a ValueError that says what was
 measured, or, where another study's converged, the proposal carries the others' findings in

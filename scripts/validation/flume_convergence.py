@@ -534,7 +534,13 @@ def limitOf(f, h):
     puts it 4.6 last steps away)."""
     e = richardson(f, h)
     if e is None:
-        return None, None, "not monotone with shrinking steps"
+        d1, d2 = f[1] - f[0], f[2] - f[1]
+        if d1 == 0 or d2 == 0 or (d1 > 0) != (d2 > 0):
+            return None, None, "not monotone"
+        # monotone, but the last step is too large against the one before for any order the
+        # spacings allow (or too small: an order past richardson's range)
+        return None, None, "monotone, but its steps (%.3g, %.3g) do not shrink as a power law's would" % (
+            abs(d1), abs(d2))
     if abs(f[2] - e[1]) > abs(f[0] - f[2]):
         return e[0], e[1], "order %.2f: its limit %.4g lies farther from the finest run than the runs lie apart" % e
     return e[0], e[1], None

@@ -38,7 +38,15 @@ def test_a_limit_is_trusted_only_within_the_span_of_the_runs(h):
         assert (why is None) == (p > pmin)
         if why:
             assert why.startswith("order %.2f: its limit 1 lies farther" % p)
-    assert fc.limitOf([1.0, 2.0, 1.0], list(h)) == (None, None, "not monotone with shrinking steps")
+    assert fc.limitOf([1.0, 2.0, 1.0], list(h)) == (None, None, "not monotone")
+    # monotone with steps that grow (the wall's deposit: 6.355 / 6.43 / 6.929 N) or shrink too
+    # little for the spacings (the §3.2 cube's blow over 1/140, 1/200, 1/250 m: 5.212 / 4.638 /
+    # 4.259 N; a power law's last step is at most ln 1.25 / ln 1.4 = 0.63 of the one before, this
+    # one 0.66): no power law through them
+    assert fc.limitOf([6.355, 6.43, 6.929], list(h))[2] == (
+        "monotone, but its steps (0.075, 0.499) do not shrink as a power law's would")
+    assert fc.limitOf([5.212, 4.638, 4.259], [1 / 140, 1 / 200, 1 / 250])[2] == (
+        "monotone, but its steps (0.574, 0.379) do not shrink as a power law's would")
 
 
 def test_package_study_errors_against_the_extrapolated_limit():

@@ -89,24 +89,31 @@ def test_shipped_studies_are_consistent():
 
 
 def test_the_cube_impact_study_answers_in_cells_per_block_height():
-    # docs/coupled-results.md, the impact under grid refinement (the blend holding ν): the first
-    # touch 0.31737 / 0.31316 / 0.31059 s at 2 / 2.8 / 4 cells per block height (Δx 0.01 /
-    # 0.00714 / 0.005 m): differences 4.20 and 2.57 ms over spacing ratios 1.4 and 1.43, order
-    # 1.59, limit 0.31059 - 2.57 ms x 0.005^p / (0.00714^p - 0.005^p) = 0.3072 s, 3.4 ms from the
-    # finest run where the runs lie 6.8 ms apart: the runs are 3.3 / 1.9 / 1.1 % late. The first
-    # blow 5.867 / 5.212 / 4.638 N steps 0.655 then 0.574 N: order 0.55, its limit (2.0 N) 2.6 N
-    # past the finest run where the runs lie 1.2 N apart: no limit to trust, like the plateau
-    # (0.62 / 0.65 / 0.56 N, not monotone).
-    f0 = 0.3072
-    p = tradeoffs.propose(0.025, output="first_touch")
-    assert p.settings["cells_per_block_height"] == pytest.approx(2.8)
-    assert p.error == pytest.approx(0.31316 / f0 - 1, abs=1e-3)
-    assert p.cost == pytest.approx(2.744 * 1.4, rel=2e-3)   # (Δx 0.01 / Δx)^3 points x 1.4 x the steps
-    assert tradeoffs.propose(0.035, output="first_touch").settings["cells_per_block_height"] == pytest.approx(2.0)
-    with pytest.raises(ValueError, match=r"smallest measured error is \+1.1\d % at 16 x"):
-        tradeoffs.propose(0.01, output="first_touch")
-    for out, values in (("block_peak_force", "5.867 / 5.212 / 4.638, order 0.55: its limit 1.999 lies farther"),
-                        ("plateau_force", "0.6199 / 0.6546 / 0.5586, not monotone")):
+    # docs/coupled-results.md, the impact under grid refinement (the blend holding ν), five
+    # spacings, the limits through the three finest (Δx 0.00714 / 0.005 / 0.004 m, 2.8 / 4 / 5
+    # cells per block height). The arriving flow's depth 44.570 / 43.711 / 43.495 mm: differences
+    # 0.859 and 0.216 mm over spacings 1/140, 1/200, 1/250 m, order 3.05, limit 43.274 mm; the runs
+    # at 1 / 2 / 2.8 / 4 / 5 cells (51.060, 45.589 mm and the three) +18.0 / +5.35 / +3.0 / +1.0 /
+    # +0.5 %. Its speed 0.8497 / 0.8607 / 0.8656 m/s: order 1.22 (above ln 2 / ln(1/140 / 1/250) =
+    # 1.20), limit 0.8810 m/s, the 0.01 m run (0.8363) -5.1 %. The first touch 0.3132 / 0.3106 /
+    # 0.3088 s and the first blow 5.212 / 4.638 / 4.259 N fall by last steps 0.70 and 0.66 of the
+    # ones before, more than any power law over these spacings allows (at most ln 1.25 / ln 1.4 =
+    # 0.63): no limit, as for the plateau (0.655 / 0.559 / 0.480 N) and the tilt.
+    f0 = 0.043274
+    rows = {round(q.settings["cells_per_block_height"], 1): q for q in tradeoffs.table("flow_depth")}
+    assert sorted(rows) == [1.0, 2.0, 2.8, 4.0, 5.0]
+    for cells, h in ((1.0, 0.051060), (2.0, 0.045589), (2.8, 0.044570), (4.0, 0.043711), (5.0, 0.043495)):
+        assert rows[cells].error == pytest.approx(h / f0 - 1, abs=2e-4)
+    # the work per simulated second against the 0.01 m run: points / step, (0.01 / Δx)^4
+    assert [rows[c].cost for c in (1.0, 2.0, 2.8, 4.0, 5.0)] == pytest.approx([1 / 16, 1, 3.8416, 16, 39.0625],
+                                                                              rel=2e-3)
+    assert tradeoffs.propose(0.06, output="flow_depth").settings["dx"] == 0.01
+    assert tradeoffs.propose(0.02, output="flow_depth").settings["dx"] == 0.005
+    speed = tradeoffs.nearest("flow_speed", cells_per_block_height=2)
+    assert speed.error == pytest.approx(0.83627 / 0.88098 - 1, abs=1e-3)
+    for out, values in (("first_touch", "0.3132 / 0.3106 / 0.3088, monotone, but its steps"),
+                        ("block_peak_force", r"5.212 / 4.638 / 4.259, monotone, but its steps \(0.574, 0.379\)"),
+                        ("plateau_force", "0.6546 / 0.5586 / 0.4796, monotone, but its steps")):
         with pytest.raises(ValueError, match="not converged.*%s" % values):
             tradeoffs.propose(0.5, output=out)
         assert len(tradeoffs.unconverged(out)) == 1
@@ -134,7 +141,7 @@ def test_the_wall_study_answers_the_peak_force_in_cells_per_flow_depth():
     # 1 s after the arrival (6.355 / 6.430 / 6.929 N: steps that grow)
     with pytest.raises(ValueError, match="not converged.*10.81 / 9.396 / 9.638 N"):
         tradeoffs.table("quasi_steady_force")
-    with pytest.raises(ValueError, match="not converged.*6.355 / 6.43 / 6.929 N, not monotone"):
+    with pytest.raises(ValueError, match=r"not converged.*6.355 / 6.43 / 6.929 N, monotone, but its steps \(0.0751, 0.499\)"):
         tradeoffs.table("deposit_force")
 
 
@@ -183,7 +190,8 @@ def test_a_glued_cube_s_first_blow_in_cells_per_block_height():
 def test_nearest_measured_setting(table):
     assert tradeoffs.nearest("runout", path=table, dx=0.011).settings == {"dx": 0.01}
     assert tradeoffs.nearest("runout", path=table, dx=0.02).settings == {"dx": 0.025}   # 0.025/0.02 < 0.02/0.0125
-    assert tradeoffs.nearest("first_touch", cells_per_block_height=1.9).error == pytest.approx(0.31737 / 0.3072 - 1, abs=1e-3)
+    assert tradeoffs.nearest("flow_depth", cells_per_block_height=1.9).error == pytest.approx(0.045589 / 0.043274 - 1,
+                                                                                              abs=1e-3)
     with pytest.raises(ValueError, match="^settings "):
         tradeoffs.nearest("runout", path=table, dx=0)
     with pytest.raises(ValueError, match="no measured row of runout has them"):
@@ -192,21 +200,22 @@ def test_nearest_measured_setting(table):
         tradeoffs.nearest("plateau_force", cells_per_block_height=2)
     with pytest.raises(ValueError, match="no measured row of peak_force has them$"):  # the wall's: per flow depth
         tradeoffs.nearest("peak_force", cells_per_block_height=2)
-    finest = tradeoffs.nearest("first_touch", cells_per_block_height=4.5)
-    assert finest.error == pytest.approx(0.31059 / 0.3072 - 1, abs=1e-3)
+    finest = tradeoffs.nearest("flow_depth", cells_per_block_height=4.6)
+    assert finest.error == pytest.approx(0.043495 / 0.043274 - 1, abs=1e-3)
 
 
 def test_the_flume_example_states_what_its_resolution_gives():
-    # examples/flume_block.py's note at Δx 0.01 m (2 cells per cube height): the first touch's
-    # error read from the study (0.31737 / 0.3072 - 1 = +3.3 %) and the first blow named among
-    # what gave no limit, not given an error
+    # examples/flume_block.py's note at Δx 0.01 m (2 cells per cube height): the arriving flow's
+    # depth error read from the study (45.589 / 43.274 mm - 1 = +5.3 %) and the first touch and
+    # the first blow named among what gave no limit, not given an error
     spec = importlib.util.spec_from_file_location(
         "flume_block", os.path.join(os.path.dirname(__file__), "..", "..", "examples", "flume_block.py"))
     example = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(example)
     note = example.resolutionNote(0.01)
-    assert "the cube is 2.0 cells tall (dx 0.01 m)" in note and "first touch +3 % off" in note
-    assert "the first blow (10 ms mean), plateau force and tilt gave no limit to trust over 2.0 to 4.0" in note
+    assert "the cube is 2.0 cells tall (dx 0.01 m)" in note and "the arriving flow's depth +5 % off" in note
+    assert ("the first touch, first blow (10 ms mean), plateau force and tilt gave no limit to trust over 2.8 to 5.0 "
+            "cells per block height") in note
     # the glued cube of the example's height (20 mm) at 2 cells: 23.976 N against its limit 13.04 N
     assert ("a glued cube 20 mm tall in a 20 deg flow took a first blow (10 ms mean) that converges, +84 % off its "
             "limit at 2.0 cells per block height") in note
