@@ -318,8 +318,9 @@ def resolutionNote(dx):
     names = {"first_touch": "first touch", "block_peak_force": "first blow (10 ms mean)",
              "plateau_force": "plateau force", "tilt": "tilt"}
     loose = [n for o, n in names.items() if any("cells per block height" in w for w in tradeoffs.unconverged(o))]
+    known = tradeoffs.outputs()
     for output, name in names.items():
-        if name not in loose and output in tradeoffs.outputs():
+        if name not in loose and output in known:
             q = tradeoffs.nearest(output, cells_per_block_height=cells)
             note += ", the %s %+.0f %% off its limit" % (name, 100 * q.error)
     if loose:  # the limits come from the three finest spacings

@@ -288,15 +288,15 @@ def readObstacle(folder, meta, free, hd=None):
     peak, tPeak = peaks[BLOW]
     theta, h, v = meta["theta"], free["h_f"], free["v_f"]
     cos = math.cos(math.radians(theta))
-    touch = analysis.firstTouch(t, f)
+    touch, source = analysis.firstTouch(t, f), analysis.forceSource(s)
     r = {"F_peak": peak, "t_peak": tPeak, "F_peak_20ms": peaks[BLOW_LONG][0],
          "F_windows": {"%g" % (1e3 * w): p for w, (p, _) in peaks.items()},
          "F_end": analysis.meanForceBetween(s, t[-1] - END, t[-1]),
          "t_end": float(t[-1]), "first_touch": touch,
-         "F_later": analysis.meanForceBetween(s, touch + LATER[0], touch + LATER[1]), "forces_from": analysis.forceSource(s),
+         "F_later": analysis.meanForceBetween(s, touch + LATER[0], touch + LATER[1]), "forces_from": source,
          "kinetic_end": float(s["flow_kinetic"][-1]), "kinetic_peak": float(s["flow_kinetic"].max()),
          "Fr_cos": v / math.sqrt(G * cos * h)}
-    if analysis.forceSource(s) == "impulse":  # the blow by parts after the touch (every step's force)
+    if source == "impulse":  # the blow by parts after the touch (every step's force)
         r["F_parts"] = analysis.blowParts(t, s["J"], touch)
     if meta["kind"] == "wall":
         w = meta["width"]
