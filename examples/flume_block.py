@@ -236,7 +236,7 @@ def blockEvents(s, duration):
     cube faster than 1 cm/s from then on); the keys of calibrate_flume.flumeRun."""
     import numpy as np
     t, ft, rot = s["t"], s["Ft"], s["rotation"]
-    touch = analysis.firstTouch(t, ft)
+    touch = analysis.touchTime(s)
     turned = np.nonzero(rot >= 45.0)[0]
     out = {"first_touch": duration if touch is None else touch,
            "t45": float(t[turned[0]]) if len(turned) else duration,

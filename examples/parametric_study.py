@@ -222,9 +222,9 @@ def _coupledResults(out, ff, s, duration, potential0, before=None):
         head = energySeries(early, potential0)
         out["energy"] = {k: head[k] + out["energy"][k] for k in head}
     out["flow_dissipated_end"] = out["energy"]["dissipated"][-1]
-    touch = analysis.firstTouch(s["t"], s["Ft"])
+    touch = analysis.touchTime(s)
     if touch is not None and analysis.forceSource(s) == "impulse":  # the blow by parts after the touch
-        out.update(first_touch=touch, blow_parts=analysis.blowParts(s["t"], s["J"], touch))
+        out.update(first_touch=touch, blow_parts=analysis.blowParts(s))
 
 
 def energySeries(s, potential0):

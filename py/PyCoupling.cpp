@@ -131,6 +131,9 @@ class PyCoupling {
   int contactCount(int i) const { return seen(i) ? coupling_.contactCount(i) : 0; }
   Vec3 impulse(int i) const { return seen(i) ? coupling_.impulse(i) : Vec3::Zero(); }
   Vec3 angularImpulse(int i) const { return seen(i) ? coupling_.angularImpulse(i) : Vec3::Zero(); }
+  double firstContact(int i) const {
+    return seen(i) ? coupling_.firstContact(i) : std::numeric_limits<double>::quiet_NaN();
+  }
   long totalContacts() const { return coupling_.totalContacts() + levelSets_.totalContacts(); }
   long historyOverflow() const { return coupling_.historyOverflow() + levelSets_.historyOverflow(); }
 
@@ -140,6 +143,7 @@ class PyCoupling {
   int levelSetContactCount(int i) const { return levelSets_.contactCount(i); }
   Vec3 levelSetImpulse(int i) const { return levelSets_.impulse(i); }
   Vec3 levelSetAngularImpulse(int i) const { return levelSets_.angularImpulse(i); }
+  double levelSetFirstContact(int i) const { return levelSets_.firstContact(i); }
   bp::dict levelSetContacts(int only) const {
     const std::vector<coupling::MpContactRecord> rec = levelSets_.contacts(only);
     return contactArrays(rec, [this](int b) { return levelSets_.externalId(b); }, false);
@@ -288,10 +292,23 @@ class PyCoupling {
   void setLevelSetDissipation(double friction, double damping) { levelSets_.setDissipation(friction, damping); }
   // The flow's impulses on the blocks and on the LevelSet bodies since the run's start
   // (CouplingReport::impulses, 6 a body), which coupled.h5's flow_impulse series go on from.
-  bp::list blockImpulses() const { return impulseList(coupling_); }
+  bp::list blockImpulses() const { return doubleList(coupling_.impulses()); }
   void setImpulses(const bp::object& values) { coupling_.setImpulses(sequenceOfDoubles(values)); }
-  bp::list levelSetImpulses() const { return impulseList(levelSets_); }
+  bp::list levelSetImpulses() const { return doubleList(levelSets_.impulses()); }
   void setLevelSetImpulses(const bp::object& values) { levelSets_.setImpulses(sequenceOfDoubles(values)); }
+  // When the flow first touched each block and LevelSet body (CouplingReport::firstContacts:
+  // NaN not yet, -inf not kept), and back: after the impulses, so that a state that did not keep
+  // them tells a touched body (firstContactsFromImpulses).
+  bp::list blockFirstContacts() const { return doubleList(coupling_.firstContacts()); }
+  void setFirstContacts(const bp::object& values) {
+    coupling_.setFirstContacts(sequenceOfDoubles(values));
+    coupling_.firstContactsFromImpulses();
+  }
+  bp::list levelSetFirstContacts() const { return doubleList(levelSets_.firstContacts()); }
+  void setLevelSetFirstContacts(const bp::object& values) {
+    levelSets_.setFirstContacts(sequenceOfDoubles(values));
+    levelSets_.firstContactsFromImpulses();
+  }
   bp::list referenceOrientations() const {
     bp::list l;
     for (const Quat& q : output_ ? output_->referenceOrientations() : ori0_)
@@ -367,7 +384,7 @@ class PyCoupling {
   void runLevelSetContacts(double dt) {
     mpm::MpmSolver& solver = mpm_.solver();
     levelSets_.computeForces(solver.numParticles() > 0 ? solver.extendForceBuffer() : mpm::ParticleView{}, dt,
-                             sdem_.engine().timeStepSafety(), solver.params().dx);
+                             solver.time(), sdem_.engine().timeStepSafety(), solver.params().dx);
   }
   void levelSetForces(const bp::object& forces) {
     bp::object addF = forces.attr("addF"), addT = forces.attr("addT");
@@ -393,13 +410,14 @@ class PyCoupling {
         r.contacts = levelSets_.contactCount(i);
         r.impulse = levelSets_.impulse(i);
         r.angularImpulse = levelSets_.angularImpulse(i);
+        r.firstContact = levelSets_.firstContact(i);
       }
     }
     return out;
   }
-  static bp::list impulseList(const coupling::CouplingReport& c) {
+  static bp::list doubleList(const std::vector<double>& values) {
     bp::list l;
-    for (double v : c.impulses()) l.append(v);
+    for (double v : values) l.append(v);
     return l;
   }
   // Tangential histories of a coupling as raw bytes (int64 keys, float64 xi: a restart is
@@ -470,6 +488,7 @@ void exportCoupling() {
       .def("levelSetForce", &PyCoupling::levelSetForce)
       .def("levelSetImpulse", &PyCoupling::levelSetImpulse)
       .def("levelSetAngularImpulse", &PyCoupling::levelSetAngularImpulse)
+      .def("levelSetFirstContact", &PyCoupling::levelSetFirstContact)
       .def("levelSetTorque", &PyCoupling::levelSetTorque)
       .def("levelSetContactCount", &PyCoupling::levelSetContactCount)
       .def("levelSetContacts", &PyCoupling::levelSetContacts)
@@ -477,6 +496,7 @@ void exportCoupling() {
       .def("torque", &PyCoupling::torque)
       .def("impulse", &PyCoupling::impulse)
       .def("angularImpulse", &PyCoupling::angularImpulse)
+      .def("firstContact", &PyCoupling::firstContact)
       .def("faceForce", &PyCoupling::faceForce)
       .def("edgeForce", &PyCoupling::edgeForce)
       .def("contactCount", &PyCoupling::contactCount)
@@ -501,6 +521,10 @@ void exportCoupling() {
       .def("setImpulses", &PyCoupling::setImpulses)
       .def("levelSetImpulses", &PyCoupling::levelSetImpulses)
       .def("setLevelSetImpulses", &PyCoupling::setLevelSetImpulses)
+      .def("blockFirstContacts", &PyCoupling::blockFirstContacts)
+      .def("setFirstContacts", &PyCoupling::setFirstContacts)
+      .def("levelSetFirstContacts", &PyCoupling::levelSetFirstContacts)
+      .def("setLevelSetFirstContacts", &PyCoupling::setLevelSetFirstContacts)
       .def("levelSetHistories", &PyCoupling::levelSetHistories)
       .def("setLevelSetHistories", &PyCoupling::setLevelSetHistories)
       .def("levelSetDissipation", &PyCoupling::levelSetDissipation)

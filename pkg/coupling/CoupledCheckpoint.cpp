@@ -138,6 +138,8 @@ CoupledCheckpoint captureCheckpoint(CoupledWorld& w, long snapshot, double lastD
   // (a block no coupling step has reached yet has taken no impulse)
   c.couplingImpulse = w.coupling.impulses();
   c.couplingImpulse.resize(CouplingReport::kImpulseValues * c.pos.size(), 0.0);
+  c.couplingFirstContact = w.coupling.firstContacts();
+  c.couplingFirstContact.resize(c.pos.size(), std::numeric_limits<double>::quiet_NaN());
   c.referenceOrientations = referenceOrientations;
   return c;
 }
@@ -179,6 +181,10 @@ void writeCheckpoint(const std::string& path, const CoupledCheckpoint& c) {
   for (std::size_t i = 0; i + nv <= c.couplingImpulse.size(); i += nv)
     ci.push_back(std::vector<double>(c.couplingImpulse.begin() + i, c.couplingImpulse.begin() + i + nv));
   j["coupling_impulse"] = ci;
+  // (a time not kept, -inf, is written null too: the impulse tells it from "not yet" at the restart)
+  json fc = json::array();
+  for (double t : c.couplingFirstContact) fc.push_back(step(t));
+  j["coupling_first_contact"] = fc;
   json ro = json::array();
   for (const Quat& q : c.referenceOrientations) ro.push_back(quat(q));
   j["reference_orientations"] = ro;
@@ -264,6 +270,15 @@ CoupledCheckpoint readCheckpoint(const std::string& path, const std::string& opt
           c.couplingImpulse.push_back(real(v[k], at + "[" + std::to_string(k) + "]"));
       }
     }
+    if (j.contains("coupling_first_contact")) {
+      const json& fc = list(j["coupling_first_contact"], "coupling_first_contact", bodies.size());
+      for (std::size_t i = 0; i < fc.size(); ++i) {
+        const std::string at = "coupling_first_contact[" + std::to_string(i) + "]";
+        const double t = toStep(fc[i], std::numeric_limits<double>::quiet_NaN(), at);
+        if (!(std::isnan(t) || (std::isfinite(t) && t >= 0))) throwParameter(at, t, "s", ">= 0 or null");
+        c.couplingFirstContact.push_back(t);
+      }
+    }
     const json& ro = list(member(j, "", "reference_orientations"), "reference_orientations");
     for (std::size_t k = 0; k < ro.size(); ++k)
       c.referenceOrientations.push_back(toQuat(ro[k], "reference_orientations[" + std::to_string(k) + "]"));
@@ -310,6 +325,14 @@ void restoreCheckpoint(const CoupledCheckpoint& c, CoupledWorld& w) {
     throwParameter("--restart: checkpoint coupling_impulse", c.couplingImpulse.size() / CouplingReport::kImpulseValues,
                    "blocks", "the scene's " + std::to_string(n) + " blocks");
   w.coupling.setImpulses(c.couplingImpulse);
+  if (!c.couplingFirstContact.empty() && c.couplingFirstContact.size() != static_cast<std::size_t>(n))
+    throwParameter("--restart: checkpoint coupling_first_contact", c.couplingFirstContact.size(), "blocks",
+                   "the scene's " + std::to_string(n) + " blocks");
+  // one that kept neither says nothing of whether a block was touched: none gets a first contact
+  std::vector<double> first = c.couplingFirstContact;
+  if (first.empty() && c.couplingImpulse.empty()) first.assign(n, -std::numeric_limits<double>::infinity());
+  w.coupling.setFirstContacts(first);
+  w.coupling.firstContactsFromImpulses();
   w.coupling.restoreParticleApproachStep(c.particleApproachStep);
   w.restoreContactSteps(c.contactStep, c.contactStepLow);
 }
@@ -411,6 +434,8 @@ void startFromFlow(CoupledWorld& w, mpm::ParticleSlices& particles, long step, d
     CoupledCheckpoint c = *source;
     captureBlocks(w, c);
     c.couplingImpulse.resize(CouplingReport::kImpulseValues * c.pos.size(), 0.0);  // no flow reached the new ones
+    if (!c.couplingFirstContact.empty())
+      c.couplingFirstContact.resize(c.pos.size(), std::numeric_limits<double>::quiet_NaN());
     c.contactStep = std::min(c.contactStep, blocksStep);
     if (blocksLow.step < c.contactStepLow.step) c.contactStepLow = blocksLow;
     restoreCheckpoint(c, w);

@@ -16,7 +16,11 @@
 //   "coupling_dissipation": [friction, damping], "coupling_impulse": [[J_x, J_y, J_z, L_x, L_y, L_z]]
 //   (per block: the flow's impulse and angular impulse since the run's start, which coupled.h5's
 //   flow_impulse series go on from; absent from checkpoints written before they were kept, and
-//   then they count from the restart), "reference_orientations": [[w, x, y, z]]}.
+//   then they count from the restart), "coupling_first_contact": [t or null] (per block: when
+//   the flow first touched it, CouplingReport::firstContact, null before it or where not kept;
+//   absent from checkpoints written before it was kept, and then a block the impulses say was
+//   touched, or every block where the impulses are absent too, keeps none),
+//   "reference_orientations": [[w, x, y, z]]}.
 // A step of +inf (no contact) is written as null.
 #pragma once
 #include <string>
@@ -49,6 +53,7 @@ struct CoupledCheckpoint {
   std::vector<double> historyXi;         // 3 per occupied slot
   double couplingFriction = 0, couplingDamping = 0;
   std::vector<double> couplingImpulse;  // CouplingReport::kImpulseValues per block (empty: zero)
+  std::vector<double> couplingFirstContact;  // per block [s], NaN: none (empty: not kept)
   std::vector<Quat> referenceOrientations;
 };
 

@@ -38,14 +38,16 @@ CoupledOutput::CoupledOutput(const std::string& dir, bool append, const sdem::Sd
     os << "]";
     return os.str();
   };
-  // A run continued from a checkpoint written before the impulses were recorded: the records
-  // before it get NaN rows, so that every series keeps a row per record (the impulse then counts
-  // from the restart).
+  // A run continued from a checkpoint written before the impulses (or the first contacts) were
+  // recorded: the records before it get NaN rows, so that every series keeps a row per record
+  // (the impulse then counts from the restart).
   const long before = append ? h5_.seriesLength("time") : 0;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const char* name : {"flow_impulse", "flow_angular_impulse"})
     if (before > 0 && h5_.seriesLength(name) == 0)
-      for (long r = 0; r < before; ++r)
-        h5_.appendVector(name, std::vector<double>(3 * all.size(), std::numeric_limits<double>::quiet_NaN()));
+      for (long r = 0; r < before; ++r) h5_.appendVector(name, std::vector<double>(3 * all.size(), nan));
+  if (before > 0 && h5_.seriesLength("flow_first_contact") == 0)
+    for (long r = 0; r < before; ++r) h5_.appendVector("flow_first_contact", std::vector<double>(all.size(), nan));
   h5_.setAttribute("ids", list(all));
   if (!otherIds.empty()) h5_.setAttribute("levelset_ids", list(otherIds));
   h5_.setAttribute("units",
@@ -53,7 +55,9 @@ CoupledOutput::CoupledOutput(const std::string& dir, bool append, const sdem::Sd
                    "attribute ids: pos, vel, rotation (rotation vector from the reference orientation), "
                    "flow_force F_t, face_force F_f, edge_force F_e, flow_torque (of the step before the record), "
                    "flow_impulse, flow_angular_impulse (summed over the steps since the run's start: their change "
-                   "between records over the interval is the mean force between them); contacts (records, blocks). "
+                   "between records over the interval is the mean force between them); contacts, flow_first_contact "
+                   "(the start of the first step whose flow force on the block was not zero, NaN before) (records, "
+                   "blocks). "
                    "LevelSet bodies (attribute levelset_ids) follow the blocks, with F_f and F_e NaN");
 }
 
@@ -73,7 +77,7 @@ void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, co
   auto orientation = [&](int i) { return i < nb ? e.orientation(i) : others[i - nb].ori; };
   for (int i = static_cast<int>(ori0_.size()); i < n; ++i) ori0_.push_back(orientation(i));
   std::vector<double> pos(3 * n), vel(3 * n), rot(3 * n), ft(3 * n), ff(3 * n), fe(3 * n), tq(3 * n), imp(3 * n),
-      angImp(3 * n), cnt(n);
+      angImp(3 * n), cnt(n), first(n);
   const Vec3 none = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   for (int i = 0; i < n; ++i) {
     const Eigen::AngleAxis<double> aa(orientation(i) * ori0_[i].conjugate());
@@ -99,6 +103,7 @@ void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, co
       angImp[3 * i + k] = ja[k];
     }
     cnt[i] = block ? (s ? coupling.contactCount(i) : 0) : o->contacts;
+    first[i] = block ? (s ? coupling.firstContact(i) : std::numeric_limits<double>::quiet_NaN()) : o->firstContact;
   }
   h5_.appendScalar("time", time);
   h5_.appendScalar("step", static_cast<double>(step));
@@ -112,6 +117,7 @@ void CoupledOutput::record(double time, long step, const sdem::SdemEngine& e, co
   h5_.appendVector("flow_impulse", imp);
   h5_.appendVector("flow_angular_impulse", angImp);
   h5_.appendVector("contacts", cnt);
+  h5_.appendVector("flow_first_contact", first);
 }
 
 std::vector<io::RigidSurface> bodySurfaces(const sdem::SdemEngine& engine) {

@@ -8,7 +8,10 @@
 //                     is the mean force and torque between them; NaN in the records before a
 //                     restart from a checkpoint that did not keep them, and counted from there)
 //                     (each records x 3 blocks),
-//                     contacts (records x blocks); energy series are appended by the caller. Bodies
+//                     contacts and flow_first_contact (records x blocks: the end of the first
+//                     step whose flow force on the body was not zero [s], CouplingReport::
+//                     firstContact; NaN before it, and where not known); energy series are
+//                     appended by the caller. Bodies
 //                     beside the SDEM blocks (YADE LevelSet bodies, root attribute
 //                     "levelset_ids") follow the blocks in "ids" and in every per-block series;
 //                     their face_force and edge_force are NaN (a level set has no faces or edges
@@ -22,6 +25,7 @@
 //                     vtk/scene_particles_NNNNNN.vtp, vtk/scene_bodies_NNNNNN.vtp and
 //                     vtk/scene_contacts_NNNNNN.vtp.
 #pragma once
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,13 +41,14 @@ namespace coupling {
 
 // A body beside the SDEM blocks at a record: its state (position: YADE's state.pos) and the
 // flow's action on it in the last step and since the run's start (zero before the body's first
-// step).
+// step), and when the flow first touched it (NaN before).
 struct OtherBodyRecord {
   Vec3 pos = Vec3::Zero(), vel = Vec3::Zero();
   Quat ori = Quat::Identity();
   Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
   Vec3 impulse = Vec3::Zero(), angularImpulse = Vec3::Zero();
   int contacts = 0;
+  double firstContact = std::numeric_limits<double>::quiet_NaN();
 };
 
 class CoupledOutput {

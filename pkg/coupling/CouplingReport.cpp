@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "common/Error.hpp"
 #include "coupling/CouplingKernelsCommon.hpp"
@@ -50,6 +51,30 @@ void CouplingReport::setImpulses(const std::vector<double>& values) {
   impulse_ = values;
 }
 
+double CouplingReport::firstContact(int i) const {
+  if (i < 0 || i >= reportedBodies())
+    throwParameter(indexKey_, i, "", indexWhat_ + " in [0, " + std::to_string(reportedBodies()) +
+                                         ") of the last coupling step");
+  const double t = static_cast<std::size_t>(i) < firstContact_.size() ? firstContact_[i]
+                                                                      : std::numeric_limits<double>::quiet_NaN();
+  return std::isinf(t) ? std::numeric_limits<double>::quiet_NaN() : t;
+}
+
+void CouplingReport::setFirstContacts(const std::vector<double>& values) {
+  for (double v : values)
+    if (!(std::isnan(v) || (std::isfinite(v) && v >= 0) || v == -std::numeric_limits<double>::infinity()))
+      throwParameter("first contacts", v, "s", ">= 0, NaN (not touched yet) or -inf (touched at a time not kept)");
+  firstContact_ = values;
+}
+
+void CouplingReport::firstContactsFromImpulses() {
+  const std::size_t bodies = impulse_.size() / kImpulseValues;
+  if (firstContact_.size() < bodies) firstContact_.resize(bodies, std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t b = 0; b < bodies; ++b)
+    for (int k = 0; k < kImpulseValues && std::isnan(firstContact_[b]); ++k)
+      if (impulse_[kImpulseValues * b + k] != 0) firstContact_[b] = -std::numeric_limits<double>::infinity();
+}
+
 std::vector<long long> currentHistoryKeys(const std::vector<long long>& keys, const std::vector<unsigned>& written,
                                           unsigned step, int slots) {
   std::vector<long long> out = keys;
@@ -72,9 +97,11 @@ int CouplingReport::contactCount(int i) const { return static_cast<int>(*sums(i,
 double CouplingReport::stiffnessSum(int i) const { return *sums(i, kSumK); }
 double CouplingReport::rotationalStiffnessSum(int i) const { return *sums(i, kSumKr); }
 
-void CouplingReport::takeStepTotals(const std::vector<double>& sums, int bodies, double dt) {
+void CouplingReport::takeStepTotals(const std::vector<double>& sums, int bodies, double dt, double stepStart) {
   barrierEnergy_ = springEnergy_ = 0;
   if (impulse_.size() < static_cast<std::size_t>(kImpulseValues) * bodies) impulse_.resize(kImpulseValues * bodies, 0.0);
+  if (firstContact_.size() < static_cast<std::size_t>(bodies))
+    firstContact_.resize(bodies, std::numeric_limits<double>::quiet_NaN());
   for (int b = 0; b < bodies; ++b) {
     const double* s = sums.data() + kBlockSums * b;
     barrierEnergy_ += s[kSumBarrier];
@@ -86,6 +113,8 @@ void CouplingReport::takeStepTotals(const std::vector<double>& sums, int bodies,
       j[d] += s[kSumForce + d] * dt;
       j[3 + d] += s[kSumTorque + d] * dt;
     }
+    if (std::isnan(firstContact_[b]) && (s[kSumForce] != 0 || s[kSumForce + 1] != 0 || s[kSumForce + 2] != 0))
+      firstContact_[b] = stepStart;
   }
 }
 

@@ -63,6 +63,23 @@ class CouplingReport {
   const std::vector<double>& impulses() const { return impulse_; }
   void setImpulses(const std::vector<double>& values);
 
+  // ---- when the flow first touched each body index: the start [s] of the first step whose
+  // force on it was not zero (a step's contacts are those of the state it starts from, and the
+  // impulse up to then is the one before any contact); NaN before that. A record holds one step's force every record interval,
+  // so the first record with a force places the touch only within that interval, and the first
+  // blow's windows (counted from the touch) would start up to an interval late. NaN too where it
+  // is not known: a run continued from a state that did not keep it, for a body its impulses say
+  // the flow had touched already (firstContactsFromImpulses).
+  double firstContact(int body) const;
+  // Per body index, to continue after a restart: a time >= 0, NaN (not yet) or -inf (touched
+  // at a time not kept). setFirstContacts: ParameterError for anything else.
+  const std::vector<double>& firstContacts() const { return firstContact_; }
+  void setFirstContacts(const std::vector<double>& values);
+  // After setImpulses and setFirstContacts at a restart: a body without a first contact (NaN)
+  // but with an impulse was touched at a time the state did not keep (-inf: it stays NaN, and
+  // no later step sets it); one without either has not been touched.
+  void firstContactsFromImpulses();
+
  protected:
   // indexKey, indexWhat: how a bad body index is named in the ParameterError (the parameter and
   // what it must be, e.g. "block", "a block (SDEM body) index").
@@ -76,9 +93,9 @@ class CouplingReport {
   const double* sums(int body, int offset) const;
   // The three sums of body i from `offset` as a vector (force, torque, their face and edge shares).
   Vec3 sumVector(int body, int offset) const;
-  // The step's potentials (replaced), dissipations and impulses (added) from its per-body sums
-  // and its length dt [s].
-  void takeStepTotals(const std::vector<double>& sums, int bodies, double dt);
+  // The step's potentials (replaced), dissipations and impulses (added) from its per-body sums,
+  // its length dt [s] and the time it starts at [s] (the first contacts).
+  void takeStepTotals(const std::vector<double>& sums, int bodies, double dt, double stepStart);
 
   double minParticleStep_ = std::numeric_limits<double>::infinity();
   double minApproachStep_ = std::numeric_limits<double>::infinity();
@@ -90,6 +107,7 @@ class CouplingReport {
   // no step has reached yet.
   Vec3 impulseVector(int body, int offset) const;
   std::vector<double> impulse_;  // kImpulseValues per body
+  std::vector<double> firstContact_;  // per body: time, NaN (not yet) or -inf (not kept)
   std::string indexKey_, indexWhat_;
 };
 

@@ -150,8 +150,11 @@ void MpLevelSetCoupling::setHistories(const std::vector<long long>& keys, const 
   historiesToDevice_ = true;  // for a step on the device
 }
 
-void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt, double safety, double watch) {
+void MpLevelSetCoupling::computeForces(const mpm::ParticleView& view, double dt, double stepStart, double safety,
+                                       double watch) {
   if (!(dt > 0) || !std::isfinite(dt)) throwParameter("dt", dt, "s", "> 0");
+  if (!std::isfinite(stepStart)) throwParameter("stepStart", stepStart, "s", "finite");
+  stepStart_ = stepStart;
   for (int i = 0; i < numBodies(); ++i)
     if (!stateSet_[i]) throw RuntimeFailure("LevelSet body " + std::to_string(ids_[i]) + ": no state set before the step");
   const bool isFloat = view.precision == mpm::Precision::Float;
@@ -280,7 +283,7 @@ void MpLevelSetCoupling::runDevice(const mpm::ParticleView& view, double dt, dou
   minApproachStep_ = out.minApproachStep;
   minParticleStep_ = out.minParticleStep;
   sums_ = out.sums;
-  takeStepTotals(sums_, numBodies(), dt);
+  takeStepTotals(sums_, numBodies(), dt, stepStart_);
 }
 
 template <typename T>
@@ -290,7 +293,7 @@ void MpLevelSetCoupling::reduce(const std::vector<MpContact<T>>& contacts, const
     addBlockShare(ct, B[ct.block], sums_.data(), add);
     minParticleStep_ = std::min(minParticleStep_, static_cast<double>(particleStepBound(ct)));
   }
-  takeStepTotals(sums_, numBodies(), dt);
+  takeStepTotals(sums_, numBodies(), dt, stepStart_);
 }
 
 long MpLevelSetCoupling::totalContacts() const {

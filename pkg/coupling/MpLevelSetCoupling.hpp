@@ -86,13 +86,15 @@ class MpLevelSetCoupling : public CouplingReport {
   void setHistories(const std::vector<long long>& keys, const std::vector<double>& xi);
 
   // One step at the particles of `view` (host or CUDA device memory; they must stay put until
-  // the solver's step): adds their contact forces into view.force and sums the bodies' share.
+  // the solver's step), of length dt from stepStart [s] (the flow's time, at which the contacts
+  // are found: the first contacts): adds their contact forces into view.force and sums the
+  // bodies' share.
   // `safety` is the time-step safety of the approach bounds, `watch` [m] how far beyond contact
   // closing pairs are examined (a grid cell). On CUDA the contacts are queued on the device and
   // waited for (the flow's step, queued after, reads their forces). RuntimeFailure when a
   // particle centre reaches a body's surface, or for a device view in a build without CUDA;
   // ParameterError (checkResolution) when a particle set smaller than the grids allow appears.
-  void computeForces(const mpm::ParticleView& view, double dt, double safety, double watch);
+  void computeForces(const mpm::ParticleView& view, double dt, double stepStart, double safety, double watch);
 
   // ---- results of the last computeForces, per body index (world frame): force, torque (about
   // the body's position, its grid's origin), contactCount, stiffness sums, step bounds and
@@ -107,6 +109,7 @@ class MpLevelSetCoupling : public CouplingReport {
 
  private:
   const std::vector<double>& lastSums() const override { return sums_; }
+  double stepStart_ = 0;  // the start of computeForces' step [s]
   int reportedBodies() const override { return numBodies(); }
   template <typename T>
   void run(const mpm::ParticleView& view, const BlockState<T>* B, const LevelSetGridView<T>* G,

@@ -324,6 +324,7 @@ void MpSdemCoupling::launchForces(mpm::MpmSolver& solver, double dt) {
   in.particles = view;
   in.dt = dt;
   pendingDt_ = dt;
+  pendingStart_ = solver.time();
   in.stepSafety = sdem_.timeStepSafety();
   in.historySlots = slots_;
   in.historyStep = ++historyStep_;
@@ -374,7 +375,7 @@ void MpSdemCoupling::collectForces() {
   minParticleStep_ = out.minParticleStep;
   minApproachStep_ = out.minApproachStep;
   overflow_ += out.overflow;
-  takeStepTotals(out.sums, numBlocks(), pendingDt_);
+  takeStepTotals(out.sums, numBlocks(), pendingDt_, pendingStart_);
 }
 
 // Float copies of what a float host step reads: the shape table when it grew, the blocks and

@@ -217,7 +217,7 @@ class MpSdemCoupling : public CouplingReport {
   // What launchForces left for collectForces: nothing (no step, or nothing could touch), the
   // host loop's results in last_, or the device's to wait for.
   enum class Pending { None, Host, Device } pending_ = Pending::None;
-  double pendingDt_ = 0;  // the launched step's dt [s] (its impulses)
+  double pendingDt_ = 0, pendingStart_ = 0;  // the launched step's dt and start [s] (its impulses, first contacts)
   template <typename T>
   static void appendContacts(const HostSide<T>& side, int block, std::vector<MpContactRecord>& out);
   bool historiesToDevice_ = false;  // setHistories() since the last step: the device takes them

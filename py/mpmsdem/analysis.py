@@ -432,19 +432,50 @@ def blowPartName(span):
 
 
 def firstTouch(t, force):
-    """When the flow first touched a block: the time [s] of the first record ``t`` whose flow
-    force ``force`` is not zero (a record holds the step before it, so the contact began within
-    the record interval before), or None where no record has one (the flow never came)."""
+    """When the flow first touched a block, as its records tell: the time [s] of the first record
+    ``t`` whose flow force ``force`` is not zero (a record holds the step before it, so the
+    contact began within the record interval before), or None where no record has one (the flow
+    never came). :func:`touchTime` reads the step itself where the series has it."""
     import numpy as np
     touched = np.nonzero(np.abs(np.asarray(force, dtype=float)) > 0)[0]
     return float(np.asarray(t, dtype=float)[touched[0]]) if len(touched) else None
 
 
-def blowParts(t, impulse, touch, spans=BLOW_PARTS):
-    """The mean force over each span after the first touch ``touch`` [s], from the impulse summed
-    since the run's start (records at times ``t``; :func:`impulseMean`): {"load_0_2ms": ...,
-    "load_2_5ms": ..., "load_5_25ms": ...} [N]; a span the records do not reach is left out."""
-    return {blowPartName((a, b)): impulseMean(t, impulse, touch + a, touch + b)
+def firstContact(series):
+    """The step the flow first touched a block in, from a block's series: the start [s] of the
+    first step whose flow force on it was not zero (``series["first_contact"]``, which coupled.h5
+    and :meth:`Flume.series` record), or None where the series does not hold one (not touched,
+    or written before it was recorded)."""
+    import numpy as np
+    known = np.asarray(series.get("first_contact", []), dtype=float)
+    known = known[np.isfinite(known)]
+    return float(known[-1]) if len(known) else None
+
+
+def touchTime(series):
+    """When the flow first touched a block [s]: :func:`firstContact` where the series holds it
+    (to the step), else :func:`firstTouch` of its records (to the record interval); None where
+    the flow never came."""
+    exact = firstContact(series)
+    return exact if exact is not None else firstTouch(series["t"], series["Ft"])
+
+
+def blowParts(series, spans=BLOW_PARTS):
+    """The mean force over each span after the first touch (:func:`touchTime`), from the impulse
+    summed since the run's start (``series["J"]``; :func:`impulseMean`): {"load_0_2ms": ...,
+    "load_2_5ms": ..., "load_5_25ms": ...} [N]; a span the records do not reach is left out; {}
+    where the flow never came. Where the series holds the first contact the impulse is the one
+    before it up to that step (no force came before), not an interpolation over the record
+    interval that holds the touch."""
+    import numpy as np
+    t, j = np.asarray(series["t"], dtype=float), np.asarray(series["J"], dtype=float)
+    touch, exact = touchTime(series), firstContact(series)
+    if touch is None:
+        return {}
+    if exact is not None and not np.any(np.isclose(t, exact, rtol=0, atol=1e-12)):
+        k = int(np.searchsorted(t, exact))  # records before it hold the impulse before any contact
+        t, j = np.insert(t, k, exact), np.insert(j, k, j[k - 1] if k > 0 else 0.0)
+    return {blowPartName((a, b)): impulseMean(t, j, touch + a, touch + b)
             for a, b in spans if touch + b <= t[-1]}
 
 
@@ -570,7 +601,9 @@ def driverBlockSeries(folder, block=None, initial=True):
     centre) [m/s], Ft, Ff, Fe
     (downstream flow force of the step before each record: total, on faces, on edges) [N], J
     (the downstream impulse since the run's start [N s]) and Fmean (the mean downstream force
-    since the record before, :func:`intervalMean`; both where the file records impulses), rotation (the whole angle turned
+    since the record before, :func:`intervalMean`; both where the file records impulses),
+    first_contact (when the flow first touched it, as known at each record, NaN before; where the
+    file records it: :func:`touchTime`) [s], rotation (the whole angle turned
     since the scene's start), tilt and yaw [deg], and the scene's flow_kinetic, flow_potential and
     block_kinetic [J], and flow_front [m] (the flow's most downstream point, from the mpm.h5
     beside it where there is one). ``block``: its index in the file (default: the first
@@ -605,6 +638,8 @@ def driverBlockSeries(folder, block=None, initial=True):
         if "flow_impulse" in g:  # files written before the impulse was recorded have none
             s["J"] = g["flow_impulse"][:, c][:, 0]
             s["Fmean"] = intervalMean(t, s["J"])
+        if "flow_first_contact" in g:  # nor before the first contact was
+            s["first_contact"] = g["flow_first_contact"][:, block]
         turns = np.array([tiltAndYaw(np.linalg.norm(r), r) for r in g["rotation"][:, c]]).reshape(-1, 2)
         s["tilt"], s["yaw"] = turns[:, 0], turns[:, 1]
         for k in ("flow_kinetic", "flow_potential", "block_kinetic"):

@@ -35,6 +35,19 @@ from .parameters import parameters, pythonNames
 PAIR_KEYS = tuple(pythonNames("block_materials.<name>.flow"))
 
 
+def _timesOrNone(times):
+    # first contacts for a checkpoint: JSON has no NaN or infinity (not yet, not kept)
+    return [t if math.isfinite(t) else None for t in times]
+
+
+def _firstContacts(data, key, impulses, bodies):
+    # a checkpoint's first contacts (None: NaN); one that kept neither them nor the impulses
+    # cannot tell a touched body: -inf (touched at a time not kept) for every body
+    if key in data:
+        return [math.nan if t is None else t for t in data[key]]
+    return [] if impulses in data else [-math.inf] * bodies
+
+
 class CoupledEngine(Engine, _StepControl):
     """Couples an :class:`SdemEngine` (blocks) and an :class:`MpmEngine` (flow).
 
@@ -471,11 +484,15 @@ class CoupledEngine(Engine, _StepControl):
                 "historyKeys": base64.b64encode(keys).decode(), "historyXi": base64.b64encode(xi).decode(),
                 "dissipation": list(self._bridge.blockDissipation()),
                 "impulse": list(self._bridge.blockImpulses()),
+                # when the flow first touched each body; None before it or where not kept (the
+                # impulse tells the two apart at the restore)
+                "firstContact": _timesOrNone(self._bridge.blockFirstContacts()),
                 "levelSets": [{"id": bid, "pair": self._levelSetPairs[bid]} for bid in self._levelSets],
                 "levelSetHistoryKeys": base64.b64encode(lsKeys).decode(),
                 "levelSetHistoryXi": base64.b64encode(lsXi).decode(),
                 "levelSetDissipation": list(self._bridge.levelSetDissipation()),
                 "levelSetImpulse": list(self._bridge.levelSetImpulses()),
+                "levelSetFirstContact": _timesOrNone(self._bridge.levelSetFirstContacts()),
                 "referenceOrientations": [list(q) for q in self._bridge.referenceOrientations()],
                 "plotOrientations": {str(i): [q[k] for k in range(4)] for i, q in self._ori0.items()},
                 # before the first step coupled.h5 is not open yet (unless restored onto one): a
@@ -549,11 +566,16 @@ class CoupledEngine(Engine, _StepControl):
         eng._bridge.setDissipation(*data["dissipation"])
         # (a checkpoint written before the impulses were kept has none: they count from here)
         eng._bridge.setImpulses(data.get("impulse", []))
+        # (nor the first contacts: a body the impulse says was touched keeps none, and without the
+        # impulses no body gets one)
+        eng._bridge.setFirstContacts(_firstContacts(data, "firstContact", "impulse", len(sdem.ids)))
         if data.get("levelSets"):
             eng._bridge.setLevelSetHistories(base64.b64decode(data["levelSetHistoryKeys"]),
                                              base64.b64decode(data["levelSetHistoryXi"]))
             eng._bridge.setLevelSetDissipation(*data["levelSetDissipation"])
             eng._bridge.setLevelSetImpulses(data.get("levelSetImpulse", []))
+            eng._bridge.setLevelSetFirstContacts(_firstContacts(data, "levelSetFirstContact", "levelSetImpulse",
+                                                                len(data["levelSets"])))
         eng._bridge.setReferenceOrientations(data["referenceOrientations"])
         eng._ori0 = {int(i): Quaternion(*q) for i, q in data["plotOrientations"].items()}
         eng._appendOutput = bool(appendOutput) and data.get("outputOpen", True)
@@ -595,6 +617,16 @@ class CoupledEngine(Engine, _StepControl):
         if yadeId in self._levelSets:
             return self._bridge.levelSetImpulse(self._levelSets[yadeId]) if self._contactsKnown else Vector3.Zero
         return self._bridge.impulse(self._index(yadeId))
+
+    def firstContact(self, yadeId):
+        """When the flow first touched a block or LevelSet body [s]: the start of the first step
+        whose flow force on it was not zero (the state its contacts were found in) (NaN before it, or where a restart from an older
+        checkpoint did not keep it). A record holds one step's force at each record, so the first
+        record with a force places the touch only within its interval; a first blow's windows
+        start here."""
+        if yadeId in self._levelSets:
+            return self._bridge.levelSetFirstContact(self._levelSets[yadeId]) if self._contactsKnown else math.nan
+        return self._bridge.firstContact(self._index(yadeId))
 
     def angularImpulse(self, yadeId):
         """The same of the torque (:meth:`torque`) [N m s]."""

@@ -13,7 +13,9 @@ driver mpmsdem-run in two legs (the scenes are built with YADE, then only the dr
   contact radius R_p0 of Eq 13) and the depth 2 and 5 cm behind the tip;
 - the coupled run with the cube, started from the free flow's state saved when its front was
   3 cm and two cells short of the cube (mpmsdem-run --flow-from: the same run, bit for bit,
-  without the flow's way there): first touch, the first blow (the largest 10 ms mean of the
+  without the flow's way there): first touch (the step the flow first touched the cube in,
+  where coupled.h5 records it, else the first 1 ms record with a force: analysis.touchTime),
+  the first blow (the largest 10 ms mean of the
   flow's downstream force within 50 ms of the touch) and the blow by parts (the mean force over
   0–2, 2–5 and 5–25 ms after the touch), the plateau (mean force over 0.4–0.5 s),
   the cube's tilt and travel at 0.5 s. The means are taken from the impulse coupled.h5 records
@@ -273,7 +275,7 @@ def coupled(folder, duration):
     from mpmsdem import analysis
     s, _ = analysis.driverBlockSeries(os.path.join(folder, "coupled"))
     t, ft = s["t"], s["Ft"]
-    t0 = analysis.firstTouch(t, ft)
+    t0 = analysis.touchTime(s)
     if t0 is None:
         return {"first_touch": None}
     late = t[-1] >= AT - 2 * SERIES_EVERY  # the last record may fall just short of AT; a short run (a check's) has none
@@ -297,7 +299,7 @@ def coupled(folder, duration):
             m = np.where(w & np.isfinite(m), m, -np.inf)
             extra["blow_%gms" % (1e3 * window)] = float(m.max())
         extra["impulse_20ms"] = float(np.interp(t0 + 0.02, t, s["J"]))
-        extra.update(analysis.blowParts(t, s["J"], t0))
+        extra.update(analysis.blowParts(s))
     return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]), "forces_from": source, **extra,
             "plateau": float(plateau) if late else None,
             "tilt_at": float(np.interp(AT, t, s["tilt"])) if late else None,

@@ -288,7 +288,7 @@ def readObstacle(folder, meta, free, hd=None):
     peak, tPeak = peaks[BLOW]
     theta, h, v = meta["theta"], free["h_f"], free["v_f"]
     cos = math.cos(math.radians(theta))
-    touch, source = analysis.firstTouch(t, f), analysis.forceSource(s)
+    touch, source = analysis.touchTime(s), analysis.forceSource(s)
     r = {"F_peak": peak, "t_peak": tPeak, "F_peak_20ms": peaks[BLOW_LONG][0],
          "F_windows": {"%g" % (1e3 * w): p for w, (p, _) in peaks.items()},
          "F_end": analysis.meanForceBetween(s, t[-1] - END, t[-1]),
@@ -297,7 +297,7 @@ def readObstacle(folder, meta, free, hd=None):
          "kinetic_end": float(s["flow_kinetic"][-1]), "kinetic_peak": float(s["flow_kinetic"].max()),
          "Fr_cos": v / math.sqrt(G * cos * h)}
     if source == "impulse":  # the blow by parts after the touch (every step's force)
-        r["F_parts"] = analysis.blowParts(t, s["J"], touch)
+        r["F_parts"] = analysis.blowParts(s)
     if meta["kind"] == "wall":
         w = meta["width"]
         hd = depositHeight(folder, meta) if hd is None else hd

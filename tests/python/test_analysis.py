@@ -285,16 +285,47 @@ def test_point_radius_is_the_sphere_of_a_points_volume():
 
 
 def test_the_blow_by_parts_of_a_known_impulse():
-    """analysis.blowParts on records every 1 ms of a cube struck at 0.3 s by 30 N for
-    3 ms, then 6 N: by hand, 30 N over 0-2 ms, (30 + 2 x 6) / 3 = 14 N over 2-5 ms, 6 N over 5-25
-    ms; a span past the last record is left out."""
+    """analysis.blowParts on records every 1 ms of a cube struck from 0.3 s by 30 N for 3 ms,
+    then 6 N: by hand, 30 N over 0-2 ms, (30 + 2 x 6) / 3 = 14 N over 2-5 ms, 6 N over 5-25 ms
+    where the series holds the contact's first step; the records alone (their first force at
+    0.301 s) count from 1 ms late and give 30, 6 and 6 N. A span past the last record is left
+    out; none where the flow never came."""
     np = pytest.importorskip("numpy")
     t = np.arange(0, 451) * 1e-3
-    F = np.where(t < 0.3 + 1e-9, 0.0, np.where(t < 0.303 + 1e-9, 30.0, 6.0))
+    F = np.where(t < 0.3 + 1e-9, 0.0, np.where(t < 0.303 + 1e-9, 30.0, 6.0))  # over the interval before t
     J = np.concatenate([[0.0], np.cumsum(F[1:] * np.diff(t))])
-    parts = analysis.blowParts(t, J, 0.3)
-    assert sorted(parts) == ["load_0_2ms", "load_2_5ms", "load_5_25ms"]
-    assert parts["load_0_2ms"] == pytest.approx(30.0, abs=1e-9)
-    assert parts["load_2_5ms"] == pytest.approx(14.0, abs=1e-9)
-    assert parts["load_5_25ms"] == pytest.approx(6.0, abs=1e-9)
-    assert list(analysis.blowParts(t, J, 0.44)) == ["load_0_2ms", "load_2_5ms"]
+    records = {"t": t, "J": J, "Ft": F}
+    exact = dict(records, first_contact=np.where(t >= 0.3, 0.3, np.nan))
+    assert analysis.touchTime(records) == pytest.approx(0.301, abs=1e-12)
+    assert analysis.touchTime(exact) == 0.3
+    for s, want in ((exact, (30.0, 14.0, 6.0)), (records, (30.0, 6.0, 6.0))):
+        parts = analysis.blowParts(s)
+        assert sorted(parts) == ["load_0_2ms", "load_2_5ms", "load_5_25ms"]
+        assert (parts["load_0_2ms"], parts["load_2_5ms"], parts["load_5_25ms"]) == pytest.approx(want, abs=1e-9)
+    late = {"t": t, "J": J, "Ft": np.where(t < 0.44, 0.0, F)}
+    assert list(analysis.blowParts(late)) == ["load_0_2ms", "load_2_5ms"]
+    assert analysis.blowParts({"t": t, "J": 0 * J, "Ft": 0 * F}) == {}
+
+
+def test_the_blow_by_parts_from_the_step_of_the_first_contact():
+    """Where the series holds the step the flow first touched the block in (coupled.h5's
+    flow_first_contact), the parts count from it, between records: a cube struck from 0.3004 s
+    (a step inside the record interval 0.300-0.301 s) by 30 N for 3 ms, then 6 N, recorded every
+    1 ms: 30 N over 0-2 ms, (30 x 1 + 6 x 2) / 3 = 14 N over 2-5 ms and 6 N over 5-25 ms, by hand,
+    to round-off; the records alone would count from 0.301 s, 0.6 ms late."""
+    np = pytest.importorskip("numpy")
+    t = np.arange(0, 451) * 1e-3
+    t0 = 0.3004
+
+    def J(x):  # the impulse of the force above at time x, by hand
+        x = np.asarray(x, dtype=float)
+        return 30 * np.clip(x - t0, 0, 0.003) + 6 * np.clip(x - t0 - 0.003, 0, None)
+
+    first = np.where(t >= t0, t0, np.nan)  # known from the record after it on
+    s = {"t": t, "J": J(t), "Ft": np.where(t > t0, 1.0, 0.0), "first_contact": first}
+    assert analysis.firstContact(s) == t0 and analysis.touchTime(s) == t0
+    parts = analysis.blowParts(s)
+    assert parts["load_0_2ms"] == pytest.approx(30.0, rel=1e-12)
+    assert parts["load_2_5ms"] == pytest.approx(14.0, rel=1e-12)
+    assert parts["load_5_25ms"] == pytest.approx(6.0, rel=1e-12)
+    assert analysis.firstContact({"t": t, "Ft": s["Ft"]}) is None  # written before it was recorded

@@ -151,6 +151,13 @@ def test_outputs_h5py_paraview_and_yade_plot(tmp_path):
                                    atol=1e-9 * np.abs(s["flow_impulse"][:]).max())
         assert s["flow_impulse"][0].tolist() == [0, 0, 0] and s["flow_impulse"][-1, 0] > 0
         assert s["contacts"].shape == (n, 1)
+        # the first contact: the start of a step within the record interval before the first
+        # record with an impulse, NaN in the records before it, the same in every one after
+        first, k = s["flow_first_contact"][:, 0], int(np.nonzero(s["flow_impulse"][:, 0])[0][0])
+        fc = coupled.firstContact(cube)
+        assert s["time"][k - 1] <= fc < s["time"][k]
+        assert np.isnan(first[:k]).all() and (first[k:] == fc).all()
+        assert fc == pytest.approx(round(fc / O.dt) * O.dt, abs=1e-12)  # a step's start
         # F_t = F_f + F_e at every record (paper §3.2.3)
         np.testing.assert_allclose(s["flow_force"][:], s["face_force"][:] + s["edge_force"][:], rtol=0, atol=1e-12)
         assert s["flow_force"][:, 0].max() > 0  # pushed downstream at some record

@@ -104,6 +104,9 @@ def test_driver_matches_yade_for_the_same_coupled_scene(tmp_path):
               "flow_kinetic", "block_kinetic"):
         a, b = y[k], d[k]
         assert np.abs(a - b).max() <= 1e-11 * np.abs(a).max(), k
+    # the same first contacts (the steps' starts, sums of the same steps), NaN until then
+    assert np.isfinite(d["flow_first_contact"][-1]).any()
+    np.testing.assert_allclose(y["flow_first_contact"], d["flow_first_contact"], rtol=1e-12, atol=0, equal_nan=True)
     # blockedDOFs 'yzXY' held in the driver: y, z fixed, rotation about z only; the bed fixed
     p = d["pos"][:, 6:9]
     assert np.abs(p[:, 1:] - p[0, 1:]).max() == 0
@@ -318,10 +321,11 @@ def test_a_restart_from_a_checkpoint_without_impulses_counts_them_from_there(tmp
     drive(split, steps // 2)
     c = json.loads((split / "coupled.checkpoint.json").read_text())
     assert np.abs(np.array(c.pop("coupling_impulse"))[:, :3]).max() > 0  # the blob had pushed the blocks
+    c.pop("coupling_first_contact")  # nor the first contacts, kept later still
     (split / "coupled.checkpoint.json").write_text(json.dumps(c))
     for name in ("coupled.h5", "coupled.h5.restart"):
         with h5py.File(split / name, "a") as f:
-            del f["series/flow_impulse"], f["series/flow_angular_impulse"]
+            del f["series/flow_impulse"], f["series/flow_angular_impulse"], f["series/flow_first_contact"]
     drive(split, steps - steps // 2, restart=True)
     w, _ = series(tmp_path / "whole" / "coupled.h5")
     d, _ = series(split / "coupled.h5")
@@ -331,6 +335,8 @@ def test_a_restart_from_a_checkpoint_without_impulses_counts_them_from_there(tmp
         assert np.isnan(d[k][:restart + 1]).all() and np.isfinite(d[k][restart + 1:]).all()
         np.testing.assert_allclose(np.diff(d[k][restart + 1:], axis=0), np.diff(w[k][restart + 1:], axis=0), rtol=0,
                                    atol=1e-12 * np.abs(w[k]).max())
+    # which block the flow had touched is not known there: no first contact, before or after
+    assert np.isfinite(w["flow_first_contact"][-1]).any() and np.isnan(d["flow_first_contact"]).all()
     np.testing.assert_array_equal(d["pos"], w["pos"])
 
 

@@ -2,6 +2,10 @@
 a run recorded, the coupled checkpoint continuing bit-for-bit, bodies added mid-run refused
 while a per-body output is being written."""
 
+import json
+import math
+import os
+
 import numpy as np
 import pytest
 
@@ -117,7 +121,7 @@ def test_coupled_checkpoint_continues_bit_for_bit(tmp_path, dtAuto, kc, before):
     mpmsdem.run(150, coupled)
     ref = {"x": coupled.mpm.particles()["x"].copy(), "v": coupled.mpm.particles()["v"].copy(),
            "body": [*O.bodies[cube].state.pos, *O.bodies[cube].state.ori, *O.bodies[cube].state.angVel],
-           "friction": coupled.energies()["friction"], "time": O.time}
+           "friction": coupled.energies()["friction"], "time": O.time, "first": coupled.firstContact(cube)}
     with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:
         refSeries = {k: f["series/" + k][:] for k in f["series"]}
     forget(coupled, coupled.sdem, coupled.mpm)
@@ -132,6 +136,21 @@ def test_coupled_checkpoint_continues_bit_for_bit(tmp_path, dtAuto, kc, before):
     with h5py.File(tmp_path / "out" / "coupled.h5", "r", locking=False) as f:  # records after the checkpoint replaced, once
         for k, v in refSeries.items():
             np.testing.assert_array_equal(f["series/" + k][:], v, err_msg=k)
+    # the first contact kept, or (the cube not touched yet at step 91) made at the same step
+    assert math.isfinite(ref["first"]) and coupled2.firstContact(cube) == ref["first"]
+    # from a checkpoint written before the first contacts were kept: a cube the flow had touched
+    # (its impulse says so) keeps none; one not touched yet gets it at the same step
+    path = os.path.join(ck, "coupled.coupled.json")
+    with open(path) as f:
+        data = json.load(f)
+    del data["firstContact"]
+    with open(path, "w") as f:
+        json.dump(data, f)
+    forget(coupled2, coupled2.sdem, coupled2.mpm)
+    coupled3 = mpmsdem.loadCheckpoint(ck, verbose=False)
+    mpmsdem.run(150, coupled3)
+    touched = before != 91
+    assert math.isnan(coupled3.firstContact(cube)) if touched else coupled3.firstContact(cube) == ref["first"]
 
 
 @pytest.mark.parametrize("before", [0, 120], ids=["checkpoint before the first step", "after 120 steps"])
@@ -141,7 +160,6 @@ def test_a_coupled_h5_damaged_by_a_kill_is_replaced_on_restore(tmp_path, before)
     overwritten). Restoring puts back the file as the checkpoint saw it (coupled.h5.restart)
     or, for a checkpoint taken before the first step, when no coupled.h5 existed yet, starts the
     file afresh; either way the continued run's records equal the unbroken run's."""
-    import os
     import subprocess
     import sys
     out, ck = tmp_path / "out", tmp_path / "ck"

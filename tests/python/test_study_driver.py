@@ -203,8 +203,8 @@ def test_a_coupled_run_started_ahead_of_the_cube_is_the_run_from_the_release(tmp
         t = a["series/time"][:]
         assert t[0] == tk
         at = np.searchsorted(b["series/time"][:], t[1:])
-        for k in a["series"]:
-            assert np.array_equal(a["series"][k][1:], b["series"][k][:][at]), k
+        for k in a["series"]:  # (flow_first_contact: NaN until the flow touches a block)
+            assert np.array_equal(a["series"][k][1:], b["series"][k][:][at], equal_nan=True), k
 
     exe, free = driver.executable(), os.path.join(runs["ahead"], "free")
     scene = json.load(open(os.path.join(runs["ahead"], "coupled.json")))
@@ -225,7 +225,8 @@ def test_a_coupled_run_started_ahead_of_the_cube_is_the_run_from_the_release(tmp
     with h5py.File(tmp_path / "from1" / "coupled.h5", "r") as a, \
             h5py.File(os.path.join(runs["ahead"], "coupled", "coupled.h5"), "r") as b:
         n = len(a["series/time"])
-        assert n > 10 and all(np.array_equal(a["series"][k][:], b["series"][k][:n]) for k in a["series"])
+        assert n > 10
+        assert all(np.array_equal(a["series"][k][:], b["series"][k][:n], equal_nan=True) for k in a["series"])
 
     def refused(changed, expect, extra=(), source=free):
         path = str(tmp_path / "changed.json")

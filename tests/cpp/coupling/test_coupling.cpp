@@ -141,6 +141,9 @@ class QueuedCpuSolver : public mpm::MpmSolver {
   double dt_ = 0;
 };
 
+// Equal to the bit, or both NaN (a first contact not made yet).
+bool sameBits(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
+
 // Zero gravity: a 4 x 4 x 4-cell blob of glass beads (8 points per cell) moving at vx along x
 // in a grid of `cellsX` x 14 x 14 cells; its solver wrapped in a QueuedCpuSolver if `queued`.
 std::unique_ptr<CoupledWorld> blobWorld(int cellsX, double vx, mpm::Backend backend = mpm::Backend::Cpu,
@@ -287,6 +290,13 @@ TEST_P(CoupledCheckpointEveryBackend, RestoredWorldContinuesTheSameRunBitForBit)
   ASSERT_EQ(c.couplingImpulse.size(), 2u * CouplingReport::kImpulseValues);
   EXPECT_GT(Vec3(c.couplingImpulse[0], c.couplingImpulse[1], c.couplingImpulse[2]).norm(), 0.0);
   EXPECT_EQ(again.couplingImpulse, c.couplingImpulse);
+  // the free cube was first touched within the run; the same bits (or NaN, not yet) come back
+  ASSERT_EQ(c.couplingFirstContact.size(), 2u);
+  EXPECT_GT(c.couplingFirstContact[0], 0.0);
+  EXPECT_LE(c.couplingFirstContact[0], c.time);
+  ASSERT_EQ(again.couplingFirstContact.size(), 2u);
+  for (int i = 0; i < 2; ++i)
+    EXPECT_TRUE(sameBits(again.couplingFirstContact[i], c.couplingFirstContact[i])) << "block " << i;
 
   for (int k = 0; k < 200; ++k) {
     a->step(dt);
@@ -299,10 +309,71 @@ TEST_P(CoupledCheckpointEveryBackend, RestoredWorldContinuesTheSameRunBitForBit)
   EXPECT_EQ(a->coupling.force(0), b->coupling.force(0));
   EXPECT_EQ(a->coupling.impulse(0), b->coupling.impulse(0));
   EXPECT_EQ(a->coupling.angularImpulse(0), b->coupling.angularImpulse(0));
+  EXPECT_EQ(a->coupling.firstContact(0), c.couplingFirstContact[0]);  // kept, not set again
+  for (int i = 0; i < 2; ++i) EXPECT_TRUE(sameBits(a->coupling.firstContact(i), b->coupling.firstContact(i)));
   mpm::ParticleSet pa, pb;
   a->mpm().getParticles(pa);
   b->mpm().getParticles(pb);
   mpm::agreement::expectBitIdentical(pa, pb);
+}
+
+// When the flow first touched a block: the start of the first step whose flow force on it is
+// not zero (the flow's time before that step), NaN before it, and never set again. A restart keeps
+// it; one from a state that did not keep it (a checkpoint written before it was) leaves a block
+// already touched without one for good, and one not touched yet gets it at the same step as the
+// run that was not stopped.
+TEST(CoupledWorld, FirstContactIsTheStartOfTheFirstStepWithAFlowForce) {
+  int cube;
+  auto w = blobAtCube(1.0, false, 1e4, &cube);
+  const double dt = 1e-5;
+  struct State {
+    CoupledCheckpoint c;
+    mpm::ParticleSet ps;
+    double time;
+    long steps;
+  };
+  auto state = [&] {
+    State s{captureCheckpoint(*w, 0, dt, {Quat::Identity()}), {}, w->mpm().time(), w->mpm().steps()};
+    w->mpm().getParticles(s.ps);
+    return s;
+  };
+  State before;  // the state one step before the touch
+  double touch = std::numeric_limits<double>::quiet_NaN();
+  for (int s = 0; s < 1500 && std::isnan(touch); ++s) {
+    if (s > 0) EXPECT_TRUE(std::isnan(w->coupling.firstContact(cube))) << "step " << s;
+    before = state();
+    w->step(dt);
+    if (w->coupling.force(cube).norm() > 0) touch = before.time;
+  }
+  ASSERT_FALSE(std::isnan(touch)) << "the blob never touched the cube";
+  EXPECT_EQ(w->coupling.firstContact(cube), touch);
+  EXPECT_GT(touch, 100 * dt);  // the blob closes 1 cm first: not the run's first steps
+  for (int s = 0; s < 100; ++s) w->step(dt);
+  EXPECT_EQ(w->coupling.firstContact(cube), touch);
+  const State after = state();
+
+  // restarts from checkpoints that did not keep the first contacts
+  auto restarted = [&](const State& s) {
+    int unused;
+    auto r = blobAtCube(1.0, false, 1e4, &unused);
+    r->mpm().setParticles(s.ps);
+    r->mpm().setClock(s.time, s.steps);
+    CoupledCheckpoint c = s.c;
+    c.couplingFirstContact.clear();
+    restoreCheckpoint(c, *r);
+    return r;
+  };
+  auto fromBefore = restarted(before);
+  fromBefore->step(dt);
+  EXPECT_EQ(fromBefore->coupling.firstContact(cube), touch);  // not touched yet: set as in the whole run
+  auto fromAfter = restarted(after);
+  ASSERT_GT(after.c.couplingImpulse[0], 0.0);
+  const double pushed = after.c.couplingImpulse[0];
+  for (int s = 0; s < 100; ++s) {
+    fromAfter->step(dt);
+    EXPECT_TRUE(std::isnan(fromAfter->coupling.firstContact(cube))) << "step " << s;  // touched before: not kept
+  }
+  EXPECT_GT(fromAfter->coupling.impulse(cube)[0], pushed);  // the flow went on pushing
 }
 
 // A coupled run started from another run's flow (driver --flow-from): a blob falls onto a fixed

@@ -96,7 +96,7 @@ MpContactRecord touch(const LevelSetGrid& g, const Vec3& x, const Vec3& pos = Ve
   c.addBody(7, g, physics());
   c.setState(0, pos, ori, Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
   OnePoint p(x, kV0);
-  c.computeForces(p.view(), 1e-5, 0.5, kDx);
+  c.computeForces(p.view(), 1e-5, 0.0, 0.5, kDx);
   const std::vector<MpContactRecord> r = c.contacts();
   EXPECT_EQ(r.size(), 1u);
   if (particleForce)
@@ -206,11 +206,16 @@ TEST(LevelSetCoupling, ContinuationBeyondTheGrid) {
   cl.addBody(4, flat, physics());
   cl.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
   OnePoint far(Vec3(a + 0.0029, a + 0.0029, 0.0), kV0);
-  cl.computeForces(far.view(), 1e-5, 0.5, kDx);
+  cl.computeForces(far.view(), 1e-5, 0.0, 0.5, kDx);
   EXPECT_EQ(cl.contactCount(0), 0);
-  // nearer, the same point touches along the diagonal: phi = 1 mm + 1.1 sqrt2 mm = 2.556 mm
+  EXPECT_TRUE(std::isnan(cl.firstContact(0)));  // not touched yet
+  // nearer, the same point touches along the diagonal: phi = 1 mm + 1.1 sqrt2 mm = 2.556 mm,
+  // in the step from 2e-5 s, the body's first contact
   OnePoint near(Vec3(a + 0.0021, a + 0.0021, 0.0), kV0);
-  cl.computeForces(near.view(), 1e-5, 0.5, kDx);
+  cl.computeForces(near.view(), 1e-5, 2e-5, 0.5, kDx);
+  EXPECT_EQ(cl.firstContact(0), 2e-5);
+  cl.computeForces(near.view(), 1e-5, 3e-5, 0.5, kDx);
+  EXPECT_EQ(cl.firstContact(0), 2e-5);  // set once
   const std::vector<MpContactRecord> r = cl.contacts();
   ASSERT_EQ(r.size(), 1u);
   EXPECT_NEAR(r[0].overlap, kRp - (0.001 + 0.0011 * std::sqrt(2.0)), 1e-14);
@@ -243,7 +248,7 @@ TEST(LevelSetCoupling, ImpulseBalanceWithSolver) {
     c.setState(0, pos, Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, false);
     mpm::ParticleView v = solver->openForceBuffer();
     for (std::size_t p = 0; p < v.n; ++p) static_cast<double*>(v.force[2])[p] = -1e-3;  // a first coupling's
-    c.computeForces(solver->extendForceBuffer(), dt, 0.5, kDx);
+    c.computeForces(solver->extendForceBuffer(), dt, solver->time(), 0.5, kDx);
     ASSERT_GE(c.contactCount(0), 5);
     mpm::ParticleSet out;
     solver->getParticles(out);
@@ -294,8 +299,8 @@ SlabRun slabOnSphere(mpm::Backend backend, mpm::Precision precision) {
     c->setState(0, Vec3(0.1011, 0.1007, 0.05), Quat::Identity(), Vec3::Zero(), Vec3(0, 0, 1), 1.0, 1e-3, false);
   }
   for (int step = 0; step < 3; ++step) {
-    first.computeForces(solver->openForceBuffer(), 1e-5, 0.5, kDx);
-    second.computeForces(solver->extendForceBuffer(), 1e-5, 0.5, kDx);
+    first.computeForces(solver->openForceBuffer(), 1e-5, 0.0, 0.5, kDx);
+    second.computeForces(solver->extendForceBuffer(), 1e-5, 0.0, 0.5, kDx);
     solver->step(1e-5);
   }
   SlabRun r{second.force(0), second.torque(0), {}, second.contacts(), {}, {}};
@@ -395,7 +400,7 @@ TEST(LevelSetCoupling, FloatAgreesWithDouble) {
     cd.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
     cf.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
     OnePoint p(x, kV0);
-    cd.computeForces(p.view(), 1e-5, 0.5, kDx);
+    cd.computeForces(p.view(), 1e-5, 0.0, 0.5, kDx);
     float xf[3] = {float(x[0]), float(x[1]), float(x[2])}, vf[3] = {0, 0, 0}, mf = float(p.mass),
           v0f = float(kV0), ff[3] = {0, 0, 0};
     mpm::ParticleView w;
@@ -408,7 +413,7 @@ TEST(LevelSetCoupling, FloatAgreesWithDouble) {
     }
     w.mass = &mf;
     w.volume0 = &v0f;
-    cf.computeForces(w, 1e-5, 0.5, kDx);
+    cf.computeForces(w, 1e-5, 0.0, 0.5, kDx);
     ASSERT_EQ(cd.contactCount(0), 1);
     ASSERT_EQ(cf.contactCount(0), 1);
     // delta ~ 1 mm from distances ~ 0.05 m in float (eps 6e-8): 3e-9 m, a relative 1e-5 of F ~ delta^2
@@ -434,7 +439,7 @@ TEST(LevelSetCoupling, CoarseGridRefused) {
   // and at the step, from the particles' own volumes
   c.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
   OnePoint p(Vec3(0.3, 0, 0), kV0);
-  EXPECT_THROW(c.computeForces(p.view(), 1e-5, 0.5, kDx), ParameterError);
+  EXPECT_THROW(c.computeForces(p.view(), 1e-5, 0.0, 0.5, kDx), ParameterError);
 }
 
 TEST(LevelSetCoupling, BadInput) {
@@ -456,7 +461,7 @@ TEST(LevelSetCoupling, BadInput) {
   EXPECT_EQ(c.numBodies(), 0);
   c.addBody(1, g, physics());
   OnePoint p(Vec3(0.3, 0, 0), kV0);
-  EXPECT_THROW(c.computeForces(p.view(), 1e-5, 0.5, kDx), RuntimeFailure);  // no state set
+  EXPECT_THROW(c.computeForces(p.view(), 1e-5, 0.0, 0.5, kDx), RuntimeFailure);  // no state set
   EXPECT_THROW(c.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 0.0, 0.0, false),
                ParameterError);
   EXPECT_THROW(c.setHistorySlots(5), ParameterError);
@@ -470,7 +475,7 @@ TEST(LevelSetCoupling, CentreInsideFails) {
   c.setState(0, Vec3::Zero(), Quat::Identity(), Vec3::Zero(), Vec3::Zero(), 1.0, 1e-3, true);
   OnePoint p(Vec3(0.049, 0, 0), kV0);
   try {
-    c.computeForces(p.view(), 1e-5, 0.5, kDx);
+    c.computeForces(p.view(), 1e-5, 0.0, 0.5, kDx);
     FAIL();
   } catch (const RuntimeFailure& e) {
     EXPECT_NE(std::string(e.what()).find("material point 0 reached the surface of LevelSet body 9"), std::string::npos)

@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -31,7 +32,8 @@ nlohmann::json checkpoint() {
     "bodies": [{"pos": [0.1, 0.2, 0.3], "ori": [1, 0, 0, 0], "vel": [0.5, 0, 0], "ang_vel": [0, 0, 1], "ang_mom": null}],
     "sdem_histories": [[0, -2, 0, 2, 3, 5, 1e-6, -2e-6, 0]], "sdem_dissipation": [0.01, 0.002], "history_slots": 4,
     "history_particles": 1000, "coupling_histories": [[17, 456, 0, 2e-7, 0]], "coupling_dissipation": [0.003, 0.0004],
-    "coupling_impulse": [[0.001, 0, -2e-4, 0, 1e-6, 0]], "reference_orientations": [[1, 0, 0, 0]]})");
+    "coupling_impulse": [[0.001, 0, -2e-4, 0, 1e-6, 0]], "coupling_first_contact": [0.0105],
+    "reference_orientations": [[1, 0, 0, 0]]})");
 }
 
 }  // namespace
@@ -66,12 +68,27 @@ TEST(ReaderRegressions, CheckpointFieldsOutOfRangeAreRefusedByName) {
   refused("/coupling_impulse/0", nlohmann::json::array({1, 2}), "coupling_impulse[0] = 2 values: must be an array of 6");
   refused("/coupling_impulse/0/4", "large", "coupling_impulse[0][4] = a JSON string: must be a number");
   refused("/coupling_impulse", nlohmann::json::array(), "coupling_impulse = 0 entries: must be one per block of");
+  refused("/coupling_first_contact/0", -0.5, "coupling_first_contact[0] = -0.5 s: must be >= 0 or null");
+  refused("/coupling_first_contact/0", "soon", "coupling_first_contact[0] = a JSON string: must be a number");
+  refused("/coupling_first_contact", nlohmann::json::array({0.01, 0.02}),
+          "coupling_first_contact = 2 values: must be an array of 1 values");
   // a checkpoint written before the impulse was kept: read, the impulse counting from the restart
   nlohmann::json old = checkpoint();
   old.erase("coupling_impulse");
   std::ofstream(path) << old.dump();
   EXPECT_TRUE(readCheckpoint(path).couplingImpulse.empty());
   EXPECT_EQ(c.couplingImpulse, (std::vector<double>{0.001, 0, -2e-4, 0, 1e-6, 0}));
+  // ... and before the first contacts were: none read (restoreCheckpoint tells touched blocks by
+  // their impulse); a block not touched yet is null
+  EXPECT_EQ(c.couplingFirstContact, (std::vector<double>{0.0105}));
+  old = checkpoint();
+  old.erase("coupling_first_contact");
+  std::ofstream(path) << old.dump();
+  EXPECT_TRUE(readCheckpoint(path).couplingFirstContact.empty());
+  old = checkpoint();
+  old["coupling_first_contact"][0] = nullptr;
+  std::ofstream(path) << old.dump();
+  EXPECT_TRUE(std::isnan(readCheckpoint(path).couplingFirstContact.at(0)));
   std::remove(path.c_str());
 }
 
