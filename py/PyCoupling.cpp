@@ -297,17 +297,15 @@ class PyCoupling {
   bp::list levelSetImpulses() const { return doubleList(levelSets_.impulses()); }
   void setLevelSetImpulses(const bp::object& values) { levelSets_.setImpulses(sequenceOfDoubles(values)); }
   // When the flow first touched each block and LevelSet body (CouplingReport::firstContacts:
-  // NaN not yet, -inf not kept), and back: after the impulses, so that a state that did not keep
-  // them tells a touched body (firstContactsFromImpulses).
+  // NaN not yet, -inf not kept), and back after the impulses (CouplingReport::
+  // restoreFirstContacts; impulsesKept: whether the checkpoint kept the impulses).
   bp::list blockFirstContacts() const { return doubleList(coupling_.firstContacts()); }
-  void setFirstContacts(const bp::object& values) {
-    coupling_.setFirstContacts(sequenceOfDoubles(values));
-    coupling_.firstContactsFromImpulses();
+  void setFirstContacts(const bp::object& values, bool impulsesKept) {
+    coupling_.restoreFirstContacts(sequenceOfDoubles(values), impulsesKept, sdem_.engine().numBodies());
   }
   bp::list levelSetFirstContacts() const { return doubleList(levelSets_.firstContacts()); }
-  void setLevelSetFirstContacts(const bp::object& values) {
-    levelSets_.setFirstContacts(sequenceOfDoubles(values));
-    levelSets_.firstContactsFromImpulses();
+  void setLevelSetFirstContacts(const bp::object& values, bool impulsesKept) {
+    levelSets_.restoreFirstContacts(sequenceOfDoubles(values), impulsesKept, levelSets_.numBodies());
   }
   bp::list referenceOrientations() const {
     bp::list l;

@@ -328,11 +328,7 @@ void restoreCheckpoint(const CoupledCheckpoint& c, CoupledWorld& w) {
   if (!c.couplingFirstContact.empty() && c.couplingFirstContact.size() != static_cast<std::size_t>(n))
     throwParameter("--restart: checkpoint coupling_first_contact", c.couplingFirstContact.size(), "blocks",
                    "the scene's " + std::to_string(n) + " blocks");
-  // one that kept neither says nothing of whether a block was touched: none gets a first contact
-  std::vector<double> first = c.couplingFirstContact;
-  if (first.empty() && c.couplingImpulse.empty()) first.assign(n, -std::numeric_limits<double>::infinity());
-  w.coupling.setFirstContacts(first);
-  w.coupling.firstContactsFromImpulses();
+  w.coupling.restoreFirstContacts(c.couplingFirstContact, !c.couplingImpulse.empty(), n);
   w.coupling.restoreParticleApproachStep(c.particleApproachStep);
   w.restoreContactSteps(c.contactStep, c.contactStepLow);
 }

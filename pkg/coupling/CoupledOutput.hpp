@@ -8,7 +8,7 @@
 //                     is the mean force and torque between them; NaN in the records before a
 //                     restart from a checkpoint that did not keep them, and counted from there)
 //                     (each records x 3 blocks),
-//                     contacts and flow_first_contact (records x blocks: the end of the first
+//                     contacts and flow_first_contact (records x blocks: the start of the first
 //                     step whose flow force on the body was not zero [s], CouplingReport::
 //                     firstContact; NaN before it, and where not known); energy series are
 //                     appended by the caller. Bodies

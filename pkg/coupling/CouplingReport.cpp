@@ -60,19 +60,22 @@ double CouplingReport::firstContact(int i) const {
   return std::isinf(t) ? std::numeric_limits<double>::quiet_NaN() : t;
 }
 
-void CouplingReport::setFirstContacts(const std::vector<double>& values) {
-  for (double v : values)
-    if (!(std::isnan(v) || (std::isfinite(v) && v >= 0) || v == -std::numeric_limits<double>::infinity()))
-      throwParameter("first contacts", v, "s", ">= 0, NaN (not touched yet) or -inf (touched at a time not kept)");
-  firstContact_ = values;
-}
-
-void CouplingReport::firstContactsFromImpulses() {
-  const std::size_t bodies = impulse_.size() / kImpulseValues;
-  if (firstContact_.size() < bodies) firstContact_.resize(bodies, std::numeric_limits<double>::quiet_NaN());
-  for (std::size_t b = 0; b < bodies; ++b)
+void CouplingReport::restoreFirstContacts(const std::vector<double>& kept, bool impulsesKept, int bodies) {
+  for (double v : kept)
+    if (!(std::isnan(v) || (std::isfinite(v) && v >= 0)))
+      throwParameter("first contacts", v, "s", ">= 0, or NaN (not touched yet, or not kept)");
+  const double notKept = -std::numeric_limits<double>::infinity();
+  const std::size_t withImpulse = impulse_.size() / kImpulseValues,
+                    n = std::max(static_cast<std::size_t>(bodies), withImpulse);
+  if (kept.empty() && !impulsesKept) {
+    firstContact_.assign(n, notKept);
+    return;
+  }
+  firstContact_ = kept;
+  if (firstContact_.size() < n) firstContact_.resize(n, std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t b = 0; b < withImpulse; ++b)
     for (int k = 0; k < kImpulseValues && std::isnan(firstContact_[b]); ++k)
-      if (impulse_[kImpulseValues * b + k] != 0) firstContact_[b] = -std::numeric_limits<double>::infinity();
+      if (impulse_[kImpulseValues * b + k] != 0) firstContact_[b] = notKept;
 }
 
 std::vector<long long> currentHistoryKeys(const std::vector<long long>& keys, const std::vector<unsigned>& written,

@@ -65,20 +65,21 @@ class CouplingReport {
 
   // ---- when the flow first touched each body index: the start [s] of the first step whose
   // force on it was not zero (a step's contacts are those of the state it starts from, and the
-  // impulse up to then is the one before any contact); NaN before that. A record holds one step's force every record interval,
-  // so the first record with a force places the touch only within that interval, and the first
-  // blow's windows (counted from the touch) would start up to an interval late. NaN too where it
-  // is not known: a run continued from a state that did not keep it, for a body its impulses say
-  // the flow had touched already (firstContactsFromImpulses).
+  // impulse up to then is the one before any contact); NaN before that. A record holds one
+  // step's force every record interval, so the first record with a force places the touch only
+  // within that interval, and the first blow's windows (counted from the touch) would start up
+  // to an interval late. NaN too where it is not known: a run continued from a state that did
+  // not keep it (restoreFirstContacts).
   double firstContact(int body) const;
   // Per body index, to continue after a restart: a time >= 0, NaN (not yet) or -inf (touched
-  // at a time not kept). setFirstContacts: ParameterError for anything else.
+  // at a time not kept).
   const std::vector<double>& firstContacts() const { return firstContact_; }
-  void setFirstContacts(const std::vector<double>& values);
-  // After setImpulses and setFirstContacts at a restart: a body without a first contact (NaN)
-  // but with an impulse was touched at a time the state did not keep (-inf: it stays NaN, and
-  // no later step sets it); one without either has not been touched.
-  void firstContactsFromImpulses();
+  // At a restart, after setImpulses: the first contacts a state kept for its `bodies` bodies
+  // (per body index, a time >= 0 or NaN for none; empty where it kept none). A body without one
+  // that the impulses say was touched was touched at a time not kept: it stays NaN, and no later
+  // step sets it; so does every body of a state that kept neither (`impulsesKept` false).
+  // ParameterError for a time < 0 or infinite.
+  void restoreFirstContacts(const std::vector<double>& kept, bool impulsesKept, int bodies);
 
  protected:
   // indexKey, indexWhat: how a bad body index is named in the ParameterError (the parameter and

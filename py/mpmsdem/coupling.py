@@ -40,12 +40,8 @@ def _timesOrNone(times):
     return [t if math.isfinite(t) else None for t in times]
 
 
-def _firstContacts(data, key, impulses, bodies):
-    # a checkpoint's first contacts (None: NaN); one that kept neither them nor the impulses
-    # cannot tell a touched body: -inf (touched at a time not kept) for every body
-    if key in data:
-        return [math.nan if t is None else t for t in data[key]]
-    return [] if impulses in data else [-math.inf] * bodies
+def _timesOrNan(times):
+    return [math.nan if t is None else t for t in times]
 
 
 class CoupledEngine(Engine, _StepControl):
@@ -568,14 +564,14 @@ class CoupledEngine(Engine, _StepControl):
         eng._bridge.setImpulses(data.get("impulse", []))
         # (nor the first contacts: a body the impulse says was touched keeps none, and without the
         # impulses no body gets one)
-        eng._bridge.setFirstContacts(_firstContacts(data, "firstContact", "impulse", len(sdem.ids)))
+        eng._bridge.setFirstContacts(_timesOrNan(data.get("firstContact", [])), "impulse" in data)
         if data.get("levelSets"):
             eng._bridge.setLevelSetHistories(base64.b64decode(data["levelSetHistoryKeys"]),
                                              base64.b64decode(data["levelSetHistoryXi"]))
             eng._bridge.setLevelSetDissipation(*data["levelSetDissipation"])
             eng._bridge.setLevelSetImpulses(data.get("levelSetImpulse", []))
-            eng._bridge.setLevelSetFirstContacts(_firstContacts(data, "levelSetFirstContact", "levelSetImpulse",
-                                                                len(data["levelSets"])))
+            eng._bridge.setLevelSetFirstContacts(_timesOrNan(data.get("levelSetFirstContact", [])),
+                                                 "levelSetImpulse" in data)
         eng._bridge.setReferenceOrientations(data["referenceOrientations"])
         eng._ori0 = {int(i): Quaternion(*q) for i, q in data["plotOrientations"].items()}
         eng._appendOutput = bool(appendOutput) and data.get("outputOpen", True)
@@ -620,10 +616,10 @@ class CoupledEngine(Engine, _StepControl):
 
     def firstContact(self, yadeId):
         """When the flow first touched a block or LevelSet body [s]: the start of the first step
-        whose flow force on it was not zero (the state its contacts were found in) (NaN before it, or where a restart from an older
-        checkpoint did not keep it). A record holds one step's force at each record, so the first
-        record with a force places the touch only within its interval; a first blow's windows
-        start here."""
+        whose flow force on it was not zero, the state its contacts were found in; NaN before it,
+        or where a restart from an older checkpoint did not keep it. A record holds one step's
+        force at each record, so the first record with a force places the touch only within its
+        interval; a first blow's windows start here."""
         if yadeId in self._levelSets:
             return self._bridge.levelSetFirstContact(self._levelSets[yadeId]) if self._contactsKnown else math.nan
         return self._bridge.firstContact(self._index(yadeId))
