@@ -252,14 +252,11 @@ def events(s):
     """Peak smoothed force per block, the middle block's fall, the flow's first touch per block."""
     import numpy as np
     z = np.array(s.extra["z"])
-    c = np.array(s.extra["contacts"])
     t = s.series(0)["t"]
     out = {}
     for k, name in enumerate(NAMES):
         peak, tPeak = s.peakForce(k, smooth=SMOOTH)
-        touched = np.nonzero(c[:, k] > 0)[0]
-        out[name] = {"peak_force": peak, "peak_time": tPeak,
-                     "first_touch": float(t[touched[0]]) if len(touched) else None,
+        out[name] = {"peak_force": peak, "peak_time": tPeak, "first_touch": analysis.touchTime(s.series(k)),
                      "travel": s.travel(k), "dz": float(z[-1, k] - z[0, k])}
     # after the impact transient: from 20 ms after the bottom block's peak to the end
     d = s.series(0)

@@ -460,21 +460,31 @@ def touchTime(series):
     return exact if exact is not None else firstTouch(series["t"], series["Ft"])
 
 
-def blowParts(series, spans=BLOW_PARTS):
-    """The mean force over each span after the first touch (:func:`touchTime`), from the impulse
-    summed since the run's start (``series["J"]``; :func:`impulseMean`): {"load_0_2ms": ...,
-    "load_2_5ms": ..., "load_5_25ms": ...} [N]; a span the records do not reach is left out; {}
-    where the flow never came. Where the series holds the first contact the impulse is the one
-    before it up to that step (no force came before), not an interpolation over the record
-    interval that holds the touch."""
+def touchImpulse(series):
+    """(touch, t, J): the first touch (:func:`touchTime`) and a block's record times and downstream
+    impulse since the run's start (``series["t"]``, ``series["J"]``), with a record added at the
+    contact's first step where the series holds it between records: the impulse there is the one
+    before it (no force came before), so a mean from the touch on (:func:`impulseMean`) counts
+    from that step, not from an interpolation over the record interval that holds it. touch None
+    where the flow never came."""
     import numpy as np
     t, j = np.asarray(series["t"], dtype=float), np.asarray(series["J"], dtype=float)
     touch, exact = touchTime(series), firstContact(series)
-    if touch is None:
-        return {}
     if exact is not None and not np.any(np.isclose(t, exact, rtol=0, atol=1e-12)):
         k = int(np.searchsorted(t, exact))  # records before it hold the impulse before any contact
         t, j = np.insert(t, k, exact), np.insert(j, k, j[k - 1] if k > 0 else 0.0)
+    return touch, t, j
+
+
+def blowParts(series, spans=BLOW_PARTS):
+    """The mean force over each span after the first touch, from the impulse summed since the
+    run's start (:func:`touchImpulse`; :func:`impulseMean`): {"load_0_2ms": ..., "load_2_5ms":
+    ..., "load_5_25ms": ...} [N]; a span the records do not reach is left out; {} where the flow
+    never came. Where the series holds the first contact the spans count from its step, else from
+    the first record with a force."""
+    touch, t, j = touchImpulse(series)
+    if touch is None:
+        return {}
     return {blowPartName((a, b)): impulseMean(t, j, touch + a, touch + b)
             for a, b in spans if touch + b <= t[-1]}
 

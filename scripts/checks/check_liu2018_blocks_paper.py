@@ -10,8 +10,9 @@ Asserts:
 - conservation: the flow's mass is the seeded mass, exactly; the glued block never moves;
   every block's state stays finite;
 - the behaviour at these numerics (docs/coupled-results.md, "§3.3 against the damping"): the
-  flow first touches the bottom block at the reference time (0.292 s stored at 7fe22ea; the free
-  flow's front reached the stack's station at 0.251 s before it, the paper's impact 0.25 s); its
+  flow first touches the bottom block at the reference time (0.290 s, the start of the step its
+  flow force first was not zero; the free flow's front reached the stack's station at 0.251 s
+  before it, the paper's impact 0.25 s); its
   peak force (the largest 10 ms mean, from the impulse; 24.6 N at 0.299 s stored, the paper's
   9.7 N); the stack holds: the middle block has not fallen by 0.35 s (it topples at 0.71 s at
   these numerics; at half the damping it falls at 0.40 s), and the push the flow has given the

@@ -76,20 +76,22 @@ def waveSpeed(E):
     return math.sqrt((K + 4 * G / 3) / RHO)
 
 
-def forceWindows(t, J, force):
-    """From the bottom block's downstream impulse J(t) since the start [N s] and its records' own
-    forces (only to find the first touch, the first record with a force): the touch, the largest
-    means over WINDOWS, the means 20-40 and 40-80 ms after the touch and over 0.40-0.45 s, and the
-    impulse of the first 20 ms (from the record before the touch: a record's force is the step's
-    before it, so the contact began after that record)."""
+def forceWindows(series):
+    """From the bottom block's series (t, its downstream impulse J since the start [N s], its
+    records' own forces Ft and, where coupled.h5 records it, first_contact): the touch
+    (:func:`mpmsdem.analysis.touchTime`: the contact's first step, or the first record with a
+    force in older files), the largest means over WINDOWS, the means 20-40 and 40-80 ms after the
+    touch and over 0.40-0.45 s, and the impulse of the first 20 ms: from the touch's step, or in
+    older files from the record before the first record with a force (a record's force is the
+    step's before it, so the contact began after that record)."""
     import numpy as np
-    from mpmsdem.analysis import impulseMean, peakWindowMean
-    if not (np.abs(force) > 0).any():  # the flow never reached the block (a flow too viscous to arrive)
+    from mpmsdem.analysis import firstContact, impulseMean, peakWindowMean, touchImpulse
+    touch, t, J = touchImpulse(series)
+    if touch is None:  # the flow never reached the block (a flow too viscous to arrive)
         nan = float("nan")
         return {"touch": None, "peaks": [nan] * len(WINDOWS), "after_20_40": nan, "after_40_80": nan, "late": nan,
                 "impulse_20ms": nan}
-    i = int(np.argmax(np.abs(force) > 0))
-    touch, start = float(t[i]), float(t[max(i - 1, 0)])
+    start = touch if firstContact(series) is not None else float(t[max(int(np.searchsorted(t, touch)) - 1, 0)])
     return {"touch": touch, "peaks": [peakWindowMean(t, J, w)[0] for w in WINDOWS],
             "after_20_40": impulseMean(t, J, touch + 0.02, touch + 0.04),
             "after_40_80": impulseMean(t, J, touch + 0.04, touch + 0.08), "late": impulseMean(t, J, 0.40, 0.45),
@@ -135,9 +137,12 @@ def runOne(a, E, dx):
             summary = json.load(fh)
     import h5py
     with h5py.File(os.path.join(folder, "coupled.h5"), "r", locking=False) as h:
-        column = 3 * json.loads(h.attrs["ids"]).index(1)  # body 1: the glued bottom block
-        t = h["series/time"][:]
-        w = forceWindows(t, h["series/flow_impulse"][:, column], h["series/flow_force"][:, column])
+        block = json.loads(h.attrs["ids"]).index(1)  # body 1: the glued bottom block
+        g = h["series"]
+        series = {"t": g["time"][:], "J": g["flow_impulse"][:, 3 * block], "Ft": g["flow_force"][:, 3 * block]}
+        if "flow_first_contact" in g:  # files written before it was recorded have none
+            series["first_contact"] = g["flow_first_contact"][:, block]
+        w = forceWindows(series)
     b = summary["blocks"]
     return dict(w, young=E, dx=dx, hold=hold, viscosity=viscosity(hold, dx), cells=BLOCK_HEIGHT / dx,
                 peak_10ms=w["peaks"][1], peak_20ms=w["peaks"][2],

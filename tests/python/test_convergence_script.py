@@ -316,21 +316,52 @@ def test_impact_walls_step_factor_names_the_run_and_is_bounded(capsys):
 def test_liu2018_force_windows_of_a_known_impulse():
     """liu2018_force.forceWindows on records every 1 ms (each record's force the one of the
     interval before it, as coupled.h5's are) of a block first pushed at the record of 0.3 s by
-    F = 20 N for 10 ms, then 8 N: the first touch is the first record with a force, the largest
-    10 ms mean 20 N (a window on the blow), the 20 ms one (20 + 8) / 2 = 14 N, the means after the
-    touch 8 N, the first 20 ms' impulse, from the record before the touch, 0.2 + 0.08 = 0.28 N s;
-    all read from the impulse (the records' own forces, here off by 5 N, only mark the touch)."""
+    F = 20 N for 10 ms, then 8 N, in a file without the contact's first step: the first touch is
+    the first record with a force, the largest 10 ms mean 20 N (a window on the blow), the 20 ms
+    one (20 + 8) / 2 = 14 N, the means after the touch 8 N, the first 20 ms' impulse, from the
+    record before the touch, 0.2 + 0.08 = 0.28 N s; all read from the impulse (the records' own
+    forces, here off by 5 N, only mark the touch)."""
     np = pytest.importorskip("numpy")
     import liu2018_force as lf
     t = np.arange(0, 451) * 1e-3
     F = np.where(t < 0.3 - 1e-9, 0.0, np.where(t < 0.31 - 1e-9, 20.0, 8.0))
     J = np.concatenate([[0.0], np.cumsum(F[1:] * np.diff(t))])
-    w = lf.forceWindows(t, J, np.where(F > 0, F + 5.0, 0.0))
+    w = lf.forceWindows({"t": t, "J": J, "Ft": np.where(F > 0, F + 5.0, 0.0)})
     assert w["touch"] == pytest.approx(0.3, abs=1e-12)
     assert w["peaks"][1] == pytest.approx(20.0, abs=1e-9) and w["peaks"][2] == pytest.approx(14.0, abs=1e-9)
     assert w["after_20_40"] == pytest.approx(8.0, abs=1e-9) and w["after_40_80"] == pytest.approx(8.0, abs=1e-9)
     assert w["late"] == pytest.approx(8.0, abs=1e-9)
     assert w["impulse_20ms"] == pytest.approx(0.28, abs=1e-9)
+
+
+def test_liu2018_force_windows_count_from_the_contacts_first_step():
+    """Where coupled.h5 records the contact's first step (flow_first_contact), the windows count
+    from it, between records: a block pushed from 0.2994 s (inside the record interval
+    0.299-0.300 s) by 20 N for 10 ms, then 8 N, recorded every 1 ms: by hand the touch 0.2994 s,
+    the first 20 ms' impulse 20 x 0.01 + 8 x 0.01 = 0.28 N s, 8 N 20-40 ms after, and the largest
+    10 ms mean the window from the touch: (0.192 + 0.4 x 0.0128) / 0.01 = 19.712 N (the blow ends
+    between the records of 0.309 and 0.310 s, where the impulse is read linear); from the records
+    alone the touch is 0.3 s, the impulse counts from the record of 0.299 s (0.2 + 8 x 0.0096 =
+    0.2768 N s) and the largest window is 0.300-0.310 s (20 x 0.0094 + 8 x 0.0006 over 10 ms:
+    19.28 N)."""
+    np = pytest.importorskip("numpy")
+    import liu2018_force as lf
+    t, t0 = np.arange(0, 451) * 1e-3, 0.2994
+
+    def J(x):  # the impulse of the force above at time x, by hand
+        x = np.asarray(x, dtype=float)
+        return 20 * np.clip(x - t0, 0, 0.01) + 8 * np.clip(x - t0 - 0.01, 0, None)
+
+    records = {"t": t, "J": J(t), "Ft": np.where(t > t0, 1.0, 0.0)}
+    w = lf.forceWindows(dict(records, first_contact=np.where(t >= t0, t0, np.nan)))
+    assert w["touch"] == t0
+    assert w["peaks"][1] == pytest.approx(19.712, rel=1e-12)
+    assert w["impulse_20ms"] == pytest.approx(0.28, rel=1e-12)
+    assert w["after_20_40"] == pytest.approx(8.0, rel=1e-12)
+    old = lf.forceWindows(records)
+    assert old["touch"] == pytest.approx(0.3, abs=1e-12)
+    assert old["impulse_20ms"] == pytest.approx(0.2768, rel=1e-12)
+    assert old["peaks"][1] == pytest.approx(19.28, rel=1e-12)
 
 
 def test_liu2018_force_windows_of_a_block_the_flow_never_reached():
@@ -339,7 +370,7 @@ def test_liu2018_force_windows_of_a_block_the_flow_never_reached():
     np = pytest.importorskip("numpy")
     import liu2018_force as lf
     t = np.arange(0, 451) * 1e-3
-    w = lf.forceWindows(t, np.zeros(len(t)), np.zeros(len(t)))
+    w = lf.forceWindows({"t": t, "J": np.zeros(len(t)), "Ft": np.zeros(len(t))})
     assert w["touch"] is None and all(np.isnan(w[k]) for k in ("after_20_40", "after_40_80", "late", "impulse_20ms"))
     assert np.isnan(w["peaks"]).all()
 
