@@ -426,9 +426,10 @@ def impulseMean(t, impulse, start, end):
 BLOW_PARTS = ((0.0, 0.002), (0.002, 0.005), (0.005, 0.025))
 
 
-def blowPartName(span):
-    """The key of a span of :data:`BLOW_PARTS` [s]: "load_0_2ms" for (0, 0.002)."""
-    return "load_%g_%gms" % (1e3 * span[0], 1e3 * span[1])
+def blowPartName(span, kind="load"):
+    """The key of a span of :data:`BLOW_PARTS` [s]: "load_0_2ms" for (0, 0.002) (:func:`blowParts`),
+    "action_0_2ms" with ``kind`` "action" (:func:`blowLineOfAction`)."""
+    return "%s_%g_%gms" % (kind, 1e3 * span[0], 1e3 * span[1])
 
 
 def firstTouch(t, force):
@@ -460,15 +461,16 @@ def touchTime(series):
     return exact if exact is not None else firstTouch(series["t"], series["Ft"])
 
 
-def touchImpulse(series):
-    """(touch, t, J): the first touch (:func:`touchTime`) and a block's record times and downstream
-    impulse since the run's start (``series["t"]``, ``series["J"]``), with a record added at the
-    contact's first step where the series holds it between records: the impulse there is the one
-    before it (no force came before), so a mean from the touch on (:func:`impulseMean`) counts
-    from that step, not from an interpolation over the record interval that holds it. touch None
-    where the flow never came."""
+def touchImpulse(series, key="J"):
+    """(touch, t, impulse): the first touch (:func:`touchTime`) and a block's record times and
+    one of its impulses since the run's start (``series[key]``: "J" the downstream impulse,
+    "Ly" the angular impulse about the cross-slope axis), with a record added at the contact's
+    first step where the series holds it between records: the impulse there is the one before it
+    (no force came before), so a mean from the touch on (:func:`impulseMean`) counts from that
+    step, not from an interpolation over the record interval that holds it. touch None where the
+    flow never came."""
     import numpy as np
-    t, j = np.asarray(series["t"], dtype=float), np.asarray(series["J"], dtype=float)
+    t, j = np.asarray(series["t"], dtype=float), np.asarray(series[key], dtype=float)
     touch, exact = touchTime(series), firstContact(series)
     if exact is not None and not np.any(np.isclose(t, exact, rtol=0, atol=1e-12)):
         k = int(np.searchsorted(t, exact))  # records before it hold the impulse before any contact
@@ -487,6 +489,30 @@ def blowParts(series, spans=BLOW_PARTS):
         return {}
     return {blowPartName((a, b)): impulseMean(t, j, touch + a, touch + b)
             for a, b in spans if touch + b <= t[-1]}
+
+
+def blowLineOfAction(series, spans=BLOW_PARTS):
+    """Where the blow acts: for each span after the first touch (as :func:`blowParts`), the height
+    [m] above the block's centroid at which the line of action of the flow's mean force (in the
+    plane of the flume's axis and the bed's normal) crosses the vertical through the centroid:
+    the angular impulse about the cross-slope axis over the span divided by the downstream
+    impulse over it (``series["Ly"]``, ``series["J"]``: T_y / F_x of their means, the height at
+    which a downstream push alone would turn the block as the flow did; a push on the top face
+    downstream of the centroid turns it the same way and raises it, above the top where that
+    push is large); NaN over a span without a downstream impulse. {"action_0_2ms": ...}; {} where the flow never came or the series has no angular
+    impulse (files written before it was recorded)."""
+    if "Ly" not in series:
+        return {}
+    touch, t, j = touchImpulse(series, "J")
+    _, _, ly = touchImpulse(series, "Ly")
+    if touch is None:
+        return {}
+    out = {}
+    for a, b in spans:
+        if touch + b <= t[-1]:
+            push = impulseMean(t, j, touch + a, touch + b)
+            out[blowPartName((a, b), "action")] = impulseMean(t, ly, touch + a, touch + b) / push if push else math.nan
+    return out
 
 
 def forceSource(series):
@@ -610,8 +636,9 @@ def driverBlockSeries(folder, block=None, initial=True):
     keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, speed (of its
     centre) [m/s], Ft, Ff, Fe
     (downstream flow force of the step before each record: total, on faces, on edges) [N], J
-    (the downstream impulse since the run's start [N s]) and Fmean (the mean downstream force
-    since the record before, :func:`intervalMean`; both where the file records impulses),
+    (the downstream impulse since the run's start [N s]), Ly (the angular impulse about the
+    centroid and the cross-slope axis y since the start [N m s]) and Fmean (the mean downstream
+    force since the record before, :func:`intervalMean`; these where the file records impulses),
     first_contact (when the flow first touched it, as known at each record, NaN before; where the
     file records it: :func:`touchTime`) [s], rotation (the whole angle turned
     since the scene's start), tilt and yaw [deg], and the scene's flow_kinetic, flow_potential and
@@ -628,7 +655,7 @@ def driverBlockSeries(folder, block=None, initial=True):
     path = os.path.join(folder, "coupled.h5")
     if not os.path.exists(path):
         raise ValueError("%s: no coupled.h5 there (the output folder of a coupled mpmsdem-run)" % folder)
-    with h5py.File(path, "r") as f:
+    with h5py.File(path, "r", locking=False) as f:  # without HDF5's file lock, as the writers: a live run reads
         g = f["series"]
         t = g["time"][:]
         pos, vel = g["pos"][:], g["vel"][:]
@@ -647,6 +674,7 @@ def driverBlockSeries(folder, block=None, initial=True):
              "rotation": np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))}
         if "flow_impulse" in g:  # files written before the impulse was recorded have none
             s["J"] = g["flow_impulse"][:, c][:, 0]
+            s["Ly"] = g["flow_angular_impulse"][:, c][:, 1]
             s["Fmean"] = intervalMean(t, s["J"])
         if "flow_first_contact" in g:  # nor before the first contact was
             s["first_contact"] = g["flow_first_contact"][:, block]
@@ -658,7 +686,7 @@ def driverBlockSeries(folder, block=None, initial=True):
         scene = json.loads(f.attrs["parameters"])
     flow = os.path.join(folder, "mpm.h5")
     if os.path.exists(flow):
-        with h5py.File(flow, "r") as f:
+        with h5py.File(flow, "r", locking=False) as f:
             s["flow_front"] = np.interp(t, f["series/time"][:], f["series/front_x"][:])
     if not initial:
         s = {k: v[1:] for k, v in s.items()}

@@ -292,6 +292,7 @@ class Flume:
         row.append([b.state.vel.norm() for b in bodies])
         row.append([self.coupled.impulse(i)[0] for i in self.blockIds])
         row.append([self.coupled.firstContact(i) for i in self.blockIds])
+        row.append([self.coupled.angularImpulse(i)[1] for i in self.blockIds])
         self.history.append(row)
 
     def run(self, duration, sampleEvery=None):
@@ -331,8 +332,9 @@ class Flume:
     def series(self, k):
         """numpy arrays of block k: t, travel S_b, v_x, speed (of its centre) [m/s], F_t, F_f, F_e
         (downstream, of the step before each sample, N), J (the downstream impulse since the
-        start, N s) and Fmean (the mean downstream force since the sample before,
-        :func:`analysis.intervalMean`, N), first_contact (when the flow first touched it, as
+        start, N s), Ly (the angular impulse about its centroid and the cross-slope axis y since
+        the start, N m s; :func:`analysis.blowLineOfAction`) and Fmean (the mean downstream force
+        since the sample before, :func:`analysis.intervalMean`, N), first_contact (when the flow first touched it, as
         known at each sample, NaN before: :meth:`CoupledEngine.firstContact`, s), rotation
         (the whole angle turned since the start), tilt and yaw (deg; :func:`tiltAndYaw`; F_f and
         F_e are nan for a LevelSet block); and
@@ -350,6 +352,7 @@ class Flume:
         out = {"t": t, "travel": cols[0] - self.x0[k], "vx": cols[1], "speed": np.array([r[11][k] for r in self.history]),
                "Ft": cols[2], "Ff": cols[3], "Fe": cols[4], "J": np.array([r[12][k] for r in self.history]),
                "first_contact": np.array([r[13][k] for r in self.history]),
+               "Ly": np.array([r[14][k] for r in self.history]),
                "rotation": cols[5], "tilt": cols[6], "yaw": cols[7], "flow_kinetic": scene[:, 0],
                "flow_potential": scene[:, 1], "block_kinetic": scene[:, 2], "flow_front": scene[:, 3]}
         out["Fmean"] = analysis.intervalMean(t, out["J"])

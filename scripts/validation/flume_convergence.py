@@ -17,7 +17,8 @@ driver mpmsdem-run in two legs (the scenes are built with YADE, then only the dr
   where coupled.h5 records it, else the first 1 ms record with a force: analysis.touchTime),
   the first blow (the largest 10 ms mean of the
   flow's downstream force within 50 ms of the touch) and the blow by parts (the mean force over
-  0–2, 2–5 and 5–25 ms after the touch), the plateau (mean force over 0.4–0.5 s),
+  0–2, 2–5 and 5–25 ms after the touch, and the height of its line of action above the cube's
+  centroid over each: analysis.blowLineOfAction), the plateau (mean force over 0.4–0.5 s),
   the cube's tilt and travel at 0.5 s. The means are taken from the impulse coupled.h5 records
   (every step's force; "forces_from": "impulse"); outputs written before it was recorded give
   them from the records' own forces, one step's each ("records").
@@ -300,6 +301,7 @@ def coupled(folder, duration):
             extra["blow_%gms" % (1e3 * window)] = float(m.max())
         extra["impulse_20ms"] = float(np.interp(t0 + 0.02, t, s["J"]))
         extra.update(analysis.blowParts(s))
+        extra.update(analysis.blowLineOfAction(s))
     return {"first_touch": t0, "blow": float(smooth[j]), "blow_time": float(t[j]), "forces_from": source, **extra,
             "plateau": float(plateau) if late else None,
             "tilt_at": float(np.interp(AT, t, s["tilt"])) if late else None,
@@ -483,12 +485,13 @@ COLUMNS = ("set, damping held", "width [m]", "Δx [m]", "cells per h_b", "O.dt [
            "nose above bed [mm] (resting point)",
            "depth 2 / 5 cm behind tip [mm]", "first touch [s]", "first blow, 10 ms [N]", "blow / Eq 20",
            "mean force 0–2 / 2–5 / 5–25 ms after the touch [N]",
-           "plateau 0.4–0.5 s [N]", "tilt at 0.5 s [°]", "travel at 0.5 s [m]", "wall free + coupled [s]")
+           "its line of action above the centroid, the same spans [mm]", "plateau 0.4–0.5 s [N]", "tilt at 0.5 s [°]", "travel at 0.5 s [m]", "wall free + coupled [s]")
 
 
 def table(runs):
     lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
     parts = partNames()
+    loads, actions = [n for n in parts if n.startswith("load")], [n for n in parts if n.startswith("action")]
     for r in runs:
         ff, cp, fr = r["free"], r["coupled"], r["free"]["front"]
         blow = cp.get("blow")
@@ -500,7 +503,8 @@ def table(runs):
                "%.0f / %.0f" % (1e3 * fr["depth"][0], 1e3 * fr["depth"][1]),
                fmt(cp.get("first_touch"), "%.3f"), fmt(blow, "%.2f"),
                fmt(blow / ff["eq20"] if blow is not None else None, "%.2f"),
-               " / ".join(fmt(cp.get(name), "%.2f") for name in parts), fmt(cp.get("plateau"), "%.2f"),
+               " / ".join(fmt(cp.get(name), "%.2f") for name in loads),
+               " / ".join(fmt(cp.get(name) and 1e3 * cp[name], "%.1f") for name in actions), fmt(cp.get("plateau"), "%.2f"),
                fmt(cp.get("tilt_at"), "%.1f"), fmt(cp.get("travel_at"), "%.3f"),
                "%.0f + %.0f" % (r["wall_seconds"]["free"], r["wall_seconds"]["coupled"])]
         lines.append("| " + " | ".join(row) + " |")
@@ -600,9 +604,10 @@ QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("front", "
 
 
 def partNames():
-    """The keys of the blow by parts in a run's coupled numbers (mpmsdem.analysis.BLOW_PARTS)."""
+    """The keys of the blow by parts in a run's coupled numbers (mpmsdem.analysis.BLOW_PARTS):
+    the mean force over each, then the height of its line of action."""
     analysis = analysisModule()
-    return [analysis.blowPartName(span) for span in analysis.BLOW_PARTS]
+    return [analysis.blowPartName(span, kind) for kind in ("load", "action") for span in analysis.BLOW_PARTS]
 
 
 def extrapolations(runs):

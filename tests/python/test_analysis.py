@@ -307,6 +307,34 @@ def test_the_blow_by_parts_of_a_known_impulse():
     assert analysis.blowParts({"t": t, "J": 0 * J, "Ft": 0 * F}) == {}
 
 
+def test_the_blows_line_of_action_by_parts():
+    """analysis.blowLineOfAction: a cube pushed from 0.3004 s (between the 1 ms records) by 30 N
+    downstream 4 mm above its centroid for 3 ms, then by 6 N 2 mm below it, recorded every 1 ms
+    (J and the angular impulse Ly by hand): 4 mm over 0-2 ms, (30 x 0.004 x 1 + 6 x (-0.002) x 2)
+    / (30 x 1 + 6 x 2) = 2.2857 mm over 2-5 ms, -2 mm over 5-25 ms, to round-off; NaN over a
+    span without a downstream push; nothing from a series without the angular impulse."""
+    np = pytest.importorskip("numpy")
+    t, t0 = np.arange(0, 451) * 1e-3, 0.3004
+
+    def J(x):  # the downstream impulse at time x
+        x = np.asarray(x, dtype=float)
+        return 30 * np.clip(x - t0, 0, 0.003) + 6 * np.clip(x - t0 - 0.003, 0, None)
+
+    def Ly(x):  # its moment about the centroid: the push's height times it
+        x = np.asarray(x, dtype=float)
+        return 30 * 0.004 * np.clip(x - t0, 0, 0.003) - 6 * 0.002 * np.clip(x - t0 - 0.003, 0, None)
+
+    s = {"t": t, "J": J(t), "Ly": Ly(t), "Ft": np.where(t > t0, 1.0, 0.0), "first_contact": np.where(t >= t0, t0, np.nan)}
+    action = analysis.blowLineOfAction(s)
+    assert sorted(action) == ["action_0_2ms", "action_2_5ms", "action_5_25ms"]
+    assert action["action_0_2ms"] == pytest.approx(0.004, rel=1e-12)
+    assert action["action_2_5ms"] == pytest.approx((0.12e-3 - 0.024e-3) / 0.042, rel=1e-12)
+    assert action["action_5_25ms"] == pytest.approx(-0.002, rel=1e-12)
+    lifted = dict(s, J=np.where(t > t0 + 0.01, J(t0 + 0.01), J(t)), Ly=np.where(t > t0 + 0.01, Ly(t0 + 0.01), Ly(t)))
+    assert math.isnan(analysis.blowLineOfAction(lifted, spans=((0.02, 0.03),))["action_20_30ms"])
+    assert analysis.blowLineOfAction({k: v for k, v in s.items() if k != "Ly"}) == {}
+
+
 def test_the_blow_by_parts_from_the_step_of_the_first_contact():
     """Where the series holds the step the flow first touched the block in (coupled.h5's
     flow_first_contact), the parts count from it, between records: a cube struck from 0.3004 s

@@ -45,6 +45,42 @@ def test_blob_hitting_a_free_block_conserves_momentum_through_yade():
     assert t["steps"] == 3000 and t["coupling"] > 0 and t["mpm"] > 0
 
 
+def test_a_blow_above_the_centroid_turns_the_block_by_its_angular_impulse(tmp_path):
+    """A blob striking the upper half of a free cube (frictionless contacts, no gravity): the
+    flow is the cube's only load, so its angular impulse about the centroid is the cube's angular
+    momentum I ω (a cube's inertia is isotropic), to round-off; it turns the cube about +y (a push
+    downstream above the centroid); coupled.h5 holds it (flow_angular_impulse). Over the blow's
+    first 2 ms the blob loads the upper half of the upstream face (horizontal pushes between the
+    centroid and the top, 13 mm above it with the rounding) and the top edge (whose downward push
+    turns the other way): its line of action crosses the centroid's vertical between the centroid
+    and the top. (Later the blob runs over the top face downstream of the centroid, whose downward
+    push turns the cube the same way as the upstream one: the crossing then lies above the top.)"""
+    out = str(tmp_path / "run")
+    sdem = mpmsdem.SdemEngine(verbose=False)
+    mat = mpmsdem.material(density=2000, friction=0.0)
+    cube = sdem.box((0.02,) * 3, 0.003, mat, pos=(0.125, 0.07, 0.07))
+    mpm = mpmsdem.MpmEngine(grid={"dx": 0.01, "cells": [24, 14, 16], "origin": [0, 0, 0]}, material=GLASS,
+                            particles=[{"lo": [0.04, 0.05, 0.07], "hi": [0.08, 0.09, 0.11], "ppc": 8,
+                                        "velocity": [1, 0, 0]}], gravity=(0, 0, 0), verbose=False)
+    coupled = mpmsdem.CoupledEngine(sdem, mpm, pairs={mat: 0.0}, verbose=False, output=out, outputEvery=0.002)
+    _, _, hit = pushFreeBody(coupled, mpm, cube)
+    assert hit > 4, "the blob never touched the block"
+    b = O.bodies[cube].state
+    L, Iw = np.array(coupled.angularImpulse(cube)), b.inertia[0] * np.array(b.angVel)
+    assert b.inertia[0] == pytest.approx(b.inertia[1], rel=1e-12) == pytest.approx(b.inertia[2], rel=1e-12)
+    assert np.linalg.norm(L - Iw) == pytest.approx(0, abs=1e-9 * np.linalg.norm(L))
+    assert L[1] > 0 and abs(L[0]) < 1e-3 * L[1] and abs(L[2]) < 1e-3 * L[1]
+    import h5py
+    with h5py.File(os.path.join(out, "coupled.h5"), "r", locking=False) as f:
+        g = f["series"]
+        s = {"t": g["time"][:], "Ft": g["flow_force"][:, 0], "J": g["flow_impulse"][:, 0],
+             "Ly": g["flow_angular_impulse"][:, 1], "first_contact": g["flow_first_contact"][:, 0]}
+    assert s["Ly"][-1] == pytest.approx(L[1], rel=1e-12) and s["Ly"][0] == 0
+    action = analysis.blowLineOfAction(s)
+    print("line of action above the centroid: %s" % {k: "%.2f mm" % (1e3 * v) for k, v in action.items()})
+    assert 0 < action["action_0_2ms"] < 0.013 and action["action_2_5ms"] > 0
+
+
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_contacts_of_the_last_step_make_the_block_sums(precision):
     sdem, mpm, coupled, cube = blob_and_cube(precision=precision)
