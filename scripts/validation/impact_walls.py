@@ -472,6 +472,8 @@ def refinement(out):
         for name in spans:
             values = [r["obstacle"]["F_parts"][name] for r in rs]
             p, f0, why = limitOf(values[-3:], [r["dx"] for r in finest])
+            if why is None and f0 <= 0:  # a power law may pass zero; the flow's mean push on the obstacle cannot
+                why = "its limit %.3g N is no push on the obstacle" % f0
             lines.append("| %s | %s | %s | %s | %s |" % (
                 name[len("load_"):-len("ms")].replace("_", "–"), " / ".join("%.3g" % v for v in values),
                 fmt(p, "%.2f"), fmt(f0, "%.3g") if why is None else "–", why or ""))

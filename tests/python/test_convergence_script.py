@@ -268,6 +268,24 @@ def test_impact_walls_refinement_reads_each_obstacle_over_its_windows(tmp_path):
     assert lines[11].startswith("| 5–25 | %.3g / " % (9 + 900 * H[0] ** 2)) and "| 2.00 | 9 |" in lines[11]
 
 
+def test_impact_walls_refinement_keeps_no_limit_that_is_no_push(tmp_path):
+    # a wall's onset falling as -5 + 1e4 Δx^1.2 at the spacings H: limitOf accepts the power law
+    # (order 1.2, its limit as near the finest run as the runs lie apart), but a mean push on the
+    # obstacle cannot go below zero: no limit, said why; the part after it (8 + 900 Δx²) keeps its 8 N
+    for dx in H:
+        run = {"kind": "wall", "theta": 20.0, "L0": 0.5, "young": 1e6, "dx": dx, "width": 0.04,
+               "free": {"h_f": 0.04}, "obstacle": {"F_windows": {"10": 16 + 900 * dx ** 2},
+                                                   "F_parts": {"load_0_2ms": -5 + 1e4 * dx ** 1.2,
+                                                               "load_5_25ms": 8 + 900 * dx ** 2}}}
+        with open(tmp_path / ("wall_dx%g.json" % dx), "w") as f:
+            json.dump(run, f)
+    p, f0, why = fc.limitOf(law(-5, 1e4, 1.2), H)
+    assert why is None and f0 == pytest.approx(-5, rel=1e-6)
+    lines = iw.refinement(str(tmp_path)).splitlines()
+    assert lines[-2].startswith("| 0–2 | ") and lines[-2].endswith("| 1.20 | – | its limit -5 N is no push on the obstacle |")
+    assert lines[-1].startswith("| 5–25 | ") and lines[-1].endswith("| 2.00 | 8 |  |")
+
+
 def test_package_block_study_errors_against_the_kept_limits():
     # a cube at Δx 0.02 (coarser than the three finest: a row, not in the limits) and the three
     # of H: its 20 ms blow on 12 + 900 Δx² (limit 12 N kept), its 10 ms blow on 13 + 4e3 Δx^0.8
