@@ -283,7 +283,7 @@ def readObstacle(folder, meta, free, hd=None):
     wall's deposit height where its run read it (else from the last snapshot)."""
     from mpmsdem import analysis
     s, _ = analysis.driverBlockSeries(os.path.join(folder, "out"), block=1)  # block 0: the flume's bed
-    t, f = s["t"], s["Ft"]
+    t = s["t"]
     peaks = {w: analysis.peakMeanForce(s, w) for w in WINDOWS}  # (peak, its centre); BLOW and BLOW_LONG among them
     peak, tPeak = peaks[BLOW]
     theta, h, v = meta["theta"], free["h_f"], free["v_f"]
