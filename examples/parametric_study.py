@@ -224,7 +224,8 @@ def _coupledResults(out, ff, s, duration, potential0, before=None):
     out["flow_dissipated_end"] = out["energy"]["dissipated"][-1]
     touch = analysis.touchTime(s)
     if touch is not None and analysis.forceSource(s) == "impulse":  # the blow by parts after the touch
-        out.update(first_touch=touch, blow_parts=analysis.blowParts(s), blow_line_of_action=analysis.blowLineOfAction(s))
+        out.update(first_touch=touch, blow_parts=analysis.blowParts(s),
+                   blow_line_of_action=analysis.blowLineOfAction(s))
 
 
 def energySeries(s, potential0):

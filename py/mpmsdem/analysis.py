@@ -499,8 +499,9 @@ def blowLineOfAction(series, spans=BLOW_PARTS):
     impulse over it (``series["Ly"]``, ``series["J"]``: T_y / F_x of their means, the height at
     which a downstream push alone would turn the block as the flow did; a push on the top face
     downstream of the centroid turns it the same way and raises it, above the top where that
-    push is large); NaN over a span without a downstream impulse. {"action_0_2ms": ...}; {} where the flow never came or the series has no angular
-    impulse (files written before it was recorded)."""
+    push is large); NaN over a span without a downstream impulse. {"action_0_2ms": ...}; {} where
+    the flow never came or the series has no angular impulse (files written before it was
+    recorded)."""
     if "Ly" not in series:
         return {}
     touch, t, j = touchImpulse(series, "J")
@@ -632,7 +633,8 @@ def restTime(t, speed, rotation=None, radius=0.0, speedBelow=REST_SPEED):
 
 
 def driverBlockSeries(folder, block=None, initial=True):
-    """A block's series from the coupled.h5 that ``mpmsdem-run`` wrote in ``folder``, with the
+    """A block's series from the coupled.h5 that ``mpmsdem-run`` or a YADE ``CoupledEngine(output=
+    folder)`` wrote in ``folder``, with the
     keys of :meth:`mpmsdem.flume.Flume.series` (x downstream): t, travel (S_b), vx, speed (of its
     centre) [m/s], Ft, Ff, Fe
     (downstream flow force of the step before each record: total, on faces, on edges) [N], J
@@ -646,15 +648,17 @@ def driverBlockSeries(folder, block=None, initial=True):
     beside it where there is one). ``block``: its index in the file (default: the first
     block that moves; a flume's bed is fixed). ``initial``: keep the driver's record at the
     start; False leaves it out, as :meth:`Flume.series` has no record before the first step
-    (travel still counts from the start). Returns (series, scene dict). Needs h5py only, not
-    YADE: runs made on another machine are read here."""
+    (travel still counts from the start). Returns (series, scene dict; None from a
+    CoupledEngine, whose file holds no scene). Needs h5py only, not YADE: runs made on another
+    machine are read here."""
     import json
     import os
     import h5py
     import numpy as np
     path = os.path.join(folder, "coupled.h5")
     if not os.path.exists(path):
-        raise ValueError("%s: no coupled.h5 there (the output folder of a coupled mpmsdem-run)" % folder)
+        raise ValueError("%s: no coupled.h5 there (the output folder of a coupled mpmsdem-run or CoupledEngine)"
+                         % folder)
     with h5py.File(path, "r", locking=False) as f:  # without HDF5's file lock, as the writers: a live run reads
         g = f["series"]
         t = g["time"][:]
@@ -683,7 +687,7 @@ def driverBlockSeries(folder, block=None, initial=True):
         for k in ("flow_kinetic", "flow_potential", "block_kinetic"):
             if k in g:  # the driver and CoupledEngine write them; other writers may not
                 s[k] = g[k][:]
-        scene = json.loads(f.attrs["parameters"])
+        scene = json.loads(f.attrs["parameters"]) if "parameters" in f.attrs else None  # the driver's scene
     flow = os.path.join(folder, "mpm.h5")
     if os.path.exists(flow):
         with h5py.File(flow, "r", locking=False) as f:

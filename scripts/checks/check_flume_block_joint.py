@@ -11,8 +11,8 @@ Asserts:
 - symmetry: the scene is symmetric about the centre line, so the cube must not turn on the bed
   (|yaw| < 1e-6 deg);
 - the story: the flow reaches the cube at the reference time (0.317 s, the start of the step
-  its flow force first was not zero; paper ~0.25 s, experiment 0.3 s); F_t at 0.4 s (its mean over 0.395-0.405 s from the impulse, 0.27 N; paper
-  0.32 N); the cube turns slowly (rotation at 0.7 s, 36° stored) through 45° at the reference
+  its flow force first was not zero; paper ~0.25 s, experiment 0.3 s); F_t at 0.4 s (its mean
+  over 0.395-0.405 s from the impulse, 0.27 N; paper 0.32 N); the cube turns slowly (rotation at 0.7 s, 36° stored) through 45° at the reference
   time (0.752 s; paper 0.72 s), each within 1 % of the stored reference (docs/validation.md, "What the checks' bands let through"), and has not
   tumbled: its largest rotation by 0.77 s stays below 100° (a cube thrown over at the impact, or
   one that tumbles, fails; so does one that never turns).

@@ -10,10 +10,10 @@ Asserts:
 - conservation: the flow's mass is the seeded mass, exactly;
 - symmetry: the scene is symmetric about the centre line, so the cube must not turn on the bed
   (|yaw| < 1e-6 deg);
-- the behaviour at these numerics: the flow reaches the cube at the reference time (0.309 s, the start
-  of the step its flow force first was not zero; paper ~0.25 s, experiment 0.3 s), and pushes it downstream while it tilts slowly: tilt at
-  0.5 s (22.6° stored) and travel at 0.5 s, each within 1 % of the reference
-  (scripts/checks/reference/flume_block_paper.json; docs/validation.md, "What the checks' bands let through"). A cube thrown over at the impact (the
+- the behaviour at these numerics: the flow reaches the cube at the reference time (0.309 s,
+  the start of the step its flow force first was not zero; paper ~0.25 s, experiment 0.3 s), and
+  pushes it downstream while it tilts slowly: tilt at 0.5 s (22.6° stored) and travel at 0.5 s,
+  each within 1 % of the reference (scripts/checks/reference/flume_block_paper.json; docs/validation.md, "What the checks' bands let through"). A cube thrown over at the impact (the
   coarse grid's or the scene default blend's behaviour: 45° within 0.1 s of the first contact)
   fails the tilt.
 

@@ -485,7 +485,8 @@ COLUMNS = ("set, damping held", "width [m]", "Δx [m]", "cells per h_b", "O.dt [
            "nose above bed [mm] (resting point)",
            "depth 2 / 5 cm behind tip [mm]", "first touch [s]", "first blow, 10 ms [N]", "blow / Eq 20",
            "mean force 0–2 / 2–5 / 5–25 ms after the touch [N]",
-           "its line of action above the centroid, the same spans [mm]", "plateau 0.4–0.5 s [N]", "tilt at 0.5 s [°]", "travel at 0.5 s [m]", "wall free + coupled [s]")
+           "its line of action above the centroid, the same spans [mm]",
+           "plateau 0.4–0.5 s [N]", "tilt at 0.5 s [°]", "travel at 0.5 s [m]", "wall free + coupled [s]")
 
 
 def table(runs):
@@ -504,7 +505,8 @@ def table(runs):
                fmt(cp.get("first_touch"), "%.3f"), fmt(blow, "%.2f"),
                fmt(blow / ff["eq20"] if blow is not None else None, "%.2f"),
                " / ".join(fmt(cp.get(name), "%.2f") for name in loads),
-               " / ".join(fmt(cp.get(name) and 1e3 * cp[name], "%.1f") for name in actions), fmt(cp.get("plateau"), "%.2f"),
+               " / ".join(fmt(cp.get(name) and 1e3 * cp[name], "%.1f") for name in actions),
+               fmt(cp.get("plateau"), "%.2f"),
                fmt(cp.get("tilt_at"), "%.1f"), fmt(cp.get("travel_at"), "%.3f"),
                "%.0f + %.0f" % (r["wall_seconds"]["free"], r["wall_seconds"]["coupled"])]
         lines.append("| " + " | ".join(row) + " |")

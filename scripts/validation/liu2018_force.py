@@ -136,13 +136,10 @@ def runOne(a, E, dx):
         with open(summaryPath) as fh:
             summary = json.load(fh)
     import h5py
+    from mpmsdem.analysis import driverBlockSeries
     with h5py.File(os.path.join(folder, "coupled.h5"), "r", locking=False) as h:
         block = json.loads(h.attrs["ids"]).index(1)  # body 1: the glued bottom block
-        g = h["series"]
-        series = {"t": g["time"][:], "J": g["flow_impulse"][:, 3 * block], "Ft": g["flow_force"][:, 3 * block]}
-        if "flow_first_contact" in g:  # files written before it was recorded have none
-            series["first_contact"] = g["flow_first_contact"][:, block]
-        w = forceWindows(series)
+    w = forceWindows(driverBlockSeries(folder, block=block)[0])
     b = summary["blocks"]
     return dict(w, young=E, dx=dx, hold=hold, viscosity=viscosity(hold, dx), cells=BLOCK_HEIGHT / dx,
                 peak_10ms=w["peaks"][1], peak_20ms=w["peaks"][2],

@@ -49,8 +49,8 @@ def test_a_blow_above_the_centroid_turns_the_block_by_its_angular_impulse(tmp_pa
     """A blob striking the upper half of a free cube (frictionless contacts, no gravity): the
     flow is the cube's only load, so its angular impulse about the centroid is the cube's angular
     momentum I ω (a cube's inertia is isotropic), to round-off; it turns the cube about +y (a push
-    downstream above the centroid); coupled.h5 holds it (flow_angular_impulse). Over the blow's
-    first 2 ms the blob loads the upper half of the upstream face (horizontal pushes between the
+    downstream above the centroid); coupled.h5 holds it (analysis.driverBlockSeries' Ly). Over
+    the blow's first 2 ms the blob loads the upper half of the upstream face (horizontal pushes between the
     centroid and the top, 13 mm above it with the rounding) and the top edge (whose downward push
     turns the other way): its line of action crosses the centroid's vertical between the centroid
     and the top. (Later the blob runs over the top face downstream of the centroid, whose downward
@@ -70,12 +70,8 @@ def test_a_blow_above_the_centroid_turns_the_block_by_its_angular_impulse(tmp_pa
     assert b.inertia[0] == pytest.approx(b.inertia[1], rel=1e-12) == pytest.approx(b.inertia[2], rel=1e-12)
     assert np.linalg.norm(L - Iw) == pytest.approx(0, abs=1e-9 * np.linalg.norm(L))
     assert L[1] > 0 and abs(L[0]) < 1e-3 * L[1] and abs(L[2]) < 1e-3 * L[1]
-    import h5py
-    with h5py.File(os.path.join(out, "coupled.h5"), "r", locking=False) as f:
-        g = f["series"]
-        s = {"t": g["time"][:], "Ft": g["flow_force"][:, 0], "J": g["flow_impulse"][:, 0],
-             "Ly": g["flow_angular_impulse"][:, 1], "first_contact": g["flow_first_contact"][:, 0]}
-    assert s["Ly"][-1] == pytest.approx(L[1], rel=1e-12) and s["Ly"][0] == 0
+    s, scene = analysis.driverBlockSeries(out)
+    assert scene is None and s["Ly"][-1] == pytest.approx(L[1], rel=1e-12) and s["Ly"][0] == 0
     action = analysis.blowLineOfAction(s)
     print("line of action above the centroid: %s" % {k: "%.2f mm" % (1e3 * v) for k, v in action.items()})
     assert 0 < action["action_0_2ms"] < 0.013 and action["action_2_5ms"] > 0
