@@ -469,13 +469,21 @@ def touchImpulse(series, key="J"):
     (no force came before), so a mean from the touch on (:func:`impulseMean`) counts from that
     step, not from an interpolation over the record interval that holds it. touch None where the
     flow never came."""
+    touch, t, (j,) = touchImpulses(series, (key,))
+    return touch, t, j
+
+
+def touchImpulses(series, keys):
+    """:func:`touchImpulse` of several impulses at once: (touch, t, [impulse of each key])."""
     import numpy as np
-    t, j = np.asarray(series["t"], dtype=float), np.asarray(series[key], dtype=float)
+    t = np.asarray(series["t"], dtype=float)
+    impulses = [np.asarray(series[key], dtype=float) for key in keys]
     touch, exact = touchTime(series), firstContact(series)
     if exact is not None and not np.any(np.isclose(t, exact, rtol=0, atol=1e-12)):
         k = int(np.searchsorted(t, exact))  # records before it hold the impulse before any contact
-        t, j = np.insert(t, k, exact), np.insert(j, k, j[k - 1] if k > 0 else 0.0)
-    return touch, t, j
+        t = np.insert(t, k, exact)
+        impulses = [np.insert(j, k, j[k - 1] if k > 0 else 0.0) for j in impulses]
+    return touch, t, impulses
 
 
 def blowParts(series, spans=BLOW_PARTS):
@@ -504,8 +512,7 @@ def blowLineOfAction(series, spans=BLOW_PARTS):
     recorded)."""
     if "Ly" not in series:
         return {}
-    touch, t, j = touchImpulse(series, "J")
-    _, _, ly = touchImpulse(series, "Ly")
+    touch, t, (j, ly) = touchImpulses(series, ("J", "Ly"))
     if touch is None:
         return {}
     out = {}

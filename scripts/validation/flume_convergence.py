@@ -532,14 +532,16 @@ def richardson(f, h):
     return p, f3 + d2 * h3 ** p / (h2 ** p - h3 ** p)
 
 
-def limitOf(f, h):
+def limitOf(f, h, positive=False):
     """(order, limit, None) of f at three spacings h (coarsest first) where a limit can be
     trusted, else (order or None, limit or None, why not). Beyond :func:`richardson`'s form, the
     limit must lie no farther from the finest run than the three runs lie apart: on an exact
     power law that asks for an order of at least ln 2 / ln(h1/h3) (first order over Δx halved,
     one half over Δx quartered). A lower order puts the limit several measured steps past the
     finest run, resting on the sequence going on as it went (order 0.55 over spacing ratios 1.4
-    puts it 4.6 last steps away)."""
+    puts it 4.6 last steps away). With ``positive`` (a mean push on an obstacle, a time, a depth)
+    a limit at or below zero is not kept either: a power law may pass zero where the quantity
+    cannot, and the trade-off studies divide by the limit."""
     e = richardson(f, h)
     if e is None:
         d1, d2 = f[1] - f[0], f[2] - f[1]
@@ -549,6 +551,8 @@ def limitOf(f, h):
         # spacings allow (or too small: an order past richardson's range)
         return None, None, "monotone, but its steps (%.3g, %.3g) do not shrink as a power law's would" % (
             abs(d1), abs(d2))
+    if positive and e[1] <= 0:
+        return e[0], e[1], "its limit %.4g is not positive, as this quantity must be" % e[1]
     if abs(f[2] - e[1]) > abs(f[0] - f[2]):
         return e[0], e[1], "order %.2f: its limit %.4g lies farther from the finest run than the runs lie apart" % e
     return e[0], e[1], None
@@ -558,7 +562,7 @@ def windowLimits(byWindow, h):
     """A blow read over several windows, each at three spacings h (coarsest first): ``byWindow``
     maps a window [s] to its three values (the largest mean force over that window in each run).
     Returns, per window (shortest first), a dict of its values, order, limit and why
-    (:func:`limitOf`; also not kept where a longer window's kept limit exceeds this window's
+    (:func:`limitOf` of a push, kept only above zero; also not kept where a longer window's kept limit exceeds this window's
     limit: run by run the largest mean over a shorter window is never below that over a longer
     one, so neither can their limits be. The longest windows are kept first: a window the flow
     crosses in a few cells is the worst resolved), and ``bracket`` (lo, hi) for a window without
@@ -568,7 +572,7 @@ def windowLimits(byWindow, h):
     is missing or the sides cross."""
     rows = []
     for w in sorted(byWindow):
-        p, f0, why = limitOf(byWindow[w], h)
+        p, f0, why = limitOf(byWindow[w], h, positive=True)
         rows.append({"window": w, "values": list(byWindow[w]), "order": p, "limit": f0, "why": why, "bracket": None})
     kept = {}
     for r in reversed(rows):
@@ -594,15 +598,22 @@ def windowLimits(byWindow, h):
     return rows
 
 
-def limitText(f, h):
+def limitText(f, h, positive=False):
     """One line's verdict of :func:`limitOf`."""
-    p, f0, why = limitOf(f, h)
+    p, f0, why = limitOf(f, h, positive)
     return "order %.2f, extrapolated to Δx 0: %.4g" % (p, f0) if why is None else "no limit to trust (%s)" % why
 
 
 QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("front", "tipHeight"), ("coupled", "first_touch"),
               ("coupled", "blow"),
               ("coupled", "plateau"), ("coupled", "tilt_at"), ("coupled", "travel_at"))
+
+
+def positive(key):
+    """Whether a quantity of a run's numbers cannot be zero or less (a time, a depth, a speed, a
+    mean push), so that no limit at or below zero is kept (:func:`limitOf`). A tilt, a travel, the
+    front's nose height and a line of action may tend to zero or cross it."""
+    return key in ("arrival", "h_f", "v_f", "first_touch", "blow", "plateau") or key.startswith("load_")
 
 
 def partNames():
@@ -630,7 +641,7 @@ def extrapolations(runs):
                 continue
             lines.append("- %s, %s, width %g m%s, %s at Δx %s: %s -> %s" % (
                 g[0], g[1], g[2], "" if g[3] == 8 else ", %d per cell" % g[3], key, ", ".join("%.4g" % r["dx"] for r in rs), ", ".join("%.4g" % v for v in vals),
-                limitText(vals, [r["dx"] for r in rs])))
+                limitText(vals, [r["dx"] for r in rs], positive(key))))
     return "\n".join(lines)
 
 
@@ -659,7 +670,7 @@ def packageStudy(runs, settings, hold, width, command):
         vals = [r[part].get(key) for r in finest]
         if None in vals:
             continue
-        p, f0, why = limitOf(vals, h)
+        p, f0, why = limitOf(vals, h, positive(key))
         if why:
             unconverged[out] = "%s at %s cells per block height (Δx %s m): %s, %s" % (
                 out, " / ".join("%.1f" % r["cells_per_block"] for r in finest), " / ".join("%.4g" % d for d in h),

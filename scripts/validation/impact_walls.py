@@ -471,9 +471,7 @@ def refinement(out):
             lines += ["", "| after the touch [ms] | mean force [N] | order | limit [N] | note |", "|---|---|---:|---:|---|"]
         for name in spans:
             values = [r["obstacle"]["F_parts"][name] for r in rs]
-            p, f0, why = limitOf(values[-3:], [r["dx"] for r in finest])
-            if why is None and f0 <= 0:  # a power law may pass zero; the flow's mean push on the obstacle cannot
-                why = "its limit %.3g N is no push on the obstacle" % f0
+            p, f0, why = limitOf(values[-3:], [r["dx"] for r in finest], positive=True)
             lines.append("| %s | %s | %s | %s | %s |" % (
                 name[len("load_"):-len("ms")].replace("_", "–"), " / ".join("%.3g" % v for v in values),
                 fmt(p, "%.2f"), fmt(f0, "%.3g") if why is None else "–", why or ""))
@@ -570,7 +568,7 @@ def packageStudy(runs, theta, L0, young, command):
         if key == "F_end" and min(restAfter(r) for r in rs) < REST - 1e-9:
             continue  # runs ended before the deposit rests (--rest below the default): no deposit's load
         vals = [r["obstacle"][key] for r in rs]
-        p, f0, why = limitOf(vals, h)
+        p, f0, why = limitOf(vals, h, positive=True)
         if why:
             unconverged[out] = "%s on a wall at %s cells per flow depth (Δx %s m): %s N, %s" % (
                 out, " / ".join("%.1f" % c for c in cells), " / ".join("%.4g" % d for d in h),

@@ -179,7 +179,7 @@ def extrapolations(rows):
             if any(v is None or v != v for v in f):  # a run the flow never reached
                 lines.append("- E %g kPa, %s: not reached at every spacing" % (E / 1e3, q))
                 continue
-            p, f0, why = limitOf(f, h)
+            p, f0, why = limitOf(f, h, positive=not q.startswith("push_"))  # the blocks' travels may tend to zero
             lines.append("- E %g kPa, %s at Δx %s: %s -> %s" % (
                 E / 1e3, q, ", ".join("%g" % x for x in h), ", ".join("%.4g" % v for v in f),
                 "no limit to trust (%s)" % why if why else

@@ -80,6 +80,26 @@ def test_package_study_errors_against_the_extrapolated_limit():
     assert fc.packageStudy([r for r in runs if r["dx"] != 0.01], "joint", "viscosity", 0.2, "cmd") is None
 
 
+def test_no_limit_at_or_below_zero_for_what_cannot_be():
+    # a first touch on -0.1 + 40 Δx and a plateau on -0.2 + 2e4 Δx² (each positive at every
+    # spacing, their power laws through zero) give no limit; a tilt on -1 + 2e4 Δx² (an angle that
+    # may tend to zero and cross it) keeps its -1; in the table of extrapolations too
+    h = [0.02, 0.01, 0.2 / 28]
+    runs = [{"settings": "joint", "hold": "viscosity", "width": 0.2, "dx": dx, "cells_per_block": 0.02 / dx, "ppc": 8,
+             "viscosity": 0.036, "points": 1000 * (0.01 / dx) ** 3, "duration": 0.5, "dt": 5e-5 * dx / 0.01,
+             "commit": "abc", "free": {"front": {}},
+             "coupled": {"first_touch": -0.1 + 40 * dx, "plateau": -0.2 + 2e4 * dx ** 2, "tilt_at": -1 + 2e4 * dx ** 2}}
+            for dx in h]
+    s = fc.packageStudy(runs, "joint", "viscosity", 0.2, "cmd")
+    assert sorted(s["unconverged"]) == ["first_touch", "plateau_force"]
+    assert s["unconverged"]["first_touch"].endswith("its limit -0.1 is not positive, as this quantity must be")
+    assert [r["errors"]["tilt"] for r in s["rows"]] == pytest.approx([-2e4 * d ** 2 for d in h], rel=1e-6)
+    lines = fc.extrapolations(runs).splitlines()
+    assert [line.split(" at Δx")[0].split(", ")[-1] for line in lines] == ["first_touch", "plateau", "tilt_at"]
+    assert lines[0].endswith("no limit to trust (its limit -0.1 is not positive, as this quantity must be)")
+    assert lines[2].endswith("order 2.00, extrapolated to Δx 0: -1")
+
+
 def test_wall_study_errors_against_the_extrapolated_limit():
     # a wall's first blow on an exact first-order law (8 N + 700 dx), a quasi-steady load that
     # zigzags and a deposit's load that steps further each halving (not converging); a run at
@@ -281,8 +301,11 @@ def test_impact_walls_refinement_keeps_no_limit_that_is_no_push(tmp_path):
             json.dump(run, f)
     p, f0, why = fc.limitOf(law(-5, 1e4, 1.2), H)
     assert why is None and f0 == pytest.approx(-5, rel=1e-6)
+    p, f0, why = fc.limitOf(law(-5, 1e4, 1.2), H, positive=True)
+    assert p == pytest.approx(1.2, rel=1e-6) and f0 == pytest.approx(-5, rel=1e-6)
+    assert why == "its limit -5 is not positive, as this quantity must be"
     lines = iw.refinement(str(tmp_path)).splitlines()
-    assert lines[-2].startswith("| 0–2 | ") and lines[-2].endswith("| 1.20 | – | its limit -5 N is no push on the obstacle |")
+    assert lines[-2].startswith("| 0–2 | ") and lines[-2].endswith("| 1.20 | – | %s |" % why)
     assert lines[-1].startswith("| 5–25 | ") and lines[-1].endswith("| 2.00 | 8 |  |")
 
 
