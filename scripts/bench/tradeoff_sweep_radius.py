@@ -331,7 +331,7 @@ def prepareDriver(a, h, ratio, folder):
 def readDriver(folder, prepared, cpuSeconds=None):
     """The series and run facts of a finished driver run in folder (driver.log, driver/coupled.h5)."""
     import h5py
-    import numpy as np
+    from mpmsdem import analysis
     logPath = os.path.join(folder, "driver.log")
     if not os.path.exists(logPath):
         raise RuntimeError("not run (no driver.log)")
@@ -342,15 +342,14 @@ def readDriver(folder, prepared, cpuSeconds=None):
         lines = [line for line in log.strip().splitlines() if line.strip()]
         raise RuntimeError("mpmsdem-run did not finish; its last line: %s" % (lines[-1] if lines else "(none)"))
     low = re.search(r"smallest contact step (\S+) s at t = (\S+) s", log)
-    c = slice(3 * prepared["cube_index"], 3 * prepared["cube_index"] + 3)
+    cube = prepared["cube_index"]
+    block, _ = analysis.driverBlockSeries(os.path.join(folder, "driver"), block=cube)
     with h5py.File(os.path.join(folder, "driver", "coupled.h5"), "r", locking=False) as f:
-        g = f["series"]
-        t = g["time"][:]
-        pos = g["pos"][:, c]
-        rot = np.degrees(np.linalg.norm(g["rotation"][:, c], axis=1))
-        ft = g["flow_force"][:, c][:, 0]
-    series = {"t": t.tolist(), "travel": (pos[:, 0] - pos[0, 0]).tolist(), "rise": (pos[:, 2] - pos[0, 2]).tolist(),
-              "Ft": ft.tolist(), "rotation": rot.tolist()}
+        z = f["series"]["pos"][:, 3 * cube + 2]  # the cube's height (driverBlockSeries reads along the flume)
+    series = {"t": block["t"].tolist(), "travel": block["travel"].tolist(), "rise": (z - z[0]).tolist(),
+              "Ft": block["Ft"].tolist(), "rotation": block["rotation"].tolist()}
+    if "first_contact" in block:  # files written before it was recorded have none
+        series["first_contact"] = block["first_contact"].tolist()
     return series, {"engine": "driver", "backend": prepared.get("backend", "cpu"),
                     "precision": prepared.get("precision", "double"), "dt_flume": prepared["dt"],
                     "flip_blend": prepared.get("flip_blend", "alpha 0.99 per step (prepared before it was recorded)"),
@@ -388,6 +387,7 @@ def firstTurn(series, deg=45.0):
 
 def summarise(series, window):
     import numpy as np
+    from mpmsdem import analysis
     t = np.asarray(series["t"])
     ft = np.asarray(series["Ft"])
     w = max(1, int(round(SMOOTH / np.median(np.diff(t)))))
@@ -400,14 +400,20 @@ def summarise(series, window):
     out = {"travel": float(series["travel"][-1]), "peak_force_sampled": float(smooth[j]),
            "peak_time_sampled": float(t[j]),
            "mean_force_window_sampled": float(ft[inWin].mean()) if covered and inWin.any() else None,
-           "first_touch": float(t[touched[0]]) if touched.size else None,
+           "first_touch_sampled": float(t[touched[0]]) if touched.size else None,
            "max_rotation_deg": float(rot.max()), "rotation_end_deg": float(rot[-1]),
            "max_rise": float(np.max(series["rise"])), "force_measure": "2 ms records",
            "rotation45_time": firstTurn(series)}
     out["peak_force"], out["peak_time"] = out["peak_force_sampled"], out["peak_time_sampled"]
     out["mean_force_window"] = out["mean_force_window_sampled"]
+    # the contact's first step where the driver recorded it, else the first record with a force
+    out["first_touch"] = analysis.touchTime(series)
     if "step_impulse" in series:
         ts, imp = np.asarray(series["step_t"]), np.asarray(series["step_impulse"])
+        # the impulse at ts[k] holds the step that ended there: the first one it grew in began
+        # at ts[k - 1] (the contact's first step, where a record holds the step before it)
+        grew = np.nonzero(imp != 0)[0]
+        out["first_touch"] = float(ts[grew[0] - 1]) if grew.size and grew[0] > 0 else None
         half = SMOOTH / 2
         mid = ts[(ts >= ts[0] + half) & (ts <= ts[-1] - half)]
         if mid.size:

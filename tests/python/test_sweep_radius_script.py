@@ -53,13 +53,32 @@ def test_prepared_runs_collected_equal_the_direct_driver_runs(tmp_path):
         # the cube is hit at 0.230 s (coarse flume, the default PIC viscosity: 50 /s at dx 0.02 m): the runs
         # carry a peak force and a travel to compare
         assert a[k]["peak_force"] > 1.0 and a[k]["first_touch"] == pytest.approx(0.230, abs=0.01)
+        # the touch is the contact's first step (coupled.h5's), within the 2 ms record interval
+        # (and one step) before the first record with a force, which holds the step before it
+        assert 0 < a[k]["first_touch_sampled"] - a[k]["first_touch"] <= 0.002 + a[k]["dt_flume"]
         assert a[k]["flip_blend"] == b[k]["flip_blend"] == "PIC viscosity 0.005 m^2/s, share 4 nu dt/dx^2 (PIC damping 50 /s at dx 0.02 m)"
         for field in ("travel", "peak_force", "peak_time", "max_rotation_deg", "max_rise", "first_touch",
+                      "first_touch_sampled",
                       "contact_step_min", "steps"):
             assert b[k][field] == a[k][field], (k, field)  # same driver, same scene: same bits
     with open(str(tmp_path / "t.md")) as f:
         text = f.read()
     assert "MPM cpu-double" in text and "dx 0.02 m" in text
+
+
+def test_the_yade_engine_and_the_driver_find_the_same_first_contact(tmp_path):
+    # the YADE path sums the cube's impulse every step and takes the first step it grew in; the
+    # driver records that step in coupled.h5: one scene, one first contact, to the bit (each
+    # within a record interval and a step before its first record with a force, the same record)
+    one = [v if v != "1/20,1/8" else "1/20" for v in COMMON]
+    rc, log = script(*one, "--exe", driverExe(), "--out", str(tmp_path / "driver"))
+    assert rc == 0, log
+    rc, log = script(*[v if v != "driver" else "yade" for v in one], "--out", str(tmp_path / "yade"))
+    assert rc == 0, log
+    d, y = results(str(tmp_path / "driver"))["1/20"], results(str(tmp_path / "yade"))["1/20"]
+    assert y["first_touch"] == d["first_touch"] == pytest.approx(0.2286, abs=1e-4)
+    assert y["first_touch_sampled"] == d["first_touch_sampled"]
+    assert 0 < d["first_touch_sampled"] - d["first_touch"] <= 0.002 + d["dt_flume"]
 
 
 def test_a_run_that_never_ran_is_reported_not_invented_nor_relabelled(tmp_path):
