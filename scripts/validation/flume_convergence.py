@@ -562,9 +562,9 @@ def windowLimits(byWindow, h):
     """A blow read over several windows, each at three spacings h (coarsest first): ``byWindow``
     maps a window [s] to its three values (the largest mean force over that window in each run).
     Returns, per window (shortest first), a dict of its values, order, limit and why
-    (:func:`limitOf` of a push, kept only above zero; also not kept where a longer window's kept limit exceeds this window's
-    limit: run by run the largest mean over a shorter window is never below that over a longer
-    one, so neither can their limits be. The longest windows are kept first: a window the flow
+    (:func:`limitOf` of a push, kept only above zero; also not kept where a longer window's kept
+    limit exceeds this window's limit: run by run the largest mean over a shorter window is never
+    below that over a longer one, so neither can their limits be. The longest windows are kept first: a window the flow
     crosses in a few cells is the worst resolved), and ``bracket`` (lo, hi) for a window without
     a kept limit: the limit lies at or above the kept limits of longer windows and at or below
     those of shorter ones and, on the assumption that a sequence that fell (rose) at every
@@ -609,7 +609,7 @@ QUANTITIES = (("free", "arrival"), ("free", "h_f"), ("free", "v_f"), ("front", "
               ("coupled", "plateau"), ("coupled", "tilt_at"), ("coupled", "travel_at"))
 
 
-def positive(key):
+def isPositiveQuantity(key):
     """Whether a quantity of a run's numbers cannot be zero or less (a time, a depth, a speed, a
     mean push), so that no limit at or below zero is kept (:func:`limitOf`). A tilt, a travel, the
     front's nose height and a line of action may tend to zero or cross it."""
@@ -641,7 +641,7 @@ def extrapolations(runs):
                 continue
             lines.append("- %s, %s, width %g m%s, %s at Δx %s: %s -> %s" % (
                 g[0], g[1], g[2], "" if g[3] == 8 else ", %d per cell" % g[3], key, ", ".join("%.4g" % r["dx"] for r in rs), ", ".join("%.4g" % v for v in vals),
-                limitText(vals, [r["dx"] for r in rs], positive(key))))
+                limitText(vals, [r["dx"] for r in rs], isPositiveQuantity(key))))
     return "\n".join(lines)
 
 
@@ -670,7 +670,7 @@ def packageStudy(runs, settings, hold, width, command):
         vals = [r[part].get(key) for r in finest]
         if None in vals:
             continue
-        p, f0, why = limitOf(vals, h, positive(key))
+        p, f0, why = limitOf(vals, h, isPositiveQuantity(key))
         if why:
             unconverged[out] = "%s at %s cells per block height (Δx %s m): %s, %s" % (
                 out, " / ".join("%.1f" % r["cells_per_block"] for r in finest), " / ".join("%.4g" % d for d in h),
